@@ -1,0 +1,3 @@
+from emogen.cli import app
+
+app()

@@ -1,0 +1,7 @@
+"""The face: mesh, blendshape deltas, identities, rig and regions."""
+
+from emogen.model.face import FaceModel, load_model
+from emogen.model.regions import Region
+from emogen.model.rig import Rig, load_rig
+
+__all__ = ["FaceModel", "Region", "Rig", "load_model", "load_rig"]

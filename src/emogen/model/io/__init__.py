@@ -1,0 +1,1 @@
+"""Reading and writing face models: ICT-FaceKit folders, glTF binaries, the compiled cache."""

@@ -1,0 +1,140 @@
+"""Reading an ICT-FaceKit ``FaceXModel`` folder into arrays.
+
+The folder holds the neutral (``generic_neutral_mesh.obj``), one OBJ per expression shape
+(the 53 named in ``vertex_indices.json`` plus ``cheekRaiser_L/R`` and ``PupilDilate_L/R``) and
+identity modes ``identityNNN.obj``. Every OBJ shares the neutral's vertex order; only the
+neutral's topology is read.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from emogen.errors import ModelFileError
+from emogen.model.io.obj import ObjTopology, parse_topology, parse_vertices, read_bytes
+
+NEUTRAL_FILE = "generic_neutral_mesh.obj"
+INDEX_FILE = "vertex_indices.json"
+EXTRA_SHAPES = ("cheekRaiser_L", "cheekRaiser_R", "PupilDilate_L", "PupilDilate_R")
+IDENTITY_PATTERN = re.compile(r"^identity(\d{3})\.obj$")
+
+
+@dataclass(frozen=True)
+class ModelArrays:
+    """Everything a face model is made of, as plain arrays (what the cache stores)."""
+
+    name: str
+    neutral: np.ndarray  # (V, 3) float32
+    shape_names: tuple[str, ...]
+    deltas: np.ndarray  # (S, V, 3) float32: shape - neutral
+    identity_names: tuple[str, ...]
+    identity_deltas: np.ndarray  # (I, V, 3) float32: identity mode - neutral
+    topology: ObjTopology
+    source_hash: str  # sha256 of the source files' bytes
+    model_hash: str  # sha256 of name, shape list, vertex count and the float32 arrays
+
+
+def expected_shapes(folder: Path) -> tuple[str, ...]:
+    """The expression shapes a FaceXModel folder must have, from its ``vertex_indices.json``."""
+    index = folder / INDEX_FILE
+    try:
+        data = json.loads(read_bytes(index))
+        names = data["expressions"]
+    except json.JSONDecodeError as exc:
+        raise ModelFileError(f"{index}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+    except (KeyError, TypeError):
+        raise ModelFileError(f"{index}: has no 'expressions' list of shape names") from None
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise ModelFileError(f"{index}: 'expressions' must be a list of shape names")
+    return tuple(names) + EXTRA_SHAPES
+
+
+def source_files(folder: Path) -> tuple[list[str], list[str]]:
+    """(expression shape names, identity file stems) present and required in ``folder``.
+
+    Raises ModelFileError for a missing folder, a missing neutral or shape, or an OBJ file
+    that is neither a known shape nor an identity mode.
+    """
+    if not folder.is_dir():
+        raise ModelFileError(f"model folder does not exist: {folder}")
+    shapes = list(expected_shapes(folder))
+    present = {p.name for p in folder.iterdir() if p.suffix.lower() == ".obj"}
+    if NEUTRAL_FILE not in present:
+        raise ModelFileError(f"the neutral mesh is missing: {folder / NEUTRAL_FILE}")
+    missing = [s for s in shapes if f"{s}.obj" not in present]
+    if missing:
+        raise ModelFileError(
+            f"{len(missing)} expression shape file(s) missing from {folder}: "
+            + ", ".join(f"{s}.obj" for s in missing)
+        )
+    identities = sorted(p[:-4] for p in present if IDENTITY_PATTERN.match(p))
+    known = {NEUTRAL_FILE, *(f"{s}.obj" for s in shapes), *(f"{i}.obj" for i in identities)}
+    extra = sorted(present - known)
+    if extra:
+        raise ModelFileError(
+            f"unexpected OBJ file(s) in {folder}: {', '.join(extra)}; expected only the neutral, "
+            f"the {len(shapes)} expression shapes of {INDEX_FILE} plus {', '.join(EXTRA_SHAPES[:2])}"
+            f"/{', '.join(EXTRA_SHAPES[2:])}, and identityNNN.obj modes"
+        )
+    return shapes, identities
+
+
+def model_content_hash(
+    name: str, shape_names: tuple[str, ...], neutral: np.ndarray, deltas: np.ndarray
+) -> str:
+    """The model hash recorded with every output: name, shape list, vertex count, geometry."""
+    h = hashlib.sha256()
+    h.update(f"{name}\n{len(neutral)}\n{','.join(shape_names)}\n".encode())
+    h.update(np.ascontiguousarray(neutral, dtype=np.float32).tobytes())
+    h.update(np.ascontiguousarray(deltas, dtype=np.float32).tobytes())
+    return h.hexdigest()
+
+
+def load_ict_folder(folder: Path, name: str = "ict-facekit") -> ModelArrays:
+    """Parse every OBJ of an ICT-FaceKit folder (the slow path the cache avoids)."""
+    shapes, identities = source_files(folder)
+    src = hashlib.sha256()
+
+    def read(stem: str) -> tuple[Path, bytes]:
+        path = folder / f"{stem}.obj"
+        text = read_bytes(path)
+        src.update(path.name.encode() + b"\0" + text)
+        return path, text
+
+    neutral_path, neutral_text = read(NEUTRAL_FILE[:-4])
+    neutral = parse_vertices(neutral_path, neutral_text)
+    n_vertices = len(neutral)
+    topology = parse_topology(neutral_path, n_vertices, neutral_text)
+
+    def deltas_of(stems: list[str]) -> np.ndarray:
+        out = np.empty((len(stems), n_vertices, 3), dtype=np.float32)
+        for k, stem in enumerate(stems):
+            path, text = read(stem)
+            verts = parse_vertices(path, text)
+            if len(verts) != n_vertices:
+                raise ModelFileError(
+                    f"shape '{stem}' has {len(verts)} vertices, neutral has {n_vertices} ({path})"
+                )
+            out[k] = verts - neutral
+        return out
+
+    deltas = deltas_of(shapes)
+    identity_deltas = deltas_of(identities)
+    neutral32 = neutral.astype(np.float32)
+    return ModelArrays(
+        name=name,
+        neutral=neutral32,
+        shape_names=tuple(shapes),
+        deltas=deltas,
+        identity_names=tuple(identities),
+        identity_deltas=identity_deltas,
+        topology=topology,
+        source_hash=src.hexdigest(),
+        model_hash=model_content_hash(name, tuple(shapes), neutral32, deltas),
+    )

@@ -1,0 +1,354 @@
+"""The rig: how a model's blendshapes are controlled and evolved.
+
+A rig (TOML; ``emogen/data/ict_rig.toml`` is the default for ICT-FaceKit) declares
+
+* **genes**, the unique core controls the GA evolves. A left/right pair (``X_L``/``X_R``) is one
+  gene ``X`` written equally to both sides; explicit groups override the automatic pairing
+  (ICT's horizontal gaze: ``eyeLookLeft`` drives ``eyeLookOut_L`` and ``eyeLookIn_R``, so both eyes
+  turn the same way);
+* **excluded** shapes, never evolved, each with its reason;
+* **eye** shapes, evolved only while eye motion is enabled;
+* **emotions**: building blocks (genes) from FACS/EMFACS prototypes for protocol initialisation;
+* **gaze**: rigid eyeball rotation driven by the ``eyeLook*`` weights (ICT's shapes move the lids
+  but not the eyeballs);
+* **identities**: named identity-coefficient presets.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from emogen.errors import ConfigError, ShapeError
+
+DEFAULT_RIG = "ict_rig.toml"
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class GeneSpec(_Strict):
+    name: str
+    shapes: list[str] = Field(min_length=1)
+
+
+class EyeSpec(_Strict):
+    shapes: list[str]
+    reason: str
+
+
+class GazeSpec(_Strict):
+    left_eyeball: str
+    right_eyeball: str
+    look_left: list[str]
+    look_right: list[str]
+    look_up: list[str]
+    look_down: list[str]
+    yaw_deg: Annotated[float, Field(ge=0, le=60)]
+    pitch_up_deg: Annotated[float, Field(ge=0, le=60)]
+    pitch_down_deg: Annotated[float, Field(ge=0, le=60)]
+
+
+class EmotionSpec(_Strict):
+    action_units: str
+    core: list[str]
+    optional: list[str] = []
+    source: str
+
+
+class IdentitySpec(_Strict):
+    coefficients: list[float]
+    description: str
+
+
+class RigSpec(_Strict):
+    name: str
+    description: str = ""
+    genes: list[GeneSpec] = []
+    excluded: dict[str, str] = {}
+    eye: EyeSpec | None = None
+    gaze: GazeSpec | None = None
+    emotions: dict[str, EmotionSpec] = {}
+    identities: dict[str, IdentitySpec] = {}
+
+
+def _format_validation(exc: ValidationError, source: str) -> str:
+    parts = []
+    for err in exc.errors():
+        loc = ".".join(str(p) for p in err["loc"])
+        if err["type"] == "extra_forbidden":
+            parts.append(f"unknown key '{loc}'")
+        else:
+            parts.append(f"'{loc}': {err['msg']} (got {err.get('input')!r})")
+    return f"invalid rig {source}: " + "; ".join(parts)
+
+
+@dataclass(frozen=True)
+class Gene:
+    name: str
+    shapes: tuple[str, ...]
+    eye: bool = False
+
+
+@dataclass(frozen=True)
+class Gaze:
+    left_eyeball: str
+    right_eyeball: str
+    look_left: np.ndarray  # indices into the shape list
+    look_right: np.ndarray
+    look_up: np.ndarray
+    look_down: np.ndarray
+    yaw: float  # radians at full weight
+    pitch_up: float
+    pitch_down: float
+
+    def angles(self, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Conjugate gaze (yaw toward the subject's left, pitch up) in radians, per face.
+
+        weights : (n_faces, n_shapes). Both eyes get the same rotation.
+        """
+        h = weights[:, self.look_left].mean(1) - weights[:, self.look_right].mean(1)
+        up = weights[:, self.look_up].mean(1)
+        down = weights[:, self.look_down].mean(1)
+        return h * self.yaw, up * self.pitch_up - down * self.pitch_down
+
+
+@dataclass(frozen=True)
+class Emotion:
+    name: str
+    action_units: str
+    core: tuple[str, ...]
+    optional: tuple[str, ...]
+    source: str
+
+    @property
+    def blocks(self) -> tuple[str, ...]:
+        return self.core + self.optional
+
+
+@dataclass(frozen=True)
+class Rig:
+    """Controls of a face model. Gene order is the rig's; shape order is the model's."""
+
+    name: str
+    shape_names: tuple[str, ...]
+    genes: tuple[Gene, ...]
+    excluded: dict[str, str]
+    eye_reason: str
+    gaze: Gaze | None
+    emotions: dict[str, Emotion]
+    identities: dict[str, IdentitySpec]
+    description: str = ""
+    _expansion: dict[bool, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
+
+    # ---- gene space -------------------------------------------------------------------
+    def gene_names(self, eye_motion: bool = True) -> tuple[str, ...]:
+        """The unique core shapes the GA evolves (eye genes only with eye motion)."""
+        return tuple(g.name for g in self.genes if eye_motion or not g.eye)
+
+    def active_genes(self, eye_motion: bool = True) -> tuple[Gene, ...]:
+        return tuple(g for g in self.genes if eye_motion or not g.eye)
+
+    @property
+    def pairs(self) -> tuple[tuple[str, str], ...]:
+        """Left/right shape pairs (``X_L``, ``X_R``) present in the model."""
+        names = set(self.shape_names)
+        return tuple(
+            (s, s[:-2] + "_R") for s in self.shape_names if s.endswith("_L") and s[:-2] + "_R" in names
+        )
+
+    def disabled_shapes(self, eye_motion: bool = True) -> dict[str, str]:
+        """Shapes never written by :meth:`expand`, with the reason for each."""
+        out = dict(self.excluded)
+        if not eye_motion:
+            for g in self.genes:
+                if g.eye:
+                    out.update({s: self.eye_reason for s in g.shapes})
+        return out
+
+    def expansion_matrix(self, eye_motion: bool = True) -> np.ndarray:
+        """(n_genes, n_shapes) 0/1 matrix: full weights = genes @ E."""
+        if eye_motion not in self._expansion:
+            index = {s: i for i, s in enumerate(self.shape_names)}
+            genes = self.active_genes(eye_motion)
+            e = np.zeros((len(genes), len(self.shape_names)))
+            for g_i, g in enumerate(genes):
+                e[g_i, [index[s] for s in g.shapes]] = 1.0
+            e.setflags(write=False)
+            self._expansion[eye_motion] = e
+        return self._expansion[eye_motion]
+
+    def expand(self, genes: np.ndarray, eye_motion: bool = True) -> np.ndarray:
+        """Gene vectors (n_faces, n_genes) → full weight vectors (n_faces, n_shapes).
+
+        Every shape of a gene gets the gene's value (symmetry); excluded shapes get 0.
+        """
+        genes = np.asarray(genes, dtype=np.float64)
+        e = self.expansion_matrix(eye_motion)
+        if genes.ndim != 2 or genes.shape[1] != e.shape[0]:
+            raise ShapeError(
+                f"genes must have shape (n_faces, {e.shape[0]}) for rig '{self.name}' "
+                f"(eye_motion={eye_motion}); got {genes.shape}"
+            )
+        return genes @ e
+
+    def contract(self, weights: np.ndarray, eye_motion: bool = True) -> np.ndarray:
+        """Full weights (n_faces, n_shapes) → genes (n_faces, n_genes); inverse of :meth:`expand`.
+
+        A gene is the mean of its shapes' weights (exact for symmetric faces).
+        """
+        weights = np.asarray(weights, dtype=np.float64)
+        e = self.expansion_matrix(eye_motion)
+        if weights.ndim != 2 or weights.shape[1] != e.shape[1]:
+            raise ShapeError(
+                f"weights must have shape (n_faces, {e.shape[1]}); got {weights.shape}"
+            )
+        return (weights @ e.T) / e.sum(1)
+
+    def gene_index(self, name: str, eye_motion: bool = True) -> int:
+        names = self.gene_names(eye_motion)
+        if name not in names:
+            raise ShapeError(f"unknown gene '{name}'; genes are: {', '.join(names)}")
+        return names.index(name)
+
+    def weights_from_names(self, named: dict[str, float]) -> np.ndarray:
+        """A full weight vector (n_shapes,) from ``{shape or gene name: value}``."""
+        w = np.zeros(len(self.shape_names))
+        index = {s: i for i, s in enumerate(self.shape_names)}
+        genes = {g.name: g for g in self.genes}
+        for key, value in named.items():
+            if not 0.0 <= float(value) <= 1.0:
+                raise ConfigError(f"weight of '{key}' must be in [0, 1]; got {value}")
+            if key in index:
+                w[index[key]] = value
+            elif key in genes:
+                w[[index[s] for s in genes[key].shapes]] = value
+            else:
+                raise ShapeError(
+                    f"unknown shape or gene '{key}'; shapes are: {', '.join(self.shape_names)}"
+                )
+        return w
+
+    def summary(self) -> dict[str, object]:
+        return {
+            "name": self.name,
+            "genes": [{"name": g.name, "shapes": list(g.shapes), "eye": g.eye} for g in self.genes],
+            "pairs": [list(p) for p in self.pairs],
+            "excluded": self.excluded,
+            "eye_shapes_disabled_without_eye_motion": sorted(
+                s for g in self.genes if g.eye for s in g.shapes
+            ),
+            "emotions": {
+                k: {"action_units": e.action_units, "core": list(e.core), "optional": list(e.optional)}
+                for k, e in self.emotions.items()
+            },
+            "identities": sorted(self.identities),
+        }
+
+
+def read_rig_spec(path: Path | None = None) -> tuple[RigSpec, str]:
+    """Parse a rig TOML (the packaged ICT default when ``path`` is None)."""
+    if path is None:
+        text = resources.files("emogen.data").joinpath(DEFAULT_RIG).read_text()
+        source = f"(packaged {DEFAULT_RIG})"
+    else:
+        try:
+            text = Path(path).read_text()
+        except OSError as exc:
+            raise ConfigError(f"cannot read rig file {path}: {exc.strerror}") from None
+        source = str(path)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"rig {source} is not valid TOML: {exc}") from None
+    try:
+        return RigSpec.model_validate(data), source
+    except ValidationError as exc:
+        raise ConfigError(_format_validation(exc, source)) from None
+
+
+def build_rig(spec: RigSpec, shape_names: tuple[str, ...], source: str = "") -> Rig:
+    """Resolve a rig spec against a model's shape list; every name must exist."""
+    known = set(shape_names)
+
+    def check(names: list[str], where: str) -> None:
+        bad = [n for n in names if n not in known]
+        if bad:
+            raise ConfigError(f"rig {source}: {where} names unknown shape(s) {bad}")
+
+    grouped: dict[str, Gene] = {}
+    claimed: set[str] = set()
+    for g in spec.genes:
+        check(g.shapes, f"gene '{g.name}'")
+        grouped[g.name] = Gene(g.name, tuple(g.shapes))
+        claimed.update(g.shapes)
+    check(list(spec.excluded), "excluded")
+    eye_shapes = set(spec.eye.shapes) if spec.eye else set()
+    check(sorted(eye_shapes), "eye.shapes")
+    overlap = claimed & set(spec.excluded)
+    if overlap:
+        raise ConfigError(f"rig {source}: shape(s) {sorted(overlap)} are both in a gene and excluded")
+
+    genes: list[Gene] = []
+    seen: set[str] = set()
+    for s in shape_names:
+        if s in seen or s in spec.excluded:
+            continue
+        group = next((g for g in grouped.values() if s in g.shapes), None)
+        if group is not None:
+            gene = group
+        elif s.endswith(("_L", "_R")) and f"{s[:-2]}_{'R' if s.endswith('_L') else 'L'}" in known:
+            gene = Gene(s[:-2], (s[:-2] + "_L", s[:-2] + "_R"))
+        else:
+            gene = Gene(s, (s,))
+        is_eye = bool(set(gene.shapes) & eye_shapes)
+        if is_eye and not set(gene.shapes) <= eye_shapes:
+            raise ConfigError(f"rig {source}: gene '{gene.name}' mixes eye and non-eye shapes")
+        genes.append(Gene(gene.name, gene.shapes, is_eye))
+        seen.update(gene.shapes)
+    gene_names = {g.name for g in genes}
+
+    emotions = {}
+    for name, e in spec.emotions.items():
+        bad = [b for b in (*e.core, *e.optional) if b not in gene_names]
+        if bad:
+            raise ConfigError(f"rig {source}: emotion '{name}' names unknown gene(s) {bad}")
+        emotions[name] = Emotion(name, e.action_units, tuple(e.core), tuple(e.optional), e.source)
+
+    gaze = None
+    if spec.gaze is not None:
+        gz = spec.gaze
+        index = {s: i for i, s in enumerate(shape_names)}
+        for key in ("look_left", "look_right", "look_up", "look_down"):
+            check(getattr(gz, key), f"gaze.{key}")
+        gaze = Gaze(
+            gz.left_eyeball,
+            gz.right_eyeball,
+            *(np.array([index[s] for s in getattr(gz, k)]) for k in ("look_left", "look_right", "look_up", "look_down")),
+            yaw=float(np.radians(gz.yaw_deg)),
+            pitch_up=float(np.radians(gz.pitch_up_deg)),
+            pitch_down=float(np.radians(gz.pitch_down_deg)),
+        )
+    return Rig(
+        name=spec.name,
+        shape_names=tuple(shape_names),
+        genes=tuple(genes),
+        excluded=dict(spec.excluded),
+        eye_reason=spec.eye.reason if spec.eye else "",
+        gaze=gaze,
+        emotions=emotions,
+        identities=dict(spec.identities),
+        description=spec.description,
+    )
+
+
+def load_rig(shape_names: tuple[str, ...], path: Path | None = None) -> Rig:
+    spec, source = read_rig_spec(path)
+    return build_rig(spec, shape_names, source)
