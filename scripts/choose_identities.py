@@ -36,7 +36,9 @@ def measurements(verts: np.ndarray, lm: np.ndarray) -> np.ndarray:
 
 def main(folder: str) -> None:
     model = emogen.load_model(folder)
-    lm = np.array(json.loads((Path(folder) / "vertex_indices.json").read_text())["idx_to_landmark_verts"])
+    lm = np.array(
+        json.loads((Path(folder) / "vertex_indices.json").read_text())["idx_to_landmark_verts"]
+    )
     rng = np.random.default_rng(SEED)
     k = model.n_identity_modes
     betas = rng.standard_normal((4000, k))

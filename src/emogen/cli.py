@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import sys
 from collections.abc import Callable
-from enum import Enum
+from enum import StrEnum
 from functools import wraps
 from pathlib import Path
 from typing import Annotated, Any, TypeVar
@@ -28,9 +28,14 @@ F = TypeVar("F", bound=Callable[..., Any])
 
 ModelOpt = Annotated[
     Path | None,
-    typer.Option("--model", help="ICT-FaceKit FaceXModel folder or GLB (default: $EMOGEN_MODEL, then the user cache)."),
+    typer.Option(
+        "--model",
+        help="ICT-FaceKit FaceXModel folder or GLB (default: $EMOGEN_MODEL, then the user cache).",
+    ),
 ]
-RigOpt = Annotated[Path | None, typer.Option("--rig", help="Rig TOML (default: the packaged ICT rig).")]
+RigOpt = Annotated[
+    Path | None, typer.Option("--rig", help="Rig TOML (default: the packaged ICT rig).")
+]
 IdentityOpt = Annotated[
     str | None, typer.Option("--identity", help="Identity preset (generic, male, female).")
 ]
@@ -88,7 +93,9 @@ def main(
 @model_app.command("info")
 @friendly_errors
 def model_info(
-    path: Annotated[Path | None, typer.Argument(help="Model folder or GLB (default: as --model).")] = None,
+    path: Annotated[
+        Path | None, typer.Argument(help="Model folder or GLB (default: as --model).")
+    ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
     rig: RigOpt = None,
 ) -> None:
@@ -117,12 +124,14 @@ def model_info(
         typer.echo(f"  {shape:<16} {why}")
     typer.echo("emotions")
     for name, e in model.rig.emotions.items():
-        typer.echo(f"  {name:<10} AU {e.action_units}: core {', '.join(e.core)}; optional {', '.join(e.optional)}")
+        typer.echo(
+            f"  {name:<10} AU {e.action_units}: core {', '.join(e.core)}; optional {', '.join(e.optional)}"
+        )
     typer.echo(f"identities generic, {', '.join(sorted(model.rig.identities))}")
     typer.echo(f"regions    {', '.join(model.regions)}")
 
 
-class ExportFormat(str, Enum):
+class ExportFormat(StrEnum):
     glb = "glb"
     obj = "obj"
 
@@ -132,12 +141,16 @@ class ExportFormat(str, Enum):
 def model_export(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output file (.glb or .obj).")],
     face: Annotated[
-        bool, typer.Option("--face", help="Export one evaluated face (static mesh) instead of the rig.")
+        bool,
+        typer.Option("--face", help="Export one evaluated face (static mesh) instead of the rig."),
     ] = False,
     weight: Annotated[
-        list[str] | None, typer.Option("--weight", "-w", help="NAME=VALUE (shape or gene); repeatable.")
+        list[str] | None,
+        typer.Option("--weight", "-w", help="NAME=VALUE (shape or gene); repeatable."),
     ] = None,
-    fmt: Annotated[ExportFormat | None, typer.Option("--format", help="Default: from --out's suffix.")] = None,
+    fmt: Annotated[
+        ExportFormat | None, typer.Option("--format", help="Default: from --out's suffix.")
+    ] = None,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
     identity: IdentityOpt = None,
@@ -145,19 +158,26 @@ def model_export(
     """Export the model as a GLB with morph targets (for the browser), or one face as GLB/OBJ."""
     from emogen.errors import ConfigError
     from emogen.model import load_model
-    from emogen.model.io import gltf
 
+    named = parse_named_weights(weight)
     kind = fmt.value if fmt else out.suffix.lower().lstrip(".")
     if kind not in ("glb", "obj"):
-        raise ConfigError(f"--out {out}: cannot tell the format from suffix '{out.suffix}'; use --format glb|obj")
-    model = load_model(model_path, identity, rig=rig)
-    named = parse_named_weights(weight)
+        raise ConfigError(
+            f"--out {out}: cannot tell the format from suffix '{out.suffix}'; use --format glb|obj"
+        )
     if named and not face:
-        raise ConfigError("--weight only makes sense with --face (the rig export carries every shape)")
+        raise ConfigError(
+            "--weight only makes sense with --face (the rig export carries every shape)"
+        )
+    from emogen.model.io import gltf
+
+    model = load_model(model_path, identity, rig=rig)
     out.parent.mkdir(parents=True, exist_ok=True)
     if not face:
         if kind != "glb":
-            raise ConfigError("the rig (with morph targets) exports as GLB only; use --face for OBJ")
+            raise ConfigError(
+                "the rig (with morph targets) exports as GLB only; use --face for OBJ"
+            )
         report = gltf.export_model_glb(model, out)
         typer.echo(f"wrote {out}: {report}")
         return
@@ -172,9 +192,14 @@ def model_export(
 @model_app.command("fetch")
 @friendly_errors
 def model_fetch(
-    dest: Annotated[Path | None, typer.Option("--dest", help="Install folder (default: the user cache).")] = None,
+    dest: Annotated[
+        Path | None, typer.Option("--dest", help="Install folder (default: the user cache).")
+    ] = None,
     base_url: Annotated[
-        str | None, typer.Option("--base-url", help="Mirror URL or folder (default: $EMOGEN_MODEL_URL, then GitHub).")
+        str | None,
+        typer.Option(
+            "--base-url", help="Mirror URL or folder (default: $EMOGEN_MODEL_URL, then GitHub)."
+        ),
     ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", help="No progress bar.")] = False,
 ) -> None:
@@ -183,7 +208,9 @@ def model_fetch(
 
     folder = fetch_model(dest, base_url=base_url, progress=not quiet and sys.stderr.isatty())
     typer.echo(f"ICT-FaceKit installed in {folder}")
-    typer.echo("ICT-FaceKit © 2020 USC Institute for Creative Technologies, MIT licence (see LICENSE beside it).")
+    typer.echo(
+        "ICT-FaceKit © 2020 USC Institute for Creative Technologies, MIT licence (see LICENSE beside it)."
+    )
 
 
 if __name__ == "__main__":  # pragma: no cover

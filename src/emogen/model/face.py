@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from emogen.errors import ConfigError, ShapeError
+from emogen.model.io.ict import ModelArrays
 from emogen.model.io.obj import ObjTopology, triangulate
 from emogen.model.regions import Region, ict_regions
 from emogen.model.rig import Rig
@@ -90,7 +91,9 @@ class FaceModel:
     @cached_property
     def _blend_matrix(self) -> np.ndarray:
         """(S + 1, V·3): the deltas with the neutral as a last row, so one product blends."""
-        return _readonly(np.vstack([self.deltas.reshape(self.n_shapes, -1), self.neutral.reshape(1, -1)]))
+        return _readonly(
+            np.vstack([self.deltas.reshape(self.n_shapes, -1), self.neutral.reshape(1, -1)])
+        )
 
     def shape_index(self, name: str) -> int:
         try:
@@ -184,14 +187,22 @@ class FaceModel:
         moving = np.flatnonzero((yaw != 0) | (pitch != 0))
         if len(moving) == 0:
             return
-        # Row vectors: p' = (p - c) Rᵀ + c, one batched product per eye.
-        rot_t = gaze_rotations(yaw[moving], pitch[moving]).transpose(0, 2, 1).astype(np.float32)
-        rows = slice(None) if len(moving) == len(w) else moving
+        # Row vectors: p' = (p − c) Rᵀ + c = p Rᵀ + (c − c Rᵀ), one batched product per eye.
+        rot = gaze_rotations(yaw[moving], pitch[moving])
+        rot_t = rot.transpose(0, 2, 1)
+        rot_t32 = np.ascontiguousarray(rot_t, dtype=np.float32)
+        every = len(moving) == len(w)
         for sl, centre in self._eye_pivots:
-            c = centre.astype(np.float32)
-            rotated = np.matmul(out[rows, sl] - c, rot_t)
-            rotated += c
-            out[rows, sl] = rotated
+            shift = (centre - centre @ rot_t).astype(np.float32)[:, None, :]
+            if every:
+                eye = out[:, sl]
+                rotated = np.matmul(eye, rot_t32)
+                rotated += shift
+                eye[...] = rotated
+            else:
+                rotated = np.matmul(out[moving, sl], rot_t32)
+                rotated += shift
+                out[moving, sl] = rotated
 
     # ---- identities ---------------------------------------------------------------------
     def with_identity(self, identity: IdentityLike) -> FaceModel:
@@ -202,7 +213,12 @@ class FaceModel:
         else:
             flat = beta.astype(np.float32) @ self.identity_deltas.reshape(len(beta), -1)
             neutral = (self.base_neutral.reshape(-1) + flat).reshape(self.base_neutral.shape)
-        return replace(self, neutral=_readonly(neutral.astype(np.float32)), identity=_readonly(beta), identity_label=label)
+        return replace(
+            self,
+            neutral=_readonly(neutral.astype(np.float32)),
+            identity=_readonly(beta),
+            identity_label=label,
+        )
 
     def resolve_identity(self, identity: IdentityLike) -> tuple[np.ndarray, str]:
         k = self.n_identity_modes
@@ -238,13 +254,17 @@ class FaceModel:
             "source": self.source,
             "model_hash": self.model_hash,
             "n_vertices": self.n_vertices,
-            "n_polygons": int(len(self.polygons)),
-            "n_triangles": int(len(self.faces)),
+            "n_polygons": len(self.polygons),
+            "n_triangles": len(self.faces),
             "n_shapes": self.n_shapes,
             "shapes": list(self.shape_names),
             "identity": {"label": self.identity_label, "modes": self.n_identity_modes},
             "regions": {
-                r.name: {"vertices": [r.v_start, r.v_stop], "polygons": [r.p_start, r.p_stop], "group": r.group}
+                r.name: {
+                    "vertices": [r.v_start, r.v_stop],
+                    "polygons": [r.p_start, r.p_stop],
+                    "group": r.group,
+                }
                 for r in self.regions.values()
             },
             "rig": self.rig.summary(),
@@ -263,17 +283,27 @@ def gaze_rotations(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
     cy, sy = np.cos(yaw), np.sin(yaw)
     cp, sp = np.cos(pitch), np.sin(pitch)
     z, o = np.zeros_like(yaw), np.ones_like(yaw)
-    ry = np.stack([np.stack([cy, z, sy], -1), np.stack([z, o, z], -1), np.stack([-sy, z, cy], -1)], -2)
-    rx = np.stack([np.stack([o, z, z], -1), np.stack([z, cp, sp], -1), np.stack([z, -sp, cp], -1)], -2)
+    ry = np.stack(
+        [np.stack([cy, z, sy], -1), np.stack([z, o, z], -1), np.stack([-sy, z, cy], -1)], -2
+    )
+    rx = np.stack(
+        [np.stack([o, z, z], -1), np.stack([z, cp, sp], -1), np.stack([z, -sp, cp], -1)], -2
+    )
     return ry @ rx
 
 
-def from_arrays(arrays, rig: Rig, regions: dict[str, Region] | None = None, source: str = "") -> FaceModel:  # type: ignore[no-untyped-def]
+def from_arrays(
+    arrays: ModelArrays, rig: Rig, regions: dict[str, Region] | None = None, source: str = ""
+) -> FaceModel:
     """Build a FaceModel from :class:`~emogen.model.io.ict.ModelArrays`."""
     topo: ObjTopology = arrays.topology
     n_vertices = len(arrays.neutral)
     if regions is None:
-        regions = ict_regions() if n_vertices == 26719 else {"all": Region("all", 0, n_vertices, 0, len(topo.polygons))}
+        regions = (
+            ict_regions()
+            if n_vertices == 26719
+            else {"all": Region("all", 0, n_vertices, 0, len(topo.polygons))}
+        )
     ident = arrays.identity_deltas if len(arrays.identity_names) else None
     return FaceModel(
         name=arrays.name,

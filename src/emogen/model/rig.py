@@ -161,7 +161,9 @@ class Rig:
         """Left/right shape pairs (``X_L``, ``X_R``) present in the model."""
         names = set(self.shape_names)
         return tuple(
-            (s, s[:-2] + "_R") for s in self.shape_names if s.endswith("_L") and s[:-2] + "_R" in names
+            (s, s[:-2] + "_R")
+            for s in self.shape_names
+            if s.endswith("_L") and s[:-2] + "_R" in names
         )
 
     def disabled_shapes(self, eye_motion: bool = True) -> dict[str, str]:
@@ -246,7 +248,11 @@ class Rig:
                 s for g in self.genes if g.eye for s in g.shapes
             ),
             "emotions": {
-                k: {"action_units": e.action_units, "core": list(e.core), "optional": list(e.optional)}
+                k: {
+                    "action_units": e.action_units,
+                    "core": list(e.core),
+                    "optional": list(e.optional),
+                }
                 for k, e in self.emotions.items()
             },
             "identities": sorted(self.identities),
@@ -294,7 +300,9 @@ def build_rig(spec: RigSpec, shape_names: tuple[str, ...], source: str = "") -> 
     check(sorted(eye_shapes), "eye.shapes")
     overlap = claimed & set(spec.excluded)
     if overlap:
-        raise ConfigError(f"rig {source}: shape(s) {sorted(overlap)} are both in a gene and excluded")
+        raise ConfigError(
+            f"rig {source}: shape(s) {sorted(overlap)} are both in a gene and excluded"
+        )
 
     genes: list[Gene] = []
     seen: set[str] = set()
@@ -328,10 +336,17 @@ def build_rig(spec: RigSpec, shape_names: tuple[str, ...], source: str = "") -> 
         index = {s: i for i, s in enumerate(shape_names)}
         for key in ("look_left", "look_right", "look_up", "look_down"):
             check(getattr(gz, key), f"gaze.{key}")
+        look = {
+            k: np.array([index[s] for s in getattr(gz, k)])
+            for k in ("look_left", "look_right", "look_up", "look_down")
+        }
         gaze = Gaze(
             gz.left_eyeball,
             gz.right_eyeball,
-            *(np.array([index[s] for s in getattr(gz, k)]) for k in ("look_left", "look_right", "look_up", "look_down")),
+            look["look_left"],
+            look["look_right"],
+            look["look_up"],
+            look["look_down"],
             yaw=float(np.radians(gz.yaw_deg)),
             pitch_up=float(np.radians(gz.pitch_up_deg)),
             pitch_down=float(np.radians(gz.pitch_down_deg)),
@@ -352,3 +367,62 @@ def build_rig(spec: RigSpec, shape_names: tuple[str, ...], source: str = "") -> 
 def load_rig(shape_names: tuple[str, ...], path: Path | None = None) -> Rig:
     spec, source = read_rig_spec(path)
     return build_rig(spec, shape_names, source)
+
+
+# ---- a rig for models that come without one (imported GLBs) ---------------------------------
+_SIDE_SUFFIXES = (("_L", "_R"), ("Left", "Right"))  # ICT-FaceKit style, ARKit style
+
+
+def _strip_side(name: str) -> str:
+    for left, right in _SIDE_SUFFIXES:
+        for suffix in (left, right):
+            if name.endswith(suffix) and len(name) > len(suffix):
+                return name[: -len(suffix)]
+    return name
+
+
+def generic_rig(shape_names: tuple[str, ...], name: str = "generic") -> Rig:
+    """A rig built from shape names alone, for models without a rig file.
+
+    Left/right twins are one gene each: ``X_L``/``X_R`` and ARKit's ``XLeft``/``XRight``
+    (``eyeBlinkLeft`` + ``eyeBlinkRight`` → gene ``eyeBlink``). As in the ICT rig, horizontal
+    gaze is grouped conjugately (``eyeLookOut`` of one eye with ``eyeLookIn`` of the other), the
+    ICT rig's exclusions (lateral jaw/mouth shifts, ``mouthClose``) apply to shapes of the same
+    name, and eye shapes (blink, look, pupil) are switched off with eye motion. No emotions,
+    gaze rotation or identities.
+    """
+    ict, _ = read_rig_spec(None)
+    known = set(shape_names)
+    excluded = {s: reason for s, reason in ict.excluded.items() if s in known}
+    genes: list[GeneSpec] = []
+    for left, right in _SIDE_SUFFIXES:
+        out_l, in_r, out_r, in_l = (
+            f"eyeLook{d}{s}"
+            for d, s in (("Out", left), ("In", right), ("Out", right), ("In", left))
+        )
+        if {out_l, in_r, out_r, in_l} <= known - set(excluded):
+            genes += [
+                GeneSpec(name="eyeLookLeft", shapes=[out_l, in_r]),
+                GeneSpec(name="eyeLookRight", shapes=[out_r, in_l]),
+            ]
+    claimed = {s for g in genes for s in g.shapes}
+    left, right = _SIDE_SUFFIXES[1]
+    for s in shape_names:  # ARKit twins (build_rig pairs X_L/X_R itself)
+        twin = s[: -len(left)] + right if s.endswith(left) else ""
+        if twin in known and not {s, twin} & (claimed | set(excluded)):
+            base = s[: -len(left)]
+            genes.append(
+                GeneSpec(
+                    name=base if base not in known else f"{base}{left}{right}", shapes=[s, twin]
+                )
+            )
+    eye_bases = {_strip_side(s) for s in ict.eye.shapes} if ict.eye else set()
+    eye_shapes = [s for s in shape_names if _strip_side(s) in eye_bases]
+    spec = RigSpec(
+        name=name,
+        description=f"Generic rig derived from {len(shape_names)} shape names (left/right twins paired).",
+        genes=genes,
+        excluded=excluded,
+        eye=EyeSpec(shapes=eye_shapes, reason=ict.eye.reason) if ict.eye and eye_shapes else None,
+    )
+    return build_rig(spec, tuple(shape_names), f"(generic rig '{name}')")

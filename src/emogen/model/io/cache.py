@@ -13,7 +13,9 @@ import json
 import logging
 import os
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
+from typing import IO
 
 import numpy as np
 import platformdirs
@@ -53,7 +55,9 @@ def load_cached(folder: Path) -> ModelArrays | None:
     """The cached arrays for ``folder`` if its files are unchanged since they were compiled."""
     try:
         index = json.loads(_index_path(folder).read_text())
-        if index.get("format") != CACHE_FORMAT or index.get("fingerprint") != folder_fingerprint(folder):
+        if index.get("format") != CACHE_FORMAT or index.get("fingerprint") != folder_fingerprint(
+            folder
+        ):
             return None
         with np.load(_data_path(index["source_hash"]), allow_pickle=False) as z:
             topo = ObjTopology(
@@ -80,7 +84,7 @@ def load_cached(folder: Path) -> ModelArrays | None:
         return None
 
 
-def _atomic_write(path: Path, write) -> None:  # type: ignore[no-untyped-def]
+def _atomic_write(path: Path, write: Callable[[IO[bytes]], object]) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
     try:

@@ -141,7 +141,9 @@ def parse_topology(path: Path, n_vertices: int, text: bytes | None = None) -> Ob
     polygons = np.asarray(polys, dtype=np.int32)
     polygon_uvs = np.asarray(puvs, dtype=np.int32)
     if polygon_uvs.max() >= len(uvs):
-        raise ModelFileError(f"{path}: a face refers to UV {polygon_uvs.max() + 1}; only {len(uvs)} 'vt' lines")
+        raise ModelFileError(
+            f"{path}: a face refers to UV {polygon_uvs.max() + 1}; only {len(uvs)} 'vt' lines"
+        )
     return ObjTopology(
         polygons=polygons,
         polygon_uvs=polygon_uvs,

@@ -1,0 +1,561 @@
+"""glTF out: the rig as a GLB with morph targets (for the browser), one face as GLB or OBJ.
+
+The model GLB holds one mesh, one primitive per material; every primitive has a morph target
+per shape (POSITION and NORMAL deltas) in the model's shape order, and ``mesh.extras.targetNames``
+names them, so three.js drives every primitive with the same weight vector through
+``morphTargetDictionary``. Positions and position deltas are int16 (KHR_mesh_quantization; the
+node's scale and translation undo it), normals int8, morph targets sparse (only vertices that
+move). glTF is in metres; EmoGen models are in centimetres (ICT-FaceKit's unit), so the node
+scales by 0.01 and :func:`~emogen.model.io.gltf_import.import_glb` multiplies by 100.
+
+Each primitive's ``extras.emogen`` maps its vertices and triangles back to the source model
+(``source_vertices``: runs ``[first, count]`` of source vertex indices, one per glTF vertex;
+``source_polygons``: runs ``[first, n_polygons, triangles_per_polygon]``), so an exported GLB
+re-imports in the source's vertex order with its regions (``asset.extras.emogen.regions``).
+UV seams duplicate vertices: a primitive lists its source vertices in source order first,
+then the seam copies.
+"""
+
+from __future__ import annotations
+
+import gzip
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from scipy import sparse
+
+from emogen.errors import ModelFileError, ShapeError
+from emogen.model.io.glb import GlbBuilder, read_glb_json
+from emogen.model.io.gltf_import import import_glb
+from emogen.model.io.obj import write_obj
+from emogen.model.regions import ICT_VISIBLE_PARTS
+
+if TYPE_CHECKING:
+    from emogen.model.face import FaceModel
+
+__all__ = [
+    "ICT_COPYRIGHT",
+    "ExportReport",
+    "export_face_glb",
+    "export_face_obj",
+    "export_model_glb",
+    "import_glb",
+    "vertex_normals",
+]
+
+log = logging.getLogger(__name__)
+
+ICT_COPYRIGHT = "ICT-FaceKit © 2020 USC Institute for Creative Technologies, MIT licence"
+EXTRAS_FORMAT = 1
+CM_TO_M = 0.01
+_Q16 = 32767  # int16 normalized: value = q / 32767
+_Q8 = 127  # int8 normalized
+
+# Plain PBR colours (sRGB) by material-name keyword, for viewers that show the GLB as is.
+_COLOURS = (
+    ("lash", (0.08, 0.06, 0.05)),
+    ("iris", (0.32, 0.22, 0.14)),
+    ("sclera", (0.93, 0.92, 0.89)),
+    ("teeth", (0.92, 0.89, 0.80)),
+    ("gum", (0.78, 0.40, 0.42)),
+    ("tongue", (0.78, 0.40, 0.42)),
+)
+_SKIN = (0.82, 0.64, 0.55)
+
+
+# ---- geometry -------------------------------------------------------------------------------
+def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals.
+
+    vertices : (V, 3) or (B, V, 3); triangles : (T, 3) → normals of the same shape as
+    ``vertices`` (float64; zero for vertices on no triangle of non-zero area).
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    batch = v[None] if v.ndim == 2 else v
+    n_v = batch.shape[1]
+    tri = np.asarray(triangles, dtype=np.int64)
+    a, b, c = (batch[:, tri[:, i]] for i in range(3))
+    face = np.cross(b - a, c - a)  # (B, T, 3), length = twice the area
+    incidence = sparse.csr_matrix(
+        (np.ones(tri.size), (tri.reshape(-1), np.repeat(np.arange(len(tri)), 3))), shape=(n_v, len(tri))
+    )
+    summed = incidence @ face.transpose(1, 0, 2).reshape(len(tri), -1)
+    normals = np.asarray(summed).reshape(n_v, len(batch), 3).transpose(1, 0, 2)
+    length = np.linalg.norm(normals, axis=-1, keepdims=True)
+    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 1e-20)
+    return normals[0] if v.ndim == 2 else normals
+
+
+def _triangle_corners(polygons: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Quads (a, b, c, d) → (a, b, c), (a, c, d): (owner polygon (T,), corner slots (T, 3))."""
+    quads = np.flatnonzero(polygons[:, 3] >= 0)
+    owner = np.concatenate([np.arange(len(polygons)), quads])
+    slots = np.concatenate([np.tile([0, 1, 2], (len(polygons), 1)), np.tile([0, 2, 3], (len(quads), 1))])
+    order = np.argsort(owner, kind="stable")
+    return owner[order], slots[order]
+
+
+def _runs(values: np.ndarray) -> list[list[int]]:
+    """Runs of consecutive integers: [5, 6, 7, 2, 3] → [[5, 3], [2, 2]]."""
+    if len(values) == 0:
+        return []
+    breaks = np.flatnonzero(np.diff(values) != 1) + 1
+    starts = np.r_[0, breaks]
+    counts = np.diff(np.r_[starts, len(values)])
+    return [[int(values[s]), int(n)] for s, n in zip(starts, counts, strict=True)]
+
+
+def _polygon_runs(tri_polygon: np.ndarray) -> list[list[int]]:
+    """Triangle → source polygon as runs ``[first polygon, n polygons, triangles per polygon]``."""
+    polys, counts = np.unique(tri_polygon, return_counts=True)
+    if len(polys) == 0:
+        return []
+    breaks = np.flatnonzero((np.diff(polys) != 1) | (np.diff(counts) != 0)) + 1
+    starts = np.r_[0, breaks]
+    lengths = np.diff(np.r_[starts, len(polys)])
+    return [[int(polys[s]), int(n), int(counts[s])] for s, n in zip(starts, lengths, strict=True)]
+
+
+@dataclass(frozen=True)
+class _Primitive:
+    """One material's part of the export, in glTF vertex numbering."""
+
+    material: int  # index into model.materials
+    source: np.ndarray  # (n,) source vertex of each glTF vertex
+    uv: np.ndarray  # (n,) index into model.uvs (-1: none)
+    triangles: np.ndarray  # (t, 3) indices into this primitive's vertices
+    tri_polygon: np.ndarray  # (t,) source polygon of each triangle
+
+
+@dataclass(frozen=True)
+class _Layout:
+    polygons: np.ndarray  # sorted source polygons exported
+    vertices: np.ndarray  # sorted source vertices they use (U)
+    triangles: np.ndarray  # (T, 3) triangles over U's numbering (for normals)
+    primitives: tuple[_Primitive, ...]
+    parts: tuple[str, ...]
+
+
+def _select_polygons(model: FaceModel, parts: tuple[str, ...] | None) -> tuple[np.ndarray, tuple[str, ...]]:
+    if parts is None:
+        if all(p in model.regions for p in ICT_VISIBLE_PARTS):
+            parts = ICT_VISIBLE_PARTS
+        else:
+            return np.arange(len(model.polygons)), ()
+    unknown = [p for p in parts if p not in model.regions]
+    if unknown:
+        raise ShapeError(f"parts names unknown region(s) {unknown}; regions are: {', '.join(model.regions)}")
+    ids = np.unique(np.concatenate([np.arange(model.regions[p].p_start, model.regions[p].p_stop) for p in parts]))
+    if len(ids) == 0:
+        raise ShapeError(f"parts {list(parts)} hold no polygons")
+    return ids, tuple(parts)
+
+
+def _layout(model: FaceModel, parts: tuple[str, ...] | None) -> _Layout:
+    poly_ids, parts = _select_polygons(model, parts)
+    owner, slots = _triangle_corners(model.polygons[poly_ids])
+    tri_v = model.polygons[poly_ids][owner[:, None], slots]
+    has_uv = len(model.uvs) > 0 and model.polygon_uvs.shape == model.polygons.shape
+    tri_uv = model.polygon_uvs[poly_ids][owner[:, None], slots] if has_uv else np.full_like(tri_v, -1)
+    tri_poly = poly_ids[owner]
+    tri_mat = model.polygon_material[tri_poly]
+    used = np.unique(tri_v)
+    primitives = []
+    for mat in np.unique(tri_mat):
+        mask = tri_mat == mat
+        corners = np.stack([tri_v[mask].reshape(-1), tri_uv[mask].reshape(-1)], 1)
+        pairs, inverse = np.unique(corners, axis=0, return_inverse=True)
+        primary = np.r_[True, pairs[1:, 0] != pairs[:-1, 0]]
+        order = np.r_[np.flatnonzero(primary), np.flatnonzero(~primary)]
+        new_index = np.empty(len(order), dtype=np.int64)
+        new_index[order] = np.arange(len(order))
+        primitives.append(
+            _Primitive(
+                material=int(mat),
+                source=pairs[order, 0],
+                uv=pairs[order, 1],
+                triangles=new_index[inverse.reshape(-1)].reshape(-1, 3),
+                tri_polygon=tri_poly[mask],
+            )
+        )
+    return _Layout(poly_ids, used, np.searchsorted(used, tri_v), tuple(primitives), parts)
+
+
+def _contained_regions(model: FaceModel, layout: _Layout) -> dict[str, list[Any]]:
+    """Regions wholly exported, renumbered to the export's compacted vertex/polygon order."""
+    out: dict[str, list[Any]] = {}
+    u, p = layout.vertices, layout.polygons
+    for r in model.regions.values():
+        v0, v1 = np.searchsorted(u, [r.v_start, r.v_stop])
+        p0, p1 = np.searchsorted(p, [r.p_start, r.p_stop])
+        if r.v_stop > r.v_start and v1 - v0 == r.n_vertices and p1 - p0 == r.p_stop - r.p_start:
+            out[r.name] = [int(v0), int(v1), int(p0), int(p1), r.group]
+    return out
+
+
+# ---- metadata -------------------------------------------------------------------------------
+def model_licence(model: FaceModel) -> tuple[str | None, str | None]:
+    """(copyright line, licence text) to carry with exports of ``model``."""
+    src = Path(model.source) if model.source else None
+    if src is not None and src.suffix.lower() in (".glb", ".gltf") and src.is_file():
+        try:
+            asset = read_glb_json(src).get("asset", {})
+        except ModelFileError:
+            asset = {}
+        return asset.get("copyright"), (asset.get("extras") or {}).get("license")
+    text = None
+    for cand in (src.parent / "LICENSE", src / "LICENSE") if src is not None else ():
+        if cand.is_file():
+            text = cand.read_text(encoding="utf-8", errors="replace")
+            break
+    is_ict = model.name.startswith("ict-facekit") or (text is not None and "Institute for Creative Technologies" in text)
+    return (ICT_COPYRIGHT if is_ict else None), text
+
+
+def _sphere_centre(points: np.ndarray) -> np.ndarray:
+    a = np.c_[2 * points, np.ones(len(points))]
+    sol, *_ = np.linalg.lstsq(a, (points**2).sum(1), rcond=None)
+    return sol[:3]
+
+
+def _gaze_extras(model: FaceModel) -> dict[str, Any] | None:
+    """What a viewer needs to turn the eyeballs (morph targets cannot): centres in metres."""
+    gz = model.rig.gaze
+    if gz is None or not {gz.left_eyeball, gz.right_eyeball} <= set(model.regions):
+        return None
+    centre = {
+        side: [float(x) * CM_TO_M for x in _sphere_centre(model.neutral[model.regions[name].vertices].astype(np.float64))]
+        for side, name in (("left", gz.left_eyeball), ("right", gz.right_eyeball))
+    }
+    names = np.asarray(model.shape_names)
+    return {
+        "left_eyeball": gz.left_eyeball,
+        "right_eyeball": gz.right_eyeball,
+        "left_centre": centre["left"],
+        "right_centre": centre["right"],
+        **{k: names[getattr(gz, k)].tolist() for k in ("look_left", "look_right", "look_up", "look_down")},
+        "yaw_deg": float(np.degrees(gz.yaw)),
+        "pitch_up_deg": float(np.degrees(gz.pitch_up)),
+        "pitch_down_deg": float(np.degrees(gz.pitch_down)),
+        "rule": "yaw = yaw_deg * (mean(look_left) - mean(look_right)); pitch = pitch_up_deg * "
+        "mean(look_up) - pitch_down_deg * mean(look_down); rotate each eyeball about its centre "
+        "by yaw about +y then pitch about -x",
+    }
+
+
+def _asset(model: FaceModel, layout: _Layout, extra: dict[str, Any]) -> dict[str, Any]:
+    from emogen import __version__
+
+    copyright_line, licence = model_licence(model)
+    emogen_extras: dict[str, Any] = {
+        "format": EXTRAS_FORMAT,
+        "model_name": model.name,
+        "model_hash": model.model_hash,
+        "identity": model.identity_label,
+        "units": "metres in the file; EmoGen models are in centimetres",
+        "source_vertex_count": model.n_vertices,
+        "source_polygon_count": int(len(model.polygons)),
+        "parts": list(layout.parts),
+        "regions": _contained_regions(model, layout),
+        **extra,
+    }
+    asset: dict[str, Any] = {"version": "2.0", "generator": f"EmoGen {__version__}"}
+    if copyright_line:
+        asset["copyright"] = copyright_line
+    asset["extras"] = {"emogen": emogen_extras, **({"license": licence} if licence else {})}
+    return asset
+
+
+def _materials(model: FaceModel, layout: _Layout) -> list[dict[str, Any]]:
+    out = []
+    for prim in layout.primitives:
+        name = model.materials[prim.material] if prim.material < len(model.materials) else f"material_{prim.material}"
+        srgb = next((c for key, c in _COLOURS if key in name.lower()), _SKIN)
+        linear = [float(((x + 0.055) / 1.055) ** 2.4) for x in srgb]
+        out.append(
+            {
+                "name": name,
+                "pbrMetallicRoughness": {"baseColorFactor": [*linear, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.6},
+                **({"doubleSided": True} if "lash" in name.lower() else {}),
+            }
+        )
+    return out
+
+
+def _primitive_extras(model: FaceModel, layout: _Layout, prim: _Primitive) -> dict[str, Any]:
+    regions = [
+        p for p in layout.parts
+        if np.any((prim.tri_polygon >= model.regions[p].p_start) & (prim.tri_polygon < model.regions[p].p_stop))
+    ]
+    return {
+        "name": model.materials[prim.material] if prim.material < len(model.materials) else "",
+        "emogen": {
+            "regions": regions,
+            "source_vertices": _runs(prim.source),
+            "source_polygons": _polygon_runs(prim.tri_polygon),
+        },
+    }
+
+
+def _uvs(model: FaceModel, prim: _Primitive) -> np.ndarray | None:
+    if len(model.uvs) == 0 or np.all(prim.uv < 0):
+        return None
+    uv = model.uvs[np.maximum(prim.uv, 0)].astype(np.float32)
+    uv[prim.uv < 0] = 0.0
+    uv[:, 1] = 1.0 - uv[:, 1]  # OBJ's v points up, glTF's down
+    return uv
+
+
+def _write(path: Path, data: bytes) -> None:
+    try:
+        Path(path).write_bytes(data)
+    except OSError as exc:
+        raise ModelFileError(f"cannot write {path}: {exc.strerror}") from None
+
+
+# ---- the model with morph targets ----------------------------------------------------------
+@dataclass(frozen=True)
+class ExportReport:
+    """What :func:`export_model_glb` wrote."""
+
+    path: Path
+    raw_bytes: int
+    gzip_bytes: int  # gzip -9: what a server sends with Content-Encoding: gzip
+    n_vertices: int  # glTF vertices over all primitives (UV seams and part borders duplicate)
+    n_source_vertices: int
+    n_triangles: int
+    n_primitives: int
+    n_shapes: int
+    quantized: bool
+    position_step_cm: float  # quantization step (0 when float)
+    max_position_error_cm: float  # over the neutral and every one-hot shape
+    normals_clamped: int  # normal-delta components clamped to int8's [-1, 1]
+    source_vertices: np.ndarray = field(repr=False)  # exported source vertices, sorted (U)
+
+    def max_error_bound_cm(self, weights: np.ndarray) -> float:
+        """Bound on |GLB face − model face| for weights (n_faces, n_shapes), per vertex."""
+        w = np.abs(np.atleast_2d(np.asarray(weights, dtype=np.float64))).sum(1).max()
+        return float(self.position_step_cm / 2 * np.sqrt(3) * (2 + w)) + 1e-6
+
+    def __str__(self) -> str:
+        err = f"max position error {self.max_position_error_cm:.5f} cm" if self.quantized else "float32"
+        return (
+            f"{self.raw_bytes / 1e6:.2f} MB ({self.gzip_bytes / 1e6:.2f} MB gzipped); "
+            f"{self.n_vertices:,} vertices in {self.n_primitives} primitives, {self.n_triangles:,} "
+            f"triangles, {self.n_shapes} morph targets; {err}"
+        )
+
+
+def _quantize(values: np.ndarray, centre: np.ndarray, half: float) -> np.ndarray:
+    return np.clip(np.rint((values - centre) / half * _Q16), -_Q16, _Q16).astype(np.int32)
+
+
+def export_model_glb(
+    model: FaceModel,
+    path: str | Path,
+    *,
+    parts: tuple[str, ...] | None = None,
+    quantize: bool = True,
+) -> ExportReport:
+    """Write the model as a GLB with one morph target per shape (positions and normals).
+
+    parts : regions to export; default ICT-FaceKit's visible parts (``ICT_VISIBLE_PARTS``),
+    or the whole mesh for a model without them. ``quantize``: int16 positions and deltas,
+    int8 normals (KHR_mesh_quantization); float32 otherwise (sparse morph targets in both).
+    """
+    path = Path(path)
+    layout = _layout(model, parts)
+    u = layout.vertices
+    neutral = model.neutral[u].astype(np.float64)
+    shapes = neutral[None] + model.deltas[:, u].astype(np.float64)  # (S, U, 3)
+    normals0 = vertex_normals(neutral, layout.triangles)
+    shape_normals = vertex_normals(shapes, layout.triangles)
+    if quantize:
+        lo = np.minimum(neutral.min(0), shapes.min((0, 1)) if len(shapes) else np.inf)
+        hi = np.maximum(neutral.max(0), shapes.max((0, 1)) if len(shapes) else -np.inf)
+        centre, half = (lo + hi) / 2, float(max((hi - lo).max() / 2, 1e-6))
+        q0 = _quantize(neutral, centre, half)
+        # Deltas between quantized shapes: every one-hot face lands on the grid point nearest it.
+        qd = np.clip(np.stack([_quantize(s, centre, half) for s in shapes]) - q0, -_Q16, _Q16) if len(shapes) else np.zeros((0, len(u), 3), np.int32)
+        step = half / _Q16
+        deq = centre + (q0[None] + np.concatenate([np.zeros_like(q0)[None], qd])) * step
+        truth = np.concatenate([neutral[None], shapes])
+        max_err = float(np.linalg.norm(deq - truth, axis=-1).max())
+        n0 = np.rint(normals0 * _Q8).astype(np.int32)
+        dn_raw = np.rint(shape_normals * _Q8).astype(np.int32) - n0[None]
+        clamped = int(np.count_nonzero(np.abs(dn_raw) > _Q8))
+        pos_base, pos_delta = q0.astype(np.int16), qd.astype(np.int16)
+        nrm_base, nrm_delta = n0.astype(np.int8), np.clip(dn_raw, -_Q8, _Q8).astype(np.int8)
+        node = {"translation": [float(x) * CM_TO_M for x in centre], "scale": [half * CM_TO_M] * 3}
+    else:
+        tol = 1e-4  # cm: smaller motions are dropped from the sparse targets
+        delta = shapes - neutral[None]
+        delta[np.all(np.abs(delta) < tol, axis=-1)] = 0.0
+        dn = shape_normals - normals0[None]
+        dn[np.all(np.abs(dn) < tol, axis=-1)] = 0.0
+        pos_base, pos_delta = (neutral * CM_TO_M).astype(np.float32), (delta * CM_TO_M).astype(np.float32)
+        nrm_base, nrm_delta = normals0.astype(np.float32), dn.astype(np.float32)
+        step, clamped, node = 0.0, 0, {}
+        max_err = float(np.abs(pos_delta.astype(np.float64) / CM_TO_M - (shapes - neutral[None])).max(initial=0.0))
+    b = GlbBuilder()
+    prims = []
+    for prim in layout.primitives:
+        at = np.searchsorted(u, prim.source)
+        attributes = {
+            "POSITION": b.attribute(pos_base[at], normalized=quantize, min_max=True),
+            "NORMAL": b.attribute(nrm_base[at], normalized=quantize),
+        }
+        uv = _uvs(model, prim)
+        if uv is not None:
+            attributes["TEXCOORD_0"] = b.attribute(uv)
+        targets = [
+            {
+                "POSITION": b.sparse(pos_delta[k, at], normalized=quantize, min_max=True),
+                "NORMAL": b.sparse(nrm_delta[k, at], normalized=quantize),
+            }
+            for k in range(model.n_shapes)
+        ]
+        prims.append(
+            {
+                "attributes": attributes,
+                "indices": b.indices(prim.triangles, len(prim.source)),
+                "material": len(prims),
+                "mode": 4,
+                **({"targets": targets} if targets else {}),
+                "extras": _primitive_extras(model, layout, prim),
+            }
+        )
+    mesh: dict[str, Any] = {"name": model.name, "primitives": prims}
+    if model.n_shapes:
+        mesh["weights"] = [0.0] * model.n_shapes
+        mesh["extras"] = {"targetNames": list(model.shape_names)}
+    gaze = _gaze_extras(model)
+    extras = {"shape_names": list(model.shape_names), "position_step_cm": step, **({"gaze": gaze} if gaze else {})}
+    doc: dict[str, Any] = {
+        "asset": _asset(model, layout, extras),
+        "scene": 0,
+        "scenes": [{"name": model.name, "nodes": [0]}],
+        "nodes": [{"name": model.name, "mesh": 0, **node}],
+        "meshes": [mesh],
+        "materials": _materials(model, layout),
+    }
+    if quantize:
+        doc["extensionsUsed"] = doc["extensionsRequired"] = ["KHR_mesh_quantization"]
+    data = b.finish(doc)
+    _write(path, data)
+    return ExportReport(
+        path=path,
+        raw_bytes=len(data),
+        gzip_bytes=len(gzip.compress(data, compresslevel=9)),
+        n_vertices=sum(len(p.source) for p in layout.primitives),
+        n_source_vertices=len(u),
+        n_triangles=len(layout.triangles),
+        n_primitives=len(layout.primitives),
+        n_shapes=model.n_shapes,
+        quantized=quantize,
+        position_step_cm=step,
+        max_position_error_cm=max_err,
+        normals_clamped=clamped,
+        source_vertices=u,
+    )
+
+
+# ---- one face -------------------------------------------------------------------------------
+def _one_face(model: FaceModel, weights: np.ndarray, gaze: bool) -> np.ndarray:
+    w = np.asarray(weights, dtype=np.float64)
+    if w.shape != (model.n_shapes,):
+        raise ShapeError(f"weights must have shape ({model.n_shapes},) (one face); got {w.shape}")
+    return model.evaluate(w[None], gaze=gaze)[0]
+
+
+def _weights_extras(model: FaceModel, weights: np.ndarray) -> dict[str, float]:
+    return {s: float(x) for s, x in zip(model.shape_names, np.asarray(weights, dtype=np.float64), strict=True) if x != 0}
+
+
+def export_face_glb(
+    model: FaceModel,
+    weights: np.ndarray,
+    path: str | Path,
+    *,
+    parts: tuple[str, ...] | None = None,
+    gaze: bool = True,
+) -> None:
+    """Write one evaluated face (weights (n_shapes,)) as a static float32 GLB for Blender/Unity."""
+    path = Path(path)
+    face = _one_face(model, weights, gaze).astype(np.float64)
+    layout = _layout(model, parts)
+    u = layout.vertices
+    verts = face[u]
+    normals = vertex_normals(verts, layout.triangles).astype(np.float32)
+    positions = (verts * CM_TO_M).astype(np.float32)
+    b = GlbBuilder()
+    prims = []
+    for prim in layout.primitives:
+        at = np.searchsorted(u, prim.source)
+        attributes = {"POSITION": b.attribute(positions[at], min_max=True), "NORMAL": b.attribute(normals[at])}
+        uv = _uvs(model, prim)
+        if uv is not None:
+            attributes["TEXCOORD_0"] = b.attribute(uv)
+        prims.append(
+            {
+                "attributes": attributes,
+                "indices": b.indices(prim.triangles, len(prim.source)),
+                "material": len(prims),
+                "mode": 4,
+                "extras": _primitive_extras(model, layout, prim),
+            }
+        )
+    doc = {
+        "asset": _asset(model, layout, {"weights": _weights_extras(model, weights), "gaze_applied": gaze}),
+        "scene": 0,
+        "scenes": [{"name": model.name, "nodes": [0]}],
+        "nodes": [{"name": model.name, "mesh": 0}],
+        "meshes": [{"name": model.name, "primitives": prims}],
+        "materials": _materials(model, layout),
+    }
+    _write(path, b.finish(doc))
+
+
+def export_face_obj(
+    model: FaceModel,
+    weights: np.ndarray,
+    path: str | Path,
+    *,
+    parts: tuple[str, ...] | None = None,
+    gaze: bool = True,
+) -> None:
+    """Write one evaluated face as OBJ in centimetres: every vertex in the model's order (so
+    it lines up with ICT-FaceKit's own OBJs), UVs, and the original quads of ``parts`` grouped
+    by ``usemtl``. The header names the model hash, the weights and the licence."""
+    path = Path(path)
+    face = _one_face(model, weights, gaze)
+    poly_ids, _ = _select_polygons(model, parts)
+    copyright_line, licence = model_licence(model)
+    named = _weights_extras(model, weights)
+    header = [
+        f"EmoGen face of model '{model.name}' (identity {model.identity_label}), centimetres",
+        f"model_hash {model.model_hash}",
+        "weights " + (" ".join(f"{k}={v:.6g}" for k, v in named.items()) or "(neutral)"),
+        f"gaze {'applied' if gaze else 'not applied'}",
+    ]
+    if copyright_line:
+        header.append(copyright_line)
+    if licence:
+        header += ["", *licence.strip().splitlines()]
+    has_uv = len(model.uvs) > 0 and model.polygon_uvs.shape == model.polygons.shape
+    try:
+        write_obj(
+            path,
+            face,
+            model.polygons[poly_ids],
+            "\n".join(header),
+            uvs=model.uvs if has_uv else None,
+            polygon_uvs=model.polygon_uvs[poly_ids] if has_uv else None,
+            polygon_material=model.polygon_material[poly_ids],
+            materials=model.materials,
+        )
+    except OSError as exc:
+        raise ModelFileError(f"cannot write {path}: {exc.strerror}") from None

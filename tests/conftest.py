@@ -1,0 +1,94 @@
+"""Shared fixtures: the real ICT-FaceKit model from ../shared, and a tiny synthetic model folder."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+ICT_DIR = REPO.parent / "shared" / "ict-facekit" / "FaceXModel"
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Keep the compiled-model cache of the test run out of the user's cache folder."""
+    os.environ["EMOGEN_CACHE_DIR"] = str(tmp_path_factory.mktemp("emogen-cache"))
+    os.environ.pop("EMOGEN_MODEL", None)
+    os.environ.pop("EMOGEN_MODEL_URL", None)
+
+
+@pytest.fixture(scope="session")
+def ict_dir() -> Path:
+    if not ICT_DIR.is_dir():
+        pytest.fail(f"the ICT-FaceKit model must be at {ICT_DIR} (../shared beside the repository)")
+    return ICT_DIR
+
+
+@pytest.fixture(scope="session")
+def ict_model(ict_dir: Path):  # type: ignore[no-untyped-def]
+    import emogen
+
+    return emogen.load_model(ict_dir)
+
+
+def read_obj_vertices_plainly(path: Path) -> np.ndarray:
+    """An independent reference: every 'v' line of an OBJ, parsed one by one in plain Python."""
+    rows = []
+    with open(path) as fh:
+        for line in fh:
+            if line.startswith("v "):
+                rows.append([float(x) for x in line.split()[1:4]])
+    return np.array(rows)
+
+
+TINY_SHAPES = ["jawOpen", "smile_L", "smile_R"]
+TINY_EXTRA = ["cheekRaiser_L", "cheekRaiser_R", "PupilDilate_L", "PupilDilate_R"]
+TINY_RIG = """
+name = "tiny"
+[excluded]
+PupilDilate_L = "test"
+PupilDilate_R = "test"
+[emotions.happy]
+action_units = "6+12"
+core = ["smile"]
+optional = ["cheekRaiser"]
+source = "test"
+"""
+
+
+def _obj(verts: np.ndarray) -> str:
+    lines = ["# tiny test mesh", "mtllib x.mtl", "usemtl M_Face"]
+    lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in verts]
+    lines += ["vt 0 0", "vt 1 0", "vt 1 1", "vt 0 1", "vt 0.5 0.5"]
+    lines += ["f 1/1 2/2 3/3 4/4", "f 1/1 3/3 5/5"]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.fixture
+def tiny_dir(tmp_path: Path) -> Path:
+    """A five-vertex model folder laid out like ICT-FaceKit's FaceXModel (random, seeded)."""
+    rng = np.random.default_rng(7)
+    folder = tmp_path / "FaceXModel"
+    folder.mkdir()
+    neutral = rng.normal(size=(5, 3))
+    (folder / "generic_neutral_mesh.obj").write_text(_obj(neutral))
+    for name in TINY_SHAPES + TINY_EXTRA:
+        (folder / f"{name}.obj").write_text(_obj(neutral + rng.normal(scale=0.1, size=(5, 3))))
+    for i in range(2):
+        (folder / f"identity{i:03d}.obj").write_text(
+            _obj(neutral + rng.normal(scale=0.05, size=(5, 3)))
+        )
+    (folder / "vertex_indices.json").write_text(json.dumps({"expressions": TINY_SHAPES}))
+    (tmp_path / "tiny_rig.toml").write_text(TINY_RIG)
+    return folder
+
+
+@pytest.fixture
+def tiny_model(tiny_dir: Path):  # type: ignore[no-untyped-def]
+    import emogen
+
+    return emogen.load_model(tiny_dir, rig=tiny_dir.parent / "tiny_rig.toml")
