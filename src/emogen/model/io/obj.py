@@ -167,9 +167,39 @@ def triangulate(polygons: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.ascontiguousarray(tris[order]), owner[order].astype(np.int32)
 
 
-def write_obj(path: Path, vertices: np.ndarray, polygons: np.ndarray, header: str = "") -> None:
-    """Write one mesh as OBJ: ``v`` lines then ``f`` lines (1-based, quads kept)."""
-    out = [f"# {h}" for h in header.splitlines()]
-    out.extend("v {:.6f} {:.6f} {:.6f}".format(*v) for v in vertices.tolist())
-    out.extend("f " + " ".join(str(i) for i in p if i > 0) for p in (polygons + 1).tolist())
+def write_obj(
+    path: Path,
+    vertices: np.ndarray,
+    polygons: np.ndarray,
+    header: str = "",
+    *,
+    uvs: np.ndarray | None = None,
+    polygon_uvs: np.ndarray | None = None,
+    polygon_material: np.ndarray | None = None,
+    materials: tuple[str, ...] = (),
+) -> None:
+    """Write one mesh as OBJ: ``v`` lines, ``vt`` lines, then ``f`` lines (1-based, quads kept).
+
+    With ``uvs`` and ``polygon_uvs`` the faces carry UV indices (``f a/ta b/tb c/tc``); with
+    ``polygon_material`` and ``materials`` a ``usemtl`` line starts each run of one material.
+    """
+    out = [f"# {h}" if h else "#" for h in header.splitlines()]
+    out.extend("v {:.6f} {:.6f} {:.6f}".format(*v) for v in np.asarray(vertices).tolist())
+    with_uv = uvs is not None and polygon_uvs is not None
+    if with_uv:
+        out.extend("vt {:.6f} {:.6f}".format(*t) for t in np.asarray(uvs).tolist())
+    tex_rows = (np.asarray(polygon_uvs) + 1).tolist() if with_uv else []
+    mats = polygon_material.tolist() if polygon_material is not None and materials else None
+    current = None
+    for k, poly in enumerate((np.asarray(polygons) + 1).tolist()):
+        if mats is not None and mats[k] != current:
+            current = mats[k]
+            out.append(f"usemtl {materials[current] if 0 <= current < len(materials) else current}")
+        if with_uv:
+            corners = zip(poly, tex_rows[k], strict=True)
+            out.append(
+                "f " + " ".join(f"{i}/{t}" if t > 0 else str(i) for i, t in corners if i > 0)
+            )
+        else:
+            out.append("f " + " ".join(str(i) for i in poly if i > 0))
     path.write_text("\n".join(out) + "\n")
