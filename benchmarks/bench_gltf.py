@@ -19,5 +19,7 @@ def run(model) -> dict[str, float]:  # type: ignore[no-untyped-def]
         raw = path.read_bytes()
     wire = len(gzip.compress(raw, 9))
     print("\n== browser GLB (morph targets: positions + normals, visible parts) ==")
-    print(f"export {seconds:.2f} s   raw {len(raw) / 1e6:.2f} MB   on the wire (gzip -9) {wire / 1e6:.2f} MB")
+    print(
+        f"export {seconds:.2f} s   raw {len(raw) / 1e6:.2f} MB   on the wire (gzip -9) {wire / 1e6:.2f} MB"
+    )
     return {"export_s": seconds, "raw_bytes": len(raw), "gzip_bytes": wire}

@@ -26,7 +26,9 @@ def draw(ax, model, weights=None) -> None:  # type: ignore[no-untyped-def]
     keep = np.zeros(len(model.polygons), bool)
     for p in PARTS:
         keep[model.regions[p].polygons] = True
-    tris = model.faces[keep[np.repeat(np.arange(len(model.polygons)), 1 + (model.polygons[:, 3] >= 0))]]
+    tris = model.faces[
+        keep[np.repeat(np.arange(len(model.polygons)), 1 + (model.polygons[:, 3] >= 0))]
+    ]
     t = v[tris]
     n = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     n /= np.linalg.norm(n, axis=1, keepdims=True) + 1e-12
