@@ -1,0 +1,209 @@
+"""Configuration: pydantic models (frozen, unknown keys rejected), loaded from TOML.
+
+Defaults are the paper's (Sections III-B, III-C and IV-A). A typo or an out-of-range value is
+a :class:`~emogen.errors.ConfigError` that names the key::
+
+    invalid config ga.toml: unknown key 'mutaton_genes'
+    invalid config sim.toml: 'ga.mutation_genes' must be >= 0; got -1
+"""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Annotated, Any, Literal, TypeVar
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from emogen.errors import ConfigError
+
+#: Selections per generation in the paper's simulations (Section IV-A): two at initialisation
+#: (g = 0), four in generations 1-5, five in 6-10.
+PAPER_SELECTIONS: tuple[int, ...] = (2, 4, 4, 4, 4, 4, 5, 5, 5, 5, 5)
+PROTOCOL_EMOTIONS: tuple[str, ...] = ("happy", "sad", "angry", "fearful")
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class InitConfig(_Strict):
+    """How generation 0 is made (Section III-C)."""
+
+    kind: Literal["protocol", "fixed"] = "protocol"
+    #: Unique core shapes active per protocol-generated face, drawn from U{lo..hi} (Table IV).
+    activation_range: tuple[Annotated[int, Field(ge=1)], Annotated[int, Field(ge=1)]] = (3, 8)
+    #: Protocol: the emotions with building-block faces, and how many faces each.
+    emotions: tuple[str, ...] = PROTOCOL_EMOTIONS
+    faces_per_emotion: Annotated[int, Field(ge=0)] = 2
+    #: Fixed: a TOML file of sets (None: the packaged sample ``emogen/data/fixed_init.toml``).
+    fixed_file: Path | None = None
+    #: Fixed: which set, numbered from 1 (None: drawn at random at every initialisation).
+    fixed_option: Annotated[int, Field(ge=1)] | None = None
+    #: On reset: draw a new initial population, or show the first one again.
+    on_reset: Literal["reinitialise", "keep"] = "reinitialise"
+
+    @model_validator(mode="after")
+    def _range_ordered(self) -> InitConfig:
+        lo, hi = self.activation_range
+        if lo > hi:
+            raise ValueError(f"activation_range must be [lo, hi] with lo <= hi; got [{lo}, {hi}]")
+        return self
+
+
+class GAConfig(_Strict):
+    """The genetic algorithm (Section III-B, Algorithm 1) and the study's options (III-C)."""
+
+    population_size: Annotated[int, Field(ge=2, le=100)] = 10
+    #: Diversity boost: fresh random faces R(x) in the last slots of every new population.
+    random_faces: Annotated[int, Field(ge=0)] = 4
+    #: m, genes mutated per crossover child.
+    mutation_genes: Annotated[int, Field(ge=0)] = 2
+    #: x, genes drawn for a random face.
+    random_genes: Annotated[int, Field(ge=1)] = 6
+    #: G: the participant selects in generations 0..G; the result is generation G's elite.
+    generations: Annotated[int, Field(ge=0, le=1000)] = 10
+    min_selections: Annotated[int, Field(ge=1)] = 1
+    #: Default: the population size (10, "unconstrained").
+    max_selections: Annotated[int, Field(ge=1)] = 10
+    eye_motion: bool = True
+    identity: str = "generic"
+    #: "emogen" (Algorithm 1) or "classical" (fitness-ranked pairs, two children per pair).
+    variant: Literal["emogen", "classical"] = "emogen"
+    init: InitConfig = InitConfig()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_max_selections(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "max_selections" not in data:
+            size = data.get("population_size", 10)
+            if isinstance(size, int) and not isinstance(size, bool):
+                return {**data, "max_selections": size}
+        return data
+
+    @model_validator(mode="after")
+    def _consistent(self) -> GAConfig:
+        n = self.population_size
+        if self.random_faces > n - 1:
+            raise ValueError(
+                f"random_faces must leave room for the elite (at most population_size - 1 = "
+                f"{n - 1}); got {self.random_faces}"
+            )
+        if self.max_selections > n:
+            raise ValueError(
+                f"max_selections must be at most population_size ({n}); got {self.max_selections}"
+            )
+        if self.min_selections > self.max_selections:
+            raise ValueError(
+                f"min_selections ({self.min_selections}) must not exceed max_selections "
+                f"({self.max_selections})"
+            )
+        if self.init.kind == "protocol":
+            emotional = len(self.init.emotions) * self.init.faces_per_emotion
+            if emotional + 1 > n:
+                raise ValueError(
+                    f"protocol initialisation needs population_size >= {emotional + 1} "
+                    f"({len(self.init.emotions)} emotions × {self.init.faces_per_emotion} "
+                    f"faces + the neutral); got {n}"
+                )
+        return self
+
+    def arbitrary_faces(self) -> int:
+        """Protocol initialisation: faces from all genes (the rest are emotions + neutral)."""
+        return self.population_size - len(self.init.emotions) * self.init.faces_per_emotion - 1
+
+
+class SimulationConfig(_Strict):
+    """A simulated study: an observer selects by cosine distance to a target (Section IV-A)."""
+
+    ga: GAConfig = GAConfig()
+    #: Target face: {gene or shape name: weight}.
+    target: dict[str, Annotated[float, Field(ge=0, le=1)]] = Field(min_length=1)
+    runs: Annotated[int, Field(ge=1)] = 500
+    seed: Annotated[int, Field(ge=0, lt=2**63)] | None = None
+    #: Faces selected in generation g = 0, 1, ...; the last value repeats beyond the list.
+    #: Ignored by the classical variant, whose observer ranks the whole population.
+    selections: tuple[Annotated[int, Field(ge=1)], ...] = Field(
+        default=PAPER_SELECTIONS, min_length=1
+    )
+
+    @model_validator(mode="after")
+    def _consistent(self) -> SimulationConfig:
+        if not any(v > 0 for v in self.target.values()):
+            raise ValueError("target must have at least one non-zero weight")
+        ga = self.ga
+        if ga.variant == "classical":
+            if ga.max_selections < ga.population_size:
+                raise ValueError(
+                    "the classical variant ranks the whole population: ga.max_selections must "
+                    f"be population_size ({ga.population_size}); got {ga.max_selections}"
+                )
+            return self
+        bad = [s for s in self.selections if not ga.min_selections <= s <= ga.max_selections]
+        if bad:
+            raise ValueError(
+                f"selections must lie within [ga.min_selections, ga.max_selections] = "
+                f"[{ga.min_selections}, {ga.max_selections}]; got {bad}"
+            )
+        return self
+
+    def selections_at(self, generation: int) -> int:
+        return self.selections[min(generation, len(self.selections) - 1)]
+
+
+M = TypeVar("M", bound=BaseModel)
+
+
+def format_validation_error(exc: ValidationError, source: str) -> str:
+    """One line naming every bad key: ``unknown key 'x'``, ``'ga.generations' must be …``."""
+    parts = []
+    for err in exc.errors():
+        loc = [str(p) for p in err["loc"]]
+        if err["type"] == "extra_forbidden":
+            where = f" in [{'.'.join(loc[:-1])}]" if len(loc) > 1 else ""
+            parts.append(f"unknown key '{loc[-1]}'{where}")
+            continue
+        msg = err["msg"].removeprefix("Value error, ")
+        msg = msg.replace("Input should be", "must be").replace("greater than or equal to", ">=")
+        msg = msg.replace("less than or equal to", "<=").replace("greater than", ">")
+        msg = msg.replace("less than", "<")
+        if loc:
+            parts.append(f"'{'.'.join(loc)}' {msg}; got {err.get('input')!r}")
+        else:
+            parts.append(msg)
+    return f"invalid config {source}: " + "; ".join(parts)
+
+
+def validate_config(model: type[M], data: dict[str, Any], source: str = "(arguments)") -> M:
+    """``model.model_validate(data)`` with a ConfigError naming each bad key."""
+    try:
+        return model.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(format_validation_error(exc, source)) from None
+
+
+def read_toml(path: Path) -> dict[str, Any]:
+    try:
+        text = Path(path).read_text()
+    except OSError as exc:
+        raise ConfigError(f"cannot read config file {path}: {exc.strerror}") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"config {path} is not valid TOML: {exc}") from None
+
+
+def load_config(model: type[M], path: Path) -> M:
+    """A config model from a TOML file, e.g. ``load_config(GAConfig, Path("ga.toml"))``."""
+    return validate_config(model, read_toml(path), str(path))
+
+
+def merge(base: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
+    """Nested dict update (overrides win); used to apply command-line options to a TOML."""
+    out = dict(base)
+    for key, value in overrides.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = merge(out[key], value)
+        else:
+            out[key] = value
+    return out

@@ -1,0 +1,46 @@
+"""Seeds and random generators: what is recorded, and how every draw is derived from it.
+
+One integer seed is recorded per GA engine. Generation ``g`` of trial ``t`` (a trial is one
+run of the GA between resets) draws from its own generator,
+``default_rng(SeedSequence(seed, spawn_key=(t, g)))``, so a session replays exactly from its
+seed and its recorded selections, whatever was drawn before. Simulations spawn one child
+seed per run from the simulation's seed (:func:`spawn_seeds`) and record them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from emogen.errors import ConfigError
+
+# Seeds are kept below 2**63 so that they fit signed 64-bit columns (Parquet, SQL, pandas).
+SEED_BITS = 63
+
+
+def check_seed(seed: object, name: str = "seed") -> int:
+    """An integer seed in [0, 2**63), or a ConfigError naming the bad value."""
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
+        raise ConfigError(f"{name} must be a non-negative integer; got {seed!r}")
+    value = int(seed)
+    if not 0 <= value < 2**SEED_BITS:
+        raise ConfigError(f"{name} must be in [0, 2**{SEED_BITS}); got {value}")
+    return value
+
+
+def _to_seed(ss: np.random.SeedSequence) -> int:
+    return int(ss.generate_state(1, np.uint64)[0] >> np.uint64(64 - SEED_BITS))
+
+
+def fresh_seed() -> int:
+    """A new seed from the operating system's entropy (record it: it is not reproducible)."""
+    return _to_seed(np.random.SeedSequence())
+
+
+def spawn_seeds(seed: int, n: int) -> list[int]:
+    """``n`` independent child seeds of ``seed`` (``SeedSequence.spawn``), as recordable ints."""
+    return [_to_seed(child) for child in np.random.SeedSequence(check_seed(seed)).spawn(n)]
+
+
+def generation_rng(seed: int, trial: int, generation: int) -> np.random.Generator:
+    """The generator of generation ``generation`` of trial ``trial`` under ``seed``."""
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(trial, generation)))
