@@ -39,6 +39,7 @@ demo: setup
 	mkdir -p $(OUT)
 	$(BIN)/emogen model export --out $(OUT)/ict-face.glb
 	$(BIN)/emogen model export --face --weight jawOpen=0.4 --weight mouthSmile=0.8 --weight cheekSquint=0.6 --identity female --out $(OUT)/smile-female.obj
+	$(BIN)/emogen simulate --target jawOpen=0.8 --runs 500 --seed 1 --out $(OUT)/simulation
 	$(BIN)/python benchmarks/run.py
 
 bench: setup
