@@ -9,10 +9,14 @@ SHARED_MODEL := $(abspath ../shared/ict-facekit/FaceXModel)
 EMOGEN_MODEL ?= $(if $(wildcard $(SHARED_MODEL)),$(SHARED_MODEL),)
 export EMOGEN_MODEL
 OUT ?= out
+VIEWER := src/emogen/web/static/build/.built
 
-.PHONY: setup test lint demo bench clean
+.PHONY: setup system test lint demo bench clean
 
-setup: $(VENV)/.installed node_modules/.installed
+setup: system $(VENV)/.installed node_modules/.installed $(VIEWER)
+
+system:
+	bash scripts/install-system-deps.sh
 
 $(VENV)/.installed: pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -22,6 +26,10 @@ $(VENV)/.installed: pyproject.toml
 
 node_modules/.installed: package.json package-lock.json
 	npm ci --no-audit --no-fund --loglevel=error
+	touch $@
+
+$(VIEWER): node_modules/.installed $(wildcard src/emogen/web/viewer/* src/emogen/web/build_study_viewer.mjs src/emogen/render/look.json src/emogen/render/shaders/*)
+	npm run build
 	touch $@
 
 lint: setup
@@ -35,12 +43,10 @@ test: lint
 demo: setup
 	@if [ -z "$$EMOGEN_MODEL" ] && [ ! -d "$$($(BIN)/python -c 'from emogen.model.io.fetch import default_model_dir; print(default_model_dir())')/FaceXModel" ]; then \
 		$(BIN)/emogen model fetch; fi
-	$(BIN)/emogen model info
-	mkdir -p $(OUT)
-	$(BIN)/emogen model export --out $(OUT)/ict-face.glb
-	$(BIN)/emogen model export --face --weight jawOpen=0.4 --weight mouthSmile=0.8 --weight cheekSquint=0.6 --identity female --out $(OUT)/smile-female.obj
+	$(BIN)/emogen model info | head -n 4
 	$(BIN)/emogen simulate --target jawOpen=0.8 --runs 500 --seed 1 --out $(OUT)/simulation
-	$(BIN)/python benchmarks/run.py
+	@echo "Starting the demo study (Ctrl-C stops it); open the URL it prints."
+	$(BIN)/emogen serve --database-url sqlite:///$(abspath $(OUT))/demo-study.sqlite
 
 bench: setup
 	$(BIN)/python benchmarks/run.py

@@ -136,6 +136,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="fewer repetitions")
     parser.add_argument("--json", type=Path, help="also write the figures as JSON")
+    parser.add_argument(
+        "--only",
+        nargs="*",
+        choices=["gltf", "render", "correct", "simulate", "study"],
+        help="run only these sections after the model benchmarks",
+    )
     args = parser.parse_args()
 
     from emogen.model import load_model
@@ -169,12 +175,21 @@ def main() -> None:
         f"{rows[-1]['loop_faces_measured']} faces of each batch in this run and scaled)"
     )
 
-    try:
-        from benchmarks import bench_gltf
-    except ImportError:
-        bench_gltf = None  # type: ignore[assignment]
-    if bench_gltf is not None:
-        results["gltf"] = bench_gltf.run(model)
+    from benchmarks import bench_correct, bench_gltf, bench_render, bench_simulate, bench_study
+
+    sections = {
+        "gltf": lambda: bench_gltf.run(model),
+        "render": lambda: bench_render.run(model),
+        "correct": lambda: bench_correct.run(
+            model, 2_000 if args.quick else 10_000, model_path=path
+        ),
+        "simulate": lambda: bench_simulate.run(model),
+        "study": lambda: bench_study.run(),
+    }
+    for name, run in sections.items():
+        if args.only and name not in args.only:
+            continue
+        results[name] = run()
 
     if args.json:
         args.json.write_text(json.dumps(results, indent=2))

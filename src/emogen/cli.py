@@ -4,16 +4,16 @@ from __future__ import annotations
 
 import json
 import sys
-from collections.abc import Callable
 from enum import StrEnum
-from functools import wraps
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import Annotated, Any
 
 import typer
 
 from emogen import __version__
-from emogen.errors import EmoGenError
+from emogen.clitools import IdentityOpt, ModelOpt, RigOpt, friendly_errors, parse_named_weights
+
+__all__ = ["IdentityOpt", "ModelOpt", "RigOpt", "app", "friendly_errors", "parse_named_weights"]
 
 app = typer.Typer(
     name="emogen",
@@ -23,56 +23,6 @@ app = typer.Typer(
 )
 model_app = typer.Typer(help="The face model: inspect, export, fetch.", no_args_is_help=True)
 app.add_typer(model_app, name="model")
-
-F = TypeVar("F", bound=Callable[..., Any])
-
-ModelOpt = Annotated[
-    Path | None,
-    typer.Option(
-        "--model",
-        help="ICT-FaceKit FaceXModel folder or GLB (default: $EMOGEN_MODEL, then the user cache).",
-    ),
-]
-RigOpt = Annotated[
-    Path | None, typer.Option("--rig", help="Rig TOML (default: the packaged ICT rig).")
-]
-IdentityOpt = Annotated[
-    str | None, typer.Option("--identity", help="Identity preset (generic, male, female).")
-]
-
-
-def _fail(message: str, code: int = 2) -> None:
-    typer.secho(f"error: {message}", fg=typer.colors.RED, err=True)
-    raise typer.Exit(code)
-
-
-def friendly_errors(func: F) -> F:
-    """Turn EmoGen's errors into one red line and exit status 2, with no traceback."""
-
-    @wraps(func)
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        try:
-            return func(*args, **kwargs)
-        except EmoGenError as exc:
-            _fail(str(exc))
-
-    return wrapper  # type: ignore[return-value]
-
-
-def parse_named_weights(items: list[str] | None, option: str = "--weight") -> dict[str, float]:
-    """``["jawOpen=0.8", ...]`` → ``{"jawOpen": 0.8}`` with errors that name the bad item."""
-    from emogen.errors import ConfigError
-
-    out: dict[str, float] = {}
-    for item in items or []:
-        name, sep, value = item.partition("=")
-        if not sep or not name.strip():
-            raise ConfigError(f"{option} must look like NAME=VALUE; got {item!r}")
-        try:
-            out[name.strip()] = float(value)
-        except ValueError:
-            raise ConfigError(f"{option} {item!r}: value {value!r} is not a number") from None
-    return out
 
 
 def _version(value: bool) -> None:
@@ -234,6 +184,40 @@ def parse_range(text: str, option: str = "--init-range") -> list[int]:
         raise ConfigError(f"{option} must look like LO-HI (e.g. 3-8); got {text!r}") from None
 
 
+class MetricChoice(StrEnum):
+    cd = "cd"
+    ed = "ed"
+    vertex_rms = "vertex_rms"
+    pca_ed = "pca_ed"
+    std_ed = "std_ed"
+    mahalanobis = "mahalanobis"
+
+
+DaskOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--dask",
+        help="Run on Dask: a scheduler address (tcp://host:8786) or 'local' (a LocalCluster).",
+    ),
+]
+WorkersOpt = Annotated[
+    int | None,
+    typer.Option(
+        "--workers", help="Local worker processes (or LocalCluster workers with --dask local)."
+    ),
+]
+ProgressOpt = Annotated[
+    bool | None,
+    typer.Option(
+        "--progress/--no-progress", help="Progress bar (default: when stderr is a terminal)."
+    ),
+]
+AllWeightsOpt = Annotated[
+    bool,
+    typer.Option("--all-weights", help="Write every shown face's full weights in faces.parquet."),
+]
+
+
 @app.command("simulate")
 @friendly_errors
 def simulate(
@@ -241,6 +225,15 @@ def simulate(
     target: Annotated[
         list[str] | None,
         typer.Option("--target", "-t", help="Target NAME=VALUE (gene or shape); repeatable."),
+    ] = None,
+    target_file: Annotated[
+        Path | None,
+        typer.Option(
+            "--target-file", help="Target from a face table (Parquet/CSV, shape columns)."
+        ),
+    ] = None,
+    target_row: Annotated[
+        int | None, typer.Option("--target-row", help="Row of --target-file (from 0).")
     ] = None,
     runs: Annotated[int | None, typer.Option("--runs", help="Runs (default 500).")] = None,
     seed: Annotated[
@@ -262,20 +255,47 @@ def simulate(
     eye_motion: Annotated[
         bool | None, typer.Option("--eye-motion/--no-eye-motion", help="Evolve eye shapes.")
     ] = None,
+    metric: Annotated[
+        MetricChoice | None,
+        typer.Option("--metric", help="The observer's similarity metric (default cd)."),
+    ] = None,
+    training: Annotated[
+        Path | None,
+        typer.Option("--training", help="Training faces for pca_ed, std_ed, mahalanobis."),
+    ] = None,
+    noise_temperature: Annotated[
+        float | None,
+        typer.Option("--noise-temperature", help="Softmax choice noise T (default 0: none)."),
+    ] = None,
+    correct: Annotated[
+        bool | None,
+        typer.Option(
+            "--correct/--no-correct", help="Apply the model's corrections to shown faces."
+        ),
+    ] = None,
+    all_weights: AllWeightsOpt = False,
+    dask: DaskOpt = None,
+    workers: WorkersOpt = None,
+    progress: ProgressOpt = None,
     config: Annotated[
         Path | None,
-        typer.Option("--config", help="Simulation TOML ([ga], [ga.init], target, runs, …)."),
+        typer.Option(
+            "--config",
+            help="Simulation TOML (tables ga, ga.init, metric; keys target, runs, seed, …).",
+        ),
     ] = None,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
 ) -> None:
-    """Simulate studies: a cosine-distance observer evolves faces towards a target.
+    """Simulate studies: an observer selects faces by a metric toward a target.
 
     Writes simulation.parquet and simulation.csv (one row per run and generation: run,
-    generation, elite_error, n_selected, run_seed) and simulation.json (resolved config, seed).
+    generation, elite_error, elite_distance, n_selected, run_seed), faces.parquet and faces.csv
+    (one row per shown face) and simulation.json (resolved config, seeds, record).
     """
     from emogen.config import SimulationConfig, merge, read_toml, validate_config
     from emogen.model import load_model
+    from emogen.simulate.backends import make_backend
     from emogen.simulate.runner import run_simulation, summary, write_simulation
 
     data: dict[str, Any] = read_toml(config) if config else {}
@@ -298,20 +318,118 @@ def simulate(
         overrides["runs"] = runs
     if seed is not None:
         overrides["seed"] = seed
+    if noise_temperature is not None:
+        overrides["noise_temperature"] = noise_temperature
+    if correct is not None:
+        overrides["correct"] = correct
+    metric_opts: dict[str, Any] = {}
+    if isinstance(data.get("metric"), str):
+        data["metric"] = {"name": data["metric"]}
+    if metric is not None:
+        metric_opts["name"] = metric.value
+    if training is not None:
+        metric_opts["training"] = str(training)
+    if metric_opts:
+        overrides["metric"] = metric_opts
     data = merge(data, overrides)
     if target:
+        data.pop("target_file", None)
+        data.pop("target_row", None)
         data["target"] = parse_named_weights(target, "--target")
+    if target_file is not None:
+        data.pop("target", None)
+        data["target_file"] = str(target_file)
+    if target_row is not None:
+        data["target_row"] = target_row
     source = str(config) if config else "(command line)"
     cfg = validate_config(SimulationConfig, data, source)
     model = load_model(model_path, rig=rig)
-    result = run_simulation(cfg, model.rig, model_name=model.name, model_hash=model.model_hash)
+    backend = make_backend(dask, workers or 1)
+    try:
+        result = run_simulation(
+            cfg,
+            model,
+            model_name=model.name,
+            model_hash=model.model_hash,
+            backend=backend,
+            progress=sys.stderr.isatty() if progress is None else progress,
+            all_weights=all_weights,
+        )
+    finally:
+        backend.close()
     paths = write_simulation(result, out)
     stats = summary(result.table)
     means, sds = stats["mean"].to_numpy(float), stats["std"].to_numpy(float)
-    typer.echo(f"{cfg.runs} runs, seed {result.record['seed']}; elite CD error (mean ± sd):")
+    typer.echo(
+        f"{cfg.runs} runs, seed {result.record['seed']}, metric {cfg.metric.name}, "
+        f"{result.record['compute_seconds']:.2f} s; elite CD error (mean ± sd):"
+    )
     for g in sorted({0, len(means) - 1}):
         typer.echo(f"  generation {g:>3}: {means[g]:.3f} ± {sds[g]:.3f}")
     typer.echo("wrote " + ", ".join(str(p) for p in paths))
+
+
+@app.command("sweep")
+@friendly_errors
+def sweep(
+    sweep_file: Annotated[Path, typer.Argument(help="Sweep TOML: [targets], [grid], settings.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (resumable).")],
+    all_weights: AllWeightsOpt = False,
+    dask: DaskOpt = None,
+    workers: WorkersOpt = None,
+    progress: ProgressOpt = None,
+    model_path: ModelOpt = None,
+    rig: RigOpt = None,
+) -> None:
+    """Run a grid of simulations (targets × metrics × init × schedules × GA variant).
+
+    Each cell is written to OUT/cells/<cell>/ as it finishes; cells already there with the
+    same config hash are skipped, so an interrupted sweep resumes. OUT/summary.csv has one
+    row per cell (elite CD error at generation 0 and G).
+    """
+    from emogen.model import load_model
+    from emogen.simulate.backends import make_backend
+    from emogen.simulate.sweep import load_sweep, run_sweep
+
+    spec = load_sweep(sweep_file)
+    model = load_model(model_path, rig=rig)
+    backend = make_backend(dask, workers or 1)
+    try:
+        result = run_sweep(
+            spec,
+            model,
+            out,
+            backend=backend,
+            progress=sys.stderr.isatty() if progress is None else progress,
+            all_weights=all_weights,
+            model_name=model.name,
+            model_hash=model.model_hash,
+        )
+    finally:
+        backend.close()
+    typer.echo(
+        f"{len(spec.cells)} cells: ran {len(result.ran)}, skipped {len(result.skipped)} "
+        f"(already done); elite CD error at the last generation (mean ± sd):"
+    )
+    for row in result.summary.itertuples():
+        typer.echo(f"  {row.cell:<48} {row.mu_final:.3f} ± {row.sigma_final:.3f}")
+    typer.echo(f"wrote {out / 'summary.csv'}")
+
+
+def _register_subcommands() -> None:
+    """Command groups defined beside their packages (they import helpers from this module)."""
+    from emogen.correct.cli import correct_command
+    from emogen.render.cli import render_app
+    from emogen.study.cli import replay_command, serve_command, study_app
+
+    app.add_typer(render_app, name="render")
+    app.add_typer(study_app, name="study")
+    app.command("serve")(serve_command)
+    app.command("replay")(replay_command)
+    app.command("correct")(correct_command)
+
+
+_register_subcommands()
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -113,12 +113,58 @@ class GAConfig(_Strict):
         return self.population_size - len(self.init.emotions) * self.init.faces_per_emotion - 1
 
 
+#: The observers' similarity metrics (Section IV-B): ED on unique core genes (eq. 11), CD on
+#: full weight vectors (eq. 12), vertex RMS (eq. 13), ED and standardised ED in PCA space
+#: (eqs. 14-15) and the vertex-space Mahalanobis distance (eq. 16).
+MetricName = Literal["cd", "ed", "vertex_rms", "pca_ed", "std_ed", "mahalanobis"]
+EMPIRICAL_METRICS: tuple[str, ...] = ("pca_ed", "std_ed", "mahalanobis")
+
+
+class MetricConfig(_Strict):
+    """The similarity metric a simulated observer selects by. In TOML, ``metric = "ed"`` is
+    short for ``[metric] name = "ed"``."""
+
+    name: MetricName = "cd"
+    #: Empirical metrics: training faces, a Parquet or CSV table with one column per shape (or
+    #: gene) name; other columns are ignored.
+    training: Path | None = None
+    #: Empirical metrics: a pandas query selecting the training rows (e.g. "rank == 0").
+    query: str | None = None
+    #: Empirical metrics: the PCA keeps the components explaining this fraction of variance.
+    variance: Annotated[float, Field(gt=0, le=1)] = 0.99
+    #: Mahalanobis: ridge λ = ridge · tr(S) / 3N added to the training covariance.
+    ridge: Annotated[float, Field(gt=0)] = 1.0
+    #: Vertex RMS: rotate the eyeballs with the gaze weights, as the model renders them.
+    gaze: bool = True
+
+    @model_validator(mode="before")
+    @classmethod
+    def _from_name(cls, data: Any) -> Any:
+        return {"name": data} if isinstance(data, str) else data
+
+    @model_validator(mode="after")
+    def _training_needed(self) -> MetricConfig:
+        if self.name in EMPIRICAL_METRICS and self.training is None:
+            raise ValueError(
+                f"metric '{self.name}' is empirical: give metric.training, a Parquet or CSV "
+                "table of training faces (one column per shape name)"
+            )
+        return self
+
+
 class SimulationConfig(_Strict):
-    """A simulated study: an observer selects by cosine distance to a target (Section IV-A)."""
+    """A simulated study: an observer selects by a metric toward a target (Section IV-A)."""
 
     ga: GAConfig = GAConfig()
-    #: Target face: {gene or shape name: weight}.
-    target: dict[str, Annotated[float, Field(ge=0, le=1)]] = Field(min_length=1)
+    #: Target face: {gene or shape name: weight}. Or give target_file instead.
+    target: (
+        Annotated[dict[str, Annotated[float, Field(ge=0, le=1)]], Field(min_length=1)] | None
+    ) = None
+    #: Target face from a table (Parquet or CSV, one column per shape or gene name): a weight
+    #: file, a dataset, or a simulation's faces table written with all weights.
+    target_file: Path | None = None
+    #: Which row of target_file (numbered from 0); may be omitted when it has one row.
+    target_row: Annotated[int, Field(ge=0)] | None = None
     runs: Annotated[int, Field(ge=1)] = 500
     seed: Annotated[int, Field(ge=0, lt=2**63)] | None = None
     #: Faces selected in generation g = 0, 1, ...; the last value repeats beyond the list.
@@ -126,11 +172,23 @@ class SimulationConfig(_Strict):
     selections: tuple[Annotated[int, Field(ge=1)], ...] = Field(
         default=PAPER_SELECTIONS, min_length=1
     )
+    metric: MetricConfig = MetricConfig()
+    #: Choice noise: 0 selects the closest faces; T > 0 draws them by a softmax of −distance/T
+    #: (in the metric's units), without replacement, to model real participants.
+    noise_temperature: Annotated[float, Field(ge=0)] = 0.0
+    #: Apply the model's corrections (correctives, collisions) to every shown face.
+    correct: bool = False
 
     @model_validator(mode="after")
     def _consistent(self) -> SimulationConfig:
-        if not any(v > 0 for v in self.target.values()):
+        if self.target is None and self.target_file is None:
+            raise ValueError("'target' Field required (or give target_file)")
+        if self.target is not None and self.target_file is not None:
+            raise ValueError("give either target or target_file, not both")
+        if self.target is not None and not any(v > 0 for v in self.target.values()):
             raise ValueError("target must have at least one non-zero weight")
+        if self.target_row is not None and self.target_file is None:
+            raise ValueError("target_row needs target_file")
         ga = self.ga
         if ga.variant == "classical":
             if ga.max_selections < ga.population_size:

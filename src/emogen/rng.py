@@ -44,3 +44,13 @@ def spawn_seeds(seed: int, n: int) -> list[int]:
 def generation_rng(seed: int, trial: int, generation: int) -> np.random.Generator:
     """The generator of generation ``generation`` of trial ``trial`` under ``seed``."""
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(trial, generation)))
+
+
+#: Spawn-key words of the observer's choice-noise stream. The GA's generators use two-word
+#: keys (trial, generation); a three-word key can never coincide with one of them.
+OBSERVER_KEY = (0x0B5, 0xC401CE)
+
+
+def observer_rng(seed: int, trial: int = 0) -> np.random.Generator:
+    """The simulated observer's generator for trial ``trial`` under ``seed`` (choice noise)."""
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(trial, *OBSERVER_KEY)))

@@ -20,6 +20,7 @@ from emogen.errors import ModelFileError
 from emogen.model.face import FaceModel
 from emogen.model.io.glb import glb_bytes, read_gltf
 from emogen.model.io.gltf import (
+    CM_TO_M,
     ICT_COPYRIGHT,
     ExportReport,
     export_face_glb,
@@ -128,8 +129,10 @@ def test_model_glb_layout_for_threejs(
     assert gltf is not None
     assert len(gltf.meshes) == 1
     mesh = gltf.meshes[0]
-    assert mesh.extras["targetNames"] == list(model.shape_names)
-    assert len(mesh.weights) == model.n_shapes
+    names = [*model.shape_names, *model.correctives.names]
+    assert report.corrective_names == model.correctives.names and report.n_correctives > 0
+    assert mesh.extras["targetNames"] == names
+    assert len(mesh.weights) == len(names) == report.n_targets
     assert (
         len(mesh.primitives)
         == report.n_primitives
@@ -138,7 +141,7 @@ def test_model_glb_layout_for_threejs(
     for prim in mesh.primitives:
         assert prim.attributes.POSITION is not None and prim.attributes.NORMAL is not None
         assert prim.attributes.TEXCOORD_0 is not None
-        assert len(prim.targets) == model.n_shapes
+        assert len(prim.targets) == report.n_targets
         assert all(set(t) == {"POSITION", "NORMAL"} for t in prim.targets)  # pygltflib: dicts
     assert gltf.extensionsRequired == ["KHR_mesh_quantization"]
     assert all(v.byteOffset % 4 == 0 for v in gltf.bufferViews)
@@ -180,6 +183,51 @@ def test_round_trip_matches_the_original_model(
             err
         )
         assert err <= 0.005
+
+
+def test_corrective_targets_evaluate_to_the_corrected_face(
+    model: FaceModel, exported: tuple[Path, ExportReport]
+) -> None:
+    """Shapes then correctives (the full vector) through the GLB's own morph deltas equal
+    model.evaluate(w, correct=True) within the quantization + corrective tolerance bound."""
+    path, report = exported
+    g = read_gltf(path)
+    prims = g.doc["meshes"][0]["primitives"]
+    scale = np.asarray(g.doc["nodes"][0]["scale"]) / CM_TO_M
+    shift = np.asarray(g.doc["nodes"][0]["translation"]) / CM_TO_M
+    u = report.source_vertices
+    rng = np.random.default_rng(11)
+    core = rng.uniform(0, 0.6, (6, model.n_shapes))
+    core[:, model.shape_index("jawOpen")] = [0.0, 0.2, 0.5, 0.8, 1.0, 0.4]
+    result = model.correct(core)
+    assert result.correctives.any()
+    full = np.hstack([result.weights, result.correctives])
+    assert full.shape[1] == report.n_targets
+    want = model.evaluate(core, gaze=False, correct=True)[:, u]
+    bound = report.max_error_bound_cm(full)
+    for prim in prims:
+        runs = prim["extras"]["emogen"]["source_vertices"]
+        src = np.concatenate([np.arange(a, a + n) for a, n in runs])
+        at = np.searchsorted(u, src)
+        base = g.accessor(prim["attributes"]["POSITION"])[:, :3].astype(np.float64)
+        deltas = np.stack(
+            [g.accessor(t["POSITION"])[:, :3].astype(np.float64) for t in prim["targets"]]
+        )
+        assert len(deltas) == report.n_targets
+        got = (base[None] + np.einsum("fk,kvc->fvc", full, deltas)) * scale + shift
+        err = np.linalg.norm(got - want[:, at], axis=-1).max()
+        assert err <= bound, (err, bound)
+    one_hot = np.eye(report.n_targets)[model.n_shapes :]
+    assert report.max_corrective_error_cm <= report.max_error_bound_cm(one_hot)
+
+
+def test_model_glb_without_correctives_has_shape_targets_only(
+    model: FaceModel, tmp_path: Path
+) -> None:
+    report = export_model_glb(model, tmp_path / "plain.glb", correctives=False)
+    assert report.n_targets == model.n_shapes and report.corrective_names == ()
+    names = read_gltf(tmp_path / "plain.glb").doc["meshes"][0]["extras"]["targetNames"]
+    assert names == list(model.shape_names)
 
 
 def test_round_trip_restores_topology_regions_and_rig(
@@ -229,8 +277,11 @@ def test_plain_reading_of_the_export_without_emogen_extras(
     assert m2.n_vertices == exported[1].n_vertices == len(source)
     assert len(m2.regions) == exported[1].n_primitives
     assert m2.rig.gaze is None  # ICT names, but no eyeball regions to turn
+    # without EmoGen's extras the corrective targets read as further shapes (zero here)
+    assert m2.shape_names == (*model.shape_names, *exported[1].corrective_names)
     w = np.random.default_rng(3).uniform(0, 0.5, (2, model.n_shapes))
-    err = np.linalg.norm(m2.evaluate(w) - model.evaluate(w, gaze=False)[:, source], axis=-1).max()
+    w2 = np.hstack([w, np.zeros((2, exported[1].n_correctives))])
+    err = np.linalg.norm(m2.evaluate(w2) - model.evaluate(w, gaze=False)[:, source], axis=-1).max()
     assert err <= exported[1].max_error_bound_cm(w)
 
 

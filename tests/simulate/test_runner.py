@@ -121,3 +121,100 @@ def test_cli_simulate_errors(ict_dir: Path, tmp_path: Path) -> None:
     bad.write_text("target = {jawOpen = 1}\n[ga]\nmutaton_genes = 3\n")
     result = runner.invoke(app, [*base, "--config", str(bad)])
     assert result.exit_code == 2 and "unknown key 'mutaton_genes' in [ga]" in result.output
+
+
+# ---- the faces table, other metrics, the CLI's new options --------------------------------------
+from emogen.config import MetricConfig  # noqa: E402
+from emogen.simulate.runner import FACE_COLUMNS  # noqa: E402
+
+
+def test_faces_table_and_all_weights(ict_model, tmp_path: Path) -> None:
+    cfg = SimulationConfig(target={"jawOpen": 0.8}, runs=3, seed=2)
+    result = run_simulation(cfg, ict_model.rig, all_weights=True)
+    faces = result.faces
+    assert faces is not None and len(faces) == 3 * 11 * 10
+    assert tuple(faces.columns[: len(FACE_COLUMNS)]) == FACE_COLUMNS
+    assert list(faces.columns[len(FACE_COLUMNS) :]) == list(ict_model.rig.shape_names)
+    # one elite per run and generation, and it is the table's elite
+    elites = faces[faces["rank"] == 0].reset_index(drop=True)
+    assert len(elites) == 33
+    np.testing.assert_array_equal(elites["error"], result.table["elite_error"])
+    # the selections follow the paper's schedule, elites first
+    counts = faces[faces["rank"] >= 0].groupby(["run", "generation"]).size().to_numpy()
+    assert counts[:11].tolist() == [2, 4, 4, 4, 4, 4, 5, 5, 5, 5, 1]
+    assert set(faces.loc[faces["generation"] == 0, "operator"]) <= {
+        "init_happy", "init_sad", "init_angry", "init_fearful", "init_arbitrary", "init_neutral"
+    }  # fmt: skip
+    assert (
+        faces.loc[(faces["generation"] > 0) & (faces["slot"] == 0), "operator"] == "elite"
+    ).all()
+    # the faces table is a face table: an evolved face as the next target
+    paths = write_simulation(result, tmp_path)
+    assert [p.name for p in paths][-2:] == ["faces.parquet", "faces.csv"]
+    last = faces[(faces["generation"] == 10) & (faces["rank"] == 0)].index[0]
+    nxt = SimulationConfig(target_file=tmp_path / "faces.parquet", target_row=int(last), runs=2)
+    record = run_simulation(nxt, ict_model.rig).record
+    assert record["target_source"]["row"] == last
+    weights = faces.loc[last, list(ict_model.rig.shape_names)].to_numpy(float)
+    assert record["target_weights"] == {
+        s: w for s, w in zip(ict_model.rig.shape_names, weights, strict=True) if w != 0
+    }
+
+
+def test_empirical_metrics_train_on_a_faces_table(ict_model, tmp_path: Path) -> None:
+    train = run_simulation(
+        SimulationConfig(target={"mouthSmile": 0.7}, runs=20, seed=1),
+        ict_model.rig,
+        all_weights=True,
+    )
+    write_simulation(train, tmp_path, csv=False)
+    for name in ("pca_ed", "std_ed", "mahalanobis"):
+        metric = MetricConfig(name=name, training=tmp_path / "faces.parquet", query="rank >= 0")
+        cfg = SimulationConfig(target={"jawOpen": 1.0}, runs=4, seed=3, metric=metric)
+        result = run_simulation(cfg, ict_model)
+        details = result.record["metric_details"]
+        assert details["n_train"] == int((train.faces["rank"] >= 0).sum())
+        assert result.table["elite_distance"].ge(0).all()
+        assert (result.table["elite_error"] <= 1).all()
+
+
+def test_cli_simulate_metric_noise_weights_and_target_file(ict_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "a"
+    base = ["simulate", "--model", str(ict_dir), "--runs", "3", "--seed", "4", "--no-progress"]
+    args = [*base, "--target", "jawOpen=0.9", "--metric", "ed", "--noise-temperature", "0.1"]
+    result = runner.invoke(app, [*args, "--all-weights", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "metric ed" in result.output
+    record = json.loads((out / "simulation.json").read_text())
+    assert record["config"]["metric"]["name"] == "ed"
+    assert record["config"]["noise_temperature"] == 0.1
+    faces = pd.read_parquet(out / "faces.parquet")
+    assert "jawOpen" in faces.columns and len(faces) == 3 * 11 * 10
+    result = runner.invoke(
+        app,
+        [
+            *base,
+            "--target-file",
+            str(out / "faces.parquet"),
+            "--target-row",
+            "5",
+            "--out",
+            str(tmp_path / "b"),
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    record = json.loads((tmp_path / "b" / "simulation.json").read_text())
+    assert record["config"]["target_row"] == 5 and record["config"]["target"] is None
+    corrected = [*base[:3], *base[5:], "--runs", "1", "--generations", "1", "--target", "jawOpen=1"]
+    result = runner.invoke(
+        app, [*corrected, "--correct", "--all-weights", "--out", str(tmp_path / "c")]
+    )
+    assert result.exit_code == 0, result.output
+    record = json.loads((tmp_path / "c" / "simulation.json").read_text())
+    assert record["corrected"] and record["config"]["correct"]
+    faces = pd.read_parquet(tmp_path / "c" / "faces.parquet")
+    assert "collision_lip_outer_left" in faces.columns  # the correctives' weights are shown
+    result = runner.invoke(
+        app, [*base, "--target", "jawOpen=1", "--metric", "std_ed", "--out", str(tmp_path / "d")]
+    )
+    assert result.exit_code == 2 and "metric 'std_ed' is empirical" in result.output

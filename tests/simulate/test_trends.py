@@ -7,6 +7,8 @@ mouth like the paper's complex target 2.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -64,3 +66,52 @@ def test_paper_trends(ict_model) -> None:
     assert stats.mannwhitneyu(few[:, 10], many[:, 10], alternative="less").pvalue < 1e-3
     # and start with the larger, more variable bias (σ0 falls with more activations)
     assert few[:, 0].mean() > many[:, 0].mean() and few[:, 0].std() > many[:, 0].std()
+
+
+# Table V: targets of increasing complexity converge better (lower μ and σ of the final CD error).
+HAPPY = {  # a dense 'happy' face: every gene active, the happy blocks strongly
+    "mouthSmile": 0.9,
+    "cheekSquint": 0.6,
+    "cheekRaiser": 0.7,
+    "eyeSquint": 0.45,
+    "mouthUpperUp": 0.3,
+    "mouthLowerDown": 0.3,
+    "jawOpen": 0.25,
+    "mouthDimple": 0.35,
+}
+TABLE_V = {
+    "1-shape": {"jawOpen": 1.0},
+    "3-shape": {"jawOpen": 1.0, "noseSneer": 0.6},  # target 1 with a nose wrinkle
+    "12-shape": {  # brows, cheeks and mouth, not one emotion's building blocks
+        "browOuterUp": 0.6,
+        "cheekPuff": 0.4,
+        "mouthDimple": 0.5,
+        "mouthPress": 0.4,
+        "noseSneer": 0.3,
+        "mouthPucker": 0.5,
+        "jawForward": 0.3,
+    },
+}
+
+
+def dense_happy(rig) -> dict[str, float]:
+    out = {g.name: 0.02 + 0.06 * ((i * 7) % 10) / 9 for i, g in enumerate(rig.genes)}
+    return out | HAPPY
+
+
+@pytest.mark.slow
+def test_table_v_ordering(ict_model) -> None:
+    rig = ict_model.rig
+    targets = {**TABLE_V, "dense": dense_happy(rig)}
+    shapes = {k: int((rig.weights_from_names(t) > 0).sum()) for k, t in targets.items()}
+    assert shapes == {"1-shape": 1, "3-shape": 3, "12-shape": 12, "dense": 52}
+    final = {}
+    for name, target in targets.items():
+        cfg = SimulationConfig(target=target, runs=RUNS, seed=SEED)
+        t = run_simulation(cfg, rig).table
+        final[name] = t.loc[t["generation"] == 10, "elite_error"].to_numpy()
+    names = list(targets)
+    for a, b in itertools.pairwise(names):
+        assert final[a].mean() > final[b].mean(), (a, b)
+        assert final[a].std() > final[b].std(), (a, b)
+        assert stats.mannwhitneyu(final[a], final[b], alternative="greater").pvalue < 1e-6

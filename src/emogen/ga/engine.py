@@ -10,8 +10,8 @@ selections (:meth:`Engine.replay`), and its state survives a JSON round trip
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -47,6 +47,9 @@ class Population:
     operators : (n_faces,) str — ``elite``, ``mean_all``, ``mean_elite_other``, ``kept``,
       ``crossover_mutation``, ``random``, or ``init_<emotion>``, ``init_arbitrary``,
       ``init_neutral``, ``init_fixed`` in generation 0
+    correctives : (n_faces, C) float or None, corrective weights computed after the core
+      weights by the engine's corrector (combinational, then collision); never evolved
+    corrective_names : (C,) names of those columns
     """
 
     genes: np.ndarray
@@ -56,6 +59,8 @@ class Population:
     operators: np.ndarray
     generation: int
     trial: int
+    correctives: np.ndarray | None = None
+    corrective_names: tuple[str, ...] = ()
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -71,6 +76,8 @@ class Population:
             _readonly(self.operators[s]),
             self.generation,
             self.trial,
+            None if self.correctives is None else _readonly(self.correctives[s]),
+            self.corrective_names,
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -84,8 +91,27 @@ class Population:
         }
 
 
+#: Corrects a batch of full weight vectors before they are shown: returns
+#: (corrective names, (n_faces, C) corrective weights). ``correctives_of(model)`` makes one.
+Corrector = Callable[[np.ndarray], tuple[tuple[str, ...], np.ndarray]]
+
+
+def correctives_of(model: Any) -> Corrector:
+    """A corrector from a face model: ``model.correct`` (combinational + collision correctives)."""
+
+    def correct(weights: np.ndarray) -> tuple[tuple[str, ...], np.ndarray]:
+        result = model.correct(weights)
+        return tuple(result.corrective_names), np.asarray(result.correctives, dtype=np.float64)
+
+    return correct
+
+
 class Engine:
     """EmoGen's GA for one participant (or one simulated run).
+
+    With a ``corrector`` (:func:`correctives_of`), every population is corrected before it is
+    shown and carries its corrective weights beside the core weights (deterministic: no rng,
+    so replays stay exact).
 
     ``Engine(config, rig, seed)`` makes generation 0 at once. Generations are numbered
     g = 0 … G (``config.generations``); a selection is told in every one of them, and the elite
@@ -93,11 +119,16 @@ class Engine:
     new trial (re-initialised or with the same initial set, as configured).
     """
 
-    def __init__(self, config: GAConfig, rig: Rig, seed: int) -> None:
-        self._setup(config, rig, seed)
+    def __init__(
+        self, config: GAConfig, rig: Rig, seed: int, *, corrector: Corrector | None = None
+    ) -> None:
+        self._setup(config, rig, seed, corrector)
         self._population = self._initialise()
 
-    def _setup(self, config: GAConfig, rig: Rig, seed: int) -> None:
+    def _setup(
+        self, config: GAConfig, rig: Rig, seed: int, corrector: Corrector | None = None
+    ) -> None:
+        self.corrector = corrector
         self.config = config
         self.rig = rig
         self.seed = check_seed(seed)
@@ -240,14 +271,25 @@ class Engine:
         ids = np.arange(self._next_id, self._next_id + n, dtype=np.int64)
         self._next_id += n
         genes = np.asarray(genes, dtype=np.float64)
-        return Population(
-            genes=_readonly(genes),
-            weights=_readonly(self.rig.expand(genes, self.config.eye_motion)),
-            ids=_readonly(ids),
-            parent_ids=_readonly(np.asarray(parent_ids, dtype=np.int64)),
-            operators=_readonly(np.asarray(operators, dtype=str)),
-            generation=self.generation,
-            trial=self.trial,
+        return self._corrected(
+            Population(
+                genes=_readonly(genes),
+                weights=_readonly(self.rig.expand(genes, self.config.eye_motion)),
+                ids=_readonly(ids),
+                parent_ids=_readonly(np.asarray(parent_ids, dtype=np.int64)),
+                operators=_readonly(np.asarray(operators, dtype=str)),
+                generation=self.generation,
+                trial=self.trial,
+            )
+        )
+
+    def _corrected(self, population: Population) -> Population:
+        """The population with its corrective weights, when the engine has a corrector."""
+        if self.corrector is None:
+            return population
+        names, values = self.corrector(population.weights)
+        return replace(
+            population, correctives=_readonly(np.asarray(values)), corrective_names=tuple(names)
         )
 
     # ---- records -------------------------------------------------------------------------
@@ -278,7 +320,9 @@ class Engine:
         return json.dumps(self.state())
 
     @classmethod
-    def from_json(cls, text: str | dict[str, Any], rig: Rig) -> Engine:
+    def from_json(
+        cls, text: str | dict[str, Any], rig: Rig, *, corrector: Corrector | None = None
+    ) -> Engine:
         """Resume an engine saved with :meth:`to_json` (the rig must have the same genes)."""
         try:
             data = json.loads(text) if isinstance(text, str) else dict(text)
@@ -290,7 +334,7 @@ class Engine:
             )
         config = validate_config(GAConfig, data["config"], "(engine state)")
         self = cls.__new__(cls)
-        self._setup(config, rig, data["seed"])
+        self._setup(config, rig, data["seed"], corrector)
         if list(self.gene_names) != data["rig"]["genes"]:
             raise ConfigError(
                 f"engine state was saved with rig '{data['rig']['name']}' genes "
@@ -312,14 +356,16 @@ class Engine:
 
     def _population_from(self, d: dict[str, Any]) -> Population:
         genes = np.array(d["genes"], dtype=np.float64).reshape(-1, len(self.gene_names))
-        return Population(
-            genes=_readonly(genes),
-            weights=_readonly(self.rig.expand(genes, self.config.eye_motion)),
-            ids=_readonly(np.array(d["ids"], dtype=np.int64)),
-            parent_ids=_readonly(np.array(d["parent_ids"], dtype=np.int64).reshape(-1, 2)),
-            operators=_readonly(np.array(d["operators"], dtype=str)),
-            generation=int(d["generation"]),
-            trial=int(d["trial"]),
+        return self._corrected(
+            Population(
+                genes=_readonly(genes),
+                weights=_readonly(self.rig.expand(genes, self.config.eye_motion)),
+                ids=_readonly(np.array(d["ids"], dtype=np.int64)),
+                parent_ids=_readonly(np.array(d["parent_ids"], dtype=np.int64).reshape(-1, 2)),
+                operators=_readonly(np.array(d["operators"], dtype=str)),
+                generation=int(d["generation"]),
+                trial=int(d["trial"]),
+            )
         )
 
     def save(self, path: Path) -> None:
@@ -334,13 +380,14 @@ class Engine:
         selections: Iterable[dict[str, Any]],
         *,
         trial: int | None = None,
+        corrector: Corrector | None = None,
     ) -> Engine:
         """A fresh engine driven through recorded selections ({trial, generation, elite, others}).
 
         ``trial``: the trial to end in, for a reset after the last recorded selection
         (default: the last recorded selection's trial).
         """
-        engine = cls(config, rig, seed)
+        engine = cls(config, rig, seed, corrector=corrector)
         for s in selections:
             while engine.trial < int(s["trial"]):
                 engine.reset()

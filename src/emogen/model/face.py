@@ -11,6 +11,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -19,6 +20,10 @@ from emogen.model.io.ict import ModelArrays
 from emogen.model.io.obj import ObjTopology, triangulate
 from emogen.model.regions import Region, ict_regions
 from emogen.model.rig import Rig
+
+if TYPE_CHECKING:
+    from emogen.correct.apply import CorrectionResult, Corrector
+    from emogen.correct.correctives import Correctives
 
 # Faces evaluated per matrix product: bounds the working memory beyond the output
 # (one chunk of float32 vertices is CHUNK × V × 12 bytes, 80 MB for ICT at 256).
@@ -104,8 +109,8 @@ class FaceModel:
             ) from None
 
     # ---- evaluation ---------------------------------------------------------------------
-    def _check_weights(self, weights: np.ndarray) -> np.ndarray:
-        w = np.asarray(weights, dtype=np.float32)
+    def _check_weights(self, weights: np.ndarray, dtype: type = np.float32) -> np.ndarray:
+        w: np.ndarray = np.asarray(weights, dtype=dtype)
         if w.ndim == 1:
             raise ShapeError(
                 f"weights must be 2-D (n_faces, {self.n_shapes}); got 1-D shape {w.shape}: "
@@ -124,14 +129,20 @@ class FaceModel:
         gaze: bool = True,
         out: np.ndarray | None = None,
         chunk: int = DEFAULT_CHUNK,
+        correct: bool = False,
     ) -> np.ndarray:
         """Vertices of faces: weights (n_faces, n_shapes) → (n_faces, n_vertices, 3) float32.
 
         The blend is one matrix product per chunk of faces, written straight into ``out``
         (allocated when None; pass a memory map to stream huge batches to disk). Beyond the
         output, working memory is bounded by ``chunk``. With ``gaze`` and a rig that declares
-        it, the eyeballs rotate rigidly with the ``eyeLook*`` weights.
+        it, the eyeballs rotate rigidly with the ``eyeLook*`` weights. With ``correct`` the
+        faces are corrected first (:meth:`correct`): companions capped, combinational and
+        collision correctives added; a face none of them touches is bit-identical to
+        ``correct=False``.
         """
+        if correct:
+            return self.evaluate_correction(self.correct(weights), gaze=gaze, out=out, chunk=chunk)
         w = self._check_weights(weights)
         n = w.shape[0]
         if out is None:
@@ -203,6 +214,50 @@ class FaceModel:
                 rotated = np.matmul(out[moving, sl], rot_t32)
                 rotated += shift
                 out[moving, sl] = rotated
+
+    def evaluate_correction(
+        self,
+        result: CorrectionResult,
+        *,
+        gaze: bool = True,
+        out: np.ndarray | None = None,
+        chunk: int = DEFAULT_CHUNK,
+    ) -> np.ndarray:
+        """Vertices of corrected faces (from :meth:`correct`): (n_faces, n_vertices, 3) float32.
+
+        The effective shape weights are blended as by :meth:`evaluate`, then the correctives'
+        offsets are added to the faces that have any (the others stay bit-identical).
+        """
+        out = self.evaluate(result.weights, gaze=gaze, out=out, chunk=chunk)
+        self._corrector.add_offsets(result, out)
+        return out
+
+    # ---- correctives --------------------------------------------------------------------
+    @property
+    def correctives(self) -> Correctives:
+        """The model's corrective shapes (built from its geometry once, cached on disk)."""
+        return self._corrector.correctives
+
+    @cached_property
+    def _corrector(self) -> Corrector:
+        from emogen.correct.apply import Corrector
+
+        return Corrector(self)
+
+    def correct(self, weights: np.ndarray, *, collisions: bool = True) -> CorrectionResult:
+        """Correct faces (paper Section III-A): weights (n_faces, n_shapes) → the correction.
+
+        Companion shapes are capped at their leads (``mouthClose`` ≤ ``jawOpen``), the
+        combinational correctives take the product of their drivers' weights, and the eight
+        collision correctives are solved (eq. 5) until no lip or teeth collision remains. The
+        result keeps the core weights, the effective weights and every corrective weight
+        separately, and says what remains uncorrected. A face without collision gets collision
+        weights of exactly zero.
+        """
+        w = self._check_weights(weights, np.float64)
+        if np.any((w < 0) | (w > 1)):
+            raise ShapeError("weights must lie in [0, 1] to be corrected")
+        return self._corrector.correct(w, collisions=collisions)
 
     # ---- identities ---------------------------------------------------------------------
     def with_identity(self, identity: IdentityLike) -> FaceModel:

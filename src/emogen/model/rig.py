@@ -11,7 +11,15 @@ A rig (TOML; ``emogen/data/ict_rig.toml`` is the default for ICT-FaceKit) declar
 * **emotions**: building blocks (genes) from FACS/EMFACS prototypes for protocol initialisation;
 * **gaze**: rigid eyeball rotation driven by the ``eyeLook*`` weights (ICT's shapes move the lids
   but not the eyeballs);
-* **identities**: named identity-coefficient presets.
+* **identities**: named identity-coefficient presets;
+* **correctives**: combinational corrective shapes, each activated by the product of its driver
+  shapes' weights (``[[correctives]]``: name, drivers, optional ``file`` — an OBJ, or a GLB with a
+  morph target of that name — relative to the rig file; without a file the shape is derived
+  from the geometry by the double-counting rule of :mod:`emogen.correct.combinational`), and
+  ``[derive_correctives] min_overlap`` to derive one for every pair of shapes whose overlap
+  score reaches it;
+* **companions**: shapes meaningful only with another (``mouthClose = "jawOpen"``): their
+  effective weight is capped at their lead's.
 """
 
 from __future__ import annotations
@@ -68,6 +76,18 @@ class IdentitySpec(_Strict):
     description: str
 
 
+class CorrectiveSpec(_Strict):
+    name: str
+    drivers: list[str] = Field(min_length=1)
+    file: str | None = None
+    description: str = ""
+
+
+class DeriveSpec(_Strict):
+    min_overlap: Annotated[float, Field(gt=0, le=2)]
+    description: str = ""
+
+
 class RigSpec(_Strict):
     name: str
     description: str = ""
@@ -77,6 +97,9 @@ class RigSpec(_Strict):
     gaze: GazeSpec | None = None
     emotions: dict[str, EmotionSpec] = {}
     identities: dict[str, IdentitySpec] = {}
+    correctives: list[CorrectiveSpec] = []
+    derive_correctives: DeriveSpec | None = None
+    companions: dict[str, str] = {}
 
 
 def _format_validation(exc: ValidationError, source: str) -> str:
@@ -134,6 +157,20 @@ class Emotion:
 
 
 @dataclass(frozen=True)
+class Corrective:
+    """A declared combinational corrective: activation = product of the drivers' weights.
+
+    ``file``: an absolute path to the artist's shape (OBJ, or GLB with a morph target named
+    ``name``); None: derived from the geometry (double-counting rule).
+    """
+
+    name: str
+    drivers: tuple[str, ...]
+    file: str | None = None
+    description: str = ""
+
+
+@dataclass(frozen=True)
 class Rig:
     """Controls of a face model. Gene order is the rig's; shape order is the model's."""
 
@@ -147,6 +184,9 @@ class Rig:
     identities: dict[str, IdentitySpec]
     description: str = ""
     _expansion: dict[bool, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
+    correctives: tuple[Corrective, ...] = ()
+    derive_min_overlap: float | None = None
+    companions: dict[str, str] = field(default_factory=dict)
 
     # ---- gene space -------------------------------------------------------------------
     def gene_names(self, eye_motion: bool = True) -> tuple[str, ...]:
@@ -256,6 +296,23 @@ class Rig:
                 for k, e in self.emotions.items()
             },
             "identities": sorted(self.identities),
+            "correctives": [
+                {"name": c.name, "drivers": list(c.drivers), "file": c.file}
+                for c in self.correctives
+            ],
+            "derive_correctives": self.derive_min_overlap,
+            "companions": dict(self.companions),
+        }
+
+    def corrective_settings(self) -> dict[str, object]:
+        """What the combinational correctives are built from (JSON-ready, for cache keys)."""
+        return {
+            "correctives": [
+                {"name": c.name, "drivers": list(c.drivers), "file": c.file}
+                for c in self.correctives
+            ],
+            "derive_min_overlap": self.derive_min_overlap,
+            "companions": dict(sorted(self.companions.items())),
         }
 
 
@@ -351,6 +408,32 @@ def build_rig(spec: RigSpec, shape_names: tuple[str, ...], source: str = "") -> 
             pitch_up=float(np.radians(gz.pitch_up_deg)),
             pitch_down=float(np.radians(gz.pitch_down_deg)),
         )
+    correctives = []
+    seen_names: set[str] = set()
+    for c in spec.correctives:
+        check(c.drivers, f"corrective '{c.name}' drivers")
+        if c.name in known or c.name in seen_names:
+            raise ConfigError(
+                f"rig {source}: corrective name '{c.name}' is already a shape or corrective"
+            )
+        if len(set(c.drivers)) != len(c.drivers):
+            raise ConfigError(f"rig {source}: corrective '{c.name}' repeats a driver {c.drivers}")
+        if c.file is None and len(c.drivers) != 2:
+            raise ConfigError(
+                f"rig {source}: corrective '{c.name}' has no file, so it is derived from its "
+                f"drivers' overlap, which needs exactly 2 drivers; got {len(c.drivers)}"
+            )
+        seen_names.add(c.name)
+        file = None
+        if c.file is not None:
+            base = Path(source).parent if Path(source).is_file() else Path.cwd()
+            file = str((base / c.file).resolve())
+        correctives.append(Corrective(c.name, tuple(c.drivers), file, c.description))
+    check(list(spec.companions), "companions")
+    check(list(spec.companions.values()), "companions (leads)")
+    for follower, lead in spec.companions.items():
+        if follower == lead:
+            raise ConfigError(f"rig {source}: companion '{follower}' cannot lead itself")
     return Rig(
         name=spec.name,
         shape_names=tuple(shape_names),
@@ -361,6 +444,11 @@ def build_rig(spec: RigSpec, shape_names: tuple[str, ...], source: str = "") -> 
         emotions=emotions,
         identities=dict(spec.identities),
         description=spec.description,
+        correctives=tuple(correctives),
+        derive_min_overlap=(
+            spec.derive_correctives.min_overlap if spec.derive_correctives else None
+        ),
+        companions=dict(spec.companions),
     )
 
 
@@ -387,9 +475,9 @@ def generic_rig(shape_names: tuple[str, ...], name: str = "generic") -> Rig:
     Left/right twins are one gene each: ``X_L``/``X_R`` and ARKit's ``XLeft``/``XRight``
     (``eyeBlinkLeft`` + ``eyeBlinkRight`` → gene ``eyeBlink``). As in the ICT rig, horizontal
     gaze is grouped conjugately (``eyeLookOut`` of one eye with ``eyeLookIn`` of the other), the
-    ICT rig's exclusions (lateral jaw/mouth shifts, ``mouthClose``) apply to shapes of the same
-    name, and eye shapes (blink, look, pupil) are switched off with eye motion. No emotions,
-    gaze rotation or identities.
+    ICT rig's exclusions (lateral jaw/mouth shifts, ``mouthClose``) and companions apply to
+    shapes of the same name, its rule for derived correctives applies, and eye shapes (blink,
+    look, pupil) are switched off with eye motion. No emotions, gaze rotation or identities.
     """
     ict, _ = read_rig_spec(None)
     known = set(shape_names)
@@ -424,5 +512,7 @@ def generic_rig(shape_names: tuple[str, ...], name: str = "generic") -> Rig:
         genes=genes,
         excluded=excluded,
         eye=EyeSpec(shapes=eye_shapes, reason=ict.eye.reason) if ict.eye and eye_shapes else None,
+        derive_correctives=ict.derive_correctives,
+        companions={f: lead for f, lead in ict.companions.items() if {f, lead} <= known},
     )
     return build_rig(spec, tuple(shape_names), f"(generic rig '{name}')")

@@ -1,13 +1,32 @@
-"""Simulated studies: an observer selects by a metric, many runs, tidy tables."""
+"""Simulated studies: observers select by a metric, many runs vectorised, tidy tables, sweeps."""
 
-from emogen.simulate.observer import CosineObserver, rank_by_cosine
-from emogen.simulate.runner import SimulationResult, run_simulation, simulate_run, write_simulation
+from emogen.simulate.backends import DaskBackend, LocalBackend, make_backend
+from emogen.simulate.batch import Problem, RunArrays, engine_run, simulate_runs
+from emogen.simulate.observer import CosineObserver, Metric, Observer, make_metric, rank_by_cosine
+from emogen.simulate.runner import (
+    SimulationResult,
+    build_problem,
+    run_simulation,
+    simulate_run,
+    write_simulation,
+)
 
 __all__ = [
     "CosineObserver",
+    "DaskBackend",
+    "LocalBackend",
+    "Metric",
+    "Observer",
+    "Problem",
+    "RunArrays",
     "SimulationResult",
+    "build_problem",
+    "engine_run",
+    "make_backend",
+    "make_metric",
     "rank_by_cosine",
     "run_simulation",
     "simulate_run",
+    "simulate_runs",
     "write_simulation",
 ]

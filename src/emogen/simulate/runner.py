@@ -1,93 +1,245 @@
-"""Many simulated runs of the GA with a cosine observer; one tidy row per run and generation."""
+"""Simulated studies: many runs, seeds spawned per run, tidy tables, a record.
+
+:func:`run_simulation` spawns one child seed per run from the simulation's seed, groups the
+runs into tasks and has a backend compute them (:mod:`emogen.simulate.backends`; vectorised
+across runs, :mod:`emogen.simulate.batch`). It returns two tidy tables:
+
+* ``table`` — one row per run and generation: ``run, generation, elite_error`` (CD of the
+  elite to the target, the paper's convergence measure), ``elite_distance`` (the selection
+  metric's distance of the elite), ``n_selected``, ``run_seed``;
+* ``faces`` — one row per shown face: ``run, generation, slot, operator, distance, error,
+  rank`` (0 elite, 1… other selections in choice order, −1 not selected), and with
+  ``all_weights`` one column per shape holding the shown full weights (so the table is itself
+  a face table for targets and training sets);
+
+and a record (schema, package version, model, resolved config, seeds, target, metric).
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import json
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
 from emogen.config import SimulationConfig
-from emogen.ga.engine import Engine
+from emogen.ga.init import read_fixed_sets
 from emogen.model.rig import Rig
 from emogen.rng import fresh_seed, spawn_seeds
-from emogen.simulate.observer import CosineObserver
+from emogen.simulate.backends import Backend, LocalBackend, Task
+from emogen.simulate.batch import (
+    CORRECTION_BLOCK,
+    Problem,
+    RunArrays,
+    engine_run,
+    make_correction,
+)
+from emogen.simulate.observer import make_metric, selection_count
+from emogen.simulate.targets import resolve_target
 
-RECORD_SCHEMA = "emogen.simulate/1"
-COLUMNS = ("run", "generation", "elite_error", "n_selected", "run_seed")
+if TYPE_CHECKING:
+    from emogen.model.face import FaceModel
+
+RECORD_SCHEMA = "emogen.simulate/2"
+COLUMNS = ("run", "generation", "elite_error", "elite_distance", "n_selected", "run_seed")
+FACE_COLUMNS = ("run", "generation", "slot", "operator", "distance", "error", "rank")
 
 
 @dataclass(frozen=True)
 class SimulationResult:
-    """table: one row per run and generation (columns ``COLUMNS``); record: how it was made."""
+    """table: one row per run and generation (``COLUMNS``); faces: one row per shown face
+    (``FACE_COLUMNS`` + shape weights with ``all_weights``); record: how it was made."""
 
     table: pd.DataFrame
     record: dict[str, Any]
+    faces: pd.DataFrame | None = None
 
 
-def simulate_run(
-    config: SimulationConfig, rig: Rig, target: np.ndarray, seed: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """One run: (elite CD error per generation (G+1,), faces selected per generation (G+1,))."""
-    ga = config.ga
-    engine = Engine(ga, rig, seed)
-    observer = CosineObserver(
-        target, config.selections_at, final=ga.generations, ranking=ga.variant == "classical"
+def _split(source: Rig | FaceModel) -> tuple[Rig, FaceModel | None]:
+    if isinstance(source, Rig):
+        return source, None
+    return source.rig, source
+
+
+def build_problem(
+    config: SimulationConfig,
+    source: Rig | FaceModel,
+    *,
+    all_weights: bool = False,
+    training: np.ndarray | None = None,
+) -> Problem:
+    """Resolve a config against a rig or face model: target, metric, fixed sets, corrections.
+
+    Vertex metrics and corrections need a FaceModel; a non-generic ``ga.identity`` evaluates
+    that identity's faces. ``training`` (n, n_shapes) overrides ``metric.training``.
+    """
+    rig, model = _split(source)
+    if model is not None and config.ga.identity != "generic":
+        model = model.with_identity(config.ga.identity)
+    target = resolve_target(config, rig)
+    correction = make_correction(model) if config.correct else None
+    metric = make_metric(
+        config.metric,
+        rig,
+        model=model,
+        eye_motion=config.ga.eye_motion,
+        training=training,
+        correctives=correction.deltas if correction is not None else None,
     )
-    errors = np.empty(ga.generations + 1)
-    counts = np.empty(ga.generations + 1, dtype=np.int64)
-    while not engine.done:
-        population = engine.ask()
-        elite, others, error = observer.choose(population)
-        errors[population.generation] = error
-        counts[population.generation] = 1 + len(others)
-        engine.tell(elite, others)
-    return errors, counts
+    fixed = None
+    if config.ga.init.kind == "fixed":
+        fixed = read_fixed_sets(
+            config.ga.init.fixed_file,
+            rig,
+            eye_motion=config.ga.eye_motion,
+            population_size=config.ga.population_size,
+        )
+    shown_target = target.weights if correction is None else correction(target.weights[None])[0]
+    return Problem(config, rig, shown_target, metric, fixed, correction, all_weights, target.source)
+
+
+def run_tasks(problem: Problem, seeds: list[int], backend: Backend) -> list[Task]:
+    """The runs cut into tasks of ``backend.chunk_size`` runs."""
+    size = backend.chunk_size(len(seeds))
+    if problem.correction is not None:  # whole correction blocks per task (see batch.py)
+        size = -(-size // CORRECTION_BLOCK) * CORRECTION_BLOCK
+    runs = np.arange(len(seeds))
+    seed_arr = np.array(seeds, dtype=np.int64)
+    return [
+        Task(problem, runs[lo : lo + size], seed_arr[lo : lo + size])
+        for lo in range(0, len(seeds), size)
+    ]
 
 
 def run_simulation(
-    config: SimulationConfig, rig: Rig, *, model_name: str = "", model_hash: str = ""
+    config: SimulationConfig,
+    source: Rig | FaceModel,
+    *,
+    model_name: str = "",
+    model_hash: str = "",
+    backend: Backend | None = None,
+    progress: bool = False,
+    all_weights: bool = False,
+    training: np.ndarray | None = None,
 ) -> SimulationResult:
     """``config.runs`` independent runs; run r uses the r-th spawned child of the seed.
 
+    ``source`` is the rig (enough for CD and ED) or the face model (vertex metrics, corrections).
     A config without a seed gets a fresh one, recorded in the result's resolved config.
     """
-    from emogen import __version__
-
     seed = config.seed if config.seed is not None else fresh_seed()
     config = config.model_copy(update={"seed": seed})
-    target = rig.weights_from_names(config.target)
+    problem = build_problem(config, source, all_weights=all_weights, training=training)
     seeds = spawn_seeds(seed, config.runs)
-    n_gen = config.ga.generations + 1
-    errors = np.empty((config.runs, n_gen))
-    counts = np.empty((config.runs, n_gen), dtype=np.int64)
-    for run, run_seed in enumerate(seeds):
-        errors[run], counts[run] = simulate_run(config, rig, target, run_seed)
-    table = pd.DataFrame(
-        {
-            "run": np.repeat(np.arange(config.runs), n_gen),
-            "generation": np.tile(np.arange(n_gen), config.runs),
-            "elite_error": errors.reshape(-1),
-            "n_selected": counts.reshape(-1),
-            "run_seed": np.repeat(np.array(seeds, dtype=np.int64), n_gen),
-        }
+    backend = backend or LocalBackend()
+    tasks = run_tasks(problem, seeds, backend)
+    start = time.perf_counter()
+    with progress_bar(progress, config.runs * problem.n_generations, "simulating") as advance:
+        arrays = RunArrays.concatenate([r for _, r in backend.run(tasks, advance)])
+    seconds = time.perf_counter() - start
+    return make_result(
+        problem,
+        arrays,
+        model_name=model_name,
+        model_hash=model_hash,
+        extra={
+            "backend": backend.name,
+            "compute_seconds": seconds,
+        },
     )
+
+
+def make_result(
+    problem: Problem,
+    arrays: RunArrays,
+    *,
+    model_name: str = "",
+    model_hash: str = "",
+    extra: dict[str, Any] | None = None,
+) -> SimulationResult:
+    """Tables and record from the arrays of every run."""
+    from emogen import __version__
+
+    config, rig = problem.config, problem.rig
+    table, faces = tables(problem, arrays)
     record = {
         "schema": RECORD_SCHEMA,
         "emogen_version": __version__,
         "model": {"name": model_name, "hash": model_hash},
         "rig": {"name": rig.name, "genes": list(rig.gene_names(config.ga.eye_motion))},
         "config": config.model_dump(mode="json"),
-        "seed": seed,
-        "run_seeds": seeds,
+        "seed": config.seed,
+        "run_seeds": [int(s) for s in arrays.seeds],
         "target_weights": {
-            s: float(w) for s, w in zip(rig.shape_names, target, strict=True) if w != 0
+            s: float(w) for s, w in zip(problem.columns, problem.target, strict=True) if w != 0
         },
-        "metric": "cosine distance (eq. 12) on full weight vectors",
+        "target_source": problem.target_source,
+        "metric": problem.metric.description,
+        "metric_details": problem.metric.details,
+        "error": "elite_error is the CD (eq. 12) of the elite to the target",
+        "corrected": problem.correction is not None,
+        "observer": {
+            "noise_temperature": config.noise_temperature,
+            "selections": [
+                selection_count(config, g, config.ga.population_size)
+                for g in range(problem.n_generations)
+            ],
+        },
+        **(extra or {}),
     }
-    return SimulationResult(table, record)
+    if config.ga.init.kind == "fixed":
+        record["fixed_options"] = [int(o) for o in arrays.fixed_options]
+    return SimulationResult(table, record, faces)
+
+
+def tables(problem: Problem, a: RunArrays) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """(per run and generation, per face) tidy tables."""
+    r, n_gen, n = a.distance.shape
+    elite = np.argmax(a.rank == 0, axis=2)  # (R, G+1)
+    ri, gi = np.meshgrid(np.arange(r), np.arange(n_gen), indexing="ij")
+    table = pd.DataFrame(
+        {
+            "run": np.repeat(a.runs, n_gen),
+            "generation": np.tile(np.arange(n_gen), r),
+            "elite_error": a.error[ri, gi, elite].reshape(-1),
+            "elite_distance": a.distance[ri, gi, elite].reshape(-1),
+            "n_selected": (a.rank >= 0).sum(axis=2).reshape(-1).astype(np.int64),
+            "run_seed": np.repeat(a.seeds, n_gen),
+        }
+    )
+    faces = pd.DataFrame(
+        {
+            "run": np.repeat(a.runs, n_gen * n),
+            "generation": np.tile(np.repeat(np.arange(n_gen), n), r),
+            "slot": np.tile(np.arange(n), r * n_gen),
+            "operator": pd.Categorical(a.operators.reshape(-1)),
+            "distance": a.distance.reshape(-1),
+            "error": a.error.reshape(-1),
+            "rank": a.rank.reshape(-1).astype(np.int64),
+        }
+    )
+    if a.weights is not None:
+        w = a.weights.reshape(-1, a.weights.shape[-1])
+        weights = pd.DataFrame(w, columns=list(problem.columns))
+        faces = pd.concat([faces, weights], axis=1)
+    return table, faces
+
+
+def simulate_run(
+    config: SimulationConfig, rig: Rig, target: np.ndarray, seed: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """One run through the engine (the reference): (elite CD error per generation (G+1,),
+    faces selected per generation (G+1,)). The metric must work on a rig (cd, ed)."""
+    problem = replace(build_problem(config, rig), target=np.asarray(target, dtype=np.float64))
+    a = engine_run(problem, 0, seed)
+    elite = np.argmax(a.rank[0] == 0, axis=1)
+    return a.error[0, np.arange(len(elite)), elite], (a.rank[0] >= 0).sum(axis=1)
 
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
@@ -95,14 +247,44 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
     return table.groupby("generation")["elite_error"].agg(["mean", "std"])
 
 
-def write_simulation(result: SimulationResult, out: Path) -> list[Path]:
-    """``simulation.parquet``, ``simulation.csv`` and ``simulation.json`` (the record) in ``out``."""
-    import json
-
+def write_simulation(result: SimulationResult, out: Path, *, csv: bool = True) -> list[Path]:
+    """``simulation.parquet`` (+ ``.csv``), ``simulation.json`` (the record) and
+    ``faces.parquet`` (+ ``.csv``) in ``out``."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    paths = [out / "simulation.parquet", out / "simulation.csv", out / "simulation.json"]
+    paths = [out / "simulation.parquet"]
     result.table.to_parquet(paths[0], index=False)
-    result.table.to_csv(paths[1], index=False)
-    paths[2].write_text(json.dumps(result.record, indent=2) + "\n")
+    if csv:
+        paths.append(out / "simulation.csv")
+        result.table.to_csv(paths[-1], index=False)
+    paths.append(out / "simulation.json")
+    paths[-1].write_text(json.dumps(result.record, indent=2) + "\n")
+    if result.faces is not None:
+        paths.append(out / "faces.parquet")
+        result.faces.to_parquet(paths[-1], index=False)
+        if csv:
+            paths.append(out / "faces.csv")
+            result.faces.to_csv(paths[-1], index=False)
     return paths
+
+
+@contextmanager
+def progress_bar(enabled: bool, total: int, label: str) -> Iterator[Callable[[int], None] | None]:
+    """A rich progress bar on stderr, or nothing: yields ``advance(k)`` (or None)."""
+    if not enabled:
+        yield None
+        return
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    with Progress(
+        "{task.description}",
+        BarColumn(),
+        MofNCompleteColumn(),
+        "run-generations",
+        TimeElapsedColumn(),
+        console=Console(stderr=True),
+        transient=True,
+    ) as bar:
+        task = bar.add_task(label, total=total)
+        yield lambda k: bar.advance(task, k)

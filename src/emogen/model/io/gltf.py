@@ -1,8 +1,9 @@
 """glTF out: the rig as a GLB with morph targets (for the browser), one face as GLB or OBJ.
 
 The model GLB holds one mesh, one primitive per material; every primitive has a morph target
-per shape (POSITION and NORMAL deltas) in the model's shape order, and ``mesh.extras.targetNames``
-names them, so three.js drives every primitive with the same weight vector through
+per shape (POSITION and NORMAL deltas) in the model's shape order, then one per corrective
+(``model.correctives``: combinational then collision; ``asset.extras.emogen.corrective_names``),
+and ``mesh.extras.targetNames`` names them all, so three.js drives every primitive with the same weight vector through
 ``morphTargetDictionary``. Positions and position deltas are int16 (KHR_mesh_quantization; the
 node's scale and translation undo it), normals int8, morph targets sparse (only vertices that
 move). glTF is in metres; EmoGen models are in centimetres (ICT-FaceKit's unit), so the node
@@ -53,6 +54,12 @@ EXTRAS_FORMAT = 1
 CM_TO_M = 0.01
 _Q16 = 32767  # int16 normalized: value = q / 32767
 _Q8 = 127  # int8 normalized
+#: Corrective targets leave out vertices moved less than this (cm) and round their deltas to
+#: about this step; by default they carry no normal deltas (zero): with their own normals the
+#: ICT GLB grows past 3 MB gzipped (3.03 MB even with a 4.5/127 normal tolerance), without them
+#: it is 2.85 MB. A corrected face is then within this tolerance per unit corrective weight.
+CORRECTIVE_TOLERANCE_CM = 0.01
+CORRECTIVE_NORMAL_TOLERANCE = 4.5 / 127
 
 # Plain PBR colours (sRGB) by material-name keyword, for viewers that show the GLB as is.
 _COLOURS = (
@@ -361,17 +368,36 @@ class ExportReport:
     n_source_vertices: int
     n_triangles: int
     n_primitives: int
-    n_shapes: int
+    n_shapes: int  # shape morph targets (then ``n_correctives`` corrective targets)
     quantized: bool
     position_step_cm: float  # quantization step (0 when float)
-    max_position_error_cm: float  # over the neutral and every one-hot shape
+    max_position_error_cm: float  # over the neutral and every one-hot shape and corrective
     normals_clamped: int  # normal-delta components clamped to int8's [-1, 1]
     source_vertices: np.ndarray = field(repr=False)  # exported source vertices, sorted (U)
+    corrective_names: tuple[str, ...] = ()  # corrective targets, after the shapes
+    corrective_tolerance_cm: float = 0.0  # smaller corrective movements left out
+    max_corrective_error_cm: float = 0.0  # over every one-hot corrective (tolerance included)
+
+    @property
+    def n_correctives(self) -> int:
+        return len(self.corrective_names)
+
+    @property
+    def n_targets(self) -> int:
+        return self.n_shapes + self.n_correctives
 
     def max_error_bound_cm(self, weights: np.ndarray) -> float:
-        """Bound on |GLB face − model face| for weights (n_faces, n_shapes), per vertex."""
-        w = np.abs(np.atleast_2d(np.asarray(weights, dtype=np.float64))).sum(1).max()
-        return float(self.position_step_cm / 2 * np.sqrt(3) * (1 + w)) + 1e-5
+        """Bound on |GLB face − model face| for weights (n_faces, n_shapes) or (n_faces,
+        n_targets) (shapes then corrective weights), per vertex."""
+        a = np.abs(np.atleast_2d(np.asarray(weights, dtype=np.float64)))
+        w = a.sum(1).max()
+        wc = a[:, self.n_shapes :].sum(1).max(initial=0.0)
+        return (
+            float(
+                self.position_step_cm / 2 * np.sqrt(3) * (1 + w) + self.corrective_tolerance_cm * wc
+            )
+            + 1e-5
+        )
 
     def __str__(self) -> str:
         err = (
@@ -382,7 +408,8 @@ class ExportReport:
         return (
             f"{self.raw_bytes / 1e6:.2f} MB ({self.gzip_bytes / 1e6:.2f} MB gzipped); "
             f"{self.n_vertices:,} vertices in {self.n_primitives} primitives, {self.n_triangles:,} "
-            f"triangles, {self.n_shapes} morph targets; {err}"
+            f"triangles, {self.n_shapes} shape + {self.n_correctives} corrective morph targets; "
+            f"{err}"
         )
 
 
@@ -392,21 +419,57 @@ def export_model_glb(
     *,
     parts: tuple[str, ...] | None = None,
     quantize: bool = True,
+    correctives: bool = True,
+    corrective_tolerance_cm: float = CORRECTIVE_TOLERANCE_CM,
+    corrective_normal_tolerance: float = CORRECTIVE_NORMAL_TOLERANCE,
+    corrective_normals: bool = False,
 ) -> ExportReport:
     """Write the model as a GLB with one morph target per shape (positions and normals).
 
     parts : regions to export; default ICT-FaceKit's visible parts (``ICT_VISIBLE_PARTS``),
     or the whole mesh for a model without them. ``quantize``: int16 positions and deltas,
     int8 normals (KHR_mesh_quantization); float32 otherwise (sparse morph targets in both).
+    ``correctives``: after the shapes, one target per corrective of the model
+    (``model.correctives``: combinational then collision, named in
+    ``asset.extras.emogen.corrective_names``), so a viewer shows corrected faces from the full
+    vector of :meth:`~emogen.correct.apply.CorrectionResult.columns` (effective weights, then
+    corrective weights). Corrective targets leave out vertices moved less than
+    ``corrective_tolerance_cm`` and are rounded to about that step; their NORMAL deltas are
+    zero unless ``corrective_normals`` (then those under ``corrective_normal_tolerance``
+    are left out), which keeps the ICT GLB under 3 MB gzipped.
     """
     path = Path(path)
     layout = _layout(model, parts)
     u = layout.vertices
     neutral = model.neutral[u].astype(np.float64)
-    shapes = neutral[None] + model.deltas[:, u].astype(np.float64)  # (S, U, 3)
+    target_deltas = model.deltas[:, u].astype(np.float64)
+    corrective_names: tuple[str, ...] = ()
+    if correctives and model.n_shapes:
+        c = model.correctives
+        corrective_names = tuple(c.names)
+        if corrective_names:
+            target_deltas = np.concatenate(
+                [
+                    target_deltas,
+                    c.combinational_deltas[:, u].astype(np.float64),
+                    c.collision_deltas[:, u].astype(np.float64),
+                ]
+            )
+    n_targets = model.n_shapes + len(corrective_names)
+    shapes = neutral[None] + target_deltas  # (S + C, U, 3)
     normals0 = vertex_normals(neutral, layout.triangles)
     shape_normals = vertex_normals(shapes, layout.triangles)
     delta = shapes - neutral[None]
+    dn_float = shape_normals - normals0[None]
+    if corrective_names:
+        # Corrective targets are sparser than the shapes (to keep the GLB small on the wire):
+        # vertices a corrective moves less than the tolerance are left out of its target.
+        cd, cn = delta[model.n_shapes :], dn_float[model.n_shapes :]
+        cd[np.linalg.norm(cd, axis=-1) < corrective_tolerance_cm] = 0.0
+        if corrective_normals:
+            cn[np.abs(cn).max(axis=-1) < corrective_normal_tolerance] = 0.0
+        else:
+            cn[:] = 0.0
     if quantize:
         lo, hi = neutral.min(0), neutral.max(0)
         centre = (lo + hi) / 2
@@ -415,10 +478,14 @@ def export_model_glb(
         q0 = np.clip(np.rint((neutral - centre) / step), -_Q16, _Q16)
         # Deltas rounded on their own (not as differences of rounded shapes): a face's error
         # is then e0 + Σ w_k e_k with independent e_k, not amplified by Σ w_k.
-        qd = np.clip(np.rint(delta / step), -_Q16, _Q16)
+        qd = np.rint(delta / step)
+        if corrective_names:  # coarser steps (multiples of step): fewer distinct bytes to gzip
+            f = max(1.0, float(np.floor(corrective_tolerance_cm / step)))
+            qd[model.n_shapes :] = np.rint(delta[model.n_shapes :] / (f * step)) * f
+        qd = np.clip(qd, -_Q16, _Q16)
         base_cm, delta_cm = centre + q0 * step, qd * step
         n0 = np.rint(normals0 * _Q8)
-        dn = np.rint((shape_normals - normals0[None]) * _Q8)
+        dn = np.rint(dn_float * _Q8)
         clamped = int(np.count_nonzero(np.abs(dn) > _Q8))
         pos_base, pos_delta = q0.astype(np.int16), qd.astype(np.int16)
         nrm_base, nrm_delta = n0.astype(np.int8), np.clip(dn, -_Q8, _Q8).astype(np.int8)
@@ -426,7 +493,7 @@ def export_model_glb(
     else:
         tol = 1e-4  # cm (and unit-normal components): smaller changes are left out of the targets
         delta[np.all(np.abs(delta) < tol, axis=-1)] = 0.0
-        dn = shape_normals - normals0[None]
+        dn = dn_float
         dn[np.all(np.abs(dn) < tol, axis=-1)] = 0.0
         pos_base, pos_delta = (
             (neutral * CM_TO_M).astype(np.float32),
@@ -436,9 +503,9 @@ def export_model_glb(
         base_cm, delta_cm = pos_base / CM_TO_M, pos_delta / CM_TO_M
         step, clamped, node = 0.0, 0, {}
     faces_cm = base_cm[None] + np.concatenate([np.zeros((1, len(u), 3)), delta_cm])
-    max_err = float(
-        np.linalg.norm(faces_cm - np.concatenate([neutral[None], shapes]), axis=-1).max()
-    )
+    errors = np.linalg.norm(faces_cm - np.concatenate([neutral[None], shapes]), axis=-1)
+    max_err = float(errors[: model.n_shapes + 1].max())
+    max_corrective_err = float(errors[model.n_shapes + 1 :].max(initial=0.0))
     b = GlbBuilder()
     prims: list[dict[str, Any]] = []
     for prim in layout.primitives:
@@ -455,7 +522,7 @@ def export_model_glb(
                 "POSITION": b.sparse(pos_delta[k, at], normalized=quantize, min_max=True),
                 "NORMAL": b.sparse(nrm_delta[k, at], normalized=quantize),
             }
-            for k in range(model.n_shapes)
+            for k in range(n_targets)
         ]
         prims.append(
             {
@@ -469,11 +536,12 @@ def export_model_glb(
         )
     mesh: dict[str, Any] = {"name": model.name, "primitives": prims}
     if model.n_shapes:
-        mesh["weights"] = [0.0] * model.n_shapes
-        mesh["extras"] = {"targetNames": list(model.shape_names)}
+        mesh["weights"] = [0.0] * n_targets
+        mesh["extras"] = {"targetNames": [*model.shape_names, *corrective_names]}
     gaze = _gaze_extras(model)
     extras = {
         "shape_names": list(model.shape_names),
+        **({"corrective_names": list(corrective_names)} if corrective_names else {}),
         "position_step_cm": step,
         **({"gaze": gaze} if gaze else {}),
     }
@@ -503,6 +571,9 @@ def export_model_glb(
         max_position_error_cm=max_err,
         normals_clamped=clamped,
         source_vertices=u,
+        corrective_names=corrective_names,
+        corrective_tolerance_cm=corrective_tolerance_cm if corrective_names else 0.0,
+        max_corrective_error_cm=max_corrective_err,
     )
 
 

@@ -137,8 +137,11 @@ def _read_geometry(g: Gltf) -> tuple[list[str], list[_Block], list[_Prim]]:
     materials = doc.get("materials", [])
     names: list[str] = []
     mesh_names = {i: _target_names(m, i) for i, m in enumerate(meshes)}
+    # EmoGen's own corrective targets (after the shapes) are not shapes of the model.
+    emogen_extras = ((doc.get("asset") or {}).get("extras") or {}).get("emogen") or {}
+    skip = set(emogen_extras.get("corrective_names") or ())
     for mesh_targets in mesh_names.values():
-        names += [s for s in mesh_targets if s not in names]
+        names += [s for s in mesh_targets if s not in names and s not in skip]
     if not names:
         raise ModelFileError(
             "has no morph targets (blendshapes) with names in mesh.extras.targetNames"
@@ -165,7 +168,7 @@ def _read_geometry(g: Gltf) -> tuple[list[str], list[_Block], list[_Prim]]:
                 pos = g.accessor(attrs["POSITION"])[:, :3]
                 deltas = np.zeros((len(names), len(pos), 3))
                 for name, target in zip(mesh_names[mesh_i], targets, strict=True):
-                    if "POSITION" in target:
+                    if "POSITION" in target and name in index:
                         deltas[index[name]] = (
                             g.accessor(target["POSITION"])[:, :3] @ lin.T * M_TO_CM
                         )

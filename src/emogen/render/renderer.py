@@ -1,0 +1,145 @@
+"""Offscreen face rendering: weights (n_faces, n_shapes) → sRGB images (n_faces, size, size, 3).
+
+    from emogen.render import Renderer
+    with Renderer(model, size=512) as r:
+        images = r.render(weights)          # (n_faces, 512, 512, 3) uint8
+
+One OpenGL context per :class:`Renderer`; faces are evaluated in one batch (``FaceModel.evaluate``)
+and drawn one after another into the same framebuffer.
+"""
+
+from __future__ import annotations
+
+from types import TracebackType
+from typing import Self
+
+import numpy as np
+
+from emogen.errors import ShapeError
+from emogen.model.face import FaceModel
+from emogen.render.gl import GLRenderer
+from emogen.render.images import contact_sheet
+from emogen.render.look import Look, default_look
+from emogen.render.scene import FaceMesh, face_mesh
+
+
+class Renderer:
+    """Renders faces of ``model`` offscreen with the look of ``look.json``.
+
+    size : image side in pixels (default ``look.size_px``, 512)
+    supersample : anti-aliasing factor (default ``look.supersample``, 2: 4 samples a pixel; 1: none)
+    background : sRGB triple in [0, 1]; fov_y_deg : vertical field of view in degrees
+    """
+
+    def __init__(
+        self,
+        model: FaceModel,
+        *,
+        size: int | None = None,
+        look: Look | None = None,
+        supersample: int | None = None,
+        background: tuple[float, float, float] | None = None,
+        fov_y_deg: float | None = None,
+    ) -> None:
+        base = look or default_look()
+        self.look = base.with_options(background=background, fov_y_deg=fov_y_deg)
+        self.model = model
+        self.mesh: FaceMesh = face_mesh(model, self.look)
+        self.size = int(size or self.look.size_px)
+        self._gl = GLRenderer(
+            self.mesh,
+            self.look,
+            self.size,
+            self.look.supersample if supersample is None else supersample,
+        )
+
+    # ---- context manager ---------------------------------------------------------------
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self._gl.release()
+
+    # ---- rendering ---------------------------------------------------------------------
+    def render(
+        self, weights: np.ndarray, *, gaze: bool = True, correct: bool = False
+    ) -> np.ndarray:
+        """Faces of ``weights (n_faces, n_shapes)`` → ``(n_faces, size, size, 3) uint8`` sRGB.
+
+        correct : apply the model's correctives first (``FaceModel.evaluate(correct=True)``:
+        combinational and lip/teeth collision correctives). The browser viewer's GLB holds the
+        corrective targets too, so given the full vector (shapes then corrective weights) it
+        draws the corrected face.
+        """
+        vertices = self.model.evaluate(
+            np.asarray(weights, dtype=np.float32), gaze=gaze, correct=correct
+        )
+        return self.render_vertices(vertices)
+
+    def render_vertices(
+        self, vertices: np.ndarray, *, albedo: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Meshes ``(n_faces, n_vertices, 3)`` in cm (the model's topology) → images.
+
+        albedo : optional per-vertex linear RGB ``(n_vertices, 3)`` or ``(n_faces, n_vertices, 3)``
+        replacing the look's part colours (error heatmaps).
+        """
+        v = np.asarray(vertices, dtype=np.float32)
+        if v.ndim != 3 or v.shape[1:] != (self.mesh.n_vertices, 3):
+            raise ShapeError(
+                f"vertices must have shape (n_faces, {self.mesh.n_vertices}, 3); got {v.shape}"
+            )
+        if albedo is not None:
+            albedo = np.asarray(albedo, dtype=np.float32)
+            if albedo.shape not in ((self.mesh.n_vertices, 3), (len(v), self.mesh.n_vertices, 3)):
+                raise ShapeError(
+                    f"albedo must have shape ({self.mesh.n_vertices}, 3) or "
+                    f"({len(v)}, {self.mesh.n_vertices}, 3); got {albedo.shape}"
+                )
+        out = np.empty((len(v), self.size, self.size, 3), dtype=np.uint8)
+        normals = self.mesh.normals(v)
+        try:
+            for i in range(len(v)):
+                if albedo is not None:
+                    self._gl.set_albedo(albedo if albedo.ndim == 2 else albedo[i])
+                out[i] = self._gl.draw(v[i], normals[i])
+        finally:
+            if albedo is not None:
+                self._gl.set_albedo(None)
+        return out
+
+    def sheet(
+        self,
+        weights: np.ndarray,
+        labels: list[str] | None = None,
+        *,
+        columns: int = 5,
+        footer: str | None = None,
+        gaze: bool = True,
+        correct: bool = False,
+    ) -> np.ndarray:
+        """A contact sheet of the faces of ``weights (n_faces, n_shapes)``: (H, W, 3) uint8.
+
+        Labels go under the faces; footer None writes the ICT-FaceKit notice, "" none.
+        """
+        return contact_sheet(
+            self.render(weights, gaze=gaze, correct=correct),
+            labels,
+            columns=columns,
+            footer=footer,
+            background=self.look.background_srgb,
+        )
+
+
+def render_faces(model: FaceModel, weights: np.ndarray, **options: object) -> np.ndarray:
+    """One-shot: render ``weights (n_faces, n_shapes)`` with a fresh :class:`Renderer`."""
+    with Renderer(model, **options) as r:  # type: ignore[arg-type]
+        return r.render(weights)

@@ -1,0 +1,101 @@
+// EmoGen shading, compiled as-is by both the offscreen renderer (moderngl, GLSL 3.30) and the
+// browser viewer (three.js ShaderMaterial, GLSL ES 3.00), so a face looks the same in both.
+// The constants (KEY_DIR, PUPIL_DEG, …) are #defines generated from render/look.json.
+//
+// Inputs per fragment:
+//   part    : part code (index into look.json "parts"; exact on the eyes, which are separate meshes)
+//   albedo  : linear RGB base colour (per vertex, interpolated: stitched skin parts blend smoothly)
+//   surface : (specular, shininess, cavity) per vertex
+//   pos     : world position in cm; n: unit normal; v: unit direction to the camera
+//   eye     : xyz = unit direction from the eyeball centre in the eye's rest frame (z = eye axis),
+//             w = side (1 left, 2 right, 0 not an eye)
+
+vec3 emogenToLinear(vec3 c) {
+    vec3 lo = c / 12.92;
+    vec3 hi = pow((c + 0.055) / 1.055, vec3(2.4));
+    return mix(hi, lo, vec3(lessThanEqual(c, vec3(0.04045))));
+}
+
+vec3 emogenToSrgb(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    vec3 lo = c * 12.92;
+    vec3 hi = 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055;
+    return mix(hi, lo, vec3(lessThanEqual(c, vec3(0.0031308))));
+}
+
+bool emogenIsEye(float part) {
+    return abs(part - PART_SCLERA) < 0.5 || abs(part - PART_IRIS) < 0.5;
+}
+
+// Angle (degrees) of an eye direction from the eye axis.
+float emogenEyeAngle(vec4 eye) {
+    vec3 e = normalize(eye.xyz);
+    return degrees(acos(clamp(e.z, -1.0, 1.0)));
+}
+
+// The ICT sclera mesh is an outer shell whose front is a transparent cornea bulge: drop it so
+// the iris on the inner ball shows through.
+bool emogenHidden(float part, vec4 eye) {
+    return abs(part - PART_SCLERA) < 0.5 && eye.w > 0.5 && emogenEyeAngle(eye) < CORNEA_DEG;
+}
+
+// Iris and pupil painted on the inner eyeball by angle from the eye axis (linear RGB).
+vec3 emogenIris(vec4 eye, vec3 scleraLinear) {
+    float th = emogenEyeAngle(eye);
+    vec3 e = normalize(eye.xyz);
+    float ph = atan(e.y, e.x);
+    if (th < PUPIL_DEG) {
+        return emogenToLinear(PUPIL_SRGB);
+    }
+    float t = (th - PUPIL_DEG) / (IRIS_DEG - PUPIL_DEG);
+    if (t > 1.0) {
+        return scleraLinear;
+    }
+    float fibres = 0.5 + 0.3 * sin(ph * 41.0 + 1.7 * sin(ph * 7.0)) + 0.2 * sin(ph * 23.0 + 5.0 * t);
+    vec3 inner = emogenToLinear(IRIS_INNER_SRGB);
+    vec3 outer = emogenToLinear(IRIS_OUTER_SRGB);
+    vec3 c = mix(inner, outer, smoothstep(0.25, 0.6, t));
+    c *= 0.7 + 0.6 * fibres;
+    c *= 1.0 + 0.35 * exp(-pow((t - 0.3) / 0.08, 2.0));
+    c = mix(emogenToLinear(PUPIL_SRGB), c, smoothstep(0.0, 0.08, t));
+    c = mix(c, emogenToLinear(LIMBUS_SRGB), smoothstep(0.78, 1.0, t));
+    return c;
+}
+
+vec3 emogenLight(vec3 n, vec3 v, vec3 albedo, float spec, float shin, float wrap) {
+    vec3 l1 = normalize(KEY_DIR);
+    vec3 l2 = normalize(FILL_DIR);
+    float n1 = dot(n, l1);
+    float n2 = dot(n, l2);
+    float d1 = max((n1 + wrap) / (1.0 + wrap), 0.0);
+    float d2 = max((n2 + wrap) / (1.0 + wrap), 0.0);
+    float s1 = n1 > 0.0 ? spec * pow(max(dot(n, normalize(l1 + v)), 0.0), shin) : 0.0;
+    float s2 = n2 > 0.0 ? spec * pow(max(dot(n, normalize(l2 + v)), 0.0), shin) : 0.0;
+    vec3 hemi = mix(GROUND_RGB, SKY_RGB, 0.5 + 0.5 * n.y);
+    return albedo * (hemi + KEY_RGB * d1 + FILL_RGB * d2) + KEY_RGB * s1 + FILL_RGB * s2;
+}
+
+// Final sRGB colour of a fragment.
+vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v, vec4 eye,
+                 bool front) {
+    bool isEye = emogenIsEye(part);
+    if (!front) {
+        if (isEye) {
+            return EYE_INTERIOR_SRGB;
+        }
+        n = -n;
+    }
+    vec3 base = albedo;
+    if (abs(part - PART_IRIS) < 0.5 && eye.w > 0.5) {
+        // The back of the inner ball is only ever seen through the pupil: the eye's interior.
+        if (emogenEyeAngle(eye) > 90.0) {
+            return EYE_INTERIOR_SRGB;
+        }
+        base = emogenIris(eye, albedo);
+    }
+    // No shadows: deep in the mouth gets darker with depth behind the lips instead.
+    float depth = smoothstep(CAVITY_Z_BACK, CAVITY_Z_FRONT, pos.z);
+    float cavity = mix(1.0, mix(CAVITY_MIN, 1.0, depth), clamp(surface.z, 0.0, 1.0));
+    float wrap = isEye ? 0.0 : WRAP;
+    return emogenToSrgb(emogenLight(n, v, base * cavity, surface.x * cavity, surface.y, wrap));
+}

@@ -1,0 +1,165 @@
+"""Study commands: ``emogen study status|export``, ``emogen serve``, ``emogen replay``.
+
+``study_app`` is a Typer sub-app; ``serve_command`` and ``replay_command`` are plain functions
+for the top-level app (``app.command("serve")(serve_command)``).
+"""
+
+from __future__ import annotations
+
+import json
+from enum import StrEnum
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from emogen.clitools import friendly_errors
+
+if TYPE_CHECKING:
+    from emogen.study.storage import Store
+
+study_app = typer.Typer(help="Participant studies: progress and data export.", no_args_is_help=True)
+
+DatabaseOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--database-url",
+        help="SQLAlchemy URL (default: $EMOGEN_DATABASE_URL, then the SQLite file in the user "
+        "data folder).",
+    ),
+]
+
+
+class ExportFormat(StrEnum):
+    parquet = "parquet"
+    csv = "csv"
+
+
+def _store(database_url: str | None, config: Path | None = None) -> Store:
+    from emogen.study.config import load_study_config
+    from emogen.study.storage import Store, resolve_database_url
+
+    config_url = load_study_config(config).database_url if config is not None else None
+    return Store(resolve_database_url(database_url, config_url))
+
+
+@study_app.command("status")
+@friendly_errors
+def status(
+    database_url: DatabaseOpt = None,
+    config: Annotated[
+        Path | None, typer.Option("--config", help="Study TOML (for its database_url).")
+    ] = None,
+    sessions: Annotated[bool, typer.Option("--sessions", help="One line per session.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
+) -> None:
+    """Sessions by stage, trials done and selections made, per study in the database."""
+    from emogen.study.export import session_progress, study_status
+
+    store = _store(database_url, config)
+    studies = study_status(store)
+    lines = session_progress(store) if sessions else []
+    if as_json:
+        typer.echo(json.dumps({"studies": studies, "sessions": lines}, indent=2))
+        return
+    typer.echo(f"database {store.describe()}")
+    if not studies:
+        typer.echo("no studies yet")
+    for s in studies:
+        stages = ", ".join(f"{n} {k}" for k, n in s["by_stage"].items()) or "none"
+        typer.echo(
+            f"study {s['name']} (config {s['config_hash'][:12]}): {s['sessions']} sessions "
+            f"({stages}); {s['trials_done']} trials done; {s['selections']} selections"
+        )
+    for line in lines:
+        typer.echo(
+            f"  session {line['session_id']:>5}  {line['participant_id']:<24} {line['stage']:<12} "
+            f"trial {line['trial']}/{line['trials']}  generation {line['generation']}  "
+            f"updated {line['updated_at']}"
+        )
+    store.dispose()
+
+
+@study_app.command("export")
+@friendly_errors
+def export(
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder.")],
+    fmt: Annotated[ExportFormat, typer.Option("--format", help="parquet or csv.")] = (
+        ExportFormat.parquet
+    ),
+    study: Annotated[
+        str | None, typer.Option("--study", help="Only the study of this name.")
+    ] = None,
+    database_url: DatabaseOpt = None,
+    config: Annotated[
+        Path | None, typer.Option("--config", help="Study TOML (for its database_url).")
+    ] = None,
+) -> None:
+    """Tidy tables: sessions, trials, faces, selections, restarts, ratings (see docs/study.md)."""
+    from emogen.study.export import export_tables, write_export
+
+    store = _store(database_url, config)
+    tables = export_tables(store, study=study)
+    paths = write_export(tables, out, fmt.value)
+    for path in paths:
+        typer.echo(f"wrote {path} ({len(tables[path.stem])} rows)")
+    store.dispose()
+
+
+@friendly_errors
+def serve_command(
+    config: Annotated[
+        Path | None,
+        typer.Argument(help="Study TOML (default: the packaged demo study)."),
+    ] = None,
+    host: Annotated[str, typer.Option("--host", help="Address to listen on.")] = "127.0.0.1",
+    port: Annotated[int, typer.Option("--port", help="Port.")] = 8000,
+    database_url: DatabaseOpt = None,
+    model: Annotated[
+        Path | None, typer.Option("--model", help="Face model (default: as in the config).")
+    ] = None,
+) -> None:
+    """Run a participant study: prints the URL to open; Ctrl-C stops it."""
+    from emogen.study.config import demo_study_path
+    from emogen.web.server import run_server
+
+    path = config if config is not None else demo_study_path()
+    run_server(path, host=host, port=port, database_url=database_url, model=model)
+
+
+@friendly_errors
+def replay_command(
+    session_id: Annotated[
+        int, typer.Argument(help="Session id (see `emogen study status --sessions`).")
+    ],
+    database_url: DatabaseOpt = None,
+    model: Annotated[
+        Path | None, typer.Option("--model", help="Face model (default: the study's).")
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
+) -> None:
+    """Regenerate every population of a session from its seeds and selections; compare."""
+    from emogen.model import load_model
+    from emogen.study.replay import replay_session, study_of_session
+
+    store = _store(database_url)
+    cfg = study_of_session(store, session_id)
+    face_model = load_model(model if model is not None else cfg.model, rig=cfg.rig)
+    report = replay_session(
+        store, session_id, face_model.rig, face_model.model_hash, model=face_model
+    )
+    store.dispose()
+    if as_json:
+        typer.echo(json.dumps(report.to_dict(), indent=2))
+    else:
+        verdict = "every face matches" if report.ok else "MISMATCH"
+        typer.echo(
+            f"session {session_id}: {report.populations} populations, {report.faces} faces "
+            f"replayed: {verdict}"
+        )
+        if not report.model_hash_matches:
+            typer.echo("  the model differs from the one the session was recorded with")
+        for m in report.mismatches[:20]:
+            typer.echo(f"  {m}")
+    if not report.ok:
+        raise typer.Exit(1)

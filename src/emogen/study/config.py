@@ -1,0 +1,206 @@
+"""A participant study's configuration (TOML), validated; errors name the bad key.
+
+::
+
+    name = "demo"
+    emotions = ["happy", "sad"]          # trials = emotions × repetitions × identities
+    repetitions = 1
+    identities = ["generic"]
+    order = "random"                     # or "latin_square", "fixed"
+    participant_param = "PROLIFIC_PID"   # URL parameter with the participant id
+    [ga]                                 # emogen.config.GAConfig: generations, selections, init …
+    generations = 10
+    [completion]
+    code = "C1A2B3"
+
+See ``docs/study.md`` for every key.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+from pathlib import Path
+from typing import Annotated, Literal
+
+from pydantic import Field, field_validator, model_validator
+
+from emogen.config import GAConfig, _Strict, read_toml, validate_config
+from emogen.errors import ConfigError
+from emogen.model.rig import Rig
+
+STUDY_SCHEMA = "emogen.study/1"
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
+_PARAM = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
+
+DEFAULT_CONSENT = (
+    "This study asks you to make faces show emotions by choosing among computer-generated "
+    "faces. It takes about 10 minutes. Your choices and their timings are recorded with a "
+    "participant id; no other personal data are collected. You may stop at any time by "
+    "closing the page.\n\nBy clicking “I agree” you consent to take part."
+)
+DEFAULT_INSTRUCTIONS = (
+    "You will see ten faces at a time. Click the face that best shows the emotion you are asked "
+    "for: it is marked with a star (★). Then click any other faces that are also acceptable: "
+    "they are marked with a tick (✓). Press “Next generation” and new faces will be bred from "
+    "the ones you chose. After a few generations you rate the final face.\n\nKeyboard: Tab or "
+    "the arrow keys move between faces, Enter or Space selects, B makes a face the best one."
+)
+
+
+class RatingConfig(_Strict):
+    """The satisfaction rating of each trial's final face."""
+
+    question: str = "How well does this face show the emotion you were asked for?"
+    low_label: str = "not at all"
+    high_label: str = "perfectly"
+    points: Annotated[int, Field(ge=2, le=11)] = 7
+
+
+class CompletionConfig(_Strict):
+    """What the participant sees at the end: a code to paste, and/or a redirect."""
+
+    message: str = "Thank you! You have completed the study."
+    #: Completion code shown to the participant (e.g. Prolific's).
+    code: str | None = None
+    #: Redirect URL; ``{code}`` and ``{participant}`` are filled in.
+    redirect_url: str | None = None
+
+    @field_validator("redirect_url")
+    @classmethod
+    def _http(cls, v: str | None) -> str | None:
+        if v is not None and not re.match(r"^https?://", v):
+            raise ValueError(f"redirect_url must start with http:// or https://; got {v!r}")
+        return v
+
+
+class StudyConfig(_Strict):
+    """One study: its trials, their order, the GA, and the participant's pages."""
+
+    name: Annotated[str, Field(min_length=1)] = "study"
+    title: str = "Making facial expressions"
+    #: Study seed: session k's seed is child k of it (None: a fresh seed per session, recorded).
+    seed: Annotated[int, Field(ge=0, lt=2**63)] | None = None
+    emotions: tuple[str, ...] = Field(default=("happy",), min_length=1)
+    repetitions: Annotated[int, Field(ge=1, le=100)] = 1
+    #: Identity per trial: generic, or a rig preset (male, female).
+    identities: tuple[str, ...] = Field(default=("generic",), min_length=1)
+    #: random (seeded per session), latin_square (balanced, row = session number), fixed.
+    order: Literal["random", "latin_square", "fixed"] = "random"
+    #: URL parameter carrying the participant id (e.g. Prolific's PROLIFIC_PID); also accepted:
+    #: ``participant``. Without one, an id is generated.
+    participant_param: str = "PROLIFIC_PID"
+    prompt: str = "Make the face look {EMOTION}"
+    consent: str = DEFAULT_CONSENT
+    instructions: str = DEFAULT_INSTRUCTIONS
+    #: Show "Start again" (what it does is ga.init.on_reset: reinitialise or keep).
+    allow_restart: bool = True
+    #: Show corrected faces (paper Section III-A): the engines correct every population
+    #: (combinational + lip/teeth collision correctives), the correctives' weights are stored
+    #: after the shape weights, and the viewer / fallback PNGs draw the corrected face.
+    correct: bool = True
+    #: Face model folder or GLB, and rig TOML (default: $EMOGEN_MODEL / the packaged rig).
+    model: Path | None = None
+    rig: Path | None = None
+    #: SQLAlchemy URL; $EMOGEN_DATABASE_URL and --database-url win.
+    database_url: str | None = None
+    ga: GAConfig = GAConfig()
+    rating: RatingConfig = RatingConfig()
+    completion: CompletionConfig = CompletionConfig()
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, v: str) -> str:
+        if not _NAME.match(v):
+            raise ValueError(
+                f"name must be 1-64 letters, digits, '_', '.', '-' (starting with a letter or "
+                f"digit); got {v!r}"
+            )
+        return v
+
+    @field_validator("participant_param")
+    @classmethod
+    def _param(cls, v: str) -> str:
+        if not _PARAM.match(v):
+            raise ValueError(f"participant_param must be a plain identifier; got {v!r}")
+        return v
+
+    @field_validator("emotions", "identities")
+    @classmethod
+    def _unique(cls, v: tuple[str, ...]) -> tuple[str, ...]:
+        dup = sorted({x for x in v if v.count(x) > 1})
+        if dup:
+            raise ValueError(f"must not repeat entries; got {dup} more than once")
+        if any(not x.strip() for x in v):
+            raise ValueError("entries must not be empty")
+        return v
+
+    @model_validator(mode="after")
+    def _consistent(self) -> StudyConfig:
+        if self.n_trials > 500:
+            raise ValueError(
+                f"emotions × repetitions × identities must be at most 500 trials; "
+                f"got {self.n_trials}"
+            )
+        return self
+
+    @property
+    def n_trials(self) -> int:
+        return len(self.emotions) * self.repetitions * len(self.identities)
+
+    def conditions(self) -> list[tuple[str, str, int]]:
+        """Every trial condition (emotion, identity, repetition), in config order."""
+        return [
+            (e, i, r)
+            for e in self.emotions
+            for i in self.identities
+            for r in range(self.repetitions)
+        ]
+
+    def ga_for(self, identity: str) -> GAConfig:
+        return self.ga.model_copy(update={"identity": identity})
+
+    def prompt_for(self, emotion: str) -> str:
+        return self.prompt.replace("{EMOTION}", emotion.upper()).replace("{emotion}", emotion)
+
+    def config_hash(self) -> str:
+        """SHA-256 of the resolved config (canonical JSON): stamped on every exported row."""
+        return hashlib.sha256(self.canonical_json().encode()).hexdigest()
+
+    def canonical_json(self) -> str:
+        return json.dumps(self.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
+
+
+def study_from_dict(data: dict[str, object], source: str = "(study config)") -> StudyConfig:
+    return validate_config(StudyConfig, dict(data), source)
+
+
+def load_study_config(path: Path) -> StudyConfig:
+    """A study config from TOML; relative ``model``/``rig`` paths are relative to the file."""
+    path = Path(path)
+    data = read_toml(path)
+    for key in ("model", "rig"):
+        value = data.get(key)
+        if isinstance(value, str) and value and not Path(value).expanduser().is_absolute():
+            data[key] = str((path.parent / value).resolve())
+    if "ga" in data and isinstance(data["ga"], dict):
+        init = data["ga"].get("init")
+        if isinstance(init, dict) and isinstance(init.get("fixed_file"), str):
+            ff = Path(init["fixed_file"]).expanduser()
+            if not ff.is_absolute():
+                init["fixed_file"] = str((path.parent / ff).resolve())
+    return study_from_dict(data, str(path))
+
+
+def demo_study_path() -> Path:
+    """The packaged demo study (``emogen/data/demo_study.toml``)."""
+    return Path(__file__).resolve().parents[1] / "data" / "demo_study.toml"
+
+
+def check_identities(config: StudyConfig, rig: Rig) -> None:
+    """Every identity of the study must be ``generic`` or one of the rig's presets."""
+    known = ["generic", *sorted(rig.identities)]
+    bad = [i for i in config.identities if i not in known]
+    if bad:
+        raise ConfigError(f"invalid study config: 'identities' must be among {known}; got {bad}")

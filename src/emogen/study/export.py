@@ -1,0 +1,338 @@
+"""Researcher side: study progress, and tidy export tables in Parquet or CSV.
+
+Tables (one row per …): ``sessions`` (session), ``trials`` (trial of a session), ``faces``
+(face shown, per generation: genes ``g_<gene>`` and full weights ``w_<column>``), ``selections``
+(selected face: role ``elite`` or ``other``), ``restarts`` (press of "Start again") and
+``ratings`` (trial). Every row carries ``schema_version``, ``package_version`` (the version
+that recorded the session), ``model_hash`` and ``study_config_hash``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+from sqlalchemy import func, select
+
+from emogen.errors import ConfigError
+from emogen.study.storage import (
+    SCHEMA_VERSION,
+    FaceRow,
+    PopulationRow,
+    RatingRow,
+    RestartRow,
+    SelectionRow,
+    SessionRow,
+    Store,
+    StudyRow,
+    TrialRow,
+    as_utc,
+)
+
+TABLES = ("sessions", "trials", "faces", "selections", "restarts", "ratings")
+STAMPS = ("schema_version", "package_version", "model_hash", "study_config_hash")
+
+
+def _iso(t: Any) -> str | None:
+    t = as_utc(t)
+    return None if t is None else t.isoformat()
+
+
+def study_status(store: Store) -> list[dict[str, Any]]:
+    """Per study: sessions by stage, trials done, selections made."""
+    out = []
+    with store.read() as db:
+        for study in db.scalars(select(StudyRow).order_by(StudyRow.id)):
+            stages = dict(
+                db.execute(
+                    select(SessionRow.stage, func.count())
+                    .where(SessionRow.study_id == study.id)
+                    .group_by(SessionRow.stage)
+                ).all()
+            )
+            trials_done = db.scalar(
+                select(func.count())
+                .select_from(TrialRow)
+                .join(SessionRow, TrialRow.session_id == SessionRow.id)
+                .where(SessionRow.study_id == study.id, TrialRow.status == "done")
+            )
+            n_sel = db.scalar(
+                select(func.count())
+                .select_from(SelectionRow)
+                .join(TrialRow, SelectionRow.trial_id == TrialRow.id)
+                .join(SessionRow, TrialRow.session_id == SessionRow.id)
+                .where(SessionRow.study_id == study.id)
+            )
+            out.append(
+                {
+                    "study_id": study.id,
+                    "name": study.name,
+                    "config_hash": study.config_hash,
+                    "model_hash": study.model_hash,
+                    "created_at": _iso(study.created_at),
+                    "sessions": int(sum(stages.values())),
+                    "by_stage": {k: int(v) for k, v in sorted(stages.items())},
+                    "trials_done": int(trials_done or 0),
+                    "selections": int(n_sel or 0),
+                }
+            )
+    return out
+
+
+def session_progress(store: Store, study_id: int | None = None) -> list[dict[str, Any]]:
+    """One line per session: participant, stage, trial and generation reached (no tokens)."""
+    out = []
+    with store.read() as db:
+        query = select(SessionRow).order_by(SessionRow.id)
+        if study_id is not None:
+            query = query.where(SessionRow.study_id == study_id)
+        sessions = list(db.scalars(query))
+        cur = {
+            (t.session_id, t.position): t
+            for t in db.scalars(
+                select(TrialRow).where(TrialRow.session_id.in_([s.id for s in sessions]))
+            )
+        }
+        for s in sessions:
+            t = cur.get((s.id, s.current_trial))
+            out.append(
+                {
+                    "session_id": s.id,
+                    "study_id": s.study_id,
+                    "participant_id": s.participant_id,
+                    "stage": s.stage,
+                    "trial": s.current_trial + 1,
+                    "trials": len(json.loads(s.trial_order)),
+                    "generation": None if t is None else t.generation,
+                    "attempt": None if t is None else t.attempt + 1,
+                    "created_at": _iso(s.created_at),
+                    "updated_at": _iso(s.updated_at),
+                    "completed_at": _iso(s.completed_at),
+                }
+            )
+    return out
+
+
+def export_tables(
+    store: Store, *, study: str | None = None, session_ids: list[int] | None = None
+) -> dict[str, pd.DataFrame]:
+    """Every table (see the module doc) as a DataFrame; ``study`` limits to studies of that name."""
+    rows: dict[str, list[dict[str, Any]]] = {t: [] for t in TABLES}
+    with store.read() as db:
+        studies = {s.id: s for s in db.scalars(select(StudyRow))}
+        if study is not None:
+            studies = {k: v for k, v in studies.items() if v.name == study}
+            if not studies:
+                raise ConfigError(f"no study named '{study}' in {store.describe()}")
+        q = select(SessionRow).where(SessionRow.study_id.in_(list(studies))).order_by(SessionRow.id)
+        if session_ids is not None:
+            q = q.where(SessionRow.id.in_(session_ids))
+        sessions = list(db.scalars(q))
+        sids = [s.id for s in sessions]
+        trials = list(
+            db.scalars(
+                select(TrialRow)
+                .where(TrialRow.session_id.in_(sids))
+                .order_by(TrialRow.session_id, TrialRow.position)
+            )
+        )
+        tids = [t.id for t in trials]
+        pops = list(
+            db.scalars(
+                select(PopulationRow)
+                .where(PopulationRow.trial_id.in_(tids))
+                .order_by(PopulationRow.id)
+            )
+        )
+        pids = [p.id for p in pops]
+        faces = list(
+            db.scalars(
+                select(FaceRow)
+                .where(FaceRow.population_id.in_(pids))
+                .order_by(FaceRow.population_id, FaceRow.position)
+            )
+        )
+        selections = list(
+            db.scalars(select(SelectionRow).where(SelectionRow.population_id.in_(pids)))
+        )
+        restarts = list(db.scalars(select(RestartRow).where(RestartRow.population_id.in_(pids))))
+        ratings = list(db.scalars(select(RatingRow).where(RatingRow.trial_id.in_(tids))))
+
+    by_session = {s.id: s for s in sessions}
+    by_trial = {t.id: t for t in trials}
+    by_pop = {p.id: p for p in pops}
+
+    def stamp(session: SessionRow) -> dict[str, Any]:
+        st = studies[session.study_id]
+        return {
+            "schema_version": SCHEMA_VERSION,
+            "package_version": session.package_version,
+            "model_hash": st.model_hash,
+            "study_config_hash": st.config_hash,
+        }
+
+    def key(trial: TrialRow) -> dict[str, Any]:
+        s = by_session[trial.session_id]
+        return {
+            "study": studies[s.study_id].name,
+            "session_id": s.id,
+            "participant_id": s.participant_id,
+            "trial": trial.position,
+        }
+
+    for s in sessions:
+        rows["sessions"].append(
+            {
+                "study": studies[s.study_id].name,
+                "session_id": s.id,
+                "participant_id": s.participant_id,
+                "participant_source": s.participant_source,
+                "session_number": s.number,
+                "seed": s.seed,
+                "order_kind": s.order_kind,
+                "order_row": s.order_row,
+                "trial_order": s.trial_order,
+                "stage": s.stage,
+                "n_trials": len(json.loads(s.trial_order)),
+                "user_agent": s.user_agent,
+                "created_at": _iso(s.created_at),
+                "consented_at": _iso(s.consented_at),
+                "started_at": _iso(s.started_at),
+                "completed_at": _iso(s.completed_at),
+                **stamp(s),
+            }
+        )
+    for t in trials:
+        rows["trials"].append(
+            {
+                **key(t),
+                "condition": t.condition,
+                "emotion": t.emotion,
+                "identity": t.identity,
+                "repetition": t.repetition,
+                "seed": t.seed,
+                "status": t.status,
+                "attempts": t.attempt + 1,
+                "generation_reached": t.generation,
+                "final_face_id": t.final_face_id,
+                "started_at": _iso(t.started_at),
+                "finished_at": _iso(t.finished_at),
+                **stamp(by_session[t.session_id]),
+            }
+        )
+    gene_cols = {sid: json.loads(st.gene_names) for sid, st in studies.items()}
+    weight_cols = {sid: json.loads(st.weight_names) for sid, st in studies.items()}
+    for f in faces:
+        p = by_pop[f.population_id]
+        t = by_trial[p.trial_id]
+        s = by_session[t.session_id]
+        row: dict[str, Any] = {
+            **key(t),
+            "attempt": p.attempt,
+            "generation": p.generation,
+            "position": f.position,
+            "face_id": f.face_id,
+            "parent_a": f.parent_a,
+            "parent_b": f.parent_b,
+            "operator": f.operator,
+            "shown_at": _iso(p.shown_at),
+        }
+        row.update(zip((f"g_{n}" for n in gene_cols[s.study_id]), json.loads(f.genes), strict=True))
+        row.update(
+            zip((f"w_{n}" for n in weight_cols[s.study_id]), json.loads(f.weights), strict=True)
+        )
+        row.update(stamp(s))
+        rows["faces"].append(row)
+    for sel in sorted(selections, key=lambda x: x.id):
+        p = by_pop[sel.population_id]
+        t = by_trial[p.trial_id]
+        others = json.loads(sel.other_face_ids)
+        for rank, (face, role) in enumerate(
+            [(sel.elite_face_id, "elite")] + [(o, "other") for o in others]
+        ):
+            rows["selections"].append(
+                {
+                    **key(t),
+                    "attempt": p.attempt,
+                    "generation": p.generation,
+                    "face_id": face,
+                    "role": role,
+                    "rank": rank,
+                    "n_selected": 1 + len(others),
+                    "shown_at": _iso(p.shown_at),
+                    "submitted_at": _iso(sel.submitted_at),
+                    "server_response_ms": sel.server_response_ms,
+                    "client_response_ms": sel.client_response_ms,
+                    "step_key": sel.step_key,
+                    **stamp(by_session[t.session_id]),
+                }
+            )
+    for r in sorted(restarts, key=lambda x: x.id):
+        p = by_pop[r.population_id]
+        t = by_trial[p.trial_id]
+        rows["restarts"].append(
+            {
+                **key(t),
+                "attempt": p.attempt,
+                "generation": p.generation,
+                "shown_at": _iso(p.shown_at),
+                "submitted_at": _iso(r.submitted_at),
+                "server_response_ms": r.server_response_ms,
+                "client_response_ms": r.client_response_ms,
+                "step_key": r.step_key,
+                **stamp(by_session[t.session_id]),
+            }
+        )
+    for rt in sorted(ratings, key=lambda x: x.id):
+        t = by_trial[rt.trial_id]
+        rows["ratings"].append(
+            {
+                **key(t),
+                "emotion": t.emotion,
+                "identity": t.identity,
+                "face_id": rt.face_id,
+                "value": rt.value,
+                "points": rt.points,
+                "submitted_at": _iso(rt.submitted_at),
+                "server_response_ms": rt.server_response_ms,
+                "client_response_ms": rt.client_response_ms,
+                "step_key": rt.step_key,
+                **stamp(by_session[t.session_id]),
+            }
+        )
+    return {name: _frame(name, rows[name]) for name in TABLES}
+
+
+_EMPTY_COLUMNS = {
+    "sessions": ["study", "session_id", "participant_id"],
+    "trials": ["study", "session_id", "participant_id", "trial"],
+    "faces": ["study", "session_id", "participant_id", "trial", "attempt", "generation"],
+    "selections": ["study", "session_id", "participant_id", "trial", "attempt", "generation"],
+    "restarts": ["study", "session_id", "participant_id", "trial", "attempt", "generation"],
+    "ratings": ["study", "session_id", "participant_id", "trial"],
+}
+
+
+def _frame(name: str, rows: list[dict[str, Any]]) -> pd.DataFrame:
+    if not rows:
+        return pd.DataFrame(columns=[*_EMPTY_COLUMNS[name], *STAMPS])
+    return pd.DataFrame(rows)
+
+
+def write_export(tables: dict[str, pd.DataFrame], out: Path, fmt: str = "parquet") -> list[Path]:
+    """``<table>.parquet`` or ``<table>.csv`` for every table, in ``out``."""
+    if fmt not in ("parquet", "csv"):
+        raise ConfigError(f"--format must be parquet or csv; got {fmt!r}")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name, df in tables.items():
+        path = out / f"{name}.{fmt}"
+        if fmt == "parquet":
+            df.to_parquet(path, index=False)
+        else:
+            df.to_csv(path, index=False)
+        paths.append(path)
+    return paths

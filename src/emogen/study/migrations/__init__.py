@@ -1,0 +1,49 @@
+"""Alembic migrations of the study database, run programmatically when a Store opens.
+
+A new migration: ``alembic -c /dev/null`` is not needed; write a file in ``versions/`` with
+``revision``/``down_revision`` (see ``0001_initial.py``); ``upgrade`` runs every pending one.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from sqlalchemy import text
+
+if TYPE_CHECKING:
+    from alembic.config import Config
+
+    from emogen.study.storage import Store
+
+HERE = Path(__file__).resolve().parent
+# Serialises concurrent upgrades on PostgreSQL (two servers starting at once).
+_PG_LOCK_ID = 0x456D6F47656E  # "EmoGen"
+
+
+def alembic_config() -> Config:
+    from alembic.config import Config
+
+    cfg = Config()
+    cfg.set_main_option("script_location", str(HERE))
+    return cfg
+
+
+def upgrade(store: Store, revision: str = "head") -> None:
+    """Bring the store's schema to ``revision`` (default: the newest)."""
+    from alembic import command
+
+    cfg = alembic_config()
+    engine = store._write_engine  # BEGIN IMMEDIATE on SQLite
+    with engine.begin() as conn:
+        if conn.dialect.name == "postgresql":
+            conn.execute(text("SELECT pg_advisory_xact_lock(:k)"), {"k": _PG_LOCK_ID})
+        cfg.attributes["connection"] = conn
+        command.upgrade(cfg, revision)
+
+
+def current_revision(store: Store) -> str | None:
+    from alembic.runtime.migration import MigrationContext
+
+    with store.engine.connect() as conn:
+        return MigrationContext.configure(conn).get_current_revision()

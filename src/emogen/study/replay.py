@@ -1,0 +1,169 @@
+"""Replay a stored session: regenerate every population from its seeds and recorded selections.
+
+For each trial the GA engine is rebuilt from the trial's seed and driven through the recorded
+selections and restarts in the order they happened; every population it makes is compared with
+the one stored (face ids, parent ids, operators, genes and full weights, exactly).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from sqlalchemy import select
+from sqlalchemy.orm import selectinload
+
+from emogen.errors import EmoGenError
+from emogen.ga.engine import Engine
+from emogen.model.rig import Rig
+from emogen.study.config import StudyConfig
+from emogen.study.errors import SessionNotFound
+from emogen.study.sessions import StudyCorrectors, full_weights
+
+if TYPE_CHECKING:
+    from emogen.model.face import FaceModel
+
+from emogen.study.storage import (
+    PopulationRow,
+    RestartRow,
+    SelectionRow,
+    SessionRow,
+    Store,
+    StudyRow,
+    TrialRow,
+)
+
+
+@dataclass
+class ReplayReport:
+    session_id: int
+    model_hash_matches: bool
+    populations: int = 0
+    faces: int = 0
+    mismatches: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return self.model_hash_matches and not self.mismatches
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "session_id": self.session_id,
+            "ok": self.ok,
+            "model_hash_matches": self.model_hash_matches,
+            "populations": self.populations,
+            "faces": self.faces,
+            "mismatches": self.mismatches,
+        }
+
+
+def _compare(where: str, stored: PopulationRow, engine: Engine) -> tuple[int, list[str]]:
+    pop = engine.ask()
+    faces = stored.faces
+    problems = []
+    if len(faces) != len(pop):
+        return 0, [f"{where}: stored {len(faces)} faces, replay made {len(pop)}"]
+    weights = full_weights(pop)
+    for i, f in enumerate(faces):
+        what = []
+        if f.face_id != int(pop.ids[i]):
+            what.append(f"id {f.face_id} vs {int(pop.ids[i])}")
+        if (f.parent_a, f.parent_b) != tuple(int(x) for x in pop.parent_ids[i]):
+            what.append("parents")
+        if f.operator != str(pop.operators[i]):
+            what.append(f"operator {f.operator} vs {pop.operators[i]}")
+        if not np.array_equal(np.array(json.loads(f.genes)), pop.genes[i]):
+            what.append("genes")
+        if not np.array_equal(np.array(json.loads(f.weights)), weights[i]):
+            what.append("weights")
+        if what:
+            problems.append(f"{where}, position {i}: " + ", ".join(what))
+    return len(faces), problems
+
+
+def study_of_session(store: Store, session_id: int) -> StudyConfig:
+    """The study config a session was recorded under."""
+    with store.read() as db:
+        sess = db.get(SessionRow, session_id)
+        if sess is None:
+            raise SessionNotFound(f"no session with id {session_id} in {store.describe()}")
+        study = db.get(StudyRow, sess.study_id)
+        if study is None:  # pragma: no cover - foreign key
+            raise SessionNotFound(f"session {session_id} has no study")
+        return StudyConfig.model_validate(json.loads(study.config_json))
+
+
+def replay_session(
+    store: Store,
+    session_id: int,
+    rig: Rig,
+    model_hash: str,
+    *,
+    model: FaceModel | None = None,
+) -> ReplayReport:
+    """Regenerate every population of session ``session_id`` and compare it with the stored one.
+
+    model : the face model; needed for a study that corrects faces (``correct = true``), whose
+    replayed populations are corrected as they were when shown (and their corrective weights
+    compared too).
+    """
+    with store.read() as db:
+        sess = db.get(SessionRow, session_id)
+        if sess is None:
+            raise SessionNotFound(f"no session with id {session_id} in {store.describe()}")
+        study = db.get(StudyRow, sess.study_id)
+        if study is None:  # pragma: no cover - foreign key
+            raise SessionNotFound(f"session {session_id} has no study")
+        config = StudyConfig.model_validate(json.loads(study.config_json))
+        report = ReplayReport(session_id, model_hash_matches=study.model_hash == model_hash)
+        correctors = StudyCorrectors(config, model)
+        trials = db.scalars(
+            select(TrialRow).where(TrialRow.session_id == sess.id).order_by(TrialRow.position)
+        ).all()
+        for trial in trials:
+            pops = db.scalars(
+                select(PopulationRow)
+                .where(PopulationRow.trial_id == trial.id)
+                .order_by(PopulationRow.attempt, PopulationRow.generation)
+                .options(selectinload(PopulationRow.faces))
+            ).all()
+            if not pops:
+                continue
+            sels = {
+                s.population_id: s
+                for s in db.scalars(select(SelectionRow).where(SelectionRow.trial_id == trial.id))
+            }
+            restarts = {
+                r.population_id
+                for r in db.scalars(select(RestartRow).where(RestartRow.trial_id == trial.id))
+            }
+            try:
+                engine = Engine(
+                    config.ga_for(trial.identity),
+                    rig,
+                    trial.seed,
+                    corrector=correctors(trial.identity),
+                )
+                for p in pops:
+                    where = f"trial {trial.position + 1} attempt {p.attempt + 1} generation {p.generation}"
+                    if (engine.trial, engine.generation) != (p.attempt, p.generation):
+                        report.mismatches.append(
+                            f"{where}: replay is at attempt {engine.trial + 1} generation "
+                            f"{engine.generation}"
+                        )
+                        break
+                    n, problems = _compare(where, p, engine)
+                    report.populations += 1
+                    report.faces += n
+                    report.mismatches += problems
+                    if p.id in sels:
+                        s = sels[p.id]
+                        engine.tell(s.elite_face_id, json.loads(s.other_face_ids))
+                    elif p.id in restarts:
+                        engine.reset()
+                    # else: the population still shown; nothing follows it
+            except EmoGenError as exc:
+                report.mismatches.append(f"trial {trial.position + 1}: replay failed: {exc}")
+    return report

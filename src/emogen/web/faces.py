@@ -1,0 +1,64 @@
+"""Server-side face images (PNG) for browsers without WebGL, rendered by ``emogen.render``.
+
+OpenGL contexts belong to the thread that made them, so every render runs on one worker thread
+that owns one renderer per identity. Recent images are cached by (identity, weights). With
+``correct`` (the study's ``correct = true``) the faces are corrected as in the GA and the
+browser viewer (``Renderer.render(weights, correct=True)``) from their shape weights.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import hashlib
+from collections import OrderedDict
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
+
+import numpy as np
+
+from emogen.model.face import FaceModel
+
+PNG_SIZE = 256
+CACHE_SIZE = 512
+
+
+class FacePNGs:
+    def __init__(self, model: FaceModel, size: int = PNG_SIZE, *, correct: bool = True) -> None:
+        self.model = model
+        self.size = size
+        self.correct = correct
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="emogen-render")
+        self._renderers: dict[str, Any] = {}
+        self._cache: OrderedDict[str, bytes] = OrderedDict()
+
+    async def render(self, weights: np.ndarray, identity: str) -> bytes:
+        w = np.asarray(weights, dtype=np.float64)[: self.model.n_shapes]
+        key = identity + ":" + hashlib.sha256(w.tobytes()).hexdigest()
+        if key in self._cache:
+            self._cache.move_to_end(key)
+            return self._cache[key]
+        loop = asyncio.get_running_loop()
+        png = await loop.run_in_executor(self._pool, self._render, w, identity)
+        self._cache[key] = png
+        while len(self._cache) > CACHE_SIZE:
+            self._cache.popitem(last=False)
+        return png
+
+    def _render(self, weights: np.ndarray, identity: str) -> bytes:
+        from emogen.render.images import png_bytes
+        from emogen.render.renderer import Renderer
+
+        if identity not in self._renderers:
+            model = self.model if identity == "generic" else self.model.with_identity(identity)
+            self._renderers[identity] = Renderer(model, size=self.size)
+        image = self._renderers[identity].render(weights[None, :], correct=self.correct)[0]
+        return png_bytes(image)
+
+    def close(self) -> None:
+        def release() -> None:
+            for r in self._renderers.values():
+                r.close()
+            self._renderers.clear()
+
+        self._pool.submit(release).result()
+        self._pool.shutdown()

@@ -1,0 +1,201 @@
+"""Participant pages and API. A session is reached only through its secret token."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Path, Request
+from fastapi.responses import HTMLResponse, JSONResponse, Response
+from pydantic import BaseModel, ConfigDict, Field
+
+from emogen.study.sessions import StudyService
+
+router = APIRouter()
+
+Token = Annotated[
+    str,
+    Path(
+        pattern=r"^[A-Za-z0-9_-]{16,64}$",
+        description="The session's secret token (from the session link).",
+    ),
+]
+#: A client-made key per step (e.g. a UUID); the same key again is the same step.
+StepKey = Annotated[str, Field(pattern=r"^[A-Za-z0-9_-]{8,64}$")]
+Index = Annotated[int, Field(ge=0, le=100_000)]
+FaceId = Annotated[int, Field(ge=0, le=2**31 - 1)]
+Millis = Annotated[float, Field(ge=0, le=86_400_000, allow_inf_nan=False)]
+
+
+class _Body(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+
+class NewSession(_Body):
+    participant_id: Annotated[str, Field(max_length=128)] | None = None
+    #: The token this browser holds for the participant's session, to resume it.
+    resume_token: Annotated[str, Field(pattern=r"^[A-Za-z0-9_-]{16,64}$")] | None = None
+
+
+class Begin(_Body):
+    key: StepKey
+
+
+class Selection(_Body):
+    key: StepKey
+    trial: Index
+    attempt: Index
+    generation: Index
+    elite: FaceId
+    others: Annotated[list[FaceId], Field(max_length=100)] = []
+    response_ms: Millis | None = None
+
+
+class Restart(_Body):
+    key: StepKey
+    trial: Index
+    attempt: Index
+    generation: Index
+    response_ms: Millis | None = None
+
+
+class Rating(_Body):
+    key: StepKey
+    trial: Index
+    value: Annotated[int, Field(ge=1, le=11)]
+    response_ms: Millis | None = None
+
+
+class State(BaseModel):
+    """The participant's view of the session (see ``StudyService._state``)."""
+
+    stage: str
+    participant_id: str
+    progress: dict[str, int]
+    limits: dict[str, int]
+    allow_restart: bool
+    trial: dict[str, Any] | None
+    population: dict[str, Any] | None
+    rating: dict[str, Any] | None
+    completion: dict[str, Any] | None
+    replayed: bool = False
+
+
+class Created(BaseModel):
+    token: str
+    url: str
+    state: State
+
+
+def _service(request: Request) -> StudyService:
+    return request.app.state.service
+
+
+def _page(request: Request, name: str, **context: Any) -> HTMLResponse:
+    cfg = request.app.state.config
+    return request.app.state.templates.TemplateResponse(
+        request,
+        name,
+        {"config": cfg, "viewer": request.app.state.viewer, **context},
+    )
+
+
+@router.get("/", response_class=HTMLResponse, include_in_schema=False)
+def landing(request: Request) -> HTMLResponse:
+    """Consent page; the participant id comes from the URL (``?PROLIFIC_PID=…``)."""
+    return _page(request, "landing.html")
+
+
+@router.get("/s/{token}", response_class=HTMLResponse, include_in_schema=False)
+def session_page(request: Request, token: Token) -> HTMLResponse:
+    _service(request).state(token)  # 404 for an unknown token
+    return _page(request, "session.html", token=token)
+
+
+@router.post("/api/sessions", status_code=201, response_model=Created)
+def create_session(request: Request, body: NewSession) -> JSONResponse:
+    """Consent given: start a session (or resume this browser's session of the participant)."""
+    token, state = _service(request).create_session(
+        body.participant_id,
+        resume_token=body.resume_token,
+        user_agent=request.headers.get("user-agent", ""),
+    )
+    return JSONResponse({"token": token, "url": f"/s/{token}", "state": state}, status_code=201)
+
+
+def _json(state: dict[str, Any]) -> JSONResponse:
+    """The state as JSON, serialised directly (no per-float encoder pass)."""
+    return JSONResponse(state)
+
+
+@router.get("/api/s/{token}/state", response_model=State)
+def get_state(request: Request, token: Token) -> JSONResponse:
+    """Where the session is: stage, progress, the population shown, or the rating asked."""
+    return _json(_service(request).state(token))
+
+
+@router.post("/api/s/{token}/begin", response_model=State)
+def begin(request: Request, token: Token, body: Begin) -> JSONResponse:
+    """Instructions read: the first trial starts."""
+    return _json(_service(request).begin(token, body.key))
+
+
+@router.post("/api/s/{token}/select", response_model=State)
+def select_faces(request: Request, token: Token, body: Selection) -> JSONResponse:
+    """The best face (elite) and the other acceptable faces of the shown generation."""
+    state = _service(request).select(
+        token,
+        body.key,
+        trial=body.trial,
+        attempt=body.attempt,
+        generation=body.generation,
+        elite=body.elite,
+        others=list(body.others),
+        response_ms=body.response_ms,
+    )
+    return _json(state)
+
+
+@router.post("/api/s/{token}/restart", response_model=State)
+def restart(request: Request, token: Token, body: Restart) -> JSONResponse:
+    """Start the current trial again at generation 0."""
+    state = _service(request).restart(
+        token,
+        body.key,
+        trial=body.trial,
+        attempt=body.attempt,
+        generation=body.generation,
+        response_ms=body.response_ms,
+    )
+    return _json(state)
+
+
+@router.post("/api/s/{token}/rating", response_model=State)
+def rate(request: Request, token: Token, body: Rating) -> JSONResponse:
+    """The satisfaction rating (1 … points) of the trial's final face."""
+    return _json(
+        _service(request).rate(
+            token, body.key, trial=body.trial, value=body.value, response_ms=body.response_ms
+        )
+    )
+
+
+@router.get(
+    "/api/s/{token}/faces/{face_id}.png",
+    responses={200: {"content": {"image/png": {}}}},
+    response_class=Response,
+)
+async def face_png(
+    request: Request, token: Token, face_id: Annotated[int, Path(ge=0, le=2**31 - 1)]
+) -> Response:
+    """A face of the current trial rendered on the server (for browsers without WebGL)."""
+    from starlette.concurrency import run_in_threadpool
+
+    from emogen.web.faces import FacePNGs
+
+    service = _service(request)
+    weights, identity = await run_in_threadpool(service.face_weights, token, face_id)
+    app = request.app
+    if app.state.faces is None:
+        app.state.faces = FacePNGs(app.state.model, correct=app.state.config.correct)
+    png = await app.state.faces.render(weights, identity)
+    return Response(png, media_type="image/png", headers={"Cache-Control": "private, max-age=3600"})

@@ -1,0 +1,74 @@
+"""Researcher dashboard and API, behind ``Authorization: Bearer $EMOGEN_RESEARCHER_TOKEN``."""
+
+from __future__ import annotations
+
+import secrets
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, Path, Request
+from fastapi.responses import HTMLResponse, Response
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+
+from emogen.study.errors import Forbidden
+from emogen.study.export import TABLES, export_tables, session_progress, study_status
+
+router = APIRouter()
+_bearer = HTTPBearer(auto_error=False, description="EMOGEN_RESEARCHER_TOKEN")
+
+
+def researcher(
+    request: Request,
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
+) -> None:
+    expected = request.app.state.researcher_token
+    if not expected:
+        raise Forbidden(
+            "researcher endpoints are disabled: start the server with EMOGEN_RESEARCHER_TOKEN set"
+        )
+    given = credentials.credentials if credentials is not None else ""
+    if not secrets.compare_digest(given.encode(), expected.encode()):
+        raise Forbidden("researcher endpoints need 'Authorization: Bearer <researcher token>'")
+
+
+Researcher = Annotated[None, Depends(researcher)]
+
+
+@router.get("/researcher", response_class=HTMLResponse, include_in_schema=False)
+def dashboard(request: Request) -> HTMLResponse:
+    """The dashboard page (it asks for the token and reads the API)."""
+    return request.app.state.templates.TemplateResponse(
+        request, "researcher.html", {"config": request.app.state.config, "viewer": False}
+    )
+
+
+@router.get("/api/researcher/status")
+def status(request: Request, _auth: Researcher) -> dict[str, Any]:
+    """Progress of every study in the database, and of this study's sessions."""
+    store = request.app.state.store
+    service = request.app.state.service
+    return {
+        "study": service.ctx.config.name,
+        "study_id": service.ctx.study_id,
+        "studies": study_status(store),
+        "sessions": session_progress(store, service.ctx.study_id),
+    }
+
+
+@router.get(
+    "/api/researcher/export/{table}.csv",
+    responses={200: {"content": {"text/csv": {}}}},
+    response_class=Response,
+)
+def export_csv(
+    request: Request,
+    _auth: Researcher,
+    table: Annotated[str, Path(pattern="^(" + "|".join(TABLES) + ")$")],
+) -> Response:
+    """One export table of this study as CSV."""
+    service = request.app.state.service
+    tables = export_tables(request.app.state.store, study=service.ctx.config.name)
+    return Response(
+        tables[table].to_csv(index=False),
+        media_type="text/csv",
+        headers={"Content-Disposition": f'attachment; filename="{table}.csv"'},
+    )

@@ -1,0 +1,68 @@
+// Face display: the 3D viewer (three.js, WebGL) when available, else PNGs rendered by the server.
+//
+//   const display = await createFaceDisplay({ token });
+//   await display.show(slots, faces, identity);   // slots: elements; faces: [{id, weights}]
+//
+// `show` resolves when every face is drawn (or has failed to load), so the caller can start
+// the response-time clock and set the page's ready flag.
+
+function webglAvailable() {
+  try {
+    const canvas = document.createElement("canvas");
+    return !!canvas.getContext("webgl2");
+  } catch {
+    return false;
+  }
+}
+
+class PngDisplay {
+  constructor(token) {
+    this.token = token;
+    this.kind = "png";
+  }
+
+  show(slots, faces, _identity) {
+    const loads = faces.map((face, i) => {
+      const slot = slots[i];
+      let img = slot.querySelector("img");
+      if (!img) {
+        img = document.createElement("img");
+        img.alt = "";
+        img.decoding = "async";
+        slot.replaceChildren(img);
+      }
+      return new Promise((resolve) => {
+        img.onload = () => {
+          slot.classList.remove("failed");
+          resolve(true);
+        };
+        img.onerror = () => {
+          slot.classList.add("failed");
+          resolve(false);
+        };
+        img.src = `/api/s/${this.token}/faces/${face.id}.png`;
+      });
+    });
+    return Promise.all(loads);
+  }
+}
+
+async function loadViewer() {
+  if (document.body.dataset.viewer !== "yes" || !webglAvailable()) return null;
+  try {
+    const mod = await import("/static/viewer-adapter.js");
+    return await mod.createViewerDisplay();
+  } catch (err) {
+    console.warn("3D viewer unavailable, using server images:", err);
+    return null;
+  }
+}
+
+export async function createFaceDisplay({ token }) {
+  const forced = new URLSearchParams(location.search).get("render");
+  if (forced !== "png") {
+    const viewer = await loadViewer();
+    if (viewer) return viewer;
+  }
+  return new PngDisplay(token);
+}

@@ -1,0 +1,388 @@
+// The participant's session: instructions, trials (ten faces, choose the best and any others),
+// ratings, completion. Every step is sent with an idempotency key and the page state always
+// comes from the server, so a reload or a server restart resumes exactly.
+import { api, ApiError, newKey } from "./api.js";
+import { createFaceDisplay } from "./faces.js";
+
+const token = document.body.dataset.token;
+const $ = (id) => document.getElementById(id);
+const views = ["loading", "instructions", "trial", "rating", "done"];
+// The grid also holds the 3D viewer's canvas: always go through the cells.
+const cellsOf = () => Array.from($("grid").querySelectorAll(":scope > .cell"));
+
+const ui = {
+  state: null,
+  display: null,
+  shownAt: 0, // performance.now() when the current faces finished drawing
+  key: null, // idempotency key of the pending step
+  elite: null, // face id
+  others: [], // face ids, in the order chosen
+  busy: false,
+  focus: 0,
+};
+// Tests and the researcher's tools read this.
+window.emogenStudy = { ready: false, stage: null, display: null };
+
+function setReady(ready) {
+  window.emogenStudy.ready = ready;
+  document.body.dataset.ready = ready ? "true" : "false";
+}
+
+function show(view) {
+  for (const v of views) $(`view-${v}`).hidden = v !== view;
+  window.emogenStudy.stage = view;
+}
+
+function say(text) {
+  $("message").textContent = text || "";
+}
+
+// ---- progress -------------------------------------------------------------------------------
+function renderProgress(state) {
+  const p = state.progress;
+  const G = p.generations + 1;
+  $("trial-progress").textContent = `Trial ${p.trial + 1} of ${p.trials}`;
+  $("gen-progress").textContent =
+    state.stage === "trial" && state.trial && state.trial.status === "active"
+      ? `· Generation ${p.generation + 1} of ${G}`
+      : state.stage === "trial"
+        ? "· Rating"
+        : "";
+  const done = state.stage === "done" ? 1 : (p.trial + (p.generation + 1) / (G + 1)) / p.trials;
+  $("meter-fill").style.width = `${Math.round(100 * Math.min(1, done))}%`;
+  $("prompt").textContent = state.trial ? state.trial.prompt : document.title;
+}
+
+// ---- selection (kept in sessionStorage until submitted, so a reload keeps the clicks) ---------
+function selectionKey() {
+  const s = ui.state;
+  return `emogen-sel:${token}:${s.progress.trial}:${s.trial.attempt}:${s.progress.generation}`;
+}
+
+function saveSelection() {
+  try {
+    sessionStorage.setItem(
+      selectionKey(),
+      JSON.stringify({ elite: ui.elite, others: ui.others, key: ui.key }),
+    );
+  } catch {
+    /* storage unavailable: fine */
+  }
+}
+
+function restoreSelection(ids) {
+  ui.elite = null;
+  ui.others = [];
+  ui.key = newKey();
+  try {
+    const saved = JSON.parse(sessionStorage.getItem(selectionKey()) || "null");
+    if (saved) {
+      ui.elite = ids.includes(saved.elite) ? saved.elite : null;
+      ui.others = (saved.others || []).filter((id) => ids.includes(id) && id !== ui.elite);
+      if (saved.key) ui.key = saved.key;
+    }
+  } catch {
+    /* ignore */
+  }
+}
+
+function count() {
+  return (ui.elite === null ? 0 : 1) + ui.others.length;
+}
+
+function toggle(id) {
+  const { max_selections: max } = ui.state.limits;
+  if (ui.elite === id) {
+    ui.elite = null;
+  } else if (ui.others.includes(id)) {
+    ui.others = ui.others.filter((o) => o !== id);
+  } else if (count() >= max) {
+    say(`You can choose at most ${max} faces. Remove one first.`);
+    return;
+  } else if (ui.elite === null) {
+    ui.elite = id;
+  } else {
+    ui.others.push(id);
+  }
+  say("");
+  saveSelection();
+  paintSelection();
+}
+
+function makeBest(id) {
+  const { max_selections: max } = ui.state.limits;
+  if (ui.elite === id) return;
+  const wasSelected = ui.others.includes(id);
+  if (!wasSelected && count() >= max && ui.elite === null) {
+    say(`You can choose at most ${max} faces. Remove one first.`);
+    return;
+  }
+  ui.others = ui.others.filter((o) => o !== id);
+  if (ui.elite !== null) {
+    if (count() + 1 <= max) ui.others.unshift(ui.elite);
+  }
+  ui.elite = id;
+  say("");
+  saveSelection();
+  paintSelection();
+}
+
+function paintSelection() {
+  const { min_selections: min, max_selections: max } = ui.state.limits;
+  for (const cell of cellsOf()) {
+    const id = Number(cell.dataset.face);
+    const face = cell.querySelector(".face");
+    const role = ui.elite === id ? "best" : ui.others.includes(id) ? "ok" : "none";
+    cell.dataset.role = role;
+    face.setAttribute("aria-pressed", role === "none" ? "false" : "true");
+    const n = Number(cell.dataset.pos) + 1;
+    face.setAttribute(
+      "aria-label",
+      `Face ${n}` + (role === "best" ? ": best" : role === "ok" ? ": also acceptable" : ""),
+    );
+    cell.querySelector(".badge").textContent = role === "best" ? "★ Best" : role === "ok" ? "✓" : "";
+  }
+  const n = count();
+  let status;
+  if (ui.elite === null) status = "Click the face that looks most like the emotion: it becomes ★ best.";
+  else if (n < min) status = `Choose at least ${min} faces (${n} chosen).`;
+  else status = `${n} chosen (up to ${max}): ★ best + ${ui.others.length} also acceptable. Then press Next generation.`;
+  $("selection-status").textContent = status;
+  $("next").disabled = ui.busy || ui.elite === null || n < min || n > max;
+}
+
+// ---- the grid --------------------------------------------------------------------------------
+function buildGrid(n) {
+  const grid = $("grid");
+  if (cellsOf().length === n) return;
+  for (const old of cellsOf()) old.remove();
+  const first = grid.firstChild;
+  for (let i = 0; i < n; i++) {
+    const cell = document.createElement("div");
+    cell.className = "cell";
+    cell.dataset.pos = String(i);
+    cell.innerHTML =
+      `<button type="button" class="face" tabindex="${i === 0 ? 0 : -1}" aria-pressed="false">` +
+      `<span class="slot"></span><span class="num" aria-hidden="true">${i + 1}</span>` +
+      `<span class="badge" aria-hidden="true"></span></button>` +
+      `<button type="button" class="star" tabindex="-1" title="Make this the best face" aria-label="Make face ${i + 1} the best">★</button>`;
+    grid.insertBefore(cell, first);
+  }
+}
+
+function cellOf(target) {
+  const cell = target.closest(".cell");
+  return cell && $("grid").contains(cell) ? cell : null;
+}
+
+function onGridClick(event) {
+  const cell = cellOf(event.target);
+  if (!cell || ui.busy || !window.emogenStudy.ready) return;
+  const id = Number(cell.dataset.face);
+  focusCell(Number(cell.dataset.pos));
+  if (event.target.closest(".star")) makeBest(id);
+  else toggle(id);
+}
+
+function columns() {
+  const grid = $("grid");
+  return getComputedStyle(grid).gridTemplateColumns.split(" ").length || 5;
+}
+
+function focusCell(pos) {
+  const cells = cellsOf();
+  pos = Math.max(0, Math.min(cells.length - 1, pos));
+  for (const c of cells) c.querySelector(".face").tabIndex = -1;
+  const face = cells[pos].querySelector(".face");
+  face.tabIndex = 0;
+  face.focus({ preventScroll: false });
+  ui.focus = pos;
+}
+
+function onGridKey(event) {
+  const cell = cellOf(event.target);
+  if (!cell) return;
+  const pos = Number(cell.dataset.pos);
+  const cols = columns();
+  const moves = { ArrowRight: 1, ArrowLeft: -1, ArrowDown: cols, ArrowUp: -cols };
+  if (event.key in moves) {
+    event.preventDefault();
+    focusCell(pos + moves[event.key]);
+  } else if (event.key === "Home") {
+    event.preventDefault();
+    focusCell(0);
+  } else if (event.key === "End") {
+    event.preventDefault();
+    focusCell(cellsOf().length - 1);
+  } else if ((event.key === "b" || event.key === "B") && window.emogenStudy.ready && !ui.busy) {
+    event.preventDefault();
+    makeBest(Number(cell.dataset.face));
+  }
+}
+
+async function showTrial(state) {
+  const pop = state.population;
+  const ids = pop.faces.map((f) => f.id);
+  buildGrid(ids.length);
+  const cells = cellsOf();
+  cells.forEach((cell, i) => {
+    cell.dataset.face = String(ids[i]);
+  });
+  restoreSelection(ids);
+  show("trial");
+  $("restart").hidden = !state.allow_restart;
+  paintSelection();
+  setReady(false);
+  $("grid").setAttribute("aria-busy", "true");
+  await ui.display.show(
+    cells.map((c) => c.querySelector(".slot")),
+    pop.faces,
+    state.trial.identity,
+  );
+  $("grid").setAttribute("aria-busy", "false");
+  ui.shownAt = performance.now();
+  setReady(true);
+  paintSelection();
+}
+
+// ---- rating ----------------------------------------------------------------------------------
+async function showRating(state) {
+  const r = state.rating;
+  $("rating-question").textContent = r.question;
+  $("rating-low").textContent = `1 = ${r.low_label}`;
+  $("rating-high").textContent = `${r.points} = ${r.high_label}`;
+  const scale = $("rating-scale");
+  scale.replaceChildren();
+  for (let v = 1; v <= r.points; v++) {
+    const label = document.createElement("label");
+    label.innerHTML = `<input type="radio" name="rating" value="${v}"><span>${v}</span>`;
+    scale.appendChild(label);
+  }
+  ui.key = newKey();
+  $("rate").disabled = true;
+  show("rating");
+  setReady(false);
+  if (r.face) await ui.display.show([$("rating-slot")], [r.face], state.trial.identity);
+  ui.shownAt = performance.now();
+  setReady(true);
+}
+
+// ---- completion ------------------------------------------------------------------------------
+function showDone(state) {
+  const c = state.completion;
+  $("done-message").textContent = c.message;
+  if (c.code) {
+    $("done-code").textContent = c.code;
+    $("done-code-line").hidden = false;
+  }
+  if (c.redirect_url) {
+    $("done-redirect").href = c.redirect_url;
+    $("done-redirect-line").hidden = false;
+    setTimeout(() => location.assign(c.redirect_url), 4000);
+  }
+  show("done");
+  setReady(true);
+}
+
+// ---- state machine ---------------------------------------------------------------------------
+async function render(state) {
+  ui.state = state;
+  renderProgress(state);
+  if (state.stage === "instructions") {
+    show("instructions");
+    setReady(true);
+    $("begin").focus();
+  } else if (state.stage === "trial" && state.trial.status === "active") {
+    await showTrial(state);
+  } else if (state.stage === "trial" && state.trial.status === "rating") {
+    await showRating(state);
+  } else if (state.stage === "done") {
+    showDone(state);
+  }
+}
+
+async function step(path, body) {
+  ui.busy = true;
+  setReady(false);
+  paintIfTrial();
+  try {
+    const state = await api(`/api/s/${token}/${path}`, { method: "POST", body });
+    say("");
+    ui.busy = false;
+    await render(state);
+  } catch (err) {
+    ui.busy = false;
+    if (err instanceof ApiError && err.status === 409) {
+      // The page was out of date (another tab, a double submission): show the server's state.
+      say("");
+      await render(await api(`/api/s/${token}/state`));
+    } else {
+      say(err.message);
+      setReady(true);
+      paintIfTrial();
+    }
+  }
+}
+
+function paintIfTrial() {
+  if (ui.state && ui.state.stage === "trial" && ui.state.trial.status === "active") paintSelection();
+}
+
+function elapsed() {
+  return Math.max(0, Math.round(performance.now() - ui.shownAt));
+}
+
+function position() {
+  const s = ui.state;
+  return { trial: s.progress.trial, attempt: s.trial.attempt, generation: s.progress.generation };
+}
+
+$("grid").addEventListener("click", onGridClick);
+$("grid").addEventListener("keydown", onGridKey);
+
+$("begin").addEventListener("click", () => step("begin", { key: newKey() }));
+
+$("next").addEventListener("click", () => {
+  if (ui.elite === null || ui.busy) return;
+  step("select", {
+    key: ui.key,
+    ...position(),
+    elite: ui.elite,
+    others: ui.others,
+    response_ms: elapsed(),
+  });
+});
+
+$("restart").addEventListener("click", () => {
+  if (ui.busy) return;
+  if (!confirm("Start this face again from a new set of faces?")) return;
+  step("restart", { key: ui.key, ...position(), response_ms: elapsed() });
+});
+
+$("rating-scale").addEventListener("change", () => {
+  $("rate").disabled = false;
+});
+
+$("rating-form").addEventListener("submit", (event) => {
+  event.preventDefault();
+  const checked = document.querySelector('input[name="rating"]:checked');
+  if (!checked || ui.busy) return;
+  step("rating", {
+    key: ui.key,
+    trial: ui.state.progress.trial,
+    value: Number(checked.value),
+    response_ms: elapsed(),
+  });
+});
+
+async function main() {
+  try {
+    ui.display = await createFaceDisplay({ token });
+    window.emogenStudy.display = ui.display.kind;
+    await render(await api(`/api/s/${token}/state`));
+  } catch (err) {
+    say(err.message);
+  }
+}
+
+main();

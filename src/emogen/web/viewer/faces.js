@@ -1,0 +1,205 @@
+// Ten (or n) faces in one WebGL context: one renderer and canvas over the grid, one shared
+// geometry per GLB primitive, per-face meshes holding only their morph influences, each face
+// drawn into its slot's rectangle with viewport + scissor.
+import {
+  ColorManagement,
+  Color,
+  Group,
+  LinearSRGBColorSpace,
+  Matrix4,
+  PerspectiveCamera,
+  Scene,
+  Vector2,
+  Vector3,
+  WebGLRenderer,
+} from 'three';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { look } from './look.js';
+import { faceMaterial, gazeMatrix } from './material.js';
+import { addShadingAttributes } from './mesh.js';
+
+ColorManagement.enabled = false; // shade.glsl writes sRGB itself: no conversions anywhere
+
+const CM_PER_M = 100;
+
+// One probe context: is WebGL 2 there, and is it Chrome's software SwiftShader?
+let probed = null;
+export function probeWebGL() {
+  if (probed) return probed;
+  probed = { webgl2: false, swiftshader: false };
+  try {
+    const gl = document.createElement('canvas').getContext('webgl2');
+    if (gl) {
+      const info = gl.getExtension('WEBGL_debug_renderer_info');
+      const name = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : '';
+      probed = { webgl2: true, swiftshader: /swiftshader/i.test(name) };
+      gl.getExtension('WEBGL_lose_context')?.loseContext();
+    }
+  } catch {
+    // no WebGL: the PNG fallback takes over
+  }
+  return probed;
+}
+
+function makeCamera() {
+  const c = look.camera;
+  const camera = new PerspectiveCamera(c.fov_y_deg, 1, c.near_cm, c.far_cm);
+  camera.up.set(...c.up);
+  camera.position.set(...c.position_cm);
+  camera.lookAt(new Vector3(...c.target_cm));
+  camera.updateMatrixWorld();
+  return camera;
+}
+
+export class FaceGrid {
+  constructor(container, slots, { antialias } = {}) {
+    this.container = container;
+    this.slots = slots;
+    this.canvas = document.createElement('canvas');
+    this.canvas.className = 'faces-canvas';
+    container.appendChild(this.canvas);
+    const aa = antialias ?? !probeWebGL().swiftshader; // SwiftShader speckles with antialias
+    this.renderer = new WebGLRenderer({ canvas: this.canvas, antialias: aa, alpha: true });
+    this.renderer.outputColorSpace = LinearSRGBColorSpace;
+    this.renderer.setPixelRatio(window.devicePixelRatio || 1);
+    this.renderer.setScissorTest(true);
+    this.renderer.autoClear = false;
+    this.camera = makeCamera();
+    this.background = new Color(...look.background_srgb);
+    this.faces = [];
+    this.shapeNames = [];
+    this.drawnSize = null;
+    new ResizeObserver(() => {
+      const box = container.getBoundingClientRect();
+      const key = `${Math.round(box.width)}x${Math.round(box.height)}`;
+      if (this.faces.length && key !== this.drawnSize) this.render();
+    }).observe(container);
+  }
+
+  /** Load the GLB (URL) and build one face per slot sharing its geometries. */
+  async load(url) {
+    const t0 = performance.now();
+    const gltf = await new GLTFLoader().loadAsync(url);
+    this.timings = { gltf_ms: performance.now() - t0 };
+    const extras = gltf.asset?.extras?.emogen ?? {};
+    this.asset = gltf.asset;
+    gltf.scene.updateMatrixWorld(true);
+    const meshes = [];
+    gltf.scene.traverse((o) => o.isMesh && meshes.push(o));
+    if (!meshes.length) throw new Error(`${url} holds no mesh`);
+    const t1 = performance.now();
+    const prims = addShadingAttributes(meshes, extras.regions);
+    this.timings.attributes_ms = performance.now() - t1;
+    this.shapeNames = meshes[0].geometry.morphAttributes.position
+      ? Object.keys(meshes[0].morphTargetDictionary ?? {}).sort(
+          (a, b) => meshes[0].morphTargetDictionary[a] - meshes[0].morphTargetDictionary[b],
+        )
+      : [];
+    this.gaze = extras.gaze ?? null;
+    const shapeIndex = new Map(this.shapeNames.map((n, i) => [n, i]));
+    if (this.gaze) {
+      this.gazeIndex = {};
+      for (const k of ['look_left', 'look_right', 'look_up', 'look_down']) {
+        this.gazeIndex[k] = this.gaze[k].map((n) => shapeIndex.get(n)).filter((i) => i !== undefined);
+      }
+    }
+    // Eye centres (metres in the GLB's scene) in each primitive's local coordinates.
+    const centres = (mesh) => {
+      if (!this.gaze) return null;
+      const inv = new Matrix4().copy(mesh.matrixWorld).invert();
+      return {
+        left: new Vector3(...this.gaze.left_centre).applyMatrix4(inv),
+        right: new Vector3(...this.gaze.right_centre).applyMatrix4(inv),
+      };
+    };
+    const order = (p) => (p.opacity < 1 || p.fringe_cm > 0 ? 4 : 0) + (p.cutout ? 2 : 0) + (p.double_sided ? 1 : 0);
+    for (let i = 0; i < this.slots.length; i++) {
+      const scene = new Scene();
+      const root = new Group();
+      root.scale.setScalar(CM_PER_M);
+      const copy = gltf.scene.clone(true); // shares geometries; own morph influences
+      const copies = [];
+      copy.traverse((o) => o.isMesh && copies.push(o));
+      copies.forEach((mesh, k) => {
+        mesh.material = faceMaterial(prims[k].part, centres(meshes[k]), this.shapeNames.length);
+        mesh.renderOrder = order(prims[k].part);
+        mesh.frustumCulled = false;
+      });
+      root.add(copy);
+      scene.add(root);
+      this.faces.push({ scene, meshes: copies });
+    }
+    const t2 = performance.now();
+    this.render();
+    this.timings.first_render_ms = performance.now() - t2; // commands issued, not yet drawn
+  }
+
+  /**
+   * Weights per face: arrays in the GLB's morph-target order (the shapes, then any corrective
+   * targets; a shorter array leaves the remaining targets at 0), or {target: value} objects.
+   */
+  setFaces(weights) {
+    const n = Math.min(weights.length, this.faces.length);
+    for (let i = 0; i < n; i++) this.setFace(i, weights[i]);
+    this.render();
+  }
+
+  setFace(i, w) {
+    const vector = Array.isArray(w) || ArrayBuffer.isView(w)
+      ? Array.from(w, Number)
+      : this.shapeNames.map((name) => Number(w?.[name] ?? 0));
+    if (vector.length > this.shapeNames.length) {
+      throw new Error(`face ${i}: expected at most ${this.shapeNames.length} weights, got ${vector.length}`);
+    }
+    while (vector.length < this.shapeNames.length) vector.push(0);
+    const face = this.faces[i];
+    for (const mesh of face.meshes) {
+      const influences = mesh.morphTargetInfluences;
+      if (influences) for (let k = 0; k < vector.length; k++) influences[k] = vector[k];
+    }
+    const active = [];
+    vector.forEach((x, k) => x !== 0 && active.push(k));
+    const [yaw, pitch] = this.gazeAngles(vector);
+    for (const mesh of face.meshes) {
+      const u = mesh.material.uniforms;
+      u.uActiveCount.value = active.length;
+      u.uActive.value.fill(0).set(active);
+      gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotLeft.value);
+      gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotRight.value);
+    }
+  }
+
+  gazeAngles(vector) {
+    if (!this.gaze) return [0, 0];
+    const mean = (idx) => (idx.length ? idx.reduce((a, k) => a + vector[k], 0) / idx.length : 0);
+    const g = this.gaze, ix = this.gazeIndex, rad = Math.PI / 180;
+    const yaw = g.yaw_deg * rad * (mean(ix.look_left) - mean(ix.look_right));
+    const pitch = g.pitch_up_deg * rad * mean(ix.look_up) - g.pitch_down_deg * rad * mean(ix.look_down);
+    return [yaw, pitch];
+  }
+
+  render() {
+    const r = this.renderer;
+    const box = this.container.getBoundingClientRect();
+    const width = Math.max(1, Math.round(box.width));
+    const height = Math.max(1, Math.round(box.height));
+    const size = r.getSize(new Vector2());
+    if (size.x !== width || size.y !== height) r.setSize(width, height, true);
+    this.drawnSize = `${width}x${height}`;
+    r.setScissor(0, 0, width, height);
+    r.setClearColor(0x000000, 0);
+    r.clear();
+    r.setClearColor(this.background, 1);
+    this.faces.forEach((face, i) => {
+      const rect = this.slots[i].getBoundingClientRect();
+      const x = rect.left - box.left;
+      const y = box.bottom - rect.bottom;
+      r.setViewport(x, y, rect.width, rect.height);
+      r.setScissor(x, y, rect.width, rect.height);
+      this.camera.aspect = rect.width / rect.height;
+      this.camera.updateProjectionMatrix();
+      r.clear();
+      r.render(face.scene, this.camera);
+    });
+  }
+}

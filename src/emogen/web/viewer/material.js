@@ -1,0 +1,108 @@
+// The face material: three.js morph targets + rigid eye rotation in the vertex shader, and the
+// fragment shading of shade.glsl (the same text the offscreen renderer compiles).
+import { DoubleSide, FrontSide, Matrix3, NormalBlending, ShaderMaterial, Vector3 } from 'three';
+import { glslDefines, shadeGlsl } from './look.js';
+
+const vertexShader = /* glsl */ `
+#include <common>
+#include <morphtarget_pars_vertex>
+attribute float aPart;
+attribute vec3 aAlbedo;
+attribute vec4 aSurface;
+attribute vec4 aEye;
+uniform mat3 uEyeRotLeft;
+uniform mat3 uEyeRotRight;
+uniform vec3 uEyeCentreLeft;
+uniform vec3 uEyeCentreRight;
+// Morph only the targets in use (three's own loop visits all 57 per vertex: slow in software GL).
+uniform int uActiveCount;
+uniform int uActive[MAX_ACTIVE];
+varying vec3 vWorld;
+varying vec3 vNormal;
+varying float vPart;
+varying vec3 vAlbedo;
+varying vec4 vSurface;
+varying vec4 vEye;
+void main() {
+    vec3 objectNormal = vec3(normal);
+    vec3 transformed = vec3(position);
+#ifdef USE_MORPHTARGETS
+    for (int j = 0; j < MAX_ACTIVE; j++) {
+        if (j >= uActiveCount) break;
+        int i = uActive[j];
+        float w = morphTargetInfluences[i];
+        transformed += getMorph(gl_VertexID, i, 0).xyz * w;
+#ifdef USE_MORPHNORMALS
+        objectNormal += getMorph(gl_VertexID, i, 1).xyz * w;
+#endif
+    }
+#endif
+    if (aEye.w > 0.5) {
+        bool left = aEye.w < 1.5;
+        mat3 r = left ? uEyeRotLeft : uEyeRotRight;
+        vec3 c = left ? uEyeCentreLeft : uEyeCentreRight;
+        transformed = r * (transformed - c) + c;
+        objectNormal = r * objectNormal;
+    }
+    vec4 world = modelMatrix * vec4(transformed, 1.0);
+    vWorld = world.xyz;
+    vNormal = mat3(modelMatrix) * objectNormal;
+    vPart = aPart;
+    vAlbedo = aAlbedo;
+    vSurface = aSurface;
+    vEye = aEye;
+    gl_Position = projectionMatrix * viewMatrix * world;
+}
+`;
+
+const fragmentMain = /* glsl */ `
+varying vec3 vWorld;
+varying vec3 vNormal;
+varying float vPart;
+varying vec3 vAlbedo;
+varying vec4 vSurface;
+varying vec4 vEye;
+void main() {
+#ifdef EMOGEN_DISCARD
+    if (emogenHidden(vPart, vEye)) discard;
+#endif
+    vec3 n = normalize(vNormal);
+    vec3 v = normalize(cameraPosition - vWorld);
+    vec3 c = emogenShade(vPart, vAlbedo, vSurface.xyz, vWorld, n, v, vEye, gl_FrontFacing);
+    gl_FragColor = vec4(c, vSurface.w);
+}
+`;
+
+/** A material for one primitive whose vertices belong to `part` (a look.json part). */
+export function faceMaterial(part, eyeCentres, nShapes) {
+  const blended = part.opacity < 1 || part.fringe_cm > 0;
+  const maxActive = Math.max(1, nShapes);
+  return new ShaderMaterial({
+    vertexShader: `#define MAX_ACTIVE ${maxActive}\n${vertexShader}`,
+    fragmentShader:
+      (part.cutout ? '#define EMOGEN_DISCARD\n' : '') + glslDefines() + shadeGlsl + fragmentMain,
+    uniforms: {
+      uEyeRotLeft: { value: new Matrix3() },
+      uEyeRotRight: { value: new Matrix3() },
+      uEyeCentreLeft: { value: eyeCentres?.left?.clone() ?? new Vector3() },
+      uEyeCentreRight: { value: eyeCentres?.right?.clone() ?? new Vector3() },
+      uActiveCount: { value: 0 },
+      uActive: { value: new Int32Array(maxActive) },
+    },
+    side: part.double_sided ? DoubleSide : FrontSide,
+    transparent: blended,
+    depthWrite: !blended,
+    blending: NormalBlending,
+  });
+}
+
+/** Gaze rotation as emogen.model.face.gaze_rotations: R = Ry(yaw) · Rx(pitch), row-major. */
+export function gazeMatrix(yaw, pitch, target = new Matrix3()) {
+  const cy = Math.cos(yaw), sy = Math.sin(yaw), cp = Math.cos(pitch), sp = Math.sin(pitch);
+  // ry = [[cy,0,sy],[0,1,0],[-sy,0,cy]]; rx = [[1,0,0],[0,cp,sp],[0,-sp,cp]]
+  return target.set(
+    cy, -sy * sp, sy * cp,
+    0, cp, sp,
+    -sy, -cy * sp, cy * cp,
+  );
+}

@@ -1,0 +1,126 @@
+"""FaceModel.correct / evaluate(correct=True): exactness, records, and the before/after figures."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from emogen.correct.measure import Interpenetration
+from emogen.errors import ShapeError
+
+# genes that never touch the mouth: a face made of them cannot collide
+AWAY_FROM_MOUTH = (
+    "browDown",
+    "browInnerUp",
+    "browOuterUp",
+    "eyeWide",
+    "eyeLookLeft",
+    "eyeLookUp",
+    "PupilDilate",
+)
+
+
+@settings(
+    max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    values=st.lists(st.floats(0, 1), min_size=len(AWAY_FROM_MOUTH), max_size=len(AWAY_FROM_MOUTH))
+)
+def test_a_face_without_collision_comes_back_unchanged_exactly(ict_model, values) -> None:
+    w = ict_model.rig.weights_from_names(dict(zip(AWAY_FROM_MOUTH, values, strict=True)))[None]
+    r = ict_model.correct(w)
+    assert not r.collided[0] and np.all(r.collision == 0)
+    plain = ict_model.evaluate(w)
+    corrected = ict_model.evaluate(w, correct=True)
+    if not r.changed()[0]:
+        np.testing.assert_array_equal(corrected, plain)  # bit for bit
+    else:  # only combinational correctives (their drivers were both on)
+        assert np.any(r.combinational[0] > 0)
+
+
+def test_ga_faces_without_collision_keep_zero_collision_weights_and_their_vertices(
+    ict_model, ga_weights
+) -> None:
+    w = ga_weights[0][:120]
+    r = ict_model.correct(w)
+    clean = ~r.collided
+    assert clean.any() and (~clean).any()
+    assert np.all(r.collision[clean] == 0)
+    untouched = ~r.changed()
+    if untouched.any():
+        np.testing.assert_array_equal(
+            ict_model.evaluate(w[untouched], correct=True), ict_model.evaluate(w[untouched])
+        )
+    # batch = one at a time
+    one = ict_model.correct(w[5:6])
+    np.testing.assert_allclose(one.collision[0], r.collision[5], atol=1e-9)
+
+
+def test_result_records_core_and_correctives_separately(ict_model, ict_correctives) -> None:
+    w = ict_model.rig.weights_from_names(
+        {"mouthShrugLower": 1.0, "mouthPress": 0.8, "eyeBlink": 0.5, "eyeLookDown": 0.5}
+    )[None]
+    r = ict_model.correct(w)
+    np.testing.assert_array_equal(r.core, w)
+    assert r.collision.shape == (1, 8) and r.collided[0] and not r.remaining[0]
+    assert r.corrective_names == ict_correctives.names
+    i = ict_correctives.combinational_names.index("corr_eyeBlink_L_eyeLookDown_L")
+    assert r.combinational[0, i] == pytest.approx(0.25)
+    cols = r.columns()
+    assert list(cols)[: ict_model.n_shapes] == list(ict_model.shape_names)
+    assert "collision_lip_inner_left" in cols
+    verts = ict_model.evaluate(w, correct=True)
+    expect = ict_model.evaluate(r.weights)[0] + np.einsum(
+        "c,cvd->vd",
+        r.correctives[0],
+        np.concatenate([ict_correctives.combinational_deltas, ict_correctives.collision_deltas]),
+    )
+    np.testing.assert_allclose(verts[0], expect, atol=2e-5)
+
+
+def test_correct_rejects_bad_weights(ict_model) -> None:
+    with pytest.raises(ShapeError, match=r"\[0, 1\]"):
+        ict_model.correct(np.full((1, ict_model.n_shapes), 1.5))
+    with pytest.raises(ShapeError, match="2-D"):
+        ict_model.correct(np.zeros(ict_model.n_shapes))
+
+
+def test_identities_are_corrected_with_their_own_neutral(ict_model) -> None:
+    w = ict_model.rig.weights_from_names({"mouthShrugLower": 1.0})[None]
+    for identity in ("male", "female"):
+        r = ict_model.with_identity(identity).correct(w)
+        assert r.collided[0] and not r.remaining[0]
+
+
+def test_correctives_are_cached_on_disk(ict_model, ict_correctives) -> None:
+    from emogen.correct import correctives as mod
+
+    mod._MEMORY.clear()
+    t = mod._cache_path(mod.cache_key(ict_model))
+    assert t.is_file()
+    again = mod.correctives_for(ict_model)
+    assert again is not ict_correctives and again.key == ict_correctives.key
+    np.testing.assert_array_equal(again.collision_deltas, ict_correctives.collision_deltas)
+    np.testing.assert_array_equal(
+        again.layout.anchor_bary[1], ict_correctives.layout.anchor_bary[1]
+    )
+
+
+def test_interpenetration_before_and_after_on_ga_faces(ict_model, ga_weights, mouth) -> None:
+    """≥ 500 GA faces: the independent winding-number test before and after correction."""
+    w, source = ga_weights
+    assert len(w) >= 500 and set(source) == {"protocol", "random", "evolved"}
+    test = Interpenetration.build(
+        ict_model.base_neutral.astype(np.float64), ict_model.regions, mouth
+    )
+    assert not test.penetrating(ict_model.evaluate(np.zeros((1, ict_model.n_shapes))))[0]
+    r = ict_model.correct(w)
+    before = test.penetrating(ict_model.evaluate(w, gaze=False))
+    changed = np.flatnonzero(r.collision.any(1))
+    after = before.copy()
+    after[changed] = test.penetrating(ict_model.evaluate_correction(r, gaze=False)[changed])
+    assert before.mean() > 0.2  # GA faces often collide: the test has something to find
+    assert after.mean() <= 0.005, f"after correction {after.sum()} of {len(w)} faces interpenetrate"
+    assert r.remaining.mean() <= 0.005

@@ -1,0 +1,70 @@
+"""A scripted participant: drives a session through the service (or over HTTP) to the end."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable
+from typing import Any
+
+_keys = itertools.count()
+
+
+def new_key() -> str:
+    return f"test-key-{next(_keys):06d}"
+
+
+def choose(state: dict[str, Any], n_others: int = 2) -> tuple[int, list[int]]:
+    """Elite: the face at position (generation mod 10); others: the next n_others faces."""
+    ids = [f["id"] for f in state["population"]["faces"]]
+    g = state["progress"]["generation"]
+    k = g % len(ids)
+    return ids[k], [ids[(k + j) % len(ids)] for j in range(1, n_others + 1)]
+
+
+def step_args(state: dict[str, Any]) -> dict[str, int]:
+    return {
+        "trial": state["progress"]["trial"],
+        "attempt": state["trial"]["attempt"],
+        "generation": state["progress"]["generation"],
+    }
+
+
+def run_to_end(
+    state: dict[str, Any],
+    call: Callable[[str, dict[str, Any]], dict[str, Any]],
+    *,
+    stop: Callable[[dict[str, Any]], bool] = lambda s: False,
+) -> dict[str, Any]:
+    """Drive from ``state`` until done (or ``stop(state)``); ``call(kind, body)`` sends a step."""
+    while state["stage"] != "done" and not stop(state):
+        if state["stage"] == "instructions":
+            state = call("begin", {"key": new_key()})
+        elif state["trial"]["status"] == "active":
+            elite, others = choose(state)
+            state = call(
+                "select",
+                {"key": new_key(), **step_args(state), "elite": elite, "others": others,
+                 "response_ms": 1234.5},
+            )  # fmt: skip
+        else:
+            state = call(
+                "rating",
+                {"key": new_key(), "trial": state["progress"]["trial"], "value": 6,
+                 "response_ms": 800.0},
+            )  # fmt: skip
+    return state
+
+
+def service_caller(service: Any, token: str) -> Callable[[str, dict[str, Any]], dict[str, Any]]:
+    def call(kind: str, body: dict[str, Any]) -> dict[str, Any]:
+        body = dict(body)
+        key = body.pop("key")
+        if kind == "begin":
+            return service.begin(token, key)  # type: ignore[no-any-return]
+        if kind == "select":
+            return service.select(token, key, **body)  # type: ignore[no-any-return]
+        if kind == "rating":
+            return service.rate(token, key, **body)  # type: ignore[no-any-return]
+        return service.restart(token, key, **body)  # type: ignore[no-any-return]
+
+    return call

@@ -1,0 +1,102 @@
+"""Study config: validation with errors that name the key; trial design and order."""
+
+from __future__ import annotations
+
+from itertools import pairwise
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from emogen.errors import ConfigError
+from emogen.study.config import (
+    check_identities,
+    demo_study_path,
+    load_study_config,
+    study_from_dict,
+)
+from emogen.study.design import balanced_latin_square, trial_order
+
+
+def test_demo_study_loads() -> None:
+    cfg = load_study_config(demo_study_path())
+    assert cfg.name == "demo" and cfg.n_trials == 2
+    assert cfg.prompt_for("happy") == "Make the face look HAPPY"
+    assert len(cfg.config_hash()) == 64
+
+
+@pytest.mark.parametrize(
+    ("data", "match"),
+    [
+        ({"emotionz": ["happy"]}, "unknown key 'emotionz'"),
+        ({"order": "shuffled"}, "'order' must be"),
+        ({"repetitions": 0}, "'repetitions' must be >= 1"),
+        ({"emotions": []}, "'emotions'"),
+        ({"emotions": ["happy", "happy"]}, "must not repeat"),
+        ({"ga": {"generations": -1}}, "'ga.generations' must be >= 0"),
+        ({"ga": {"mutaton_genes": 1}}, r"unknown key 'mutaton_genes' in \[ga\]"),
+        ({"rating": {"points": 1}}, "'rating.points' must be >= 2"),
+        ({"completion": {"redirect_url": "ftp://x"}}, "redirect_url must start with http"),
+        ({"participant_param": "PROLIFIC PID"}, "participant_param"),
+        ({"name": "has space"}, "'name'"),
+    ],
+)
+def test_errors_name_the_key(data: dict, match: str) -> None:
+    with pytest.raises(ConfigError, match=match):
+        study_from_dict(data, "study.toml")
+
+
+def test_toml_errors_and_relative_paths(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text("name = 'x'\norder = 'sideways'\n")
+    with pytest.raises(ConfigError, match=r"invalid config .*bad.toml: 'order' must be"):
+        load_study_config(bad)
+    good = tmp_path / "good.toml"
+    good.write_text("name = 'x'\nmodel = 'models/face'\n")
+    assert load_study_config(good).model == (tmp_path / "models" / "face").resolve()
+
+
+def test_identities_must_be_rig_presets(ict_model) -> None:
+    check_identities(study_from_dict({"identities": ["generic", "male", "female"]}), ict_model.rig)
+    with pytest.raises(ConfigError, match="'identities' must be among"):
+        check_identities(study_from_dict({"identities": ["alien"]}), ict_model.rig)
+
+
+def test_trials_are_emotions_times_identities_times_repetitions() -> None:
+    cfg = study_from_dict(
+        {"emotions": ["happy", "sad", "angry"], "identities": ["male", "female"], "repetitions": 2}
+    )
+    conds = cfg.conditions()
+    assert cfg.n_trials == len(conds) == 12 and len(set(conds)) == 12
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 6, 7])
+def test_latin_square_is_balanced(n: int) -> None:
+    rows = balanced_latin_square(n)
+    assert len(rows) == (n if n % 2 == 0 else 2 * n)
+    for row in rows:
+        assert sorted(row) == list(range(n))
+    for col in range(n):  # every condition equally often in every position
+        counts = np.bincount([r[col] for r in rows], minlength=n)
+        assert len(set(counts)) == 1
+    if n > 1:  # every ordered pair adjacent equally often (first-order carry-over balance)
+        pairs = np.zeros((n, n), int)
+        for row in rows:
+            for a, b in pairwise(row):
+                pairs[a, b] += 1
+        off = pairs[~np.eye(n, dtype=bool)]
+        assert len(set(off)) == 1
+
+
+def test_orders_random_latin_and_fixed() -> None:
+    base = {"emotions": ["a", "b", "c", "d"]}
+    rnd = study_from_dict({**base, "order": "random"})
+    o1 = trial_order(rnd, session_number=0, rng=np.random.default_rng(5))
+    o2 = trial_order(rnd, session_number=0, rng=np.random.default_rng(5))
+    assert o1 == o2 and sorted(o1.order) == [0, 1, 2, 3] and o1.kind == "random"
+    latin = study_from_dict({**base, "order": "latin_square"})
+    rows = [trial_order(latin, session_number=k, rng=np.random.default_rng(0)) for k in range(5)]
+    assert [r.row for r in rows] == [0, 1, 2, 3, 0]
+    assert rows[0].order == (0, 1, 3, 2) and rows[4].order == rows[0].order
+    fixed = study_from_dict({**base, "order": "fixed"})
+    assert trial_order(fixed, session_number=3, rng=np.random.default_rng(0)).order == (0, 1, 2, 3)

@@ -1,0 +1,97 @@
+# ruff: noqa: F811  (pytest fixtures imported by name, then requested by name)
+"""Fault test: the server (a uvicorn subprocess) is killed with SIGKILL mid-session and restarted.
+
+The participant resumes at the same generation with the same faces; a request in flight at the
+kill, retried with its idempotency key, is done exactly once; the export then holds each
+generation once and replay regenerates every face.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+from benchmarks.bench_study import ServerProcess, write_study_toml
+
+from emogen.study.export import export_tables
+from emogen.study.replay import replay_session
+from emogen.study.storage import Store
+from tests.study.conftest import SMALL_STUDY
+from tests.study.drive import choose, new_key, run_to_end, step_args
+from tests.study_fixtures import db_url, pg_cluster  # noqa: F401
+
+pytestmark = pytest.mark.slow
+
+
+def post(url: str, path: str, body: dict[str, Any]) -> dict[str, Any]:
+    r = httpx.post(url + path, json=body, timeout=30)
+    assert r.status_code in (200, 201), r.text
+    return r.json()  # type: ignore[no-any-return]
+
+
+def test_sigkill_mid_session_loses_and_duplicates_nothing(
+    db_url: str, tmp_path: Path, ict_dir: Path, ict_model
+) -> None:
+    config = write_study_toml(SMALL_STUDY, tmp_path / "study.toml")
+    server = ServerProcess(config, db_url, ict_dir, tmp_path / "server.log").start()
+    try:
+        created = post(server.url, "/api/sessions", {"participant_id": "K-1"})
+        token = created["token"]
+        state = post(server.url, f"/api/s/{token}/begin", {"key": new_key()})
+        elite, others = choose(state)
+        state = post(
+            server.url,
+            f"/api/s/{token}/select",
+            {"key": new_key(), **step_args(state), "elite": elite, "others": others},
+        )
+        assert state["progress"]["generation"] == 1
+
+        # 1. killed between steps: everything answered was committed
+        server.kill()
+        server.start()
+        resumed = httpx.get(f"{server.url}/api/s/{token}/state", timeout=30).json()
+        assert resumed == state  # same trial, generation, attempt and the very same faces
+
+        # 2. killed with a step in flight: the retry (same key) is done exactly once
+        elite, others = choose(state)
+        body = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
+
+        def send() -> None:
+            with contextlib.suppress(httpx.HTTPError):  # the server dies under it
+                httpx.post(f"{server.url}/api/s/{token}/select", json=body, timeout=5)
+
+        in_flight = threading.Thread(target=send, daemon=True)
+        in_flight.start()
+        time.sleep(0.005)
+        server.kill()
+        in_flight.join(10)
+        server.start()
+        before = httpx.get(f"{server.url}/api/s/{token}/state", timeout=30).json()
+        assert before["progress"]["generation"] in (1, 2)  # the step happened wholly or not at all
+        after = post(server.url, f"/api/s/{token}/select", body)
+        assert after["progress"]["generation"] == 2
+        assert after.get("replayed", False) == (before["progress"]["generation"] == 2)
+        final = run_to_end(
+            after,
+            lambda kind, b: post(server.url, f"/api/s/{token}/{kind}", b),
+        )
+        assert final["stage"] == "done"
+    finally:
+        server.stop()
+
+    store = Store(db_url)
+    tables = export_tables(store)
+    faces, sel = tables["faces"], tables["selections"]
+    per_generation = faces.groupby(["trial", "attempt", "generation"]).size()
+    assert len(per_generation) == 6 and (per_generation == 10).all()
+    elites = sel[sel.role == "elite"]
+    assert len(elites) == 6 and not elites.duplicated(["trial", "attempt", "generation"]).any()
+    assert len(tables["ratings"]) == 2
+    report = replay_session(store, 1, ict_model.rig, ict_model.model_hash, model=ict_model)
+    assert report.ok, report.mismatches
+    store.dispose()
