@@ -418,6 +418,7 @@ def sweep(
 
 def _register_subcommands() -> None:
     """Command groups defined beside their packages (they import helpers from this module)."""
+    from emogen.analysis.cli import analyse_command, power_command, replicate_command
     from emogen.correct.cli import correct_command
     from emogen.render.cli import render_app
     from emogen.study.cli import replay_command, serve_command, study_app
@@ -427,6 +428,9 @@ def _register_subcommands() -> None:
     app.command("serve")(serve_command)
     app.command("replay")(replay_command)
     app.command("correct")(correct_command)
+    app.command("analyse")(analyse_command)
+    app.command("replicate")(replicate_command)
+    app.command("power")(power_command)
 
 
 _register_subcommands()

@@ -111,7 +111,7 @@ def shown_faces(page: Any) -> list[int]:
 
 
 def test_participant_completes_two_trials(
-    server: ServerProcess, browser: Any, db_url: str, ict_model
+    server: ServerProcess, browser: Any, db_url: str, ict_model, ict_dir: Path, tmp_path: Path
 ) -> None:  # type: ignore[no-untyped-def]
     context = browser.new_context(viewport={"width": 1366, "height": 768})
     context.add_init_script(LAYOUT_SHIFT_PROBE)
@@ -235,3 +235,26 @@ def test_participant_completes_two_trials(
     assert tables["sessions"].stage.tolist() == ["done"]
     assert replay_session(store, 1, ict_model.rig, ict_model.model_hash, model=ict_model).ok
     store.dispose()
+
+    # ---- and `emogen analyse` reads that export end to end ----
+    from typer.testing import CliRunner
+
+    from emogen.cli import app
+    from emogen.study.export import write_export
+
+    write_export(tables, tmp_path / "export")
+    result = CliRunner().invoke(
+        app,
+        [
+            "analyse",
+            str(tmp_path / "export"),
+            "--out",
+            str(tmp_path / "analysis"),
+            "--model",
+            str(ict_dir),
+            "--noise-runs",
+            "50",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "analysis" / "index.html").is_file()

@@ -1,0 +1,93 @@
+"""The analysis commands through their Typer app: power, replicate (one section; the whole
+quick run is marked slow)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from emogen.analysis.cli import analysis_app
+
+runner = CliRunner()
+
+
+def test_power_command(ict_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "power"
+    result = runner.invoke(
+        analysis_app,
+        ["power", "--out", str(out), "--model", str(ict_dir), "--a", "mouthSmile=0.9",
+         "--a", "cheekSquint=0.6", "--difference", "browInnerUp=0.8", "--generations", "3",
+         "--pool", "40", "--replicates", "40", "--permutations", "40", "--max-participants", "12"],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    summary = json.loads((out / "power.json").read_text())
+    assert summary["n_required"] is not None and 4 <= summary["n_required"] <= 12
+    assert summary["prototype_cd"] > 0.15
+    curve = pd.read_csv(out / "power.csv")
+    assert list(curve.columns) == ["n", "power", "se", "fitted"]
+    assert (out / "power.png").is_file()
+    assert "participants per group reach power 0.8" in result.output
+
+
+def test_power_command_needs_one_group_b(ict_dir: Path, tmp_path: Path) -> None:
+    result = runner.invoke(
+        analysis_app, ["power", "--out", str(tmp_path), "--model", str(ict_dir), "--a", "jawOpen=1"]
+    )
+    assert result.exit_code == 2 and "--b or --difference" in result.output
+
+
+def test_analyse_command_reports_a_bad_folder(ict_dir: Path, tmp_path: Path) -> None:
+    result = runner.invoke(
+        analysis_app,
+        ["analyse", str(tmp_path), "--out", str(tmp_path / "o"), "--model", str(ict_dir)],
+    )
+    assert result.exit_code == 2 and "neither a study export" in result.output
+
+
+def test_replicate_one_section(ict_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "rep"
+    result = runner.invoke(
+        analysis_app,
+        ["replicate", "--quick", "--out", str(out), "--model", str(ict_dir), "--only",
+         "activation", "--no-render", "--runs", "40"],
+    )  # fmt: skip
+    assert result.exit_code == 0, result.output
+    findings = pd.read_csv(out / "tables" / "findings.csv")
+    assert len(findings) == 4 and set(findings["section"]) == {"Table IV"}
+    assert findings["verdict"].str.strip("*").isin(["holds", "partly", "differs"]).all()
+    assert "Table IV" in result.output and "findings:" in result.output
+    assert "9,592" in (out / "README.md").read_text()
+
+
+@pytest.mark.slow
+def test_replicate_quick(ict_dir: Path, tmp_path: Path) -> None:
+    """The CI run of the whole quick replication (about a minute on two cores)."""
+    out = tmp_path / "quick"
+    result = runner.invoke(
+        analysis_app, ["replicate", "--quick", "--out", str(out), "--model", str(ict_dir)]
+    )
+    assert result.exit_code == 0, result.output
+    findings = pd.read_csv(out / "tables" / "findings.csv")
+    assert len(findings) >= 30
+    sections = set(findings["section"])
+    for s in (
+        "Table I",
+        "Table III",
+        "Table IV",
+        "Table V",
+        "Fig. 11",
+        "Fig. 14",
+        "Selection pressure",
+    ):
+        assert s in sections, s
+    verdicts = findings["verdict"].str.strip("*")
+    assert verdicts.isin(["holds", "partly", "differs"]).all()
+    assert (verdicts == "holds").sum() >= len(findings) // 3
+    html = (out / "index.html").read_text()
+    assert "9,592" in html and "simulated participants" in html
+    for fig in ("fig8_cd", "fig9_mean_faces", "fig15_kl_default", "table_iii_bins", "power"):
+        assert (out / "figures" / f"{fig}.png").is_file(), fig
