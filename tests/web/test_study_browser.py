@@ -21,24 +21,13 @@ from emogen.study.export import export_tables
 from emogen.study.replay import replay_session
 from emogen.study.storage import Store
 from tests.study_fixtures import db_url, pg_cluster  # noqa: F401
+from tests.web.viewer_site import CHROMIUM, CHROMIUM_ARGS
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
 REPO = Path(__file__).resolve().parents[2]
 WEB = REPO / "src" / "emogen" / "web"
 BUNDLE = WEB / "static" / "build" / "study-viewer.js"
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--enable-unsafe-swiftshader",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 BROWSER_STUDY: dict[str, Any] = {
     "name": "browser",
     "emotions": ["happy", "sad"],
