@@ -19,35 +19,15 @@ PAPER_TABLE_V = {  # target: (μ, σ) of the final CD error, Table V of the pape
     "12-shape": (0.237, 0.0760),
     "dense (paper: 125-shape happy)": (0.222, 0.0551),
 }
-HAPPY = {
-    "mouthSmile": 0.9,
-    "cheekSquint": 0.6,
-    "cheekRaiser": 0.7,
-    "eyeSquint": 0.45,
-    "mouthUpperUp": 0.3,
-    "mouthLowerDown": 0.3,
-    "jawOpen": 0.25,
-    "mouthDimple": 0.35,
-}
 
 
 def table_v_targets(rig) -> dict[str, dict[str, float]]:  # type: ignore[no-untyped-def]
     """Analogues of Fig. 18's targets: 1, 3 and 12 active shapes, and a dense happy face."""
-    dense = {g.name: 0.02 + 0.06 * ((i * 7) % 10) / 9 for i, g in enumerate(rig.genes)}
-    return {
-        "1-shape": {"jawOpen": 1.0},
-        "3-shape": {"jawOpen": 1.0, "noseSneer": 0.6},
-        "12-shape": {
-            "browOuterUp": 0.6,
-            "cheekPuff": 0.4,
-            "mouthDimple": 0.5,
-            "mouthPress": 0.4,
-            "noseSneer": 0.3,
-            "mouthPucker": 0.5,
-            "jawForward": 0.3,
-        },
-        "dense (paper: 125-shape happy)": dense | HAPPY,
-    }
+    from emogen.analysis.targets import table_v_by_shapes
+
+    targets = table_v_by_shapes(rig)
+    targets["dense (paper: 125-shape happy)"] = targets.pop("dense")
+    return targets
 
 
 def _timed(cfg, source, repeat: int = 1):  # type: ignore[no-untyped-def]

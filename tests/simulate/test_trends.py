@@ -13,26 +13,13 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from emogen.analysis.targets import TARGET_1, table_v_by_shapes
+from emogen.analysis.targets import TARGET_2 as TARGET_12
 from emogen.config import GAConfig, InitConfig, SimulationConfig
 from emogen.simulate.runner import run_simulation
 
 RUNS = 500
 SEED = 1
-TARGET_1 = {"jawOpen": 1.0}
-TARGET_12 = {
-    "browInnerUp": 0.7,
-    "browOuterUp": 0.6,
-    "eyeWide": 0.5,
-    "jawOpen": 0.4,
-    "mouthStretch": 0.5,
-    "mouthLowerDown": 0.4,
-    "mouthFrown": 0.3,
-    "noseSneer": 0.3,
-    "cheekSquint": 0.2,
-    "mouthUpperUp": 0.3,
-    "mouthFunnel": 0.2,
-    "browDown": 0.2,
-}
 
 
 def errors(rig, target: dict[str, float], lo_hi: tuple[int, int]) -> np.ndarray:
@@ -69,40 +56,12 @@ def test_paper_trends(ict_model) -> None:
 
 
 # Table V: targets of increasing complexity converge better (lower μ and σ of the final CD error).
-HAPPY = {  # a dense 'happy' face: every gene active, the happy blocks strongly
-    "mouthSmile": 0.9,
-    "cheekSquint": 0.6,
-    "cheekRaiser": 0.7,
-    "eyeSquint": 0.45,
-    "mouthUpperUp": 0.3,
-    "mouthLowerDown": 0.3,
-    "jawOpen": 0.25,
-    "mouthDimple": 0.35,
-}
-TABLE_V = {
-    "1-shape": {"jawOpen": 1.0},
-    "3-shape": {"jawOpen": 1.0, "noseSneer": 0.6},  # target 1 with a nose wrinkle
-    "12-shape": {  # brows, cheeks and mouth, not one emotion's building blocks
-        "browOuterUp": 0.6,
-        "cheekPuff": 0.4,
-        "mouthDimple": 0.5,
-        "mouthPress": 0.4,
-        "noseSneer": 0.3,
-        "mouthPucker": 0.5,
-        "jawForward": 0.3,
-    },
-}
-
-
-def dense_happy(rig) -> dict[str, float]:
-    out = {g.name: 0.02 + 0.06 * ((i * 7) % 10) / 9 for i, g in enumerate(rig.genes)}
-    return out | HAPPY
 
 
 @pytest.mark.slow
 def test_table_v_ordering(ict_model) -> None:
     rig = ict_model.rig
-    targets = {**TABLE_V, "dense": dense_happy(rig)}
+    targets = table_v_by_shapes(rig)
     shapes = {k: int((rig.weights_from_names(t) > 0).sum()) for k, t in targets.items()}
     assert shapes == {"1-shape": 1, "3-shape": 3, "12-shape": 12, "dense": 52}
     final = {}

@@ -61,6 +61,29 @@ def dense_happy(rig: Rig) -> dict[str, float]:
     return base | HAPPY
 
 
+#: Table V's targets counted in *shapes*, as the paper counts them (a left/right pair is two
+#: shapes): 1, 3 and 12 active shapes; with :func:`dense_happy` they make the Table V analogue
+#: of tests/simulate/test_trends.py and benchmarks/bench_simulate.py.
+TABLE_V_BY_SHAPES = {
+    "1-shape": {"jawOpen": 1.0},
+    "3-shape": {"jawOpen": 1.0, "noseSneer": 0.6},  # target 1 with a nose wrinkle
+    "12-shape": {  # brows, cheeks and mouth, not one emotion's building blocks
+        "browOuterUp": 0.6,
+        "cheekPuff": 0.4,
+        "mouthDimple": 0.5,
+        "mouthPress": 0.4,
+        "noseSneer": 0.3,
+        "mouthPucker": 0.5,
+        "jawForward": 0.3,
+    },
+}
+
+
+def table_v_by_shapes(rig: Rig) -> dict[str, dict[str, float]]:
+    """Targets of 1, 3 and 12 active shapes and the dense happy face (52 shapes)."""
+    return {**{k: dict(v) for k, v in TABLE_V_BY_SHAPES.items()}, "dense": dense_happy(rig)}
+
+
 def paper_targets(rig: Rig) -> dict[str, dict[str, float]]:
     """The Fig. 6 / Fig. 18 analogues, in the paper's order of complexity."""
     return {
