@@ -156,3 +156,33 @@ def test_depth_is_the_distance_to_the_partner_along_the_axis(ict_model, ict_corr
         )
         others = [d for d in range(3) if d != ax]
         np.testing.assert_allclose(partner[:, others], anchor[:, others], atol=1e-9)
+
+
+def _by_face(c):  # type: ignore[no-untyped-def]
+    """The pairs in (face, kind, anchor) order, as one comparable array."""
+    rows = np.lexsort((c.anchor, c.kind, c.face))
+    ids = np.c_[c.face, c.kind, c.anchor, c.partner].astype(np.float64)
+    return np.column_stack([ids, c.partner_bary, c.depth, c.within])[rows]
+
+
+def test_compiled_detection_equals_the_array_reference_on_ga_faces(
+    ict_model, ict_correctives, ga_weights
+) -> None:
+    """Within counts and every pair (partner, barycentric point, depth) agree with the same rules
+    written as whole-array numpy over line_hits (tests/correct/reference_detect.py), on ≥ 500
+    GA faces of which many collide, and on the faces as corrected part-way."""
+    from tests.correct.reference_detect import reference_detect
+
+    lay = ict_correctives.layout
+    weights = ga_weights[0]
+    pts = local(ict_model, lay, weights)
+    deltas = ict_correctives.collision_deltas[:, lay.vertices].astype(np.float64)
+    half = pts + (np.full((len(pts), 8), 0.3) @ deltas.reshape(8, -1)).reshape(pts.shape)
+    for batch, least in ((pts, 100), (half, 10)):
+        got, want = col.detect(batch, lay, margin=0.03), reference_detect(batch, lay, margin=0.03)
+        np.testing.assert_array_equal(got.within, want.within)
+        assert got.colliding.sum() >= least
+        g, w = _by_face(got.constraints), _by_face(want.constraints)
+        assert g.shape == w.shape and len(g) >= 10 * least
+        np.testing.assert_array_equal(g[:, :4], w[:, :4])
+        np.testing.assert_allclose(g[:, 4:], w[:, 4:], rtol=0, atol=1e-12)

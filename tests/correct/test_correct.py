@@ -124,3 +124,45 @@ def test_interpenetration_before_and_after_on_ga_faces(ict_model, ga_weights, mo
     assert before.mean() > 0.2  # GA faces often collide: the test has something to find
     assert after.mean() <= 0.005, f"after correction {after.sum()} of {len(w)} faces interpenetrate"
     assert r.remaining.mean() <= 0.005
+
+
+def test_a_faces_correction_does_not_depend_on_its_batch_or_the_blas_threads(
+    ict_model, ga_weights
+) -> None:
+    """Exact replay needs a face's corrected weights to be a function of that face alone: the
+    same bits corrected with 199 others, one at a time, in uneven slices, and with BLAS on one
+    thread."""
+    from threadpoolctl import threadpool_limits
+
+    w = ga_weights[0][:200]
+    whole = ict_model.correct(w)
+    assert whole.collided.sum() > 20
+    for rows in ([slice(i, i + 1) for i in range(0, 200, 9)], [slice(3, 10), slice(10, 77)]):
+        for s in rows:
+            part = ict_model.correct(w[s])
+            np.testing.assert_array_equal(part.correctives, whole.correctives[s])
+            np.testing.assert_array_equal(part.weights, whole.weights[s])
+    with threadpool_limits(limits=1):
+        np.testing.assert_array_equal(ict_model.correct(w).correctives, whole.correctives)
+
+
+def test_blend_is_start_plus_weights_times_rows_in_a_fixed_order() -> None:
+    from emogen.correct.blend import blend
+
+    rng = np.random.default_rng(0)
+    rows = rng.normal(size=(6, 40))
+    weights = rng.random((5, 6)) * (rng.random((5, 6)) > 0.4)
+    start = rng.normal(size=(5, 40))
+    loop = start.copy()
+    for i in range(5):
+        for k in range(6):
+            if weights[i, k] != 0:
+                loop[i] += weights[i, k] * rows[k]
+    np.testing.assert_array_equal(blend(start, weights, rows), loop)
+    np.testing.assert_allclose(blend(start[0], weights, rows), start[0] + weights @ rows)
+    with pytest.raises(ValueError, match="start has 2 rows for 5 faces"):
+        blend(start[:2], weights, rows)
+    with pytest.raises(
+        ValueError, match=r"weights \(B, K\), rows \(K, D\); got \(1, 40\), \(5, 6\)"
+    ):
+        blend(start[0], weights, rows[:5])

@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from emogen.correct.raycast import AxisBins
+from emogen.correct.raycast import line_hits
+
+
+def as_mesh(triangles):
+    """(B, T, 3, 3) corners → vertices (B, 3T, 3) and triangles (T, 3) (no shared corners)."""
+    b, t = triangles.shape[:2]
+    return triangles.reshape(b, 3 * t, 3), np.arange(3 * t).reshape(t, 3)
 
 
 def reference_hits(points, point_face, triangles, axis):
@@ -41,7 +47,7 @@ def test_hits_match_plain_reference(axis) -> None:
     triangles = centres + rng.normal(scale=0.15, size=(b, t, 3, 3))
     points = rng.uniform(-1.2, 1.2, size=(q, 3))
     point_face = rng.integers(0, b, size=q)
-    hits = AxisBins(triangles, axis, cell=0.1).hits(points, point_face)
+    hits = line_hits(points, point_face, *as_mesh(triangles), axis, cell=0.1)
     got = {
         (int(p), int(tr), round(float(d), 9))
         for p, tr, d in zip(hits.point, hits.triangle, hits.t, strict=True)
@@ -67,10 +73,9 @@ def test_need_only_drops_points_that_cannot_get_what_they_need() -> None:
     triangles = rng.uniform(0, 1, size=(1, 80, 1, 3)) + rng.normal(scale=0.1, size=(1, 80, 3, 3))
     points = rng.uniform(-0.2, 1.2, size=(300, 3))
     face = np.zeros(300, dtype=np.int64)
-    bins = AxisBins(triangles, 2, cell=0.08)
-    full = bins.hits(points, face)
+    full = line_hits(points, face, *as_mesh(triangles), 2, cell=0.08)
     for need in (-1, 0, 1):
-        part = bins.hits(points, face, need)
+        part = line_hits(points, face, *as_mesh(triangles), 2, cell=0.08, need=need)
         kept = set(part.point.tolist())
         for p in range(300):
             ts = full.t[full.point == p]
@@ -78,3 +83,55 @@ def test_need_only_drops_points_that_cannot_get_what_they_need() -> None:
             if ok:  # a point that can have what it needs keeps all its hits
                 assert p in kept
                 assert sorted(part.t[part.point == p]) == sorted(ts)
+
+
+def test_a_face_with_non_finite_corners_has_no_hits_and_the_others_are_unaffected() -> None:
+    rng = np.random.default_rng(3)
+    triangles = rng.uniform(0, 1, size=(2, 30, 1, 3)) + rng.normal(scale=0.2, size=(2, 30, 3, 3))
+    points = rng.uniform(0, 1, size=(200, 3))
+    face = np.repeat([0, 1], 100)
+    clean = line_hits(points, face, *as_mesh(triangles), 1, cell=0.1)
+    bad = triangles.copy()
+    bad[0, 4, 1, 2] = np.nan
+    hits = line_hits(points, face, *as_mesh(bad), 1, cell=0.1)
+    assert not np.any(hits.point < 100)
+    keep = clean.point >= 100
+    np.testing.assert_array_equal(hits.point, clean.point[keep])
+    np.testing.assert_array_equal(hits.t, clean.t[keep])
+
+
+def test_a_grid_too_fine_for_the_face_gets_coarser_cells_and_the_same_hits() -> None:
+    """Cells of 1e-6 over a unit face would be 10¹² cells: the grid coarsens, hits stay exact."""
+    rng = np.random.default_rng(4)
+    triangles = rng.uniform(0, 1, size=(1, 25, 1, 3)) + rng.normal(scale=0.2, size=(1, 25, 3, 3))
+    points = rng.uniform(0, 1, size=(150, 3))
+    face = np.zeros(150, dtype=np.int64)
+    hits = line_hits(points, face, *as_mesh(triangles), 0, cell=1e-6)
+    got = {
+        (int(p), int(t), round(float(d), 9))
+        for p, t, d in zip(hits.point, hits.triangle, hits.t, strict=True)
+    }
+    assert got == reference_hits(points, face, triangles, 0) and len(got) > 5
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"axis": 3}, "axis must be 0, 1 or 2; got 3"),
+        ({"cell": 0.0}, "cell must be positive; got 0.0"),
+        ({"point_face": np.array([0, 2])}, r"point faces must lie in \[0, 1\); got 0…2"),
+        ({"point_face": np.array([0])}, "2 points but 1 point faces"),
+        ({"corners": np.array([[0, 1, 7]])}, r"triangle corners must lie in \[0, 3\)"),
+    ],
+)
+def test_bad_arguments_are_named(kwargs, message) -> None:
+    args = {
+        "points": np.zeros((2, 3)),
+        "point_face": np.array([0, 0]),
+        "vertices": np.eye(3)[None],
+        "corners": np.array([[0, 1, 2]]),
+        "axis": 2,
+        "cell": 0.1,
+    }
+    with pytest.raises(ValueError, match=message):
+        line_hits(**(args | kwargs))

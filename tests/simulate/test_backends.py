@@ -45,3 +45,26 @@ def test_make_backend() -> None:
         make_backend("somewhere")
     with pytest.raises(ConfigError, match="workers must be >= 1"):
         LocalBackend(0)
+
+
+CORRECTED = SimulationConfig(
+    target={"jawOpen": 1.0, "mouthShrugLower": 0.8},
+    runs=110,
+    seed=5,
+    correct=True,
+    ga={"generations": 3},
+)
+
+
+def test_corrected_simulation_is_the_same_in_a_process_pool_and_on_dask(ict_model) -> None:
+    """Every shown face corrected (collisions included): one process, two worker processes and
+    a Dask LocalCluster give the same tables, corrective weights and all."""
+    local = run_simulation(CORRECTED, ict_model, all_weights=True)
+    shown = local.faces
+    assert local.record["corrected"]
+    collision = [c for c in shown.columns if c.startswith("collision_")]
+    assert len(collision) == 8 and (shown[collision].to_numpy() > 0).any(axis=1).mean() > 0.05
+    pooled = run_simulation(CORRECTED, ict_model, backend=LocalBackend(2), all_weights=True)
+    assert_same(local, pooled)
+    with DaskBackend(n_workers=2, processes=False, chunk_runs=40) as backend:
+        assert_same(local, run_simulation(CORRECTED, ict_model, backend=backend, all_weights=True))

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from emogen.correct.blend import blend
 from emogen.correct.combinational import activations
 from emogen.correct.correctives import Correctives, correctives_for
 from emogen.correct.solve import MAX_ITERATIONS, solve_collisions
@@ -147,8 +148,9 @@ class Corrector:
             for start in range(0, b_n, CHUNK):  # bounds the memory of the local vertices
                 rows = slice(start, start + CHUNK)
                 n = len(eff[rows])
-                base = np.concatenate([eff[rows], comb[rows]], axis=1) @ self._base_rows
-                base += self._neutral
+                base = blend(
+                    self._neutral, np.concatenate([eff[rows], comb[rows]], axis=1), self._base_rows
+                )
                 sol = solve_collisions(
                     base.reshape(n, -1, 3),
                     self._collision_local,

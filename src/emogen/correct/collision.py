@@ -17,9 +17,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from emogen.correct.lips import UPPER_FRONT_TEETH, MouthGeometry
-from emogen.correct.raycast import LineHits, line_hits
+from emogen.correct.raycast import bin_triangles, gather_triangles, grow, hit_buffers, probe
 
 LIP, TEETH = 0, 1
 TYPES = ("lip", "teeth")
@@ -34,7 +35,6 @@ UPPER_ANCHOR_RADIUS = 1.5  # cm from the upper chain: upper lip anchors
 CROWN_FRACTION = 0.45  # the lower part of each tooth's height that carries anchors (the crown)
 CONTACT_TOLERANCE = 0.02  # cm: an anchor this close to the lip surface is touching, not inside
 CELL_FACTOR = 1.0  # ray-casting bin size, in median lower-lip edge lengths
-DETECT_CHUNK = 16  # faces per ray-casting batch (bounds the candidate arrays)
 
 # The corrective shapes: amplitude (cm at weight 1) and geodesic falloff (full up to r_full,
 # smoothstep to zero at r_zero) per moving part.
@@ -208,8 +208,11 @@ def collision_layout(
 
 def anchor_points(local: np.ndarray, layout: CollisionLayout, kind: int) -> np.ndarray:
     """(B, Na, 3) anchor positions from local vertices (B, L, 3)."""
-    tri = local[:, layout.anchors[kind]]  # (B, Na, 3, 3)
-    return np.einsum("bnkd,nk->bnd", tri, layout.anchor_bary[kind])
+    idx, bary = layout.anchors[kind], layout.anchor_bary[kind]
+    out = np.take(local, idx[:, 0], axis=1) * bary[:, 0, None]
+    for k in (1, 2):
+        out += np.take(local, idx[:, k], axis=1) * bary[:, k, None]
+    return out
 
 
 @dataclass(frozen=True)
@@ -244,198 +247,223 @@ class Detection:
         return self.within.sum(1) > 0
 
 
-def _nearest(hits: LineHits, n: int, sign: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per query point: distance and facing of the nearest hit on the ``sign`` side."""
-    side = sign * hits.t > 0
-    dist = np.where(side, sign * hits.t, np.inf)
-    best = np.full(n, np.inf)
-    np.minimum.at(best, hits.point, dist)
-    is_best = side & (dist == best[hits.point])
-    facing = np.zeros(n)
-    facing[hits.point[is_best]] = hits.facing[is_best]
-    return best, facing
+@njit(cache=True, nogil=True)
+def _summarise(
+    n: int, hit_t: np.ndarray, hit_facing: np.ndarray, negative: float
+) -> tuple[float, float, float, float, int, int]:  # pragma: no cover - compiled
+    """One line's hits: the nearest on the + side (distance, facing) and on the − side (ties:
+    the last such hit), and along the ``negative`` ray the first hit leaving the lower lip
+    (buffer index or −1; ties: the first such hit) with its rank among the hits on that side
+    (0: the first surface met, the point is within; 1: after entering once, passed through)."""
+    d_plus, f_plus, d_minus, f_minus = np.inf, 0.0, np.inf, 0.0
+    exit_h, exit_d = -1, np.inf
+    for h in range(n):
+        t = hit_t[h]
+        if t > 0.0 and t <= d_plus:
+            d_plus, f_plus = t, hit_facing[h]
+        if -t > 0.0 and -t <= d_minus:
+            d_minus, f_minus = -t, hit_facing[h]
+        d = negative * t
+        if d > 0.0 and negative * hit_facing[h] > 0.0 and d < exit_d:
+            exit_h, exit_d = h, d
+    rank = 0
+    if exit_h >= 0:
+        for h in range(n):
+            d = negative * hit_t[h]
+            if d > 0.0 and (d < exit_d or (d == exit_d and h < exit_h)):
+                rank += 1
+    return d_plus, f_plus, d_minus, f_minus, exit_h, rank
 
 
-def _within(hy: LineHits, hz: LineHits, n: int) -> np.ndarray:
-    """(Q,) bool: the query point is within the lower lip.
+@njit(cache=True, nogil=True)
+def _detect_faces(
+    local: np.ndarray,
+    lower: np.ndarray,
+    lower_vertices: np.ndarray,
+    anchor_corners: np.ndarray,
+    anchor_bary: np.ndarray,
+    anchor_kind: np.ndarray,
+    cell: float,
+    tolerance: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    """Detection of a batch, face by face (see :func:`detect`); compiled.
 
-    The paper's test — on y or on z, lower-lip surfaces on both sides — with the surfaces'
-    orientation: each nearest hit must be seen from inside (its outward normal pointing away
-    from the point). The lower lip is an open sheet, cut where its region ends, so a ray can
-    leave it before meeting its far side; a point is also within when at least two of its four
-    rays meet the lower lip and every one of them meets it from inside. Either way the point
-    must be deeper than ``CONTACT_TOLERANCE`` (no surface it is inside of closer along a ray):
-    touching lips are not a collision. (:func:`detect_chunk` further requires the surface
-    above to be seen from inside: over 10,000 GA faces, no within anchor lacked it.)
+    Anchors of both types are given together (``anchor_kind``: 0 lip, 1 teeth; lip first).
+    Returns within (B, 2), and per pair (face, anchor (global), partner triangle, within flag)
+    (M, 4) and (partner barycentric u, v (2nd, 3rd corner), distance along the negative ray)
+    (M, 3).
     """
-    exits = np.zeros(n, dtype=np.int64)
-    entries = np.zeros(n, dtype=np.int64)
-    depth = np.full(n, np.inf)
-    both = np.zeros(n, dtype=bool)
-    for hits in (hy, hz):
-        leaving = []
-        for sign in (+1.0, -1.0):
-            dist, facing = _nearest(hits, n, sign)
-            out = sign * facing > 0
-            leaving.append(out)
-            exits += out
-            entries += sign * facing < 0
-            depth = np.minimum(depth, np.where(out, dist, np.inf))
-        both |= leaving[0] & leaving[1]
-    inside = both | ((exits >= 2) & (entries == 0))
-    return inside & (depth > CONTACT_TOLERANCE)
-
-
-def _starts(k: np.ndarray) -> np.ndarray:
-    """Boolean mask of the first element of each run of equal values in ``k``."""
-    out = np.empty(len(k), dtype=bool)
-    if len(k):
-        out[0] = True
-        np.not_equal(k[1:], k[:-1], out=out[1:])
-    return out
-
-
-def _first_exit(hits: LineHits, n: int, negative: float) -> tuple[np.ndarray, np.ndarray]:
-    """Along each query's negative ray: the first hit leaving the lower lip, and its rank.
-
-    Returns (hit index, or -1 when none; rank of that hit along the ray: 0 when it is the
-    first surface met (the query is within), 1 after entering once (passed through)).
-    """
-    dist = negative * hits.t
-    order = np.flatnonzero(dist > 0)
-    order = order[np.lexsort((dist[order], hits.point[order]))]
-    k = hits.point[order]
-    exit_idx = np.full(n, -1, dtype=np.int64)
-    exit_rank = np.full(n, -1, dtype=np.int64)
-    if len(k) == 0:
-        return exit_idx, exit_rank
-    new = _starts(k)
-    starts = np.flatnonzero(new)
-    rank = np.arange(len(k)) - np.repeat(starts, np.diff(np.append(starts, len(k))))
-    ex = np.flatnonzero(negative * hits.facing[order] > 0)
-    kk = k[ex]
-    first = ex[_starts(kk)] if len(ex) else ex
-    exit_idx[k[first]] = order[first]
-    exit_rank[k[first]] = rank[first]
-    return exit_idx, exit_rank
-
-
-def _empty_constraints() -> Constraints:
-    z = np.zeros(0, dtype=np.int64)
-    return Constraints(z, z, z, z, np.zeros((0, 3)), np.zeros(0), np.zeros(0, dtype=bool))
-
-
-def _concat(parts: list[Constraints], offsets: list[int]) -> Constraints:
-    if not parts:
-        return _empty_constraints()
-    return Constraints(
-        face=np.concatenate([c.face + o for c, o in zip(parts, offsets, strict=True)]),
-        kind=np.concatenate([c.kind for c in parts]),
-        anchor=np.concatenate([c.anchor for c in parts]),
-        partner=np.concatenate([c.partner for c in parts]),
-        partner_bary=np.concatenate([c.partner_bary for c in parts]),
-        depth=np.concatenate([c.depth for c in parts]),
-        within=np.concatenate([c.within for c in parts]),
-    )
+    n_faces, n_tris, n_anc = local.shape[0], lower.shape[0], anchor_corners.shape[0]
+    within = np.zeros((n_faces, 2), dtype=np.int64)
+    tri = np.empty((n_tris, 3, 3))
+    b_tri, b_t, b_facing, b_u, b_v = hit_buffers(n_tris)
+    q_anchor = np.empty(n_anc, dtype=np.int64)
+    q_point = np.empty((n_anc, 3))
+    q_near = np.empty((n_anc, 8))  # y: d+, f+, d−, f−; z: d+, f+, d−, f−
+    q_candidate = np.zeros(n_anc, dtype=np.bool_)
+    q_inside = np.zeros(n_anc, dtype=np.bool_)
+    q_exit = np.empty((n_anc, 5))  # partner triangle, u, v, distance, rank (triangle −1: none)
+    pair_ids = np.empty((1024, 4), dtype=np.int64)  # face, anchor, partner, within
+    pair_values = np.empty((1024, 3))  # partner u, v, distance
+    n_out = 0
+    p = np.empty(3)
+    for b in range(n_faces):
+        verts = local[b]
+        lo = np.full(3, np.inf)
+        hi = np.full(3, -np.inf)
+        for v in lower_vertices:
+            for d in range(3):
+                lo[d] = min(lo[d], verts[v, d])
+                hi[d] = max(hi[d], verts[v, d])
+        gather_triangles(verts, lower, tri)
+        grid_y = bin_triangles(tri, Y, cell)
+        n_q = 0
+        busy = False
+        for n in range(n_anc):
+            kind = anchor_kind[n]
+            for d in range(3):
+                p[d] = (
+                    anchor_bary[n, 0] * verts[anchor_corners[n, 0], d]
+                    + anchor_bary[n, 1] * verts[anchor_corners[n, 1], d]
+                    + anchor_bary[n, 2] * verts[anchor_corners[n, 2], d]
+                )
+            # the lower lip's bounding box, open on the negative ray's side (an anchor may have
+            # passed through the lower lip)
+            inside_box = True
+            for d in range(3):
+                if p[d] < lo[d] and not (kind == LIP and d == Y):
+                    inside_box = False
+                if p[d] > hi[d] and not (kind == TEETH and d == Z):
+                    inside_box = False
+            if not inside_box:
+                continue
+            q = n_q
+            n_q += 1
+            q_anchor[q] = n
+            q_point[q] = p
+            h = probe(tri, Y, grid_y, p, 1, b_tri, b_t, b_facing, b_u, b_v)
+            dp, fp, dm, fm, ex, rank = _summarise(h, b_t, b_facing, 1.0)
+            q_near[q, 0], q_near[q, 1], q_near[q, 2], q_near[q, 3] = dp, fp, dm, fm
+            q_near[q, 4], q_near[q, 5], q_near[q, 6], q_near[q, 7] = np.inf, 0.0, np.inf, 0.0
+            q_exit[q, 0] = -1.0
+            if kind == LIP and ex >= 0:
+                q_exit[q, 0], q_exit[q, 1], q_exit[q, 2] = b_tri[ex], b_u[ex], b_v[ex]
+                q_exit[q, 3], q_exit[q, 4] = b_t[ex], rank
+            # a point inside the lower lip has the lip's top above it, seen from inside
+            q_candidate[q] = fp > 0.0
+            busy = busy or q_candidate[q]
+        if not busy:
+            continue
+        grid_z = bin_triangles(tri, Z, cell)
+        count_lip, count_teeth = 0, 0
+        for q in range(n_q):
+            kind = anchor_kind[q_anchor[q]]
+            if q_candidate[q] or kind == TEETH:
+                need = -1 if kind == TEETH else 2
+                h = probe(tri, Z, grid_z, q_point[q], need, b_tri, b_t, b_facing, b_u, b_v)
+                dp, fp, dm, fm, ex, rank = _summarise(h, b_t, b_facing, -1.0)
+                q_near[q, 4], q_near[q, 5], q_near[q, 6], q_near[q, 7] = dp, fp, dm, fm
+                if kind == TEETH:
+                    q_exit[q, 0] = -1.0
+                    if ex >= 0:
+                        q_exit[q, 0], q_exit[q, 1], q_exit[q, 2] = b_tri[ex], b_u[ex], b_v[ex]
+                        q_exit[q, 3], q_exit[q, 4] = -b_t[ex], rank
+            # within: along y or z the nearest surfaces on both sides are left (seen from
+            # inside), or ≥ 2 rays meet the lower lip and all from inside; deeper than the
+            # contact tolerance
+            exits, entries, both, depth = 0, 0, False, np.inf
+            for k in (0, 4):
+                out_plus = q_near[q, k + 1] > 0.0
+                out_minus = q_near[q, k + 3] < 0.0
+                exits += out_plus + out_minus
+                entries += (q_near[q, k + 1] < 0.0) + (q_near[q, k + 3] > 0.0)
+                if out_plus:
+                    depth = min(depth, q_near[q, k])
+                if out_minus:
+                    depth = min(depth, q_near[q, k + 2])
+                both = both or (out_plus and out_minus)
+            inside = q_candidate[q] and (both or (exits >= 2 and entries == 0))
+            q_inside[q] = inside and depth > tolerance
+            if q_inside[q]:
+                if kind == LIP:
+                    count_lip += 1
+                else:
+                    count_teeth += 1
+        within[b, 0], within[b, 1] = count_lip, count_teeth
+        if count_lip + count_teeth == 0:
+            continue
+        # the pairs: within anchors and anchors that passed through, with their first exit
+        for q in range(n_q):
+            if q_exit[q, 0] < 0 or not (q_inside[q] or q_exit[q, 4] == 1.0):
+                continue
+            if n_out == len(pair_ids):
+                pair_ids = grow(pair_ids, 2 * n_out)
+                pair_values = grow(pair_values, 2 * n_out)
+            pair_ids[n_out, 0], pair_ids[n_out, 1] = b, q_anchor[q]
+            pair_ids[n_out, 2], pair_ids[n_out, 3] = int(q_exit[q, 0]), q_inside[q]
+            pair_values[n_out] = q_exit[q, 1:4]
+            n_out += 1
+    return within, pair_ids[:n_out], pair_values[:n_out]
 
 
 def detect(local: np.ndarray, layout: CollisionLayout, *, margin: float = 0.0) -> Detection:
-    """Detect collisions and build the intersection pairs of a batch (in chunks of faces).
+    """Detect collisions (paper: *within*) and build the intersection pairs (δb) of a batch.
 
-    local : (B, L, 3) float64 positions of ``layout.vertices``. See :func:`detect_chunk`.
+    local : (B, L, 3) float64 positions of ``layout.vertices``.
+
+    An anchor is *within* the lower lip when the lower lip's surface above it is seen from
+    inside (its outward normal pointing away from the anchor), and along y or z the nearest
+    surfaces on both sides are, or at least two of its four rays meet the lower lip and every one
+    of them meets it from inside (the lower lip is an open sheet, cut where its region ends, so a
+    ray can leave it before meeting its far side) — and it is deeper than
+    ``CONTACT_TOLERANCE`` (no surface it is inside of closer along a ray): touching lips are not
+    a collision. In a face with a collision, every within anchor, and every anchor that *passed
+    through* the lower lip (along its negative ray: one surface entered, then one left), pairs
+    with the first lower-lip surface left along its negative ray; δb is the distance to it
+    (+ ``margin``).
+
+    Cheap first: anchors outside the lower lip's bounding box (open on the negative ray's side)
+    are skipped; the vertical rays come first, and only in a face where some anchor sees the
+    lower lip above it from inside are the rays cast outward too (for those anchors, and for
+    every teeth anchor, whose pairs are outward). Compiled (numba), face by face; the same
+    rules as whole-array operations are kept in the tests as the reference.
     """
-    parts = [
-        detect_chunk(local[s : s + DETECT_CHUNK], layout, margin=margin)
-        for s in range(0, len(local), DETECT_CHUNK)
-    ]
-    if len(parts) == 1:
-        return parts[0]
+    local = np.ascontiguousarray(local, dtype=np.float64)
+    if local.ndim != 3 or local.shape[1:] != (len(layout.vertices), 3):
+        raise ValueError(
+            f"local vertices must be (B, {len(layout.vertices)}, 3); got shape {local.shape}"
+        )
+    within, ids, values = _detect_faces(
+        local,
+        layout.lower,
+        layout.lower_vertices,
+        *_anchor_table(layout),
+        layout.cell,
+        CONTACT_TOLERANCE,
+    )
+    n_lip = len(layout.anchors[LIP])
+    kind = (ids[:, 1] >= n_lip).astype(np.int64)
+    u, v = values[:, 0], values[:, 1]
     return Detection(
-        within=np.concatenate([p.within for p in parts]).reshape(-1, 2),
-        constraints=_concat(
-            [p.constraints for p in parts], list(range(0, len(local), DETECT_CHUNK))
+        within=within,
+        constraints=Constraints(
+            face=ids[:, 0].copy(),
+            kind=kind,
+            anchor=ids[:, 1] - n_lip * kind,
+            partner=ids[:, 2].copy(),
+            partner_bary=np.stack([1.0 - u - v, u, v], axis=1),
+            depth=values[:, 2] + margin,
+            within=ids[:, 3].astype(bool),
         ),
     )
 
 
-def _subset(hits: LineHits, ids: np.ndarray) -> LineHits:
-    """Hits of a subset query renumbered to the full query list (``ids``: subset → full)."""
-    return LineHits(ids[hits.point], hits.triangle, hits.t, hits.facing, hits.bary)
-
-
-def detect_chunk(local: np.ndarray, layout: CollisionLayout, *, margin: float = 0.0) -> Detection:
-    """Detect collisions (paper: *within*) and build the intersection pairs (δb) of a batch.
-
-    An anchor is *within* the lower lip (:func:`_within`) when the lower lip's surface above it
-    is seen from inside, and along y or z both sides are, or every ray that meets the lower lip
-    meets it from inside — deeper than ``CONTACT_TOLERANCE``. In a face with a collision, every
-    within anchor, and every anchor that *passed through* the lower lip (along its negative ray:
-    one surface entered, then one left), pairs with the first lower-lip surface left along its
-    negative ray; δb is the distance to it (+ ``margin``).
-
-    Cheap first: anchors outside the lower lip's bounding box (open on the negative ray's side)
-    are skipped; the vertical rays come first, and only the anchors that see the lower lip
-    above them from inside — few or none in a face without collision — are cast outward too (plus,
-    in a face with a collision, the teeth anchors, for their pairs).
-    """
-    b_n = len(local)
-    lv = local[:, layout.lower_vertices]
-    lo, hi = lv.min(1), lv.max(1)
-    tris = local[:, layout.lower]
-    q_pts, q_face, q_kind, q_anchor = [], [], [], []
-    for kind in (LIP, TEETH):
-        pts = anchor_points(local, layout, kind)
-        ge, le = pts >= lo[:, None], pts <= hi[:, None]
-        # open on the negative ray's side: an anchor may have passed through the lower lip
-        (ge if NEGATIVE[kind] > 0 else le)[..., AXIS[kind]] = True
-        face, anchor = np.nonzero(np.all(ge & le, axis=2))
-        q_pts.append(pts[face, anchor])
-        q_face.append(face)
-        q_kind.append(np.full(len(face), kind))
-        q_anchor.append(anchor)
-    pts_q = np.concatenate(q_pts)
-    face_q = np.concatenate(q_face)
-    kind_q = np.concatenate(q_kind)
-    anchor_q = np.concatenate(q_anchor)
-    n = len(pts_q)
-    within = np.zeros((b_n, 2), dtype=np.int64)
-    # A point inside the lower lip has the lip's top above it, seen from inside.
-    hy = line_hits(pts_q, face_q, tris, Y, layout.cell, 1)
-    _, up = _nearest(hy, n, +1.0)
-    candidate = up > 0
-    if not candidate.any():
-        return Detection(within=within, constraints=_empty_constraints())
-    busy = np.zeros(b_n, dtype=bool)
-    busy[face_q[candidate]] = True
-    cast = np.flatnonzero(candidate | ((kind_q == TEETH) & busy[face_q]))
-    need = np.where(kind_q[cast] == TEETH, -1, 2)
-    hz = _subset(line_hits(pts_q[cast], face_q[cast], tris, Z, layout.cell, need), cast)
-    inside_q = candidate & _within(hy, hz, n)
-    np.add.at(within, (face_q, kind_q), inside_q)
-    colliding = within.sum(1) > 0
-    parts = []
-    for kind in (LIP, TEETH):
-        if not np.any((kind_q == kind) & colliding[face_q]):
-            continue
-        hits = hy if kind == LIP else hz
-        exit_idx, exit_rank = _first_exit(hits, n, NEGATIVE[kind])
-        q = np.flatnonzero(
-            (kind_q == kind) & colliding[face_q] & (exit_idx >= 0) & (inside_q | (exit_rank == 1))
-        )
-        h = exit_idx[q]
-        bary = hits.bary[h]
-        parts.append(
-            Constraints(
-                face=face_q[q],
-                kind=kind_q[q],
-                anchor=anchor_q[q],
-                partner=hits.triangle[h],
-                partner_bary=np.concatenate([1.0 - bary.sum(1, keepdims=True), bary], axis=1),
-                depth=NEGATIVE[kind] * hits.t[h] + margin,
-                within=inside_q[q],
-            )
-        )
-    return Detection(within=within, constraints=_concat(parts, [0] * len(parts)))
+def _anchor_table(layout: CollisionLayout) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Both types' anchors together (lip first): corners (N, 3), barycentric (N, 3), kind (N,)."""
+    corners = np.ascontiguousarray(np.concatenate(layout.anchors), dtype=np.int64)
+    bary = np.ascontiguousarray(np.concatenate(layout.anchor_bary), dtype=np.float64)
+    kind = np.repeat([LIP, TEETH], [len(layout.anchors[LIP]), len(layout.anchors[TEETH])])
+    return corners, bary, kind.astype(np.int64)
 
 
 def offsets_at(deltas_local: np.ndarray, triangles: np.ndarray, bary: np.ndarray) -> np.ndarray:

@@ -1,12 +1,16 @@
-"""Axis-aligned ray casting against triangle sets, batched over faces, with planar binning.
+"""Axis-aligned ray casting against triangle sets, batched over faces, compiled with numba.
 
 The collision rays are axis-aligned (vertical and outward), so the line along axis k through a
-point is a point in the plane of the two other axes. :class:`AxisBins` bins the triangles'
-bounding boxes in that plane on a uniform grid (one grid per face, keys offset by the face
-index, so a whole batch is one sort) and keeps, per cell, the span of the triangles along the
-axis. A query point looks up its cell, is skipped when the span cannot give the hits it needs,
-and is tested exactly (2-D barycentric coordinates, float64) against the few triangles there.
-Every crossing of the whole line through the point is returned, on both sides.
+point is a point in the plane of the two other axes. For each face of a batch,
+:func:`line_hits` bins the triangles' bounding boxes in that plane on a uniform grid (a counting
+sort; each cell also keeps the span of its triangles along the axis), looks up each query
+point's cell, skips the point when that span cannot give the hits it needs, and tests it exactly
+(2-D barycentric coordinates, float64) against the few triangles there. Every crossing of the
+whole line through the point is returned, on both sides.
+
+The per-face, per-ray loops are compiled by numba (``cache=True``: compiled once per machine,
+then loaded from ``__pycache__``); numpy could only run them through large intermediate arrays,
+several times slower (see docs/correctives.md, "Speed").
 """
 
 from __future__ import annotations
@@ -14,6 +18,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
+
+NO_FILTER = 3  # ``need`` code: every hit of the line, whatever the cell's span
+MAX_CELLS = 1 << 20  # per face; a wider grid (a degenerate, huge face) gets coarser cells
 
 
 @dataclass(frozen=True)
@@ -25,6 +33,9 @@ class LineHits:
     facing : (H,) float, the triangle normal's component along the axis (× twice its area);
       its sign says whether a ray going +axis enters (< 0) or leaves (> 0) the surface's inside
     bary : (H, 2) float, barycentric weights of the triangle's 2nd and 3rd corners at the hit
+
+    Hits come grouped by face (in batch order), then by query point (in query order within the
+    face), each point's in increasing triangle order.
     """
 
     point: np.ndarray
@@ -37,205 +48,276 @@ class LineHits:
         return len(self.t)
 
 
-def _ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """Concatenated aranges: [starts[0], …, starts[0]+counts[0]-1, starts[1], …]."""
-    total = int(counts.sum())
-    if total == 0:
-        return np.zeros(0, dtype=np.int64)
-    ends = np.cumsum(counts)
-    offsets = np.repeat(ends - counts, counts)
-    return np.repeat(starts, counts) + (np.arange(total) - offsets)
+@njit(cache=True, nogil=True)
+def grow(arr: np.ndarray, size: int) -> np.ndarray:  # pragma: no cover - compiled
+    """A copy of the rows of ``arr`` (N, C) with room for ``size`` rows."""
+    out = np.empty((size, arr.shape[1]), dtype=arr.dtype)
+    out[: len(arr)] = arr
+    return out
 
 
-def _argsort_keys(keys: np.ndarray, n_keys: int) -> np.ndarray:
-    """Argsort of bin keys: a radix sort (uint16, stable) when they fit, else a quicksort."""
-    if n_keys <= 1 << 16:
-        return np.argsort(keys.astype(np.uint16), kind="stable")
-    return np.argsort(keys)
+@njit(cache=True, nogil=True)
+def hit_buffers(
+    n: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """Scratch for :func:`probe`: triangle, t, facing, u, v of up to ``n`` hits."""
+    return np.empty(n, dtype=np.int64), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
 
 
-_DA = np.array([0, 0, 0, 1, 1, 1, 2, 2, 2])  # cell offsets of a box up to 3 × 3 cells
-_DC = np.array([0, 1, 2, 0, 1, 2, 0, 1, 2])
+@njit(cache=True, nogil=True)
+def gather_triangles(
+    vertices: np.ndarray, corners: np.ndarray, out: np.ndarray
+) -> None:  # pragma: no cover - compiled
+    """out (T, 3, 3) ← the corners (T, 3) of one face's vertices (V, 3)."""
+    for t in range(corners.shape[0]):
+        for k in range(3):
+            for d in range(3):
+                out[t, k, d] = vertices[corners[t, k], d]
 
 
-def _min3(x: np.ndarray) -> np.ndarray:
-    return np.minimum(np.minimum(x[0], x[1]), x[2])
+@njit(cache=True, nogil=True)
+def bin_triangles(
+    tri: np.ndarray, axis: int, cell: float
+) -> tuple[float, float, float, int, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One face's triangles (T, 3, 3) binned for lines along ``axis``; compiled.
 
-
-def _max3(x: np.ndarray) -> np.ndarray:
-    return np.maximum(np.maximum(x[0], x[1]), x[2])
-
-
-class _Frame:
-    """A batch's triangles seen along ``axis``: corners and edges per coordinate (contiguous
-    rows, (3, B·T): numpy is slow on short strided axes), and the 2-D determinant (= the
-    normal's component along the axis, × twice the area)."""
-
-    def __init__(self, triangles: np.ndarray, axis: int) -> None:
-        b_n, t_n = triangles.shape[:2]
-        self.axis, self.t_n = axis, t_n
-        self.a, self.c = a, c = (axis + 1) % 3, (axis + 2) % 3  # (a, c, axis) right-handed
-        self.tri = tri = np.ascontiguousarray(triangles.reshape(b_n * t_n, 9).T).reshape(
-            3, 3, b_n * t_n
-        )
-        self.corner = tri[0]
-        self.ea = tri[1] - tri[0]
-        self.eb = tri[2] - tri[0]
-        self.det = self.ea[a] * self.eb[c] - self.ea[c] * self.eb[a]
-        with np.errstate(divide="ignore"):
-            self.inv_det = 1.0 / self.det
-
-    def exact(self, points: np.ndarray, cp: np.ndarray, ct: np.ndarray) -> LineHits:
-        """Test candidate pairs (point ``cp``, flat triangle ``ct``) exactly; keep the hits."""
-        a, c, axis = self.a, self.c, self.axis
-        corner, ea, eb = self.corner, self.ea, self.eb
-        dpa = points[cp, a] - corner[a, ct]
-        dpc = points[cp, c] - corner[c, ct]
-        with np.errstate(invalid="ignore"):  # degenerate (edge-on) triangles give NaN: no hit
-            u = (dpa * eb[c, ct] - dpc * eb[a, ct]) * self.inv_det[ct]
-            v = (ea[a, ct] * dpc - ea[c, ct] * dpa) * self.inv_det[ct]
-            hit = np.flatnonzero((u >= 0) & (v >= 0) & (u + v <= 1))
-        ct, cp, u, v = ct[hit], cp[hit], u[hit], v[hit]
-        coord = corner[axis, ct] + u * ea[axis, ct] + v * eb[axis, ct]
-        return LineHits(
-            point=cp,
-            triangle=ct % self.t_n,
-            t=coord - points[cp, axis],
-            facing=self.det[ct],
-            bary=np.stack([u, v], axis=1),
-        )
-
-
-def brute_hits(
-    points: np.ndarray, point_face: np.ndarray, triangles: np.ndarray, axis: int
-) -> LineHits:
-    """Like :meth:`AxisBins.hits` (every hit) by testing each point against every triangle of
-    its face: cheaper than binning for a handful of points."""
-    t_n = triangles.shape[1]
-    frame = _Frame(triangles, axis)
-    cp = np.repeat(np.arange(len(points)), t_n)
-    ct = (np.repeat(point_face * t_n, t_n).reshape(-1, t_n) + np.arange(t_n)).reshape(-1)
-    return frame.exact(points, cp, ct)
-
-
-class AxisBins(_Frame):
-    """Triangles of a batch binned for lines parallel to ``axis``.
-
-    triangles : (B, T, 3, 3) float corner coordinates; axis : 0, 1 or 2; cell : bin size in the
-    plane of the two other axes (about the triangles' size).
+    Returns (org_a, org_c, inv, n_a, n_c, start, members, span_lo, span_hi): the grid's origin
+    and inverse cell size in the plane (a, c) = (axis + 1, axis + 2) mod 3; cell k = i·n_c + j
+    lists ``members[start[k]:start[k + 1]]`` (increasing triangle order) spanning
+    [span_lo[k], span_hi[k]] along the axis. A face with non-finite corners gets no cells.
     """
+    a = (axis + 1) % 3
+    c = (axis + 2) % 3
+    n_tris = tri.shape[0]
+    org_a, org_c = np.inf, np.inf
+    top_a, top_c = -np.inf, -np.inf
+    finite = True
+    for t in range(n_tris):
+        for k in range(3):
+            org_a = min(org_a, tri[t, k, a])
+            org_c = min(org_c, tri[t, k, c])
+            top_a = max(top_a, tri[t, k, a])
+            top_c = max(top_c, tri[t, k, c])
+            for d in range(3):
+                finite = finite and np.isfinite(tri[t, k, d])
+    if not (finite and n_tris > 0):
+        empty = np.zeros(1, dtype=np.int64)
+        return 0.0, 0.0, 1.0, 0, 0, empty, empty, np.zeros(0), np.zeros(0)
+    size = cell
+    while ((top_a - org_a) / size + 1.0) * ((top_c - org_c) / size + 1.0) > MAX_CELLS:
+        size *= 2.0
+    inv = 1.0 / size
+    n_a = int((top_a - org_a) * inv) + 1
+    n_c = int((top_c - org_c) * inv) + 1
+    n_cells = n_a * n_c
+    ia0 = np.empty(n_tris, dtype=np.int64)
+    ia1 = np.empty(n_tris, dtype=np.int64)
+    ic0 = np.empty(n_tris, dtype=np.int64)
+    ic1 = np.empty(n_tris, dtype=np.int64)
+    start = np.zeros(n_cells + 1, dtype=np.int64)
+    for t in range(n_tris):
+        ia0[t] = int((min(tri[t, 0, a], tri[t, 1, a], tri[t, 2, a]) - org_a) * inv)
+        ia1[t] = min(int((max(tri[t, 0, a], tri[t, 1, a], tri[t, 2, a]) - org_a) * inv), n_a - 1)
+        ic0[t] = int((min(tri[t, 0, c], tri[t, 1, c], tri[t, 2, c]) - org_c) * inv)
+        ic1[t] = min(int((max(tri[t, 0, c], tri[t, 1, c], tri[t, 2, c]) - org_c) * inv), n_c - 1)
+        for i in range(ia0[t], ia1[t] + 1):
+            for j in range(ic0[t], ic1[t] + 1):
+                start[i * n_c + j + 1] += 1
+    for i in range(n_cells):
+        start[i + 1] += start[i]
+    fill = start[:-1].copy()
+    members = np.empty(start[n_cells], dtype=np.int64)
+    span_lo = np.full(n_cells, np.inf)
+    span_hi = np.full(n_cells, -np.inf)
+    for t in range(n_tris):  # increasing t: each cell lists its triangles in order
+        lo_k = min(tri[t, 0, axis], tri[t, 1, axis], tri[t, 2, axis])
+        hi_k = max(tri[t, 0, axis], tri[t, 1, axis], tri[t, 2, axis])
+        for i in range(ia0[t], ia1[t] + 1):
+            for j in range(ic0[t], ic1[t] + 1):
+                key = i * n_c + j
+                members[fill[key]] = t
+                fill[key] += 1
+                span_lo[key] = min(span_lo[key], lo_k)
+                span_hi[key] = max(span_hi[key], hi_k)
+    return org_a, org_c, inv, n_a, n_c, start, members, span_lo, span_hi
 
-    def __init__(self, triangles: np.ndarray, axis: int, cell: float) -> None:
-        _Frame.__init__(self, triangles, axis)
-        b_n, t_n = triangles.shape[:2]
-        a, c, axis, tri = self.a, self.c, self.axis, self.tri
 
-        lo_a, hi_a = _min3(tri[:, a]), _max3(tri[:, a])
-        lo_c, hi_c = _min3(tri[:, c]), _max3(tri[:, c])
-        self.org_a = lo_a.reshape(b_n, t_n).min(1)
-        self.org_c = lo_c.reshape(b_n, t_n).min(1)
-        tri_face = np.repeat(np.arange(b_n), t_n)
-        self.inv = inv = 1.0 / cell
-        ia0 = ((lo_a - self.org_a[tri_face]) * inv).astype(np.int64)
-        ia1 = ((hi_a - self.org_a[tri_face]) * inv).astype(np.int64)
-        ic0 = ((lo_c - self.org_c[tri_face]) * inv).astype(np.int64)
-        ic1 = ((hi_c - self.org_c[tri_face]) * inv).astype(np.int64)
-        self.n_a = int(ia1.max()) + 1 if ia1.size else 1
-        self.n_c = int(ic1.max()) + 1 if ic1.size else 1
-        self.n_cells = self.n_a * self.n_c
-        keys, owner = self._cell_copies(tri_face, ia0, ia1, ic0, ic1)
-        order = _argsort_keys(keys, b_n * self.n_cells)
-        keys, self.tri_flat = keys[order], owner[order]
-        new = np.empty(len(keys), dtype=bool)
-        if len(keys):
-            new[0] = True
-            np.not_equal(keys[1:], keys[:-1], out=new[1:])
-        first = np.flatnonzero(new)
-        self.cell_keys = keys[first]
-        self.bounds = np.append(first, len(keys))
-        if len(keys):
-            self.cell_lo = np.minimum.reduceat(_min3(tri[:, axis])[self.tri_flat], first)
-            self.cell_hi = np.maximum.reduceat(_max3(tri[:, axis])[self.tri_flat], first)
+@njit(cache=True, nogil=True)
+def probe(
+    tri: np.ndarray,
+    axis: int,
+    grid: tuple[float, float, float, int, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    point: np.ndarray,
+    need: int,
+    hit_tri: np.ndarray,
+    hit_t: np.ndarray,
+    hit_facing: np.ndarray,
+    hit_u: np.ndarray,
+    hit_v: np.ndarray,
+) -> int:  # pragma: no cover - compiled
+    """The crossings of the line along ``axis`` through ``point`` (3,) with one face's binned
+    triangles, written to the ``hit_*`` buffers (at least the largest cell's size); returns
+    their number (0 when the point's cell is empty, outside the grid, or its span cannot give
+    what ``need`` asks for — see :func:`line_hits`)."""
+    a = (axis + 1) % 3
+    c = (axis + 2) % 3
+    org_a, org_c, inv, n_a, n_c, start, members, span_lo, span_hi = grid
+    pa, pc, pk = point[a], point[c], point[axis]
+    fa = np.floor((pa - org_a) * inv)
+    fc = np.floor((pc - org_c) * inv)
+    if not (fa >= 0 and fa < n_a and fc >= 0 and fc < n_c):
+        return 0
+    key = int(fa) * n_c + int(fc)
+    if start[key] == start[key + 1]:
+        return 0
+    if need != NO_FILTER:
+        above = pk < span_hi[key]
+        below = pk > span_lo[key]
+        if need == 1:
+            ok = above
+        elif need == -1:
+            ok = below
+        elif need == 0:
+            ok = above and below
         else:
-            self.cell_lo = self.cell_hi = np.zeros(0)
-
-    def _cell_copies(
-        self,
-        tri_face: np.ndarray,
-        ia0: np.ndarray,
-        ia1: np.ndarray,
-        ic0: np.ndarray,
-        ic1: np.ndarray,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """(key, triangle) for every cell each triangle's box covers.
-
-        Boxes up to 3 × 3 cells (nearly all) go through a fixed 9-slot mask; bigger ones
-        through a general expansion.
-        """
-        wa, wc = ia1 - ia0, ic1 - ic0
-        base = tri_face * self.n_cells + ia0 * self.n_c + ic0
-        is_small = (wa < 3) & (wc < 3)
-        mask = (wa[:, None] >= _DA) & (wc[:, None] >= _DC) & is_small[:, None]
-        rows, slot = np.nonzero(mask)
-        keys = base[rows] + (_DA * self.n_c + _DC)[slot]
-        owner = rows
-        big = np.flatnonzero(~is_small)
-        if len(big):
-            wa_b, wc_b = wa[big] + 1, wc[big] + 1
-            counts = wa_b * wc_b
-            o = np.repeat(np.arange(len(big)), counts)
-            k = _ranges(np.zeros(len(big), dtype=np.int64), counts)
-            keys = np.concatenate([keys, base[big][o] + (k // wc_b[o]) * self.n_c + k % wc_b[o]])
-            owner = np.concatenate([owner, big[o]])
-        return keys, owner
-
-    def hits(
-        self, points: np.ndarray, point_face: np.ndarray, need: np.ndarray | int | None = None
-    ) -> LineHits:
-        """Crossings of the lines through ``points`` (Q, 3) of batch rows ``point_face`` (Q,).
-
-        need : None (every hit), or (Q,) / scalar int — which hits the caller needs: 0, surfaces
-        on both sides of the point; +1, some on its + side; −1, some on its − side; 2, some on
-        either side. A point whose cell's span along the axis cannot give that is skipped (no
-        hits returned for it).
-        """
-        a, c, axis = self.a, self.c, self.axis
-        ja = np.floor((points[:, a] - self.org_a[point_face]) * self.inv).astype(np.int64)
-        jc = np.floor((points[:, c] - self.org_c[point_face]) * self.inv).astype(np.int64)
-        ok = np.flatnonzero((ja >= 0) & (ja < self.n_a) & (jc >= 0) & (jc < self.n_c))
-        if len(self.cell_keys) == 0:
-            ok = ok[:0]
-        key = point_face[ok] * self.n_cells + ja[ok] * self.n_c + jc[ok]
-        slot = np.minimum(np.searchsorted(self.cell_keys, key), max(len(self.cell_keys) - 1, 0))
-        keep = self.cell_keys[slot] == key
-        if need is not None:
-            pk = points[ok, axis]
-            above = pk < self.cell_hi[slot]
-            below = pk > self.cell_lo[slot]
-            nd = np.broadcast_to(np.asarray(need), points.shape[:1])[ok]
-            keep &= np.select(
-                [nd == 1, nd == -1, nd == 0], [above, below, above & below], above | below
-            )
-        ok, slot = ok[keep], slot[keep]
-        start = self.bounds[slot]
-        n = self.bounds[slot + 1] - start
-        return self.exact(points, np.repeat(ok, n), self.tri_flat[_ranges(start, n)])
+            ok = above or below
+        if not ok:
+            return 0
+    n = 0
+    for m in range(start[key], start[key + 1]):
+        t = members[m]
+        x0a, x0c, x0k = tri[t, 0, a], tri[t, 0, c], tri[t, 0, axis]
+        ea_a = tri[t, 1, a] - x0a
+        ea_c = tri[t, 1, c] - x0c
+        eb_a = tri[t, 2, a] - x0a
+        eb_c = tri[t, 2, c] - x0c
+        det = ea_a * eb_c - ea_c * eb_a
+        if det == 0.0:
+            continue  # edge-on: no crossing
+        inv_det = 1.0 / det
+        dpa = pa - x0a
+        dpc = pc - x0c
+        u = (dpa * eb_c - dpc * eb_a) * inv_det
+        v = (ea_a * dpc - ea_c * dpa) * inv_det
+        if not (u >= 0.0 and v >= 0.0 and u + v <= 1.0):
+            continue
+        coord = x0k + u * (tri[t, 1, axis] - x0k) + v * (tri[t, 2, axis] - x0k)
+        hit_tri[n] = t
+        hit_t[n] = coord - pk
+        hit_facing[n] = det
+        hit_u[n] = u
+        hit_v[n] = v
+        n += 1
+    return n
 
 
-BRUTE_PAIRS = 40_000  # below this many point–triangle pairs, testing all beats binning
+@njit(cache=True, nogil=True)
+def _cast(
+    points: np.ndarray,
+    order: np.ndarray,
+    face_bounds: np.ndarray,
+    vertices: np.ndarray,
+    corners: np.ndarray,
+    axis: int,
+    cell: float,
+    need: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The hits of every query point (see :func:`line_hits`); compiled.
+
+    order : the query indices grouped by face; face_bounds (B + 1,): face b's queries are
+    ``order[face_bounds[b]:face_bounds[b + 1]]``. vertices (B, V, 3), corners (T, 3): the
+    triangles of face b are ``vertices[b, corners]``. need (Q,) int8: 0, 1, −1, 2 or
+    NO_FILTER. Returns the hits' (point, triangle) (H, 2) and (t, facing, u, v) (H, 4).
+    """
+    n_faces, n_tris = vertices.shape[0], corners.shape[0]
+    tri = np.empty((n_tris, 3, 3))
+    cap = max(64, 8 * len(points))
+    ids = np.empty((cap, 2), dtype=np.int64)  # point, triangle
+    values = np.empty((cap, 4))  # t, facing, u, v
+    b_tri, b_t, b_facing, b_u, b_v = hit_buffers(n_tris)
+    n_out = 0
+    for b in range(n_faces):
+        q0, q1 = face_bounds[b], face_bounds[b + 1]
+        if q0 == q1 or n_tris == 0:
+            continue
+        gather_triangles(vertices[b], corners, tri)
+        grid = bin_triangles(tri, axis, cell)
+        for k in range(q0, q1):
+            q = order[k]
+            n = probe(tri, axis, grid, points[q], need[q], b_tri, b_t, b_facing, b_u, b_v)
+            if n_out + n > len(ids):
+                ids = grow(ids, 2 * (n_out + n))
+                values = grow(values, 2 * (n_out + n))
+            for h in range(n):
+                ids[n_out, 0], ids[n_out, 1] = q, b_tri[h]
+                values[n_out, 0], values[n_out, 1] = b_t[h], b_facing[h]
+                values[n_out, 2], values[n_out, 3] = b_u[h], b_v[h]
+                n_out += 1
+    return ids[:n_out], values[:n_out]
 
 
 def line_hits(
     points: np.ndarray,
     point_face: np.ndarray,
-    triangles: np.ndarray,
+    vertices: np.ndarray,
+    corners: np.ndarray,
     axis: int,
     cell: float,
     need: np.ndarray | int | None = None,
 ) -> LineHits:
-    """Every hit of ``points`` against ``triangles`` (B, T, 3, 3) along ``axis``: by brute force
-    for a few points (``need`` then only saves work, it is not applied), else binned
-    (:class:`AxisBins`)."""
-    if len(points) * triangles.shape[1] <= BRUTE_PAIRS:
-        return brute_hits(points, point_face, triangles, axis)
-    return AxisBins(triangles, axis, cell).hits(points, point_face, need)
+    """Crossings of the lines along ``axis`` through ``points`` (Q, 3) of batch rows
+    ``point_face`` (Q,) with the triangles ``corners`` (T, 3) of ``vertices`` (B, V, 3).
+
+    cell : the bin size in the plane of the two other axes (about the triangles' size; only
+    speed depends on it). need : None (every hit), or (Q,) / scalar int — which hits the caller
+    needs: 0, surfaces on both sides of the point; +1, some on its + side; −1, some on its −
+    side; 2, some on either side. A point whose cell's span along the axis cannot give that is
+    skipped (no hits returned for it); a point that is kept gets every hit of its line.
+    """
+    if axis not in (0, 1, 2):
+        raise ValueError(f"axis must be 0, 1 or 2; got {axis!r}")
+    if not cell > 0:
+        raise ValueError(f"cell must be positive; got {cell!r}")
+    pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    verts = np.ascontiguousarray(vertices, dtype=np.float64)
+    tri_idx = np.ascontiguousarray(corners, dtype=np.int64).reshape(-1, 3)
+    if verts.ndim != 3 or verts.shape[2] != 3:
+        raise ValueError(f"vertices must be (B, V, 3); got shape {verts.shape}")
+    if len(tri_idx) and (tri_idx.min() < 0 or tri_idx.max() >= verts.shape[1]):
+        raise ValueError(f"triangle corners must lie in [0, {verts.shape[1]})")
+    face = np.asarray(point_face, dtype=np.int64).reshape(-1)
+    if len(face) != len(pts):
+        raise ValueError(f"{len(pts)} points but {len(face)} point faces")
+    if len(face) and (face.min() < 0 or face.max() >= len(verts)):
+        raise ValueError(
+            f"point faces must lie in [0, {len(verts)}); got {face.min()}…{face.max()}"
+        )
+    code = np.full(len(pts), NO_FILTER, dtype=np.int8)
+    if need is not None:
+        code[:] = np.broadcast_to(np.asarray(need, dtype=np.int8), code.shape)
+    order = np.argsort(face, kind="stable")
+    bounds = np.searchsorted(face[order], np.arange(len(verts) + 1)).astype(np.int64)
+    ids, values = _cast(pts, order, bounds, verts, tri_idx, int(axis), float(cell), code)
+    return LineHits(
+        point=ids[:, 0], triangle=ids[:, 1], t=values[:, 0], facing=values[:, 1], bary=values[:, 2:]
+    )
+
+
+@njit(cache=True, nogil=True)
+def _nearest(
+    point: np.ndarray, t: np.ndarray, facing: np.ndarray, n: int, sign: float
+) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    best = np.full(n, np.inf)
+    face = np.zeros(n)
+    for h in range(len(t)):
+        d = sign * t[h]
+        if d > 0.0 and d <= best[point[h]]:  # ties: the last such hit
+            best[point[h]] = d
+            face[point[h]] = facing[h]
+    return best, face
+
+
+def nearest(hits: LineHits, n: int, sign: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per query point (``n`` of them): the distance to the nearest hit on the ``sign`` side of
+    the point (inf when none) and that hit's facing (0 when none); (n,) float each."""
+    return _nearest(hits.point, hits.t, hits.facing, int(n), float(sign))

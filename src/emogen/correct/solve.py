@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import lsq_linear
 
+from emogen.correct.blend import blend
 from emogen.correct.collision import (
     LIP,
     TEETH,
@@ -135,7 +136,9 @@ def solve_collisions(
             break
         current = base_local[active]
         if it:
-            current = current + (weights[active] @ flat_deltas).reshape(current.shape)
+            current = blend(
+                current.reshape(len(current), -1), weights[active], flat_deltas
+            ).reshape(current.shape)
         det = detect(current, layout, margin=margin)
         if it == 0:
             within_before[active] = det.within

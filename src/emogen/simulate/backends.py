@@ -39,6 +39,18 @@ def _run_task(problem: Problem, runs: np.ndarray, seeds: np.ndarray) -> RunArray
     return simulate_runs(problem, runs, seeds)
 
 
+_LIMITS: list[Any] = []
+
+
+def _one_blas_thread() -> None:
+    """Pool worker initialiser: BLAS on one thread in this worker process (the parallelism is
+    the workers'; BLAS threads of their own would only compete for the same cores). Dask's
+    nanny does the same for its worker processes (OMP/MKL/OPENBLAS_NUM_THREADS=1)."""
+    from threadpoolctl import threadpool_limits
+
+    _LIMITS.append(threadpool_limits(limits=1))
+
+
 class LocalBackend:
     """In this process (``workers=1``), or a pool of ``workers`` local processes."""
 
@@ -67,7 +79,9 @@ class LocalBackend:
         import multiprocessing
 
         ctx = multiprocessing.get_context("forkserver")
-        with ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx) as pool:
+        with ProcessPoolExecutor(
+            max_workers=self.workers, mp_context=ctx, initializer=_one_blas_thread
+        ) as pool:
             futures = {
                 pool.submit(_run_task, t.problem, t.runs, t.seeds): i for i, t in enumerate(tasks)
             }

@@ -10,12 +10,10 @@ of :func:`engine_run`, which drives the :class:`~emogen.ga.engine.Engine` one ru
 through ``ask()``/``tell()`` like a participant. Results depend on each run's seed only, never
 on how runs are grouped into chunks or spread over workers.
 
-One exception to bit-for-bit equality with the engine: with corrections on, the correctives'
-least-squares solves give the same weights for a face only to rounding (~1e-16) when it is
-corrected in a batch of another size (the engine corrects 10 faces at a time, the runner a
-block of :data:`CORRECTION_BLOCK` runs at once, which is 3× faster per face). Selections agree
-unless two faces tie to 1e-16. Across backends the numbers stay identical: blocks are fixed by
-run number and tasks hold whole blocks.
+That holds with corrections on too: a face's correction depends on that face alone (the
+collision detector and the blending it reads work face by face in a fixed order,
+:mod:`emogen.correct.blend`), so correcting a run's faces with the runner's whole batch or the
+engine's 10 at a time gives the same weights, bit for bit.
 """
 
 from __future__ import annotations
@@ -180,23 +178,6 @@ def _measure(problem: Problem, shown: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return distance.reshape(shown.shape[:-1]), error.reshape(shown.shape[:-1])
 
 
-#: With corrections, runs are corrected in blocks of this many (by run number, 0–49, 50–99, …):
-#: the correction's least-squares solves agree across batch sizes only to rounding (~1e-16), so
-#: a fixed grouping keeps the numbers identical however runs are chunked over workers.
-CORRECTION_BLOCK = 50
-
-
-def _corrected(correction: Correction, shown: np.ndarray, runs: np.ndarray) -> np.ndarray:
-    """Corrected faces (R, N, S + C) of shown faces (R, N, S), block by block of runs."""
-    r_count, n, s = shown.shape
-    out = np.empty((r_count, n, len(correction.names)))
-    block = runs // CORRECTION_BLOCK
-    for b in np.unique(block).tolist():
-        rows = np.flatnonzero(block == b)
-        out[rows] = correction(shown[rows].reshape(-1, s)).reshape(len(rows), n, -1)
-    return out
-
-
 def simulate_runs(
     problem: Problem,
     runs: np.ndarray,
@@ -231,7 +212,8 @@ def simulate_runs(
     for g in range(n_gen):
         shown = genes @ expansion
         if problem.correction is not None:
-            shown = _corrected(problem.correction, shown, np.asarray(runs))
+            r_count, n, n_shapes = shown.shape
+            shown = problem.correction(shown.reshape(-1, n_shapes)).reshape(r_count, n, -1)
         distance[:, g], error[:, g] = _measure(problem, shown)
         ops[:, g] = operators
         if shown_all is not None:

@@ -34,7 +34,6 @@ from emogen.model.rig import Rig
 from emogen.rng import fresh_seed, spawn_seeds
 from emogen.simulate.backends import Backend, LocalBackend, Task
 from emogen.simulate.batch import (
-    CORRECTION_BLOCK,
     Problem,
     RunArrays,
     engine_run,
@@ -107,8 +106,6 @@ def build_problem(
 def run_tasks(problem: Problem, seeds: list[int], backend: Backend) -> list[Task]:
     """The runs cut into tasks of ``backend.chunk_size`` runs."""
     size = backend.chunk_size(len(seeds))
-    if problem.correction is not None:  # whole correction blocks per task (see batch.py)
-        size = -(-size // CORRECTION_BLOCK) * CORRECTION_BLOCK
     runs = np.arange(len(seeds))
     seed_arr = np.array(seeds, dtype=np.int64)
     return [
