@@ -20,7 +20,7 @@ import numpy as np
 from emogen.config import GAConfig, validate_config
 from emogen.errors import ConfigError, SelectionError
 from emogen.ga.classical import classical_next_generation
-from emogen.ga.init import fixed_init, protocol_init, read_fixed_sets
+from emogen.ga.init import first_generation, read_fixed_sets
 from emogen.ga.operators import select
 from emogen.ga.step import Offspring, next_generation
 from emogen.model.rig import Rig
@@ -242,24 +242,15 @@ class Engine:
 
     # ---- internals -----------------------------------------------------------------------
     def _initialise(self) -> Population:
-        cfg, init = self.config, self.config.init
-        if init.on_reset == "keep" and self._initial is not None:
+        if self.config.init.on_reset == "keep" and self._initial is not None:
             genes, labels = self._initial
         else:
             rng = generation_rng(self.seed, self.trial, 0)
+            genes, labels, option = first_generation(
+                self.config, self.rig, self._fixed_sets, rng=rng
+            )
             if self._fixed_sets is not None:
-                genes, labels, option = fixed_init(self._fixed_sets, init.fixed_option, rng=rng)
                 self.fixed_options.append(option)
-            else:
-                genes, labels = protocol_init(
-                    self.rig,
-                    eye_motion=cfg.eye_motion,
-                    activation_range=init.activation_range,
-                    emotions=init.emotions,
-                    faces_per_emotion=init.faces_per_emotion,
-                    arbitrary=cfg.arbitrary_faces(),
-                    rng=rng,
-                )
             self._initial = (_readonly(genes), _readonly(labels))
         parents = np.full((len(genes), 2), -1, dtype=np.int64)
         return self._make_population(genes, parents, labels)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from emogen.config import format_validation_error
+from emogen.config import GAConfig, format_validation_error
 from emogen.errors import ConfigError, EmoGenError
 from emogen.model.rig import Rig
 
@@ -183,3 +183,24 @@ def fixed_init(
         raise ConfigError(f"init.fixed_option must be in [1, {len(sets)}]; got {option}")
     genes = sets[option - 1].copy()
     return genes, np.full(len(genes), FIXED), option
+
+
+def first_generation(
+    config: GAConfig, rig: Rig, fixed_sets: np.ndarray | None, *, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Generation 0 as ``config.init`` says: one of the ``fixed_sets`` (when given; see
+    :func:`fixed_init`) or protocol initialisation. Returns (genes, labels, fixed option, or −1
+    for a protocol population)."""
+    init = config.init
+    if fixed_sets is not None:
+        return fixed_init(fixed_sets, init.fixed_option, rng=rng)
+    genes, labels = protocol_init(
+        rig,
+        eye_motion=config.eye_motion,
+        activation_range=init.activation_range,
+        emotions=init.emotions,
+        faces_per_emotion=init.faces_per_emotion,
+        arbitrary=config.arbitrary_faces(),
+        rng=rng,
+    )
+    return genes, labels, -1

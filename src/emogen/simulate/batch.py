@@ -28,7 +28,7 @@ from emogen.config import SimulationConfig
 from emogen.errors import ConfigError
 from emogen.ga.batch import classical_next_generation_batch, next_generation_batch
 from emogen.ga.engine import Engine
-from emogen.ga.init import fixed_init, protocol_init
+from emogen.ga.init import first_generation
 from emogen.metrics import cosine_distance
 from emogen.model.rig import Rig
 from emogen.rng import generation_rng, observer_rng
@@ -154,20 +154,9 @@ class RunArrays:
 
 def _initial(problem: Problem, seed: int) -> tuple[np.ndarray, np.ndarray, int]:
     """Generation 0 of one run, as the engine makes it."""
-    cfg, init = problem.config.ga, problem.config.ga.init
-    rng = generation_rng(seed, 0, 0)
-    if problem.fixed_sets is not None:
-        return fixed_init(problem.fixed_sets, init.fixed_option, rng=rng)
-    genes, labels = protocol_init(
-        problem.rig,
-        eye_motion=cfg.eye_motion,
-        activation_range=init.activation_range,
-        emotions=init.emotions,
-        faces_per_emotion=init.faces_per_emotion,
-        arbitrary=cfg.arbitrary_faces(),
-        rng=rng,
+    return first_generation(
+        problem.config.ga, problem.rig, problem.fixed_sets, rng=generation_rng(seed, 0, 0)
     )
-    return genes, labels, -1
 
 
 def _measure(problem: Problem, shown: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
