@@ -59,12 +59,11 @@ def run(model) -> dict[str, object]:  # type: ignore[no-untyped-def]
     print(f"{'vertex_rms':<28} {seconds:8.2f}   (goal < 30 s; Gram matrix, no vertex evaluated)")
     if callable(getattr(model, "correct", None)):
         from emogen.simulate.backends import LocalBackend
+        from emogen.simulate.runner import run_simulation
 
         runs = 50 if quick else RUNS
         cfg = SimulationConfig(target=target, runs=runs, seed=1, correct=True)
         _ = model.correctives  # built (or read from the cache) once, not part of the timing
-        from emogen.simulate.runner import run_simulation
-
         run_simulation(cfg.model_copy(update={"runs": 1}), model)  # compiled kernels loaded
         faces = runs * 11 * 10
         tables = []

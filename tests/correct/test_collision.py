@@ -7,6 +7,7 @@ import pytest
 
 from emogen.correct import collision as col
 from emogen.correct.lips import geodesic
+from tests.correct.reference_detect import anchor_points, reference_detect
 
 
 def local(model, layout, weights):  # type: ignore[no-untyped-def]
@@ -148,7 +149,7 @@ def test_depth_is_the_distance_to_the_partner_along_the_axis(ict_model, ict_corr
     c = det.constraints
     for kind in (col.LIP, col.TEETH):
         rows = np.flatnonzero(c.kind == kind)[:20]
-        anchor = col.anchor_points(pts, lay, kind)[0, c.anchor[rows]]
+        anchor = anchor_points(pts, lay, kind)[0, c.anchor[rows]]
         partner = np.einsum("mkd,mk->md", pts[0][lay.lower[c.partner[rows]]], c.partner_bary[rows])
         ax = col.AXIS[kind]
         np.testing.assert_allclose(
@@ -171,8 +172,6 @@ def test_compiled_detection_equals_the_array_reference_on_ga_faces(
     """Within counts and every pair (partner, barycentric point, depth) agree with the same rules
     written as whole-array numpy over line_hits (tests/correct/reference_detect.py), on ≥ 500
     GA faces of which many collide, and on the faces as corrected part-way."""
-    from tests.correct.reference_detect import reference_detect
-
     lay = ict_correctives.layout
     weights = ga_weights[0]
     pts = local(ict_model, lay, weights)

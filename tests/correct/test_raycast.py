@@ -1,11 +1,12 @@
-"""Axis-aligned ray casting against a plain per-pair reference."""
+"""The compiled ray casting (binning and probes, through the batch caster of the reference
+detector) against a plain per-pair loop."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from emogen.correct.raycast import line_hits
+from tests.correct.reference_detect import line_hits
 
 
 def as_mesh(triangles):

@@ -206,15 +206,6 @@ def collision_layout(
     )
 
 
-def anchor_points(local: np.ndarray, layout: CollisionLayout, kind: int) -> np.ndarray:
-    """(B, Na, 3) anchor positions from local vertices (B, L, 3)."""
-    idx, bary = layout.anchors[kind], layout.anchor_bary[kind]
-    out = np.take(local, idx[:, 0], axis=1) * bary[:, 0, None]
-    for k in (1, 2):
-        out += np.take(local, idx[:, k], axis=1) * bary[:, k, None]
-    return out
-
-
 @dataclass(frozen=True)
 class Constraints:
     """Intersection pairs of a batch (one row per pair; eq. 3–4 inputs).

@@ -1,51 +1,26 @@
-"""Axis-aligned ray casting against triangle sets, batched over faces, compiled with numba.
+"""Axis-aligned ray casting against a face's triangles, compiled with numba.
 
 The collision rays are axis-aligned (vertical and outward), so the line along axis k through a
-point is a point in the plane of the two other axes. For each face of a batch,
-:func:`line_hits` bins the triangles' bounding boxes in that plane on a uniform grid (a counting
-sort; each cell also keeps the span of its triangles along the axis), looks up each query
-point's cell, skips the point when that span cannot give the hits it needs, and tests it exactly
-(2-D barycentric coordinates, float64) against the few triangles there. Every crossing of the
-whole line through the point is returned, on both sides.
+point is a point in the plane of the two other axes. :func:`bin_triangles` bins one face's
+triangles' bounding boxes in that plane on a uniform grid (a counting sort; each cell also keeps
+the span of its triangles along the axis); :func:`probe` looks up a point's cell, skips the
+point when that span cannot give the hits it needs, and tests it exactly (2-D barycentric
+coordinates, float64) against the few triangles there, returning every crossing of the whole
+line through the point, on both sides. The collision detector
+(:func:`emogen.correct.collision.detect`) calls them face by face, anchor by anchor.
 
 The per-face, per-ray loops are compiled by numba (``cache=True``: compiled once per machine,
 then loaded from ``__pycache__``); numpy could only run them through large intermediate arrays,
-several times slower (see docs/correctives.md, "Speed").
+several times slower (see docs/correctives.md).
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
 NO_FILTER = 3  # ``need`` code: every hit of the line, whatever the cell's span
 MAX_CELLS = 1 << 20  # per face; a wider grid (a degenerate, huge face) gets coarser cells
-
-
-@dataclass(frozen=True)
-class LineHits:
-    """Every crossing of the axis-parallel line through a query point with a triangle.
-
-    point, triangle : (H,) int — query point and triangle (index within its face) of each hit
-    t : (H,) float, hit coordinate minus point coordinate along the axis (signed distance)
-    facing : (H,) float, the triangle normal's component along the axis (× twice its area);
-      its sign says whether a ray going +axis enters (< 0) or leaves (> 0) the surface's inside
-    bary : (H, 2) float, barycentric weights of the triangle's 2nd and 3rd corners at the hit
-
-    Hits come grouped by face (in batch order), then by query point (in query order within the
-    face), each point's in increasing triangle order.
-    """
-
-    point: np.ndarray
-    triangle: np.ndarray
-    t: np.ndarray
-    facing: np.ndarray
-    bary: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.t)
 
 
 @njit(cache=True, nogil=True)
@@ -158,7 +133,13 @@ def probe(
     """The crossings of the line along ``axis`` through ``point`` (3,) with one face's binned
     triangles, written to the ``hit_*`` buffers (at least the largest cell's size); returns
     their number (0 when the point's cell is empty, outside the grid, or its span cannot give
-    what ``need`` asks for — see :func:`line_hits`)."""
+    what ``need`` asks for: 0, surfaces on both sides of the point; +1, some on its + side; −1,
+    some on its − side; 2, some on either side; ``NO_FILTER``, every hit).
+
+    Hits are (triangle, t = hit coordinate − point coordinate along the axis, facing = the
+    triangle normal's component along the axis × twice its area — its sign says whether a ray
+    going +axis enters (< 0) or leaves (> 0) the surface's inside — and the barycentric weights
+    u, v of the triangle's 2nd and 3rd corners), in increasing triangle order."""
     a = (axis + 1) % 3
     c = (axis + 2) % 3
     org_a, org_c, inv, n_a, n_c, start, members, span_lo, span_hi = grid
@@ -209,115 +190,3 @@ def probe(
         hit_v[n] = v
         n += 1
     return n
-
-
-@njit(cache=True, nogil=True)
-def _cast(
-    points: np.ndarray,
-    order: np.ndarray,
-    face_bounds: np.ndarray,
-    vertices: np.ndarray,
-    corners: np.ndarray,
-    axis: int,
-    cell: float,
-    need: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """The hits of every query point (see :func:`line_hits`); compiled.
-
-    order : the query indices grouped by face; face_bounds (B + 1,): face b's queries are
-    ``order[face_bounds[b]:face_bounds[b + 1]]``. vertices (B, V, 3), corners (T, 3): the
-    triangles of face b are ``vertices[b, corners]``. need (Q,) int8: 0, 1, −1, 2 or
-    NO_FILTER. Returns the hits' (point, triangle) (H, 2) and (t, facing, u, v) (H, 4).
-    """
-    n_faces, n_tris = vertices.shape[0], corners.shape[0]
-    tri = np.empty((n_tris, 3, 3))
-    cap = max(64, 8 * len(points))
-    ids = np.empty((cap, 2), dtype=np.int64)  # point, triangle
-    values = np.empty((cap, 4))  # t, facing, u, v
-    b_tri, b_t, b_facing, b_u, b_v = hit_buffers(n_tris)
-    n_out = 0
-    for b in range(n_faces):
-        q0, q1 = face_bounds[b], face_bounds[b + 1]
-        if q0 == q1 or n_tris == 0:
-            continue
-        gather_triangles(vertices[b], corners, tri)
-        grid = bin_triangles(tri, axis, cell)
-        for k in range(q0, q1):
-            q = order[k]
-            n = probe(tri, axis, grid, points[q], need[q], b_tri, b_t, b_facing, b_u, b_v)
-            if n_out + n > len(ids):
-                ids = grow(ids, 2 * (n_out + n))
-                values = grow(values, 2 * (n_out + n))
-            for h in range(n):
-                ids[n_out, 0], ids[n_out, 1] = q, b_tri[h]
-                values[n_out, 0], values[n_out, 1] = b_t[h], b_facing[h]
-                values[n_out, 2], values[n_out, 3] = b_u[h], b_v[h]
-                n_out += 1
-    return ids[:n_out], values[:n_out]
-
-
-def line_hits(
-    points: np.ndarray,
-    point_face: np.ndarray,
-    vertices: np.ndarray,
-    corners: np.ndarray,
-    axis: int,
-    cell: float,
-    need: np.ndarray | int | None = None,
-) -> LineHits:
-    """Crossings of the lines along ``axis`` through ``points`` (Q, 3) of batch rows
-    ``point_face`` (Q,) with the triangles ``corners`` (T, 3) of ``vertices`` (B, V, 3).
-
-    cell : the bin size in the plane of the two other axes (about the triangles' size; only
-    speed depends on it). need : None (every hit), or (Q,) / scalar int — which hits the caller
-    needs: 0, surfaces on both sides of the point; +1, some on its + side; −1, some on its −
-    side; 2, some on either side. A point whose cell's span along the axis cannot give that is
-    skipped (no hits returned for it); a point that is kept gets every hit of its line.
-    """
-    if axis not in (0, 1, 2):
-        raise ValueError(f"axis must be 0, 1 or 2; got {axis!r}")
-    if not cell > 0:
-        raise ValueError(f"cell must be positive; got {cell!r}")
-    pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
-    verts = np.ascontiguousarray(vertices, dtype=np.float64)
-    tri_idx = np.ascontiguousarray(corners, dtype=np.int64).reshape(-1, 3)
-    if verts.ndim != 3 or verts.shape[2] != 3:
-        raise ValueError(f"vertices must be (B, V, 3); got shape {verts.shape}")
-    if len(tri_idx) and (tri_idx.min() < 0 or tri_idx.max() >= verts.shape[1]):
-        raise ValueError(f"triangle corners must lie in [0, {verts.shape[1]})")
-    face = np.asarray(point_face, dtype=np.int64).reshape(-1)
-    if len(face) != len(pts):
-        raise ValueError(f"{len(pts)} points but {len(face)} point faces")
-    if len(face) and (face.min() < 0 or face.max() >= len(verts)):
-        raise ValueError(
-            f"point faces must lie in [0, {len(verts)}); got {face.min()}…{face.max()}"
-        )
-    code = np.full(len(pts), NO_FILTER, dtype=np.int8)
-    if need is not None:
-        code[:] = np.broadcast_to(np.asarray(need, dtype=np.int8), code.shape)
-    order = np.argsort(face, kind="stable")
-    bounds = np.searchsorted(face[order], np.arange(len(verts) + 1)).astype(np.int64)
-    ids, values = _cast(pts, order, bounds, verts, tri_idx, int(axis), float(cell), code)
-    return LineHits(
-        point=ids[:, 0], triangle=ids[:, 1], t=values[:, 0], facing=values[:, 1], bary=values[:, 2:]
-    )
-
-
-@njit(cache=True, nogil=True)
-def _nearest(
-    point: np.ndarray, t: np.ndarray, facing: np.ndarray, n: int, sign: float
-) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
-    best = np.full(n, np.inf)
-    face = np.zeros(n)
-    for h in range(len(t)):
-        d = sign * t[h]
-        if d > 0.0 and d <= best[point[h]]:  # ties: the last such hit
-            best[point[h]] = d
-            face[point[h]] = facing[h]
-    return best, face
-
-
-def nearest(hits: LineHits, n: int, sign: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per query point (``n`` of them): the distance to the nearest hit on the ``sign`` side of
-    the point (inf when none) and that hit's facing (0 when none); (n,) float each."""
-    return _nearest(hits.point, hits.t, hits.facing, int(n), float(sign))

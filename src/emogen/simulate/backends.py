@@ -39,16 +39,13 @@ def _run_task(problem: Problem, runs: np.ndarray, seeds: np.ndarray) -> RunArray
     return simulate_runs(problem, runs, seeds)
 
 
-_LIMITS: list[Any] = []
-
-
 def _one_blas_thread() -> None:
-    """Pool worker initialiser: BLAS on one thread in this worker process (the parallelism is
-    the workers'; BLAS threads of their own would only compete for the same cores). Dask's
-    nanny does the same for its worker processes (OMP/MKL/OPENBLAS_NUM_THREADS=1)."""
+    """Pool worker initialiser: BLAS on one thread in this worker process for its lifetime (the
+    parallelism is the workers'; BLAS threads of their own would only compete for the same
+    cores). Dask's nanny does the same for its worker processes (OMP/MKL/OPENBLAS_NUM_THREADS=1)."""
     from threadpoolctl import threadpool_limits
 
-    _LIMITS.append(threadpool_limits(limits=1))
+    threadpool_limits(limits=1)  # not restored: nothing else runs in the worker
 
 
 class LocalBackend:
