@@ -341,9 +341,7 @@ class StudyService:
 
         def step(db: Session, sess: SessionRow) -> None:
             row, pop = self._shown(db, sess, trial, attempt, generation)
-            engine = Engine.from_json(
-                row.engine_state or "", self.ctx.rig, corrector=self.correctors(row.identity)
-            )
+            engine = self._engine(row)
             engine.tell(elite, others)
             now = utcnow()
             db.add(
@@ -390,9 +388,7 @@ class StudyService:
             if not self.ctx.config.allow_restart:
                 raise StepConflict("this study does not allow starting a trial again")
             row, pop = self._shown(db, sess, trial, attempt, generation)
-            engine = Engine.from_json(
-                row.engine_state or "", self.ctx.rig, corrector=self.correctors(row.identity)
-            )
+            engine = self._engine(row)
             now = utcnow()
             db.add(
                 RestartRow(
@@ -523,6 +519,12 @@ class StudyService:
         if row is None:  # pragma: no cover - created with the session
             raise SessionNotFound(f"trial {trial + 1} does not exist")
         return row
+
+    def _engine(self, row: TrialRow) -> Engine:
+        """The trial's engine, restored from its stored state, with its identity's corrector."""
+        return Engine.from_json(
+            row.engine_state or "", self.ctx.rig, corrector=self.correctors(row.identity)
+        )
 
     def _shown(
         self, db: Session, sess: SessionRow, trial: int, attempt: int, generation: int
