@@ -74,6 +74,8 @@ class FaceModel:
     identity: np.ndarray = field(default_factory=lambda: np.zeros(0))
     identity_label: str = "generic"
     source: str = ""
+    #: (68,) int32 landmark vertex ids (ICT's ``vertex_indices.json``), empty when unknown
+    landmarks: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
 
     # ---- sizes --------------------------------------------------------------------------
     @property
@@ -378,6 +380,7 @@ def from_arrays(
         identity_deltas=None if ident is None else _readonly(ident),
         identity=np.zeros(0 if ident is None else len(ident)),
         source=source,
+        landmarks=_readonly(np.asarray(arrays.landmarks, dtype=np.int32)),
     )
 
 

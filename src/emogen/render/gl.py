@@ -24,6 +24,7 @@ in vec3 in_albedo;
 in float in_part;
 in vec4 in_surface;
 in vec4 in_eye;
+in vec2 in_uv;
 uniform mat4 u_view_proj;
 out vec3 v_world;
 out vec3 v_normal;
@@ -31,7 +32,9 @@ out vec3 v_albedo;
 out float v_part;
 out vec4 v_surface;
 out vec4 v_eye;
+out vec2 v_uv;
 void main() {
+    v_uv = in_uv;
     v_world = in_position;
     v_normal = in_normal;
     v_albedo = in_albedo;
@@ -50,6 +53,7 @@ in vec3 v_albedo;
 in float v_part;
 in vec4 v_surface;
 in vec4 v_eye;
+in vec2 v_uv;
 out vec4 f_colour;
 void main() {
 #ifdef EMOGEN_DISCARD
@@ -57,7 +61,7 @@ void main() {
 #endif
     vec3 n = normalize(v_normal);
     vec3 v = normalize(u_camera - v_world);
-    vec3 c = emogenShade(v_part, v_albedo, v_surface.xyz, v_world, n, v, v_eye, gl_FrontFacing);
+    vec3 c = emogenShade(v_part, v_albedo, v_surface.xyz, v_world, n, v, v_eye, gl_FrontFacing, v_uv);
     f_colour = vec4(c, v_surface.w);
 }
 """
@@ -116,25 +120,36 @@ class GLRenderer:
             }
         except Exception as exc:
             raise RenderError(f"shader failed to compile: {exc}") from None
-        n_v = mesh.n_vertices
+        n_v = len(mesh.source)
+        src = mesh.source
         self.vbo_geometry = ctx.buffer(reserve=n_v * 24, dynamic=True)
-        self.vbo_albedo = ctx.buffer(mesh.albedo.tobytes(), dynamic=True)
-        static = np.concatenate([mesh.part[:, None], mesh.surface, mesh.eye], axis=1)
+        self.vbo_albedo = ctx.buffer(mesh.albedo[src].tobytes(), dynamic=True)
+        static = np.concatenate(
+            [mesh.part[src, None], mesh.surface[src], mesh.eye[src], mesh.uv], axis=1
+        )
         self.vbo_static = ctx.buffer(np.ascontiguousarray(static, dtype="f4").tobytes())
-        self.ibo = ctx.buffer(mesh.triangles.astype("i4").tobytes())
+        self.ibo = ctx.buffer(mesh.drawn_triangles.astype("i4").tobytes())
         self.vaos = {
             cutout: ctx.vertex_array(
                 program,
                 [
                     (self.vbo_geometry, "3f 3f", "in_position", "in_normal"),
                     (self.vbo_albedo, "3f", "in_albedo"),
-                    (self.vbo_static, "1f 4f 4f", "in_part", "in_surface", "in_eye"),
+                    (
+                        self.vbo_static,
+                        "1f 4f 4f 2f",
+                        "in_part",
+                        "in_surface",
+                        "in_eye",
+                        "in_uv",
+                    ),
                 ],
                 index_buffer=self.ibo,
                 index_element_size=4,
             )
             for cutout, program in self.programs.items()
         }
+        self.textures: list[Any] = []
         side = size * supersample
         self.fbo = ctx.framebuffer(
             color_attachments=[ctx.renderbuffer((side, side))],
@@ -146,23 +161,53 @@ class GLRenderer:
             program["u_view_proj"].write(view_proj.T.astype("f4").tobytes())
             program["u_camera"].value = tuple(cam.position)
         self._albedo_is_default = True
+        self.set_textures(None)
+
+    def set_textures(self, skin: np.ndarray | None, detail: np.ndarray | None = None) -> None:
+        """The skin atlas (H, W, 3) and detail tile (D, D, 3) uint8, row 0 at glTF v = 0
+        (mipmapped, trilinear, as three.js); None draws every part in its flat colour."""
+        with self.ctx:
+            for t in self.textures:
+                t.release()
+            blank = np.full((1, 1, 3), 128, dtype=np.uint8)
+            images = [blank, blank] if skin is None else [skin, blank if detail is None else detail]
+            self.textures = []
+            for unit, (image, repeat) in enumerate(zip(images, (False, True), strict=True)):
+                img = np.ascontiguousarray(image, dtype=np.uint8)
+                tex = self.ctx.texture((img.shape[1], img.shape[0]), 3, img.tobytes(), alignment=1)
+                tex.repeat_x = tex.repeat_y = repeat
+                tex.build_mipmaps()
+                tex.filter = (self.ctx.LINEAR_MIPMAP_LINEAR, self.ctx.LINEAR)
+                tex.use(location=unit)
+                self.textures.append(tex)
+            for program in self.programs.values():
+                program["emogenSkin"].value = 0
+                program["emogenDetail"].value = 1
+                program["emogenTextured"].value = 0.0 if skin is None else 1.0
+            self._textured = skin is not None
 
     def set_albedo(self, albedo: np.ndarray | None) -> None:
-        """Per-vertex linear RGB base colours (V, 3); None restores the look's."""
+        """Per-vertex linear RGB base colours (V, 3) in place of the look's colours and the skin
+        texture (heatmaps); None restores both."""
         with self.ctx:
+            on = 1.0 if albedo is None and self._textured else 0.0
+            for program in self.programs.values():
+                program["emogenTextured"].value = on
             if albedo is None:
                 if not self._albedo_is_default:
-                    self.vbo_albedo.write(self.mesh.albedo.tobytes())
+                    self.vbo_albedo.write(self.mesh.albedo[self.mesh.source].tobytes())
                     self._albedo_is_default = True
                 return
-            self.vbo_albedo.write(np.ascontiguousarray(albedo, dtype="f4").tobytes())
+            drawn = np.asarray(albedo, dtype="f4")[self.mesh.source]
+            self.vbo_albedo.write(np.ascontiguousarray(drawn).tobytes())
             self._albedo_is_default = False
 
     def draw(self, vertices: np.ndarray, normals: np.ndarray) -> np.ndarray:
         """One face: vertices and normals (V, 3) → (size, size, 3) uint8 sRGB, top row first."""
-        geometry = np.empty((self.mesh.n_vertices, 6), dtype="f4")
-        geometry[:, :3] = vertices
-        geometry[:, 3:] = normals
+        src = self.mesh.source
+        geometry = np.empty((len(src), 6), dtype="f4")
+        geometry[:, :3] = vertices[src]
+        geometry[:, 3:] = normals[src]
         with self.ctx:  # several renderers (contexts) may live in one thread
             data = self._draw(geometry)
         side = self.size * self.supersample
@@ -176,6 +221,8 @@ class GLRenderer:
         ctx.enable(ctx.DEPTH_TEST)
         ctx.depth_func = "<="  # as three.js
         ctx.clear(*self.look.background_srgb, 1.0, depth=1.0)
+        for unit, tex in enumerate(self.textures):
+            tex.use(location=unit)
         for g in self.mesh.groups:
             if g.double_sided:
                 ctx.disable(ctx.CULL_FACE)

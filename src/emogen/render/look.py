@@ -14,7 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from emogen.appearance.params import Appearance
 from emogen.errors import ConfigError
+from emogen.model.face import FaceModel
 
 
 @dataclass(frozen=True)
@@ -52,6 +54,23 @@ class Camera:
         m[2, 2], m[2, 3] = -(f + n) / (f - n), -2 * f * n / (f - n)
         m[3, 2] = -1.0
         return m
+
+    def fitted(
+        self, top_y: float, bottom_y: float, depth_z: float, fill: float, top: float
+    ) -> Camera:
+        """This camera moved vertically and zoomed so that the span from ``bottom_y`` to
+        ``top_y`` (cm, at depth ``depth_z``) fills ``fill`` of the image height, its top edge
+        ``top`` of the height below the image's top (looking along −z, as the look's cameras)."""
+        distance = self.position[2] - depth_z
+        height = (top_y - bottom_y) / fill
+        centre = top_y + top * height - height / 2
+        fov = float(np.degrees(2 * np.arctan(height / 2 / distance)))
+        return replace(
+            self,
+            position=(self.position[0], centre, self.position[2]),
+            target=(self.target[0], centre, self.target[2]),
+            fov_y_deg=fov,
+        )
 
     def project(self, points: np.ndarray, size: int) -> np.ndarray:
         """Pixel coordinates (n, 2) — x right, y down, top-left pixel's centre at (0.5, 0.5) —
@@ -101,6 +120,9 @@ class Look:
     eye_axis_vertices: int
     fringe_root: str  # region whose nearest vertex measures a fringe vertex's distance
     shader: dict[str, Any]
+    framings: dict[str, Camera]
+    framing: str  # the framing of ``camera``
+    fits: dict[str, tuple[float, float]]  # framing → (fill, top) for cameras fitted to a face
 
     def with_options(
         self,
@@ -108,9 +130,13 @@ class Look:
         background: tuple[float, float, float] | None = None,
         fov_y_deg: float | None = None,
         camera: Camera | None = None,
+        framing: str | None = None,
     ) -> Look:
-        """A copy with another background, field of view or camera."""
-        cam = camera or self.camera
+        """A copy with another background, framing (``face``, ``head``), field of view or camera."""
+        if framing is not None and framing not in self.framings:
+            raise ConfigError(f"framing must be one of {sorted(self.framings)}; got {framing!r}")
+        cam = camera or (self.framings[framing] if framing else self.camera)
+        framing = framing or self.framing
         if fov_y_deg is not None:
             if not 1.0 <= fov_y_deg <= 120.0:
                 raise ConfigError(f"field of view must be in [1, 120] degrees; got {fov_y_deg}")
@@ -118,8 +144,22 @@ class Look:
         return replace(
             self,
             camera=cam,
+            framing=framing,
             background_srgb=self.background_srgb if background is None else background,
         )
+
+    def front_irradiance(self) -> float:
+        """Linear light reaching a surface that faces the camera (n = +z), green channel, as
+        ``emogenLight`` computes it: what the skin generator divides a target colour by."""
+        sh = self.shader
+        n = np.array([0.0, 0.0, 1.0])
+        wrap = float(sh["WRAP"])
+        total = 0.5 * (np.asarray(sh["GROUND_RGB"]) + np.asarray(sh["SKY_RGB"]))
+        for d, rgb in (("KEY_DIR", "KEY_RGB"), ("FILL_DIR", "FILL_RGB")):
+            direction = np.asarray(sh[d], dtype=np.float64)
+            cos = float(n @ direction / np.linalg.norm(direction))
+            total = total + np.asarray(sh[rgb]) * max((cos + wrap) / (1 + wrap), 0.0)
+        return float(total[1])
 
     def part_code(self, name: str) -> int:
         return [p.name for p in self.parts].index(name)
@@ -145,18 +185,40 @@ def _triple(v: Any, what: str) -> tuple[float, float, float]:
     return (float(v[0]), float(v[1]), float(v[2]))
 
 
+def fitted_look(look: Look, model: FaceModel, appearance: Appearance | None) -> Look:
+    """``look`` with its camera fitted to ``model``'s face when its framing fits faces (``face``)
+    and the model has landmarks; otherwise ``look`` unchanged."""
+    if look.framing not in look.fits or len(model.landmarks) != 68:
+        return look
+    from emogen.appearance.framing import face_span
+
+    fill, top = look.fits[look.framing]
+    hair, chin, depth = face_span(model, appearance or Appearance())
+    return replace(look, camera=look.framings[look.framing].fitted(hair, chin, depth, fill, top))
+
+
 def look_from_dict(d: dict[str, Any]) -> Look:
     """Build a :class:`Look` from parsed ``look.json``, checking the shader's part codes."""
     try:
-        cam = d["camera"]
-        camera = Camera(
-            position=_triple(cam["position_cm"], "camera.position_cm"),
-            target=_triple(cam["target_cm"], "camera.target_cm"),
-            up=_triple(cam["up"], "camera.up"),
-            fov_y_deg=float(cam["fov_y_deg"]),
-            near=float(cam["near_cm"]),
-            far=float(cam["far_cm"]),
-        )
+        framings = {
+            name: Camera(
+                position=_triple(cam["position_cm"], f"framings.{name}.position_cm"),
+                target=_triple(cam["target_cm"], f"framings.{name}.target_cm"),
+                up=_triple(cam["up"], f"framings.{name}.up"),
+                fov_y_deg=float(cam["fov_y_deg"]),
+                near=float(cam["near_cm"]),
+                far=float(cam["far_cm"]),
+            )
+            for name, cam in d["framings"].items()
+        }
+        if d["framing"] not in framings:
+            raise ConfigError(f"look.json: framing {d['framing']!r} is not among the framings")
+        camera = framings[d["framing"]]
+        fits = {
+            name: (float(cam["fill"]), float(cam["top"]))
+            for name, cam in d["framings"].items()
+            if "fill" in cam
+        }
         parts = tuple(
             Part(
                 name=p["name"],
@@ -184,11 +246,14 @@ def look_from_dict(d: dict[str, Any]) -> Look:
             eye_axis_vertices=int(d["eye_axis_vertices"]),
             fringe_root=str(d["fringe_root"]),
             shader=dict(d["shader"]),
+            framings=framings,
+            framing=str(d["framing"]),
+            fits=fits,
         )
     except KeyError as exc:
         raise ConfigError(f"look.json lacks {exc}") from None
     names = [p.name for p in parts]
-    for key, part in (("PART_SCLERA", "sclera"), ("PART_IRIS", "iris")):
+    for key, part in (("PART_SKIN", "skin"), ("PART_SCLERA", "sclera"), ("PART_IRIS", "iris")):
         if part not in names or look.shader.get(key) != names.index(part):
             raise ConfigError(f"look.json: shader.{key} must be the index of part '{part}'")
     return look

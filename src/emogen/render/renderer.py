@@ -15,17 +15,24 @@ from typing import Self
 
 import numpy as np
 
+from emogen.appearance.params import Appearance
+from emogen.appearance.textures import SkinTextures, skin_textures
 from emogen.errors import ShapeError
 from emogen.model.face import FaceModel
 from emogen.render.gl import GLRenderer
 from emogen.render.images import contact_sheet
-from emogen.render.look import Look, default_look
+from emogen.render.look import Look, default_look, fitted_look
 from emogen.render.scene import FaceMesh, face_mesh
 
 
 class Renderer:
     """Renders faces of ``model`` offscreen with the look of ``look.json``.
 
+    appearance : the skin's look (:class:`~emogen.appearance.Appearance`: tone, brows, lips,
+        hair, stubble), painted once into a texture and cached; None draws flat part colours
+        (also for models without ICT's landmarks and UV layout)
+    framing : ``face`` (default: hairline to chin fills ≥ 80% of the height) or ``head``
+        (head and shoulders), from ``look.json``
     size : image side in pixels (default ``look.size_px``, 512)
     supersample : anti-aliasing factor (default ``look.supersample``, 2: 4 samples a pixel; 1: none)
     background : sRGB triple in [0, 1]; fov_y_deg : vertical field of view in degrees
@@ -40,9 +47,13 @@ class Renderer:
         supersample: int | None = None,
         background: tuple[float, float, float] | None = None,
         fov_y_deg: float | None = None,
+        appearance: Appearance | None = None,
+        framing: str | None = None,
     ) -> None:
         base = look or default_look()
-        self.look = base.with_options(background=background, fov_y_deg=fov_y_deg)
+        self.look = base.with_options(background=background, fov_y_deg=fov_y_deg, framing=framing)
+        if fov_y_deg is None:
+            self.look = fitted_look(self.look, model, appearance)
         self.model = model
         self.mesh: FaceMesh = face_mesh(model, self.look)
         self.size = int(size or self.look.size_px)
@@ -52,6 +63,13 @@ class Renderer:
             self.size,
             self.look.supersample if supersample is None else supersample,
         )
+        self.appearance = appearance
+        self.textures: SkinTextures | None = None
+        if appearance is not None:
+            self.textures = skin_textures(
+                model, appearance, irradiance=self.look.front_irradiance()
+            )
+            self._gl.set_textures(self.textures.albedo, self.textures.detail)
 
     # ---- context manager ---------------------------------------------------------------
     def __enter__(self) -> Self:

@@ -101,6 +101,12 @@ class FaceMesh:
     eye: np.ndarray
     incidence: sparse.csr_matrix  # (V, T): vertex normal = Σ adjacent face normals
     groups: tuple[DrawGroup, ...]
+    #: What the GPU draws: UV seams split vertices, as in the GLB. ``source`` (R,) is the model
+    #: vertex of each drawn vertex, ``uv`` (R, 2) its glTF UV (u in tiles, v down), and
+    #: ``drawn_triangles`` (T, 3) the triangles in that numbering (same order as ``triangles``).
+    source: np.ndarray
+    uv: np.ndarray
+    drawn_triangles: np.ndarray
 
     def normals(self, vertices: np.ndarray) -> np.ndarray:
         """Area-weighted unit vertex normals: vertices (B, V, 3) → (B, V, 3) float32."""
@@ -160,7 +166,8 @@ def _opacity(model: FaceModel, look: Look, code: np.ndarray) -> np.ndarray:
 def _grouped(
     triangles: np.ndarray, code: np.ndarray, look: Look
 ) -> tuple[np.ndarray, tuple[DrawGroup, ...]]:
-    """Order triangles by draw state (stable within a state), keyed by their first corner's part."""
+    """Order of the triangles by draw state (stable within a state), keyed by their first
+    corner's part, and the groups of that order."""
     flags = np.array([[p.blended, p.cutout, p.double_sided] for p in look.parts], dtype=np.int64)
     key = (flags @ [4, 2, 1])[code[triangles[:, 0]]]
     order = np.argsort(key, kind="stable")
@@ -169,7 +176,31 @@ def _grouped(
         if n:
             groups.append(DrawGroup(first, int(n), bool(k & 1), bool(k & 2), bool(k & 4)))
         first += int(n)
-    return np.ascontiguousarray(triangles[order], dtype=np.int32), tuple(groups)
+    return order, tuple(groups)
+
+
+def _uv_corners(model: FaceModel, owner: np.ndarray) -> np.ndarray:
+    """(T, 3) UV ids of the triangles of :func:`triangulate` (−1: none)."""
+    if len(model.uvs) == 0 or model.polygon_uvs.shape != model.polygons.shape:
+        return np.full((len(owner), 3), -1, dtype=np.int64)
+    second = np.r_[False, owner[1:] == owner[:-1]]
+    puv = model.polygon_uvs[owner]
+    return np.where(second[:, None], puv[:, [0, 2, 3]], puv[:, [0, 1, 2]]).astype(np.int64)
+
+
+def _split_seams(
+    model: FaceModel, triangles: np.ndarray, uv_ids: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(source (R,), uv (R, 2) glTF convention, drawn triangles (T, 3)): one drawn vertex per
+    distinct (vertex, UV) corner pair, ordered by vertex then UV."""
+    pairs = np.stack([triangles.reshape(-1).astype(np.int64), uv_ids.reshape(-1)], 1)
+    unique, inverse = np.unique(pairs, axis=0, return_inverse=True)
+    uv = np.zeros((len(unique), 2), dtype=np.float32)
+    has = unique[:, 1] >= 0
+    uv[has] = model.uvs[unique[has, 1]]
+    uv[has, 1] = 1.0 - uv[has, 1]
+    drawn = inverse.reshape(-1, 3).astype(np.int32)
+    return unique[:, 0].astype(np.int32), uv, np.ascontiguousarray(drawn)
 
 
 def face_mesh(model: FaceModel, look: Look) -> FaceMesh:
@@ -177,7 +208,11 @@ def face_mesh(model: FaceModel, look: Look) -> FaceMesh:
     tris, owner = triangulate(model.polygons)
     keep = np.isin(owner, visible_polygons(model))
     code = _part_codes(model, look)
-    triangles, groups = _grouped(tris[keep], code, look)
+    uv_ids = _uv_corners(model, owner)[keep]
+    tris = tris[keep]
+    order, groups = _grouped(tris, code, look)
+    triangles = np.ascontiguousarray(tris[order], dtype=np.int32)
+    source, uv, drawn = _split_seams(model, triangles, uv_ids[order])
     albedo = np.array([srgb_to_linear(np.array(p.albedo_srgb)) for p in look.parts])[code]
     surface = np.c_[
         np.array([[p.specular, p.shininess, p.cavity] for p in look.parts])[code],
@@ -198,4 +233,7 @@ def face_mesh(model: FaceModel, look: Look) -> FaceMesh:
         eye=_eye_directions(model, look).astype(np.float32),
         incidence=incidence,
         groups=groups,
+        source=source,
+        uv=uv,
+        drawn_triangles=drawn,
     )

@@ -24,7 +24,7 @@ from emogen.model.io.ict import INDEX_FILE, ModelArrays
 from emogen.model.io.obj import ObjTopology
 
 log = logging.getLogger(__name__)
-CACHE_FORMAT = 1
+CACHE_FORMAT = 2  # 2: landmarks
 
 
 def cache_root() -> Path:
@@ -77,6 +77,7 @@ def load_cached(folder: Path) -> ModelArrays | None:
                 topology=topo,
                 source_hash=str(z["source_hash"]),
                 model_hash=str(z["model_hash"]),
+                landmarks=z["landmarks"],
             )
     except (OSError, ValueError, KeyError, json.JSONDecodeError) as exc:
         if not isinstance(exc, FileNotFoundError):
@@ -117,6 +118,7 @@ def store(folder: Path, arrays: ModelArrays) -> None:
                 materials=np.array(topo.materials),
                 source_hash=np.str_(arrays.source_hash),
                 model_hash=np.str_(arrays.model_hash),
+                landmarks=arrays.landmarks,
             ),
         )
         index = {

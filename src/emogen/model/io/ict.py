@@ -11,7 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +38,9 @@ class ModelArrays:
     topology: ObjTopology
     source_hash: str  # sha256 of the source files' bytes
     model_hash: str  # sha256 of name, shape list, vertex count and the float32 arrays
+    #: (68,) int32 vertex ids of the 68-point facial landmarks (jaw 0-16, brows 17-26, nose
+    #: 27-35, eyes 36-47, lips 48-67) from ``vertex_indices.json``; empty when unknown
+    landmarks: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
 
 
 def expected_shapes(folder: Path) -> tuple[str, ...]:
@@ -53,6 +56,22 @@ def expected_shapes(folder: Path) -> tuple[str, ...]:
     if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
         raise ModelFileError(f"{index}: 'expressions' must be a list of shape names")
     return tuple(names) + EXTRA_SHAPES
+
+
+def landmark_vertices(folder: Path, n_vertices: int) -> np.ndarray:
+    """The 68 landmark vertex ids of ``vertex_indices.json`` (empty if it lists none)."""
+    index = folder / INDEX_FILE
+    data = json.loads(read_bytes(index))
+    ids = data.get("idx_to_landmark_verts") if isinstance(data, dict) else None
+    if ids is None:
+        return np.zeros(0, dtype=np.int32)
+    arr = np.asarray(ids)
+    if arr.shape != (68,) or arr.dtype.kind not in "iu" or arr.min() < 0 or arr.max() >= n_vertices:
+        raise ModelFileError(
+            f"{index}: 'idx_to_landmark_verts' must be 68 vertex ids in [0, {n_vertices}); "
+            f"got shape {arr.shape}"
+        )
+    return arr.astype(np.int32)
 
 
 def source_files(folder: Path) -> tuple[list[str], list[str]]:
@@ -137,4 +156,5 @@ def load_ict_folder(folder: Path, name: str = "ict-facekit") -> ModelArrays:
         topology=topology,
         source_hash=src.hexdigest(),
         model_hash=model_content_hash(name, tuple(shapes), neutral32, deltas),
+        landmarks=landmark_vertices(folder, n_vertices),
     )

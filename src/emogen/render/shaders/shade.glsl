@@ -9,6 +9,16 @@
 //   pos     : world position in cm; n: unit normal; v: unit direction to the camera
 //   eye     : xyz = unit direction from the eyeball centre in the eye's rest frame (z = eye axis),
 //             w = side (1 left, 2 right, 0 not an eye)
+//   uv      : glTF texture coordinates (u counts UDIM tiles: face 0-1, head 1-2; v down)
+//
+// Textures (skin part only, when emogenTextured > 0.5): emogenSkin, the identity's skin atlas
+// (SKIN_TILES tiles side by side, sRGB); emogenDetail, a tileable micro-relief (R height,
+// G roughness) repeated DETAIL_TILES times per tile. Both are sampled unconditionally (mipmap
+// derivatives need uniform control flow) and used only on skin.
+
+uniform sampler2D emogenSkin;
+uniform sampler2D emogenDetail;
+uniform float emogenTextured;
 
 vec3 emogenToLinear(vec3 c) {
     vec3 lo = c / 12.92;
@@ -75,9 +85,33 @@ vec3 emogenLight(vec3 n, vec3 v, vec3 albedo, float spec, float shin, float wrap
     return albedo * (hemi + KEY_RGB * d1 + FILL_RGB * d2) + KEY_RGB * s1 + FILL_RGB * s2;
 }
 
+// Normal perturbed by a height field h (cm) from screen-space derivatives (no tangents needed).
+vec3 emogenBump(vec3 pos, vec3 n, float h) {
+    vec3 dpdx = dFdx(pos);
+    vec3 dpdy = dFdy(pos);
+    float dhdx = dFdx(h);
+    float dhdy = dFdy(h);
+    vec3 r1 = cross(dpdy, n);
+    vec3 r2 = cross(n, dpdx);
+    float det = dot(dpdx, r1);
+    vec3 grad = sign(det) * (dhdx * r1 + dhdy * r2);
+    vec3 bumped = abs(det) * n - grad;
+    float len = length(bumped);
+    return len > 1e-12 ? bumped / len : n;
+}
+
 // Final sRGB colour of a fragment.
 vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v, vec4 eye,
-                 bool front) {
+                 bool front, vec2 uv) {
+    vec3 skin = texture(emogenSkin, vec2(uv.x / SKIN_TILES, uv.y)).rgb;
+    vec3 detail = texture(emogenDetail, uv * DETAIL_TILES).rgb;
+    vec3 bumped = emogenBump(pos, n, (detail.r - 0.5) * DETAIL_BUMP_CM);
+    bool textured = emogenTextured > 0.5 && abs(part - PART_SKIN) < 0.5;
+    if (textured) {
+        albedo = emogenToLinear(skin);
+        surface.x *= 1.0 + DETAIL_SPECULAR * (2.0 * detail.g - 1.0);
+        n = bumped;
+    }
     bool isEye = emogenIsEye(part);
     if (!front) {
         if (isEye) {

@@ -1,0 +1,103 @@
+"""Identities: a shape (the rig's identity preset or coefficients) plus an appearance.
+
+Six ready presets cross two sexes with three Monk skin tones (light 2, medium 5, dark 8).
+The rig's shape-only names keep working — ``generic``, ``male``, ``female`` — with a default
+appearance of their sex at the medium tone. A lab defines its own in the study TOML::
+
+    [identity.participant_match]
+    shape = "female"            # generic | male | female | a list of identity coefficients
+    skin_tone = 6.5             # Monk Skin Tone scale 1-10
+    brow_colour = "#3a2a20"
+    hair = "short"
+    beard_shadow = 0.0
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict
+
+from emogen.appearance.params import Appearance, appearance_from_dict
+from emogen.errors import ConfigError
+
+TONES = {"light": 2.0, "medium": 5.0, "dark": 8.0}
+
+
+class Identity(BaseModel):
+    """What a participant sees: a face shape and its appearance."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    shape: str | tuple[float, ...] = "generic"
+    appearance: Appearance = Appearance()
+
+    def record(self) -> dict[str, Any]:
+        """Everything needed to re-render a stimulus of this identity exactly."""
+        shape = self.shape if isinstance(self.shape, str) else list(self.shape)
+        return {"shape": shape, "appearance": self.appearance.record()}
+
+
+def _female(tone: float) -> Appearance:
+    return Appearance(
+        skin_tone=tone,
+        brow_thickness=0.8,
+        brow_density=0.9,
+        hairline=1.0,
+        lip_colour=1.15,
+        redness=1.1,
+        brow_colour="#2e221b" if tone < 4 else "#1e1713",
+        hair_colour="#3b2a1e" if tone < 4 else "#1a1411",
+    )
+
+
+def _male(tone: float) -> Appearance:
+    return Appearance(
+        skin_tone=tone,
+        brow_thickness=1.15,
+        brow_density=1.1,
+        hairline=1.12,
+        beard_shadow=0.8,
+        lip_colour=0.85,
+        brow_colour="#2b2019" if tone < 4 else "#1c1612",
+        hair_colour="#33261c" if tone < 4 else "#18120f",
+    )
+
+
+PRESETS: dict[str, Identity] = {
+    **{f"female-{k}": Identity(shape="female", appearance=_female(v)) for k, v in TONES.items()},
+    **{f"male-{k}": Identity(shape="male", appearance=_male(v)) for k, v in TONES.items()},
+    "generic": Identity(shape="generic", appearance=Appearance()),
+    "female": Identity(shape="female", appearance=_female(TONES["medium"])),
+    "male": Identity(shape="male", appearance=_male(TONES["medium"])),
+}
+
+
+def identity_from_dict(name: str, data: dict[str, Any]) -> Identity:
+    """A lab's identity from a TOML table: ``shape`` plus any :class:`Appearance` keys."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"identity '{name}' must be a table of keys; got {data!r}")
+    rest = dict(data)
+    shape = rest.pop("shape", "generic")
+    if isinstance(shape, list):
+        try:
+            shape = tuple(float(x) for x in shape)
+        except (TypeError, ValueError):
+            raise ConfigError(
+                f"identity '{name}': shape must be a preset name or a list of numbers; got {shape!r}"
+            ) from None
+    elif not isinstance(shape, str):
+        raise ConfigError(
+            f"identity '{name}': shape must be a preset name or a list of numbers; got {shape!r}"
+        )
+    return Identity(shape=shape, appearance=appearance_from_dict(rest, f"identity '{name}'"))
+
+
+def resolve_identity(name: str, custom: dict[str, Identity] | None = None) -> Identity:
+    """The identity called ``name``: the lab's own first, then the presets."""
+    if custom and name in custom:
+        return custom[name]
+    if name in PRESETS:
+        return PRESETS[name]
+    known = sorted({*PRESETS, *(custom or {})})
+    raise ConfigError(f"unknown identity '{name}'; known identities: {', '.join(known)}")
