@@ -98,15 +98,19 @@ def regional_maps(t: Texels, f: FaceFeatures) -> tuple[np.ndarray, np.ndarray]:
         ear = np.array([side * (abs(lm[0, 0]) + 1.2), lm[0, 1] - 1.0, lm[0, 2] - 3.2])
         red += 0.8 * _gauss(t.pos, ear, np.array([1.2, 2.6, 1.6]))
     red += 0.9 * _gauss(t.pos, lm[30], np.array([1.0, 0.9, 1.2]))  # nose tip
-    red += 0.35 * _gauss(t.pos, lm[8] + [0, 0.8, 0], np.array([1.6, 1.2, 2.0])) * front  # chin
-    red += 0.25 * _gauss(t.pos, lm[27] + [0, 3.5, 0], np.array([3.5, 2.0, 3.0])) * front  # brow
+    red += (
+        0.35 * _gauss(t.pos, lm[8] + np.array([0.0, 0.8, 0.0]), np.array([1.6, 1.2, 2.0])) * front
+    )  # chin
+    red += (
+        0.25 * _gauss(t.pos, lm[27] + np.array([0.0, 3.5, 0.0]), np.array([3.5, 2.0, 3.0])) * front
+    )  # brow
     peri = np.zeros(len(t.pos))
     for k, eye in enumerate(f.eye_centres):
         ids = range(36, 42) if k == 0 else range(42, 48)
         width = float(np.ptp(lm[list(ids), 0]))
-        under = eye + [0.0, -0.75, 0.0]
+        under = eye + np.array([0.0, -0.75, 0.0])
         peri += _gauss(t.pos, under, np.array([width * 0.55, 0.45, 2.0]))
-        lid = eye + [0.0, 0.55, 0.0]
+        lid = eye + np.array([0.0, 0.55, 0.0])
         peri += 0.7 * _gauss(t.pos, lid, np.array([width * 0.6, 0.45, 2.0]))
     return np.clip(red, 0, 1), np.clip(peri, 0, 1) * front
 

@@ -21,6 +21,7 @@ import io
 import logging
 import os
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 from importlib import resources
@@ -110,7 +111,7 @@ def texels(model: FaceModel, layout: SkinLayout, features: FaceFeatures) -> Texe
 
 def texel_size_cm(t: Texels) -> float:
     """Median distance (cm) between horizontally adjacent covered texels of the face tile."""
-    row, col = np.divmod(t.index, t.shape[1])
+    _row, col = np.divmod(t.index, t.shape[1])
     nxt = np.searchsorted(t.index, t.index + 1)
     ok = (nxt < len(t.index)) & (col < t.shape[0] - 1)
     ok[ok] &= t.index[nxt[ok]] == t.index[ok] + 1
@@ -206,15 +207,15 @@ def _write_atomic(path: Path, data: bytes) -> None:
         raise
 
 
-def _cached(path: Path, make: callable) -> bytes:  # type: ignore[valid-type]
+def _cached(path: Path, make: Callable[[], bytes]) -> bytes:
     try:
-        data = path.read_bytes()
-        decode_webp(data)  # a truncated or corrupt file is rebuilt
-        return data
+        stored = path.read_bytes()
+        decode_webp(stored)  # a truncated or corrupt file is rebuilt
+        return stored
     except (OSError, ValueError, Image.UnidentifiedImageError) as exc:
         if not isinstance(exc, FileNotFoundError):
             log.warning("rebuilding unreadable texture cache %s: %s", path, exc)
-    data: bytes = make()
+    data = make()
     try:
         _write_atomic(path, data)
     except OSError as exc:

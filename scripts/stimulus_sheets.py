@@ -1,0 +1,62 @@
+"""Before/after stimulus sheets for docs/images: the seven basic-expression prototypes (neutral
+and the rig's six EMFACS core blocks at full weight) on the six identity presets.
+
+    python scripts/stimulus_sheets.py [OUT_FOLDER]     # default docs/images
+
+"before": the flat look of EmoGen ≤ 0.2 (no textures, head-and-shoulders framing);
+"after": each preset's appearance and the face framing. 512² and the participant tile (256²).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+import emogen
+from emogen.appearance.identities import PRESETS
+from emogen.render.images import contact_sheet
+from emogen.render.renderer import Renderer
+
+EMOTIONS = ("happy", "sad", "angry", "fearful", "surprised", "disgusted")
+PRESET_NAMES = tuple(f"{s}-{t}" for s in ("female", "male") for t in ("light", "medium", "dark"))
+
+
+def prototypes(model: emogen.FaceModel) -> tuple[list[str], np.ndarray]:
+    names = ["neutral", *EMOTIONS]
+    rows = [np.zeros(model.n_shapes)]
+    for e in EMOTIONS:
+        rows.append(model.rig.weights_from_names({g: 1.0 for g in model.rig.emotions[e].core}))
+    return names, np.asarray(rows)
+
+
+def sheet(model: emogen.FaceModel, size: int, after: bool) -> np.ndarray:
+    names, w = prototypes(model)
+    images, labels = [], []
+    for preset in PRESET_NAMES:
+        ident = PRESETS[preset]
+        m = model.with_identity(ident.shape)
+        options = (
+            {"appearance": ident.appearance, "framing": "face"} if after else {"framing": "head"}
+        )
+        with Renderer(m, size=size, **options) as r:  # type: ignore[arg-type]
+            images.append(r.render(w, correct=True))
+        labels += [f"{preset} · {n}" for n in names]
+    return contact_sheet(np.concatenate(images), labels, columns=len(names))
+
+
+def main() -> None:
+    out = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/images")
+    model = emogen.load_model()
+    for after in (False, True):
+        for size, tag in ((512, "512"), (256, "tile")):
+            image = sheet(model, size, after)
+            name = f"stimuli_{'after' if after else 'before'}_{tag}.jpg"
+            Image.fromarray(image).save(out / name, quality=90, optimize=True)
+            print(out / name, image.shape)
+
+
+if __name__ == "__main__":
+    main()
