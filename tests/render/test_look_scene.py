@@ -37,9 +37,17 @@ def test_look_json_is_consistent() -> None:
     broken["shader"]["PART_IRIS"] = 2
     with pytest.raises(ConfigError, match="PART_IRIS"):
         look_from_dict(broken)
-    del broken["camera"]
-    with pytest.raises(ConfigError, match="camera"):
+    del broken["framings"]
+    with pytest.raises(ConfigError, match="framings"):
         look_from_dict(broken)
+    typo = json.loads(json.dumps(look_json()))
+    typo["framing"] = "faces"
+    with pytest.raises(ConfigError, match="faces"):
+        look_from_dict(typo)
+    assert look.with_options(framing="head").camera == look.framings["head"]
+    with pytest.raises(ConfigError, match="framing must be one of"):
+        look.with_options(framing="torso")
+    assert look.shader["PART_SKIN"] == names.index("skin")
 
 
 @pytest.mark.parametrize(

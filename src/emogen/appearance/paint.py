@@ -50,6 +50,15 @@ class Texels:
     cavity: np.ndarray  # (n,) concavity in [0, 1]
     shape: tuple[int, int]  # (H, W) of the atlas
     index: np.ndarray  # (n,) flat atlas index of each texel (the covered ones)
+    corners: np.ndarray  # (n, 3) vertices of each texel's triangle
+    bary: np.ndarray  # (n, 3) the texel's barycentric weights in it
+    vertex_pos: np.ndarray  # (V, 3) rest positions
+    vertex_normal: np.ndarray  # (V, 3) rest unit normals
+
+    def from_vertices(self, values: np.ndarray) -> np.ndarray:
+        """Per-vertex values (V, …) → per-texel (n, …), linearly inside each triangle (for
+        smooth fields: painting them at the vertices costs 40× less than at the texels)."""
+        return np.einsum("nk,nk...->n...", self.bary, np.asarray(values)[self.corners])
 
 
 def texel_noise(t: Texels, rng: np.random.Generator, sigma_texels: float = 0.7) -> np.ndarray:
@@ -82,36 +91,47 @@ class NoiseField:
 
 
 def _gauss(pos: np.ndarray, centre: np.ndarray, radius: np.ndarray) -> np.ndarray:
-    d = (pos - centre) / radius
-    return np.exp(-0.5 * (d**2).sum(-1))
+    """exp(−½‖(pos − centre) / radius‖²), evaluated only within 4 radii (0 beyond)."""
+    out = np.zeros(len(pos))
+    near = np.all(np.abs(pos - centre) < 4 * radius, axis=1)
+    d = (pos[near] - centre) / radius
+    out[near] = np.exp(-0.5 * (d**2).sum(-1))
+    return out
 
 
 def regional_maps(t: Texels, f: FaceFeatures) -> tuple[np.ndarray, np.ndarray]:
-    """(redness, periorbital) weights in [0, 1] per texel."""
+    """(redness, periorbital) weights in [0, 1] per texel (smooth: made at the vertices)."""
+    red, peri = _regional_at(t.vertex_pos, t.vertex_normal, f)
+    return t.from_vertices(red), t.from_vertices(peri)
+
+
+def _regional_at(
+    pos: np.ndarray, normal: np.ndarray, f: FaceFeatures
+) -> tuple[np.ndarray, np.ndarray]:
     lm = f.landmarks
-    red = np.zeros(len(t.pos))
-    front = t.normal[:, 2] > -0.2
+    red = np.zeros(len(pos))
+    front = normal[:, 2] > -0.2
     for side in (-1, 1):
         eye = f.eye_centres[0 if side < 0 else 1]
         cheek = np.array([eye[0] * 1.08, eye[1] - 2.9, eye[2] + 0.2])
-        red += 0.9 * _gauss(t.pos, cheek, np.array([1.9, 1.6, 3.0])) * front
+        red += 0.9 * _gauss(pos, cheek, np.array([1.9, 1.6, 3.0])) * front
         ear = np.array([side * (abs(lm[0, 0]) + 1.2), lm[0, 1] - 1.0, lm[0, 2] - 3.2])
-        red += 0.8 * _gauss(t.pos, ear, np.array([1.2, 2.6, 1.6]))
-    red += 0.9 * _gauss(t.pos, lm[30], np.array([1.0, 0.9, 1.2]))  # nose tip
+        red += 0.8 * _gauss(pos, ear, np.array([1.2, 2.6, 1.6]))
+    red += 0.9 * _gauss(pos, lm[30], np.array([1.0, 0.9, 1.2]))  # nose tip
     red += (
-        0.35 * _gauss(t.pos, lm[8] + np.array([0.0, 0.8, 0.0]), np.array([1.6, 1.2, 2.0])) * front
+        0.35 * _gauss(pos, lm[8] + np.array([0.0, 0.8, 0.0]), np.array([1.6, 1.2, 2.0])) * front
     )  # chin
     red += (
-        0.25 * _gauss(t.pos, lm[27] + np.array([0.0, 3.5, 0.0]), np.array([3.5, 2.0, 3.0])) * front
+        0.25 * _gauss(pos, lm[27] + np.array([0.0, 3.5, 0.0]), np.array([3.5, 2.0, 3.0])) * front
     )  # brow
-    peri = np.zeros(len(t.pos))
+    peri = np.zeros(len(pos))
     for k, eye in enumerate(f.eye_centres):
         ids = range(36, 42) if k == 0 else range(42, 48)
         width = float(np.ptp(lm[list(ids), 0]))
         under = eye + np.array([0.0, -0.75, 0.0])
-        peri += _gauss(t.pos, under, np.array([width * 0.55, 0.45, 2.0]))
+        peri += _gauss(pos, under, np.array([width * 0.55, 0.45, 2.0]))
         lid = eye + np.array([0.0, 0.55, 0.0])
-        peri += 0.7 * _gauss(t.pos, lid, np.array([width * 0.6, 0.45, 2.0]))
+        peri += 0.7 * _gauss(pos, lid, np.array([width * 0.6, 0.45, 2.0]))
     return np.clip(red, 0, 1), np.clip(peri, 0, 1) * front
 
 

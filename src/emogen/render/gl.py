@@ -180,10 +180,11 @@ class GLRenderer:
                 tex.filter = (self.ctx.LINEAR_MIPMAP_LINEAR, self.ctx.LINEAR)
                 tex.use(location=unit)
                 self.textures.append(tex)
+            values = {"emogenSkin": 0, "emogenDetail": 1, "emogenTextured": float(skin is not None)}
             for program in self.programs.values():
-                program["emogenSkin"].value = 0
-                program["emogenDetail"].value = 1
-                program["emogenTextured"].value = 0.0 if skin is None else 1.0
+                for name, value in values.items():
+                    if name in program:  # a uniform the compiler dropped is not there
+                        program[name].value = value
             self._textured = skin is not None
 
     def set_albedo(self, albedo: np.ndarray | None) -> None:
@@ -192,7 +193,8 @@ class GLRenderer:
         with self.ctx:
             on = 1.0 if albedo is None and self._textured else 0.0
             for program in self.programs.values():
-                program["emogenTextured"].value = on
+                if "emogenTextured" in program:
+                    program["emogenTextured"].value = on
             if albedo is None:
                 if not self._albedo_is_default:
                     self.vbo_albedo.write(self.mesh.albedo[self.mesh.source].tobytes())
