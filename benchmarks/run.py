@@ -139,7 +139,7 @@ def main() -> None:
     parser.add_argument(
         "--only",
         nargs="*",
-        choices=["gltf", "render", "correct", "simulate", "study"],
+        choices=["gltf", "render", "appearance", "correct", "simulate", "study"],
         help="run only these sections after the model benchmarks",
     )
     args = parser.parse_args()
@@ -175,11 +175,19 @@ def main() -> None:
         f"{rows[-1]['loop_faces_measured']} faces of each batch in this run and scaled)"
     )
 
-    from benchmarks import bench_correct, bench_gltf, bench_render, bench_simulate, bench_study
+    from benchmarks import (
+        bench_appearance,
+        bench_correct,
+        bench_gltf,
+        bench_render,
+        bench_simulate,
+        bench_study,
+    )
 
     sections = {
         "gltf": lambda: bench_gltf.run(model),
         "render": lambda: bench_render.run(model),
+        "appearance": lambda: bench_appearance.run(model, path),
         "correct": lambda: bench_correct.run(
             model, 2_000 if args.quick else 10_000, model_path=path
         ),
