@@ -52,3 +52,22 @@ def test_textures_are_cached_and_a_corrupt_cache_is_rebuilt(
     assert other.key != first.key
     # a darker tone paints a darker atlas
     assert other.albedo.mean() > first.albedo.mean() + 30
+
+
+@pytest.mark.parametrize("tone", [2, 5, 8])
+def test_a_lit_cheek_renders_at_its_monk_swatch(ict_model, tone) -> None:  # type: ignore[no-untyped-def]
+    """Known answer: the generator divides the swatch by the frontal light, so a frontal cheek
+    (no regional redness) comes out at the published swatch, within a few levels (the specular
+    sheen, additive, lifts the darkest tones a little more)."""
+    from emogen.appearance.params import MONK_SWATCHES, hex_to_srgb
+    from emogen.render.renderer import Renderer
+
+    with Renderer(ict_model, size=256, appearance=Appearance(skin_tone=tone, redness=0)) as r:
+        image = r.render(np.zeros((1, ict_model.n_shapes)))[0].astype(float)
+        lm = ict_model.neutral[ict_model.landmarks]
+        cheek = (lm[41] + lm[31]) / 2 + np.array([-0.5, -0.3, 0.0])
+        x, y = r.look.camera.project(cheek[None], 256)[0].astype(int)
+    patch = image[y - 2 : y + 3, x - 2 : x + 3].reshape(-1, 3).mean(0)
+    swatch = np.array(hex_to_srgb(MONK_SWATCHES[tone - 1])) * 255
+    assert np.abs(patch - swatch).max() < (8 if tone < 6 else 20)
+    assert np.abs(patch - np.array(hex_to_srgb(MONK_SWATCHES[tone + 1])) * 255).max() > 20
