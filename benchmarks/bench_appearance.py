@@ -7,10 +7,8 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
-
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -27,16 +25,8 @@ print(time.perf_counter() - t1)
 """
 
 
-def _best(fn: Any, repeat: int) -> float:  # type: ignore[no-untyped-def]
-    best = float("inf")
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t)
-    return best
-
-
 def run(model: Any, model_path: str | None = None) -> dict[str, float]:  # type: ignore[no-untyped-def]
+    from benchmarks.bench_render import _best
     from emogen.appearance import Appearance
     from emogen.appearance.identities import PRESETS
     from emogen.appearance.textures import skin_textures
@@ -95,7 +85,7 @@ def run(model: Any, model_path: str | None = None) -> dict[str, float]:  # type:
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(REPO / "src"))
+    sys.path[:0] = [str(REPO / "src"), str(REPO)]
     from emogen.model import load_model
 
     run(
