@@ -21,8 +21,9 @@ from scipy import ndimage
 from emogen.errors import ShapeError
 from emogen.model.face import FaceModel
 
-#: Regions painted by the skin atlas (the look's "skin" part)
-SKIN_REGIONS = ("face", "head_neck")
+#: Regions painted by the skin atlas (the look's "skin" and "eye_socket" parts: the inner
+#: lids carry the skin's tone too)
+SKIN_REGIONS = ("face", "head_neck", "eye_socket_left", "eye_socket_right")
 TILES = 2
 
 
@@ -95,7 +96,7 @@ class SkinLayout:
 def skin_triangles(model: FaceModel) -> tuple[np.ndarray, np.ndarray]:
     """(T, 3) vertex ids and (T, 3) UV ids of the skin regions' triangles (quads split a-b-c,
     a-c-d, as everywhere in EmoGen)."""
-    missing = [r for r in SKIN_REGIONS if r not in model.regions]
+    missing = [r for r in SKIN_REGIONS if r not in model.regions]  # ICT's layout
     if missing or len(model.uvs) == 0:
         raise ShapeError(
             f"the skin atlas needs the regions {list(SKIN_REGIONS)} and UVs; model "

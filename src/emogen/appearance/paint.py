@@ -46,7 +46,8 @@ class Texels:
     normal: np.ndarray  # (n, 3) rest unit normal
     cyl: np.ndarray  # (n, 2) cylindrical (s, y), cm
     theta: np.ndarray  # (n,) degrees around the head axis, 0 in front
-    face: np.ndarray  # (n,) bool: texel of the face region (else head and neck)
+    face: np.ndarray  # (n,) bool: texel of the face region (else head and neck, eye sockets)
+    lids: np.ndarray  # (n,) bool: texel of the eye sockets (the inner lids)
     cavity: np.ndarray  # (n,) concavity in [0, 1]
     shape: tuple[int, int]  # (H, W) of the atlas
     index: np.ndarray  # (n,) flat atlas index of each texel (the covered ones)
@@ -348,6 +349,8 @@ def paint_albedo(
     col *= 1 - peri[:, None] * np.array([0.13, 0.15, 0.12]) * (0.8 + 0.4 * tone)
     # creases read darker (baked concavity of the rest mesh)
     col *= (1 - 0.35 * t.cavity)[:, None]
+    # inner lids: the wet, redder lid margin
+    col[t.lids] *= (1 - tone) * np.array([0.92, 0.70, 0.70]) + tone * np.array([0.85, 0.75, 0.78])
     # stubble shadow
     if look.beard_shadow > 0:
         stubble = 0.55 + 0.45 * smoothstep(-1.0, 1.5, texel_noise(t, rng))

@@ -102,6 +102,12 @@ def texels(model: FaceModel, layout: SkinLayout, features: FaceFeatures) -> Texe
         cyl=features.cylindrical(pos),
         theta=features.theta_deg(pos),
         face=(corners[:, 0] >= face.v_start) & (corners[:, 0] < face.v_stop),
+        lids=np.isin(
+            corners[:, 0],
+            np.concatenate(
+                [model.regions[r].vertex_indices() for r in ("eye_socket_left", "eye_socket_right")]
+            ),
+        ),
         cavity=at(vertex_cavity(n, layout.triangles, vertex_n)),
         shape=(layout.height, layout.width),
         index=index,

@@ -253,7 +253,12 @@ def look_from_dict(d: dict[str, Any]) -> Look:
     except KeyError as exc:
         raise ConfigError(f"look.json lacks {exc}") from None
     names = [p.name for p in parts]
-    for key, part in (("PART_SKIN", "skin"), ("PART_SCLERA", "sclera"), ("PART_IRIS", "iris")):
+    for key, part in (
+        ("PART_SKIN", "skin"),
+        ("PART_EYE_SOCKET", "eye_socket"),
+        ("PART_SCLERA", "sclera"),
+        ("PART_IRIS", "iris"),
+    ):
         if part not in names or look.shader.get(key) != names.index(part):
             raise ConfigError(f"look.json: shader.{key} must be the index of part '{part}'")
     return look

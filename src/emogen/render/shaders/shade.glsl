@@ -11,7 +11,7 @@
 //             w = side (1 left, 2 right, 0 not an eye)
 //   uv      : glTF texture coordinates (u counts UDIM tiles: face 0-1, head 1-2; v down)
 //
-// Textures (skin part only, when emogenTextured > 0.5): emogenSkin, the identity's skin atlas
+// Textures (skin and eye-socket parts, when emogenTextured > 0.5): emogenSkin, the identity's skin atlas
 // (SKIN_TILES tiles side by side, sRGB); emogenDetail, a tileable micro-relief (R height,
 // G roughness) repeated DETAIL_TILES times per tile. Both are sampled unconditionally (mipmap
 // derivatives need uniform control flow) and used only on skin.
@@ -106,7 +106,8 @@ vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v
     vec3 skin = texture(emogenSkin, vec2(uv.x / SKIN_TILES, uv.y)).rgb;
     vec3 detail = texture(emogenDetail, uv * DETAIL_TILES).rgb;
     vec3 bumped = emogenBump(pos, n, (detail.r - 0.5) * DETAIL_BUMP_CM);
-    bool textured = emogenTextured > 0.5 && abs(part - PART_SKIN) < 0.5;
+    bool textured = emogenTextured > 0.5
+        && (abs(part - PART_SKIN) < 0.5 || abs(part - PART_EYE_SOCKET) < 0.5);
     if (textured) {
         albedo = emogenToLinear(skin);
         surface.x *= 1.0 + DETAIL_SPECULAR * (2.0 * detail.g - 1.0);
