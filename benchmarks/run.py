@@ -182,11 +182,13 @@ def main() -> None:
         bench_render,
         bench_simulate,
         bench_study,
+        bench_viewer,
     )
 
     sections = {
         "gltf": lambda: bench_gltf.run(model),
         "render": lambda: bench_render.run(model),
+        "viewer": lambda: bench_viewer.run(model),
         "appearance": lambda: bench_appearance.run(model, path),
         "correct": lambda: bench_correct.run(
             model, 2_000 if args.quick else 10_000, model_path=path

@@ -77,7 +77,10 @@ def model_info(
         typer.echo(
             f"  {name:<10} AU {e.action_units}: core {', '.join(e.core)}; optional {', '.join(e.optional)}"
         )
-    typer.echo(f"identities generic, {', '.join(sorted(model.rig.identities))}")
+    from emogen.appearance.identities import PRESETS
+
+    typer.echo(f"shapes     generic, {', '.join(sorted(model.rig.identities))}")
+    typer.echo(f"identities {', '.join(PRESETS)} (shape + appearance)")
     typer.echo(f"regions    {', '.join(model.regions)}")
 
 

@@ -27,8 +27,27 @@ ModelOpt = Annotated[
 RigOpt = Annotated[
     Path | None, typer.Option("--rig", help="Rig TOML (default: the packaged ICT rig).")
 ]
+
+
+def _shape_of(name: str | None) -> str | None:
+    """An identity preset's shape (``female-dark`` → ``female``); other names unchanged."""
+    if name is None:
+        return None
+    from emogen.appearance.identities import PRESETS
+
+    preset = PRESETS.get(name)
+    return preset.shape if preset is not None and isinstance(preset.shape, str) else name
+
+
+#: The face shape of commands that use no appearance (model export, correct).
 IdentityOpt = Annotated[
-    str | None, typer.Option("--identity", help="Identity preset (generic, male, female).")
+    str | None,
+    typer.Option(
+        "--identity",
+        help="Shape preset (generic, male, female); an identity preset (e.g. female-dark) "
+        "gives its shape.",
+        callback=_shape_of,
+    ),
 ]
 
 

@@ -562,3 +562,78 @@ def test_bad_json_and_bad_indices_name_the_file(
         import_glb(dangling)
     with pytest.raises(ModelFileError, match="missing"):
         import_glb(tmp_path / "nowhere.glb")
+
+
+# ---- the textured GLB (what the study serves) -------------------------------------------------
+TEXTURED_WIRE_LIMIT = 4_000_000  # bytes, gzip -9: mesh, morph targets and both images
+
+
+@pytest.fixture(scope="module")
+def textured(model: FaceModel, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any]:
+    from emogen.appearance.identities import PRESETS
+    from emogen.appearance.textures import skin_textures
+    from emogen.render.look import default_look, fitted_look
+
+    identity = PRESETS["generic"]
+    m = model.with_identity(identity.shape)
+    look = default_look()
+    textures = skin_textures(m, identity.appearance, irradiance=look.front_irradiance())
+    camera = fitted_look(look, m, identity.appearance).camera
+    path = tmp_path_factory.mktemp("glb") / "textured.glb"
+    report = export_model_glb(m, path, textures=textures, camera=camera)
+    return path, (report, textures, camera)
+
+
+def test_textured_glb_passes_the_khronos_validator(textured: tuple[Path, Any]) -> None:
+    path, (report, _, _) = textured
+    result = validate(path)
+    assert issues(result, 0) == []
+    assert issues(result, 1) == []
+    assert {"EXT_texture_webp", "KHR_texture_transform"} <= set(result["info"]["extensionsUsed"])
+    assert report.gzip_bytes <= TEXTURED_WIRE_LIMIT, str(report)
+
+
+def test_textured_glb_embeds_the_webp_images_and_camera(
+    model: FaceModel, textured: tuple[Path, Any]
+) -> None:
+    from emogen.render.look import look_json
+
+    path, (_, textures, camera) = textured
+    gltf = read_gltf(path)
+    doc, blob = gltf.doc, gltf.buffers[0]
+    assert "EXT_texture_webp" in doc["extensionsRequired"]
+    assert "EXT_texture_webp" in doc["extensionsUsed"]
+    assert [i["mimeType"] for i in doc["images"]] == ["image/webp", "image/webp"]
+
+    def image_bytes(k: int) -> bytes:
+        view = doc["bufferViews"][doc["images"][k]["bufferView"]]
+        return blob[view["byteOffset"] : view["byteOffset"] + view["byteLength"]]
+
+    emogen_extras = doc["asset"]["extras"]["emogen"]
+    tex = emogen_extras["textures"]
+    skin = doc["textures"][tex["skin"]]["extensions"]["EXT_texture_webp"]["source"]
+    detail = doc["textures"][tex["detail"]]["extensions"]["EXT_texture_webp"]["source"]
+    assert image_bytes(skin) == textures.albedo_webp
+    assert image_bytes(detail) == textures.detail_webp
+    samplers = [doc["samplers"][doc["textures"][tex[k]]["sampler"]] for k in ("skin", "detail")]
+    assert [s["wrapS"] for s in samplers] == [33071, 10497]  # clamp, repeat
+    assert all(s["minFilter"] == 9987 and s["magFilter"] == 9729 for s in samplers)
+    # the skin materials (look.json's skin regions) show the atlas, one UDIM tile per 1/2 of u
+    skin_part = next(p for p in look_json()["parts"] if p["name"] == "skin")
+    assert tuple(skin_part["regions"]) == emogen.model.io.gltf.SKIN_REGIONS
+    textured_materials = {
+        doc["materials"][p["material"]]["name"]
+        for p in doc["meshes"][0]["primitives"]
+        if "baseColorTexture" in doc["materials"][p["material"]]["pbrMetallicRoughness"]
+    }
+    assert textured_materials == {"M_Face", "M_BackHead"}
+    face = next(m for m in doc["materials"] if m["name"] == "M_Face")
+    base = face["pbrMetallicRoughness"]["baseColorTexture"]
+    assert base["index"] == tex["skin"]
+    assert base["extensions"]["KHR_texture_transform"]["scale"] == [0.5, 1.0]
+    assert emogen_extras["appearance"] == textures.appearance.record()
+    cam = emogen_extras["camera"]
+    assert cam["position_cm"] == list(camera.position)
+    assert cam["fov_y_deg"] == camera.fov_y_deg and cam["near_cm"] == camera.near
+    # and it still reads back as the model
+    assert import_glb(path).shape_names == model.shape_names

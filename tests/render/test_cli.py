@@ -5,11 +5,14 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 import typer
 from PIL import Image
 from typer.testing import CliRunner
 
+from emogen.appearance.identities import PRESETS
+from emogen.appearance.params import GENERATOR_VERSION, Appearance
 from emogen.render.cli import render_app
 from emogen.render.images import read_png
 
@@ -149,3 +152,48 @@ def test_errors_are_one_line(tmp_path: Path, model_args: list[str]) -> None:
         assert result.exit_code == 2, (args, result.output)
         assert message in result.output and "Traceback" not in result.output
     assert not list(tmp_path.glob("x.png"))
+
+
+def test_identities_render_with_their_appearance(tmp_path: Path, model_args: list[str]) -> None:
+    """Each preset draws its own skin (not only its shape); --plain draws the flat look; the
+    PNG records everything needed to render it again."""
+    common = ["--weight", "mouthSmile_L=0.6", "--size", "96", *model_args]
+    paths = {}
+    for name, extra in [
+        ("male-dark", []),
+        ("female-light", []),
+        ("male-dark-plain", ["--plain"]),
+        ("male-dark-head", ["--framing", "head"]),
+    ]:
+        paths[name] = tmp_path / f"{name}.png"
+        identity = "female-light" if name == "female-light" else "male-dark"
+        run("render", "--identity", identity, *extra, "--out", str(paths[name]), *common)
+    images = {k: read_png(p).astype(int) for k, p in paths.items()}
+
+    def differ(a: str, b: str) -> float:
+        return float(np.abs(images[a] - images[b]).mean())
+
+    assert differ("male-dark", "female-light") > 10
+    assert differ("male-dark", "male-dark-plain") > 10
+    assert differ("male-dark", "male-dark-head") > 5
+    # dark skin is darker than light skin in the middle of the face
+    mid = (slice(40, 56), slice(40, 56))
+    assert images["male-dark"][mid].mean() < images["female-light"][mid].mean() - 40
+    with Image.open(paths["male-dark"]) as im:
+        record = json.loads(im.text["emogen"])
+    assert record["identity"] == "male-dark" and record["shape"] == "male"
+    assert Appearance(**record["appearance"]) == PRESETS["male-dark"].appearance
+    assert record["appearance_generator"] == GENERATOR_VERSION and record["framing"] == "face"
+    with Image.open(paths["male-dark-plain"]) as im:
+        assert json.loads(im.text["emogen"])["appearance"] is None
+
+
+def test_unknown_identity_exits_and_writes_nothing(tmp_path: Path, model_args: list[str]) -> None:
+    out = tmp_path / "x.png"
+    for args in (["--out", str(out)], ["sheet", "--face", "neutral", "--out", str(out)]):
+        result = runner.invoke(app, ["render", *args, "--identity", "femal-light", *model_args])
+        assert result.exit_code == 2, result.output
+        lines = result.output.strip().splitlines()
+        assert len(lines) == 1 and "unknown identity 'femal-light'" in lines[0]
+        assert "female-light" in lines[0] and "male-dark" in lines[0] and "generic" in lines[0]
+    assert not list(tmp_path.iterdir())

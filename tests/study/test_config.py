@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+import hashlib
+import json
 from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from emogen.appearance.identities import PRESETS, Identity
+from emogen.appearance.params import Appearance
 from emogen.errors import ConfigError
 from emogen.study.config import (
+    StudyConfig,
     check_identities,
     demo_study_path,
     load_study_config,
@@ -56,10 +61,89 @@ def test_toml_errors_and_relative_paths(tmp_path: Path) -> None:
     assert load_study_config(good).model == (tmp_path / "models" / "face").resolve()
 
 
-def test_identities_must_be_rig_presets(ict_model) -> None:
+def test_identities_must_be_presets_or_the_studys_own(ict_model) -> None:  # type: ignore[no-untyped-def]
     check_identities(study_from_dict({"identities": ["generic", "male", "female"]}), ict_model.rig)
-    with pytest.raises(ConfigError, match="'identities' must be among"):
+    check_identities(study_from_dict({"identities": list(PRESETS)}), ict_model.rig, ict_model)
+    with pytest.raises(
+        ConfigError, match=r"'identities' must be among .*female-light.*\['alien'\]"
+    ):
         check_identities(study_from_dict({"identities": ["alien"]}), ict_model.rig)
+    typo = study_from_dict({"identities": ["my_face"], "identity": {"my_fac": {}}})
+    with pytest.raises(ConfigError, match=r"my_fac\).*got \['my_face'\]"):
+        check_identities(typo, ict_model.rig)
+
+
+OWN_IDENTITY = """
+name = "own"
+identities = ["female-dark", "my_face", "coeffs"]
+[identity.my_face]
+shape = "male"
+skin_tone = 6.5
+brow_colour = "#3A2A20"
+hair = "none"
+beard_shadow = 0.3
+[identity.coeffs]
+shape = [0.5, -0.25]
+"""
+
+
+def test_study_defines_its_own_identities(tmp_path: Path, ict_model) -> None:  # type: ignore[no-untyped-def]
+    path = tmp_path / "own.toml"
+    path.write_text(OWN_IDENTITY)
+    cfg = load_study_config(path)
+    check_identities(cfg, ict_model.rig, ict_model)
+    mine = cfg.identity_of("my_face")
+    assert mine == Identity(
+        shape="male",
+        appearance=Appearance(skin_tone=6.5, brow_colour="#3a2a20", hair="none", beard_shadow=0.3),
+    )
+    assert cfg.study_identities() == {
+        "female-dark": PRESETS["female-dark"],
+        "my_face": mine,
+        "coeffs": Identity(shape=(0.5, -0.25)),
+    }
+    assert cfg.n_trials == 3
+    # the engine sees the shape preset; coefficient shapes share the generic rig
+    assert [cfg.ga_for(n).identity for n in cfg.identities] == ["female", "male", "generic"]
+    # the recorded config (canonical JSON) rebuilds the same identities
+    again = StudyConfig.model_validate(json.loads(cfg.canonical_json()))
+    assert again == cfg and again.config_hash() == cfg.config_hash()
+    assert json.loads(cfg.canonical_json())["identity"]["my_face"]["skin_tone"] == 6.5
+
+
+def test_studies_without_own_identities_keep_their_hash() -> None:
+    cfg = study_from_dict({"identities": ["male", "female"]})
+    assert "identity" not in json.loads(cfg.canonical_json())
+    dumped = cfg.model_dump(mode="json")
+    del dumped["identity"]
+    text = json.dumps(dumped, sort_keys=True, separators=(",", ":"))
+    assert cfg.config_hash() == hashlib.sha256(text.encode()).hexdigest()
+
+
+@pytest.mark.parametrize(
+    ("table", "match"),
+    [
+        ({"my_face": {"skin_tonee": 3}}, r"my_face.*unknown key 'skin_tonee'"),
+        ({"my_face": {"skin_tone": 11}}, r"my_face.*'skin_tone'.*11"),
+        ({"my_face": {"brow_colour": "brown"}}, r"my_face.*'brow_colour'.*brown"),
+        ({"my_face": {"shape": [1, "x"]}}, r"my_face.*shape must be"),
+        ({"male": {"skin_tone": 3}}, "identity 'male' is a preset"),
+        ({"has space": {}}, "identity name must be"),
+    ],
+)
+def test_own_identity_errors_name_the_key(table: dict, match: str) -> None:
+    with pytest.raises(ConfigError, match=match):
+        study_from_dict({"identity": table}, "study.toml")
+
+
+def test_own_identity_shapes_must_fit_the_model(ict_model) -> None:  # type: ignore[no-untyped-def]
+    bad_shape = study_from_dict({"identities": ["x"], "identity": {"x": {"shape": "alien"}}})
+    with pytest.raises(ConfigError, match="identity 'x' has shape 'alien'"):
+        check_identities(bad_shape, ict_model.rig)
+    k = ict_model.n_identity_modes
+    too_long = study_from_dict({"identities": ["x"], "identity": {"x": {"shape": [0.1] * (k + 1)}}})
+    with pytest.raises(ConfigError, match=f"identity 'x'.*{k + 1} coefficients"):
+        check_identities(too_long, ict_model.rig, ict_model)
 
 
 def test_trials_are_emotions_times_identities_times_repetitions() -> None:

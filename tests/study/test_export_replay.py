@@ -169,3 +169,57 @@ def test_serve_command_reports_a_bad_config(tmp_path: Path) -> None:
     assert "'repetitions' must be >= 1" in result.output
     result = runner.invoke(app, ["serve", "--help"])
     assert result.exit_code == 0 and "demo study" in result.output
+
+
+def test_export_records_every_identity_to_render_it_again(
+    db_url: str, ict_model, tmp_path: Path
+) -> None:  # type: ignore[no-untyped-def]
+    """The identities table (presets and the study's own) reads back as the config's identities,
+    from Parquet and CSV; sessions of such a study replay exactly."""
+    from emogen.appearance.identities import Identity
+    from emogen.appearance.params import GENERATOR_VERSION
+    from emogen.study.config import study_from_dict
+    from emogen.study.export import identities_from_table
+    from emogen.study.storage import Store
+    from tests.study.conftest import SMALL_STUDY
+
+    config = study_from_dict(
+        {
+            **SMALL_STUDY,
+            "name": "faces",
+            "emotions": ["happy"],
+            "correct": False,
+            "identities": ["male-dark", "lab_face", "lab_coeffs"],
+            "identity": {
+                "lab_face": {"shape": "female", "skin_tone": 3.5, "hair": "none", "seed": 9},
+                "lab_coeffs": {"shape": [0.75, -0.5], "brow_colour": "#403020"},
+            },
+        }
+    )
+    store = Store(db_url)
+    try:
+        service = StudyService(
+            config, store, ict_model.rig, model_name=ict_model.name,
+            model_hash=ict_model.model_hash, model=ict_model,
+        )  # fmt: skip
+        completed(service, "I-1")
+        tables = export_tables(store)
+        ids = tables["identities"]
+        assert list(ids.identity) == ["male-dark", "lab_face", "lab_coeffs"]
+        assert (ids.appearance_generator == GENERATOR_VERSION).all()
+        assert list(ids["shape"][:2]) == ["male", "female"] and pd.isna(ids["shape"].iloc[2])
+        assert set(tables["trials"].identity) == set(ids.identity)  # joins on (study, identity)
+        expected = {("faces", n): i for n, i in config.study_identities().items()}
+        assert expected[("faces", "lab_coeffs")] == Identity(
+            shape=(0.75, -0.5), appearance=config.identity["lab_coeffs"].appearance
+        )
+        assert identities_from_table(ids) == expected
+        for fmt in ("parquet", "csv"):
+            write_export(tables, tmp_path / fmt, fmt)
+            path = tmp_path / fmt / f"identities.{fmt}"
+            back = pd.read_parquet(path) if fmt == "parquet" else pd.read_csv(path)
+            assert identities_from_table(back) == expected, fmt
+        report = replay_session(store, 1, ict_model.rig, ict_model.model_hash)
+        assert report.ok and report.populations == 9, report.mismatches
+    finally:
+        store.dispose()

@@ -3,8 +3,10 @@ served from a temporary folder, and Debian's Chromium through Playwright.
 
 The viewer is built by `npm run build` (the setup command); a missing or stale build is rebuilt
 here. The server is a plain http.server on 127.0.0.1 (port 0) serving the built files, the
-model GLB (`face.glb`) and, for the WebGL-less fallback, `render.png?size=&weights=` rendered
-offscreen by emogen.render — as the study server will.
+model GLB (`face.glb`: the default identity, ``IDENTITY``, with its skin textures and fitted
+camera, as the study server's ``ModelGLBs`` writes it) and, for the WebGL-less fallback,
+`render.png?size=&weights=` rendered offscreen by emogen.render of the same identity — as the
+study server will.
 """
 
 from __future__ import annotations
@@ -29,6 +31,8 @@ SHARED = [
     REPO / "src" / "emogen" / "render" / "look.json",
     REPO / "src" / "emogen" / "render" / "shaders" / "shade.glsl",
 ]
+#: The identity the site serves (a preset of emogen.appearance.identities).
+IDENTITY = "generic"
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [
     "--headless",
@@ -65,6 +69,37 @@ def viewer_build() -> Path:
     return BUILD
 
 
+def identity_model(ict_model: Any, name: str = IDENTITY) -> tuple[Any, Any]:
+    """(model with the identity's shape, its appearance)."""
+    from emogen.appearance.identities import resolve_identity
+
+    identity = resolve_identity(name)
+    return ict_model.with_identity(identity.shape), identity.appearance
+
+
+def offscreen_renderer(
+    ict_model: Any, size: int, name: str = IDENTITY, supersample: int | None = None
+) -> Any:
+    """The offscreen renderer of what the site's GLB shows: same identity, appearance, camera."""
+    from emogen.render.renderer import Renderer
+
+    model, appearance = identity_model(ict_model, name)
+    return Renderer(model, size=size, appearance=appearance, supersample=supersample)
+
+
+def export_site_glb(ict_model: Any, path: Path, name: str = IDENTITY) -> Any:
+    """The identity's textured GLB with its fitted camera (as emogen.web.assets.ModelGLBs)."""
+    from emogen.appearance.textures import skin_textures
+    from emogen.model.io.gltf import export_model_glb
+    from emogen.render.look import default_look, fitted_look
+
+    model, appearance = identity_model(ict_model, name)
+    look = default_look()
+    textures = skin_textures(model, appearance, irradiance=look.front_irradiance())
+    camera = fitted_look(look, model, appearance).camera
+    return export_model_glb(model, path, textures=textures, camera=camera)
+
+
 class _Handler(http.server.SimpleHTTPRequestHandler):
     renderers: dict[int, Any]
     model: Any
@@ -78,7 +113,6 @@ class _Handler(http.server.SimpleHTTPRequestHandler):
             super().do_GET()
             return
         from emogen.render.images import png_bytes
-        from emogen.render.renderer import Renderer
 
         q = parse_qs(url.query)
         size = int(q.get("size", ["256"])[0])
@@ -88,7 +122,7 @@ class _Handler(http.server.SimpleHTTPRequestHandler):
             values = [float(x) for x in text.split(",")]
             w[0, : len(values)] = values
         if size not in self.renderers:  # made in the server's own thread: one GL context
-            self.renderers[size] = Renderer(self.model, size=size)
+            self.renderers[size] = offscreen_renderer(self.model, size)
         body = png_bytes(self.renderers[size].render(w)[0])
         self.send_response(200)
         self.send_header("Content-Type", "image/png")
@@ -108,13 +142,11 @@ class Site:
 def viewer_site(
     viewer_build: Path, ict_model, tmp_path_factory: pytest.TempPathFactory
 ) -> Iterator[Site]:  # type: ignore[no-untyped-def]
-    from emogen.model.io.gltf import export_model_glb
-
     folder = tmp_path_factory.mktemp("site")
     for f in viewer_build.iterdir():
         if f.is_file():
             shutil.copy(f, folder / f.name)
-    report = export_model_glb(ict_model, folder / "face.glb")
+    report = export_site_glb(ict_model, folder / "face.glb")
     handler = type("Handler", (_Handler,), {"renderers": {}, "model": ict_model})
 
     def make(*args: Any) -> http.server.SimpleHTTPRequestHandler:

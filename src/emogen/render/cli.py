@@ -1,6 +1,7 @@
 """`emogen render`: faces to PNG, contact sheets and error heatmaps.
 
 emogen render --weight jawOpen=1 --out a.png
+emogen render --weight jawOpen=1 --identity male-dark --framing head --out b.png
 emogen render --weights faces.csv --out faces/          (one PNG per row)
 emogen render sheet --weights faces.csv --out sheet.png
 emogen render heatmap --weight jawOpen=1 --reference-weight jawOpen=0.5 --out heat.png
@@ -8,16 +9,19 @@ emogen render heatmap --weight jawOpen=1 --reference-weight jawOpen=0.5 --out he
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from emogen.clitools import IdentityOpt, ModelOpt, RigOpt, friendly_errors, parse_named_weights
+from emogen.clitools import ModelOpt, RigOpt, friendly_errors, parse_named_weights
 
 if TYPE_CHECKING:
     import numpy as np
 
+    from emogen.appearance.identities import Identity
+    from emogen.appearance.params import Appearance
     from emogen.model.face import FaceModel
     from emogen.render.renderer import Renderer
 
@@ -52,6 +56,79 @@ SupersampleOpt = Annotated[
     int | None,
     typer.Option("--supersample", help="Anti-aliasing: render N× larger, average (default 2)."),
 ]
+IdentityOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--identity",
+        help="Identity: shape and appearance (skin tone, brows, lips, hair). Presets: "
+        "female-light, female-medium, female-dark, male-light, male-medium, male-dark; "
+        "generic, male, female (medium tone); or a shape preset of the rig. Default: generic.",
+    ),
+]
+
+
+class Framing(StrEnum):
+    face = "face"
+    head = "head"
+
+
+FramingOpt = Annotated[
+    Framing,
+    typer.Option(
+        "--framing",
+        help="face: hairline to chin fills the image; head: head and shoulders.",
+    ),
+]
+PlainOpt = Annotated[
+    bool,
+    typer.Option(
+        "--plain",
+        help="Draw the earlier flat look (one colour per part: no skin tone, brows, lips or "
+        "hair) instead of the identity's appearance.",
+    ),
+]
+
+
+def _identity(model: FaceModel, name: str | None) -> tuple[str, Identity]:
+    """(name, identity) of ``--identity``: a preset, else a shape preset of the model's rig."""
+    from emogen.appearance.identities import PRESETS, Identity
+    from emogen.errors import ConfigError
+
+    name = name or "generic"
+    if name in PRESETS:
+        return name, PRESETS[name]
+    if name in model.rig.identities:
+        return name, Identity(shape=name)
+    known = sorted({*PRESETS, *model.rig.identities})
+    raise ConfigError(f"unknown identity '{name}'; known identities: {', '.join(known)}")
+
+
+def _appearance(model: FaceModel, identity: Identity, plain: bool) -> Appearance | None:
+    """The identity's appearance, or None (flat look) with --plain or a model without ICT's
+    skin atlas (its regions and UVs), which is said on stderr."""
+    from emogen.appearance.layout import SKIN_REGIONS
+
+    if plain:
+        return None
+    if len(model.uvs) == 0 or any(r not in model.regions for r in SKIN_REGIONS):
+        typer.echo(
+            f"note: model '{model.name}' has no skin atlas (ICT-FaceKit's UV layout): "
+            "drawing the plain look",
+            err=True,
+        )
+        return None
+    return identity.appearance
+
+
+def _load(
+    model_path: Path | None, rig: Path | None, identity: str | None
+) -> tuple[FaceModel, str, Identity]:
+    """The model with ``--identity``'s shape, the identity's name, and the identity."""
+    from emogen.model import load_model
+
+    base = load_model(model_path, rig=rig)
+    name, ident = _identity(base, identity)
+    return base.with_identity(ident.shape), name, ident
 
 
 def _renderer(
@@ -60,6 +137,9 @@ def _renderer(
     background: str | None,
     fov: float | None,
     supersample: int | None,
+    *,
+    appearance: Appearance | None = None,
+    framing: Framing | None = None,
 ) -> Renderer:
     from emogen.render.look import parse_colour
     from emogen.render.renderer import Renderer
@@ -70,6 +150,8 @@ def _renderer(
         background=parse_colour(background) if background else None,
         fov_y_deg=fov,
         supersample=supersample,
+        appearance=appearance,
+        framing=framing.value if framing is not None else None,
     )
 
 
@@ -93,6 +175,8 @@ def _faces(
 
 
 def _metadata(model: FaceModel, weights: np.ndarray | None = None, **extra: Any) -> dict[str, Any]:
+    """PNG text chunks: software, copyright, and an ``emogen`` JSON record of the face (model,
+    shape, identity and appearance when given in ``extra``, weights)."""
     from emogen import __version__
     from emogen.model.io.gltf import model_licence
 
@@ -103,7 +187,7 @@ def _metadata(model: FaceModel, weights: np.ndarray | None = None, **extra: Any)
     record: dict[str, Any] = {
         "model": model.name,
         "model_hash": model.model_hash,
-        "identity": model.identity_label,
+        "shape": model.identity_label,
         **extra,
     }
     if weights is not None:
@@ -112,6 +196,25 @@ def _metadata(model: FaceModel, weights: np.ndarray | None = None, **extra: Any)
         }
     meta["emogen"] = record
     return meta
+
+
+def _look_record(
+    name: str, identity: Identity, appearance: Appearance | None, framing: Framing | None
+) -> dict[str, Any]:
+    """What a stimulus's look depends on, for :func:`_metadata`: enough to render it again."""
+    from emogen.appearance.params import GENERATOR_VERSION
+
+    record: dict[str, Any] = {
+        "identity": name,
+        "appearance": None if appearance is None else appearance.record(),
+        "appearance_generator": None if appearance is None else GENERATOR_VERSION,
+    }
+    shape = identity.shape
+    if not isinstance(shape, str):
+        record["shape_coefficients"] = list(shape)
+    if framing is not None:
+        record["framing"] = framing.value
+    return record
 
 
 def _output_paths(out: Path, n: int, labels: list[str]) -> list[Path]:
@@ -151,28 +254,35 @@ def render(
         bool, typer.Option("--gaze/--no-gaze", help="Turn the eyeballs with eyeLook* weights.")
     ] = True,
     correct: CorrectOpt = False,
+    framing: FramingOpt = Framing.face,
+    plain: PlainOpt = False,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
 ) -> None:
-    """Render faces offscreen to PNG (512×512, frontal camera, the viewer's look)."""
+    """Render faces offscreen to PNG (512×512, frontal camera, the viewer's look) with an
+    identity's shape and appearance."""
     if ctx.invoked_subcommand is not None:
         return
     from emogen.errors import ConfigError
-    from emogen.model import load_model
     from emogen.render.images import add_footer, save_png
 
     if out is None:
         raise ConfigError("--out is required (a .png file, or a folder for several faces)")
-    model = load_model(model_path, identity, rig=rig)
+    model, name, ident = _load(model_path, rig, identity)
     w, labels = _faces(model, weight, weights_file)
     paths = _output_paths(out, len(w), labels)
-    with _renderer(model, size, background, fov, supersample) as r:
+    appearance = _appearance(model, ident, plain)
+    look = _look_record(name, ident, appearance, framing)
+    with _renderer(
+        model, size, background, fov, supersample, appearance=appearance, framing=framing
+    ) as r:
         images = r.render(w, gaze=gaze, correct=correct)
         for i, path in enumerate(paths):
             image = (
                 add_footer(images[i], background=r.look.background_srgb) if footer else images[i]
             )
-            save_png(path, image, _metadata(model, w[i], label=labels[i], corrected=correct))
+            meta = _metadata(model, w[i], label=labels[i], corrected=correct, **look)
+            save_png(path, image, meta)
     typer.echo(f"wrote {paths[0]}" if len(paths) == 1 else f"wrote {len(paths)} faces to {out}")
 
 
@@ -195,6 +305,8 @@ def sheet(
     fov: FovOpt = None,
     supersample: SupersampleOpt = None,
     correct: CorrectOpt = False,
+    framing: FramingOpt = Framing.face,
+    plain: PlainOpt = False,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
 ) -> None:
@@ -202,11 +314,10 @@ def sheet(
     import numpy as np
 
     from emogen.errors import ConfigError
-    from emogen.model import load_model
     from emogen.render.images import save_png
     from emogen.render.weights import describe
 
-    model = load_model(model_path, identity, rig=rig)
+    model, name, ident = _load(model_path, rig, identity)
     rows: list[np.ndarray] = []
     names: list[str] = []
     if weights_file is not None:
@@ -219,11 +330,15 @@ def sheet(
         names.append(describe(named))
     if not rows:
         raise ConfigError("give faces with --weights FILE.csv and/or --face NAME=VALUE,…")
-    with _renderer(model, size, background, fov, supersample) as r:
+    appearance = _appearance(model, ident, plain)
+    look = _look_record(name, ident, appearance, framing)
+    with _renderer(
+        model, size, background, fov, supersample, appearance=appearance, framing=framing
+    ) as r:
         image = r.sheet(
             np.asarray(rows), names if labels else None, columns=columns, correct=correct
         )
-    save_png(out, image, _metadata(model, None, faces=names, corrected=correct))
+    save_png(out, image, _metadata(model, None, faces=names, corrected=correct, **look))
     typer.echo(f"wrote {out}: {len(rows)} faces")
 
 
@@ -258,12 +373,11 @@ def heatmap(
     import numpy as np
 
     from emogen.errors import ConfigError
-    from emogen.model import load_model
     from emogen.render.heatmap import render_heatmap
     from emogen.render.images import save_png
     from emogen.render.weights import read_weights_csv
 
-    model = load_model(model_path, identity, rig=rig)
+    model, name, _ = _load(model_path, rig, identity)  # the heatmap colours the face: no skin
     if weights_file is not None:
         if weight or reference_weight:
             raise ConfigError("give either --weights FILE.csv or --weight/--reference-weight")
@@ -290,6 +404,7 @@ def heatmap(
         _metadata(
             model,
             w[0],
+            identity=name,
             reference={s: float(x) for s, x in zip(model.shape_names, w[1], strict=True) if x},
             vmax_cm=result.vmax,
             max_distance_cm=result.max_distance,

@@ -45,21 +45,29 @@ def example_weights(model: FaceModel, name: str) -> tuple[FaceModel, np.ndarray]
     raise KeyError(name)
 
 
-def render_examples(model: FaceModel, size: int = 512) -> dict[str, np.ndarray]:
-    """Every example rendered: name → (size, size, 3) uint8."""
+Example = tuple[str, str, dict[str, float]]
+
+
+def render_examples(
+    model: FaceModel, size: int = 512, examples: tuple[Example, ...] = EXAMPLES
+) -> dict[str, np.ndarray]:
+    """Examples (name, identity preset, named weights) drawn as a participant sees them — the
+    preset's shape and appearance, the face framing: name → (size, size, 3) uint8."""
+    from emogen.appearance.identities import resolve_identity
     from emogen.render.renderer import Renderer
 
     out: dict[str, np.ndarray] = {}
-    by_identity: dict[str, list[str]] = {}
-    for name, identity, _ in EXAMPLES:
-        by_identity.setdefault(identity, []).append(name)
-    for identity, names in by_identity.items():
-        m = model.with_identity(identity)
-        w = np.concatenate([example_weights(model, n)[1] for n in names])
-        with Renderer(m, size=size) as r:
-            for n, image in zip(names, r.render(w), strict=True):
+    by_identity: dict[str, list[Example]] = {}
+    for example in examples:
+        by_identity.setdefault(example[1], []).append(example)
+    for name, todo in by_identity.items():
+        identity = resolve_identity(name)
+        m = model.with_identity(identity.shape)
+        w = np.stack([m.rig.weights_from_names(named) for _, _, named in todo])
+        with Renderer(m, size=size, appearance=identity.appearance) as r:
+            for (n, _, _), image in zip(todo, r.render(w), strict=True):
                 out[n] = image
-    return out
+    return {e[0]: out[e[0]] for e in examples}
 
 
 def write_doc_images(model: FaceModel, folder: str | Path) -> list[Path]:

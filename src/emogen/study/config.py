@@ -5,13 +5,16 @@
     name = "demo"
     emotions = ["happy", "sad"]          # trials = emotions × repetitions × identities
     repetitions = 1
-    identities = ["generic"]
+    identities = ["female-light", "male-dark", "my_face"]   # presets and the lab's own
     order = "random"                     # or "latin_square", "fixed"
     participant_param = "PROLIFIC_PID"   # URL parameter with the participant id
     [ga]                                 # emogen.config.GAConfig: generations, selections, init …
     generations = 10
     [completion]
     code = "C1A2B3"
+    [identity.my_face]                   # a lab's own identity: shape + appearance keys
+    shape = "female"
+    skin_tone = 6.5
 
 See ``docs/study.md`` for every key.
 """
@@ -22,17 +25,23 @@ import hashlib
 import json
 import re
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, field_serializer, field_validator, model_validator
 
+from emogen.appearance.identities import PRESETS, Identity, identity_from_dict
 from emogen.config import GAConfig, _Strict, read_toml, validate_config
-from emogen.errors import ConfigError
+from emogen.errors import ConfigError, EmoGenError
 from emogen.model.rig import Rig
+
+if TYPE_CHECKING:
+    from emogen.model.face import FaceModel
 
 STUDY_SCHEMA = "emogen.study/1"
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
 _PARAM = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
+#: A lab's identity name: it is a URL path segment of the viewer's GLB and a trial column.
+_IDENTITY = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 
 DEFAULT_CONSENT = (
     "This study asks you to make faces show emotions by choosing among computer-generated "
@@ -84,8 +93,12 @@ class StudyConfig(_Strict):
     seed: Annotated[int, Field(ge=0, lt=2**63)] | None = None
     emotions: tuple[str, ...] = Field(default=("happy",), min_length=1)
     repetitions: Annotated[int, Field(ge=1, le=100)] = 1
-    #: Identity per trial: generic, or a rig preset (male, female).
+    #: Identities, each crossed with every emotion: presets (female-light, female-medium,
+    #: female-dark, male-light, male-medium, male-dark; generic, male, female) or the lab's own.
     identities: tuple[str, ...] = Field(default=("generic",), min_length=1)
+    #: The lab's own identities, ``[identity.NAME]`` tables: ``shape`` (generic, a rig preset or
+    #: identity coefficients) plus any :class:`~emogen.appearance.Appearance` key.
+    identity: dict[str, Identity] = Field(default_factory=dict)
     #: random (seeded per session), latin_square (balanced, row = session number), fixed.
     order: Literal["random", "latin_square", "fixed"] = "random"
     #: URL parameter carrying the participant id (e.g. Prolific's PROLIFIC_PID); also accepted:
@@ -136,6 +149,36 @@ class StudyConfig(_Strict):
             raise ValueError("entries must not be empty")
         return v
 
+    @field_validator("identity", mode="before")
+    @classmethod
+    def _own_identities(cls, v: Any) -> Any:
+        if not isinstance(v, dict):
+            return v
+        out: dict[str, Any] = {}
+        for name, table in v.items():
+            if not _IDENTITY.match(str(name)):
+                raise ValueError(
+                    f"identity name must be 1-64 letters, digits, '_', '-' (starting with a "
+                    f"letter or digit); got {name!r}"
+                )
+            if name in PRESETS:
+                raise ValueError(
+                    f"identity '{name}' is a preset; give the lab's own identity another name"
+                )
+            if isinstance(table, Identity):
+                out[name] = table
+                continue
+            try:
+                out[name] = identity_from_dict(name, table)
+            except ConfigError as exc:
+                raise ValueError(str(exc)) from None
+        return out
+
+    @field_serializer("identity")
+    def _flat_identities(self, v: dict[str, Identity]) -> dict[str, Any]:
+        """As written in the TOML: ``shape`` and the appearance keys side by side."""
+        return {name: identity_table(ident) for name, ident in v.items()}
+
     @model_validator(mode="after")
     def _consistent(self) -> StudyConfig:
         if self.n_trials > 500:
@@ -158,8 +201,24 @@ class StudyConfig(_Strict):
             for r in range(self.repetitions)
         ]
 
+    def identity_of(self, name: str) -> Identity:
+        """The identity called ``name``: the lab's own, a preset, or else a rig shape preset of
+        that name with the default appearance (``check_identities`` vets the names)."""
+        if name in self.identity:
+            return self.identity[name]
+        return PRESETS.get(name) or Identity(shape=name)
+
+    def study_identities(self) -> dict[str, Identity]:
+        """Every identity the study shows, by name, in config order."""
+        return {name: self.identity_of(name) for name in self.identities}
+
     def ga_for(self, identity: str) -> GAConfig:
-        return self.ga.model_copy(update={"identity": identity})
+        """The GA config of a trial of ``identity``; the engine sees the identity's shape
+        preset (coefficient shapes share the generic rig: gene space does not change)."""
+        shape = self.identity_of(identity).shape
+        return self.ga.model_copy(
+            update={"identity": shape if isinstance(shape, str) else "generic"}
+        )
 
     def prompt_for(self, emotion: str) -> str:
         return self.prompt.replace("{EMOTION}", emotion.upper()).replace("{emotion}", emotion)
@@ -169,7 +228,10 @@ class StudyConfig(_Strict):
         return hashlib.sha256(self.canonical_json().encode()).hexdigest()
 
     def canonical_json(self) -> str:
-        return json.dumps(self.model_dump(mode="json"), sort_keys=True, separators=(",", ":"))
+        data = self.model_dump(mode="json")
+        if not data["identity"]:  # studies without their own identities keep their hash
+            del data["identity"]
+        return json.dumps(data, sort_keys=True, separators=(",", ":"))
 
 
 def study_from_dict(data: dict[str, object], source: str = "(study config)") -> StudyConfig:
@@ -198,9 +260,32 @@ def demo_study_path() -> Path:
     return Path(__file__).resolve().parents[1] / "data" / "demo_study.toml"
 
 
-def check_identities(config: StudyConfig, rig: Rig) -> None:
-    """Every identity of the study must be ``generic`` or one of the rig's presets."""
-    known = ["generic", *sorted(rig.identities)]
+def identity_table(identity: Identity) -> dict[str, Any]:
+    """An identity as a flat table (``shape`` then the appearance keys), as in the TOML."""
+    shape = identity.shape if isinstance(identity.shape, str) else list(identity.shape)
+    return {"shape": shape, **identity.appearance.record()}
+
+
+def check_identities(config: StudyConfig, rig: Rig, model: FaceModel | None = None) -> None:
+    """Every identity of the study must be a preset or the lab's own, and every shape one the
+    rig has (``generic`` or its presets); with ``model``, coefficient shapes must fit it."""
+    shapes = ["generic", *sorted(rig.identities)]
+    known = sorted({*PRESETS, *config.identity, *rig.identities})
     bad = [i for i in config.identities if i not in known]
     if bad:
-        raise ConfigError(f"invalid study config: 'identities' must be among {known}; got {bad}")
+        raise ConfigError(
+            f"invalid study config: 'identities' must be among the presets and the study's own "
+            f"[identity.NAME] tables ({', '.join(known)}); got {bad}"
+        )
+    for name in config.identities:
+        shape = config.identity_of(name).shape
+        if isinstance(shape, str) and shape not in shapes:
+            raise ConfigError(
+                f"invalid study config: identity '{name}' has shape '{shape}'; the model's "
+                f"shapes are {', '.join(shapes)} (or a list of identity coefficients)"
+            )
+        if model is not None and not isinstance(shape, str):
+            try:
+                model.resolve_identity(shape)
+            except EmoGenError as exc:
+                raise ConfigError(f"invalid study config: identity '{name}': {exc}") from None

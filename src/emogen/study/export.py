@@ -2,9 +2,12 @@
 
 Tables (one row per …): ``sessions`` (session), ``trials`` (trial of a session), ``faces``
 (face shown, per generation: genes ``g_<gene>`` and full weights ``w_<column>``), ``selections``
-(selected face: role ``elite`` or ``other``), ``restarts`` (press of "Start again") and
-``ratings`` (trial). Every row carries ``schema_version``, ``package_version`` (the version
-that recorded the session), ``model_hash`` and ``study_config_hash``.
+(selected face: role ``elite`` or ``other``), ``restarts`` (press of "Start again"),
+``ratings`` (trial) and ``identities`` (identity of a study: its ``shape`` — a preset name, or
+``shape_coefficients`` as a JSON list — and one column per appearance parameter, with
+``appearance_generator``, so any stimulus can be re-rendered exactly; join on ``study`` and
+``identity``). Every row carries ``schema_version``, ``package_version`` (the version that
+recorded the session; for ``identities``, the study), ``model_hash`` and ``study_config_hash``.
 """
 
 from __future__ import annotations
@@ -16,7 +19,10 @@ from typing import Any
 import pandas as pd
 from sqlalchemy import func, select
 
+from emogen.appearance.identities import Identity
+from emogen.appearance.params import GENERATOR_VERSION, Appearance
 from emogen.errors import ConfigError
+from emogen.study.config import StudyConfig
 from emogen.study.storage import (
     SCHEMA_VERSION,
     FaceRow,
@@ -31,7 +37,7 @@ from emogen.study.storage import (
     as_utc,
 )
 
-TABLES = ("sessions", "trials", "faces", "selections", "restarts", "ratings")
+TABLES = ("sessions", "trials", "faces", "selections", "restarts", "ratings", "identities")
 STAMPS = ("schema_version", "package_version", "model_hash", "study_config_hash")
 
 
@@ -302,7 +308,51 @@ def export_tables(
                 **stamp(by_session[t.session_id]),
             }
         )
+    shown = {s.study_id for s in sessions} if session_ids is not None else set(studies)
+    for sid in sorted(shown):
+        rows["identities"].extend(identity_rows(studies[sid]))
     return {name: _frame(name, rows[name]) for name in TABLES}
+
+
+def identity_rows(study: StudyRow) -> list[dict[str, Any]]:
+    """One row per identity of ``study`` (from its recorded config): shape and appearance."""
+    config = StudyConfig.model_validate(json.loads(study.config_json))
+    out = []
+    for name, ident in config.study_identities().items():
+        coeffs = None if isinstance(ident.shape, str) else json.dumps(list(ident.shape))
+        out.append(
+            {
+                "study": study.name,
+                "identity": name,
+                "shape": ident.shape if isinstance(ident.shape, str) else None,
+                "shape_coefficients": coeffs,
+                **ident.appearance.record(),
+                "appearance_generator": GENERATOR_VERSION,
+                "schema_version": SCHEMA_VERSION,
+                "package_version": study.package_version,
+                "model_hash": study.model_hash,
+                "study_config_hash": study.config_hash,
+            }
+        )
+    return out
+
+
+def identities_from_table(table: pd.DataFrame) -> dict[tuple[str, str], Identity]:
+    """The ``identities`` export table (as read back from Parquet or CSV) as identities, by
+    (study, identity name)."""
+    out = {}
+    for row in table.to_dict("records"):
+        coeffs = row.get("shape_coefficients")
+        shape: str | tuple[float, ...] = (
+            tuple(float(x) for x in json.loads(coeffs))
+            if isinstance(coeffs, str) and coeffs
+            else str(row["shape"])
+        )
+        appearance = Appearance(**{k: row[k] for k in Appearance.model_fields})
+        out[(str(row["study"]), str(row["identity"]))] = Identity(
+            shape=shape, appearance=appearance
+        )
+    return out
 
 
 _EMPTY_COLUMNS = {
@@ -312,6 +362,7 @@ _EMPTY_COLUMNS = {
     "selections": ["study", "session_id", "participant_id", "trial", "attempt", "generation"],
     "restarts": ["study", "session_id", "participant_id", "trial", "attempt", "generation"],
     "ratings": ["study", "session_id", "participant_id", "trial"],
+    "identities": ["study", "identity", "shape", "shape_coefficients"],
 }
 
 

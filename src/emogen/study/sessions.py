@@ -118,8 +118,9 @@ class StudyContext:
 
 
 class StudyCorrectors:
-    """One corrector per identity (``correctives_of`` the model with that identity), made on
-    first use; none when the study does not correct faces."""
+    """One corrector per identity shape (``correctives_of`` the model with the shape of the
+    study's identity of that name; identities that share a shape share it), made on first use;
+    none when the study does not correct faces."""
 
     def __init__(self, config: StudyConfig, model: FaceModel | None) -> None:
         if config.correct and model is None:
@@ -127,16 +128,18 @@ class StudyCorrectors:
                 "the study corrects faces (correct = true): the server needs the face model "
                 "(pass model=…), or set correct = false"
             )
+        self.config = config
         self.model = model if config.correct else None
-        self._made: dict[str, Corrector] = {}
+        self._made: dict[str | tuple[float, ...], Corrector] = {}
 
     def __call__(self, identity: str) -> Corrector | None:
         if self.model is None:
             return None
-        if identity not in self._made:
-            m = self.model if identity == "generic" else self.model.with_identity(identity)
-            self._made[identity] = correctives_of(m)
-        return self._made[identity]
+        shape = self.config.identity_of(identity).shape
+        if shape not in self._made:
+            m = self.model if shape == "generic" else self.model.with_identity(shape)
+            self._made[shape] = correctives_of(m)
+        return self._made[shape]
 
 
 class StudyService:
@@ -149,7 +152,7 @@ class StudyService:
 
     def __init__(self, config: StudyConfig, store: Store, rig: Rig, *, model_name: str,
                  model_hash: str, model: FaceModel | None = None) -> None:  # fmt: skip
-        check_identities(config, rig)
+        check_identities(config, rig, model)
         self.store = store
         self.correctors = StudyCorrectors(config, model)
         probe = Engine(config.ga_for("generic"), rig, 0, corrector=self.correctors("generic")).ask()

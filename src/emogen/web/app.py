@@ -30,6 +30,7 @@ from emogen.study.errors import StudyError
 from emogen.study.sessions import StudyService
 from emogen.study.storage import Store, resolve_database_url
 from emogen.web.assets import ModelGLBs
+from emogen.web.faces import FacePNGs
 
 log = logging.getLogger("emogen.web")
 
@@ -112,8 +113,10 @@ def create_app(
     app.state.researcher_token = token or None
     app.state.templates = Jinja2Templates(directory=str(HERE / "templates"))
     app.state.viewer = viewer_built()
-    app.state.glbs = ModelGLBs(model)
-    app.state.faces = None  # FacePNGs, made on first use
+    identities = config.study_identities()
+    app.state.glbs = ModelGLBs(model, identities=identities)
+    # no thread or OpenGL context until the first PNG is asked for
+    app.state.faces = FacePNGs(model, correct=config.correct, identities=identities)
 
     @app.middleware("http")
     async def timing(request: Request, call_next: Any) -> Any:

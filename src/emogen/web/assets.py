@@ -1,7 +1,11 @@
 """The face model for the browser viewer: a GLB with morph targets per identity, cached on disk.
 
-``export_model_glb`` takes a few seconds, so each (model hash, identity, package version, GLB
-layout) is written once to the cache folder (beside the compiled model cache), with a gzip copy.
+Each identity (a preset or the study's own, :func:`~emogen.appearance.identities.resolve_identity`)
+gets the model with its shape, its skin textures embedded and the camera fitted to its face.
+``export_model_glb`` takes a few seconds, so each (model hash, identity, textures key, package
+version, GLB layout) is written once to the cache folder (beside the compiled model cache),
+with a gzip copy; the textures key covers the appearance, so another appearance of the same
+name never reuses a GLB.
 """
 
 from __future__ import annotations
@@ -17,41 +21,69 @@ from fastapi import Path as PathParam
 from fastapi.responses import FileResponse
 
 from emogen import __version__
+from emogen.appearance.identities import Identity, resolve_identity
+from emogen.errors import ConfigError
 from emogen.model.face import FaceModel
 from emogen.study.errors import SessionNotFound
 
 router = APIRouter()
-#: Bumped when the GLB's layout changes (2: corrective morph targets after the shapes).
-GLB_LAYOUT = 2
+#: Bumped when the GLB's layout changes (2: corrective morph targets after the shapes;
+#: 3: skin textures, appearance and fitted camera).
+GLB_LAYOUT = 3
 
 
 class ModelGLBs:
-    def __init__(self, model: FaceModel, folder: Path | None = None) -> None:
+    """The viewer's GLB per identity name. ``identities``: the study's own identities
+    (by name), looked up before the presets."""
+
+    def __init__(
+        self,
+        model: FaceModel,
+        identities: dict[str, Identity] | None = None,
+        folder: Path | None = None,
+    ) -> None:
         from emogen.model.io.cache import cache_root
 
         self.model = model
+        self.identities = dict(identities or {})
         self.folder = folder or cache_root() / "glb"
         self._lock = threading.Lock()
+        self._paths: dict[str, Path] = {}
 
     def path(self, identity: str) -> Path:
         """The GLB of ``identity`` (made on first use); unknown identities are not found."""
-        if identity != "generic" and identity not in self.model.rig.identities:
-            raise SessionNotFound(f"no identity '{identity}' in this study's model")
-        name = f"{self.model.model_hash[:20]}-{identity}-{__version__}-l{GLB_LAYOUT}.glb"
-        path = self.folder / name
+        try:
+            resolved = resolve_identity(identity, self.identities)
+        except ConfigError:
+            raise SessionNotFound(f"no identity '{identity}' in this study") from None
+        from emogen.appearance.textures import skin_textures
+        from emogen.render.look import default_look, fitted_look
+
         with self._lock:
+            known = self._paths.get(identity)
+            if known is not None and known.is_file() and known.with_suffix(".glb.gz").is_file():
+                return known
+            model = self.model.with_identity(resolved.shape)
+            look = default_look()
+            textures = skin_textures(model, resolved.appearance, irradiance=look.front_irradiance())
+            name = (
+                f"{self.model.model_hash[:20]}-{identity}-{textures.key[:16]}-{__version__}"
+                f"-l{GLB_LAYOUT}.glb"
+            )
+            path = self.folder / name
             if not path.is_file() or not path.with_suffix(".glb.gz").is_file():
                 from emogen.model.io.gltf import export_model_glb
 
                 self.folder.mkdir(parents=True, exist_ok=True)
-                model = self.model if identity == "generic" else self.model.with_identity(identity)
+                camera = fitted_look(look, model, resolved.appearance).camera
                 tmp = path.with_suffix(f".tmp{os.getpid()}.glb")
-                export_model_glb(model, tmp)
+                export_model_glb(model, tmp, textures=textures, camera=camera)
                 data = tmp.read_bytes()
                 gz = path.with_suffix(f".tmp{os.getpid()}.gz")
                 gz.write_bytes(gzip.compress(data, compresslevel=6, mtime=0))
                 os.replace(gz, path.with_suffix(".glb.gz"))
                 os.replace(tmp, path)
+            self._paths[identity] = path
         return path
 
 

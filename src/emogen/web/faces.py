@@ -1,7 +1,8 @@
 """Server-side face images (PNG) for browsers without WebGL, rendered by ``emogen.render``.
 
 OpenGL contexts belong to the thread that made them, so every render runs on one worker thread
-that owns one renderer per identity. Recent images are cached by (identity, weights). With
+that owns one renderer per identity: the identity's shape with its appearance (skin tone, brows,
+lips, hair), as in the browser viewer. Recent images are cached by (identity, weights). With
 ``correct`` (the study's ``correct = true``) the faces are corrected as in the GA and the
 browser viewer (``Renderer.render(weights, correct=True)``) from their shape weights.
 """
@@ -16,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from emogen.appearance.identities import Identity, resolve_identity
 from emogen.model.face import FaceModel
 
 PNG_SIZE = 256
@@ -23,10 +25,24 @@ CACHE_SIZE = 512
 
 
 class FacePNGs:
-    def __init__(self, model: FaceModel, size: int = PNG_SIZE, *, correct: bool = True) -> None:
+    """PNGs of faces by identity name.
+
+    identities : the study's identities by name (``StudyConfig.study_identities()``); names not
+        in it are looked up among the presets (``emogen.appearance.identities.PRESETS``)
+    """
+
+    def __init__(
+        self,
+        model: FaceModel,
+        size: int = PNG_SIZE,
+        *,
+        correct: bool = True,
+        identities: dict[str, Identity] | None = None,
+    ) -> None:
         self.model = model
         self.size = size
         self.correct = correct
+        self.identities = dict(identities or {})
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="emogen-render")
         self._renderers: dict[str, Any] = {}
         self._cache: OrderedDict[str, bytes] = OrderedDict()
@@ -49,8 +65,9 @@ class FacePNGs:
         from emogen.render.renderer import Renderer
 
         if identity not in self._renderers:
-            model = self.model if identity == "generic" else self.model.with_identity(identity)
-            self._renderers[identity] = Renderer(model, size=self.size)
+            ident = resolve_identity(identity, self.identities)
+            model = self.model.with_identity(ident.shape)
+            self._renderers[identity] = Renderer(model, size=self.size, appearance=ident.appearance)
         image = self._renderers[identity].render(weights[None, :], correct=self.correct)[0]
         return png_bytes(image)
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Path, Request
+from fastapi import APIRouter, HTTPException, Path, Request
 from fastapi.responses import HTMLResponse, JSONResponse, Response
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -190,12 +190,10 @@ async def face_png(
     """A face of the current trial rendered on the server (for browsers without WebGL)."""
     from starlette.concurrency import run_in_threadpool
 
-    from emogen.web.faces import FacePNGs
-
     service = _service(request)
     weights, identity = await run_in_threadpool(service.face_weights, token, face_id)
-    app = request.app
-    if app.state.faces is None:
-        app.state.faces = FacePNGs(app.state.model, correct=app.state.config.correct)
-    png = await app.state.faces.render(weights, identity)
+    faces = request.app.state.faces  # made with the study's identities when the app starts
+    if faces is None:
+        raise HTTPException(503, "the server is shutting down; try again in a moment")
+    png = await faces.render(weights, identity)
     return Response(png, media_type="image/png", headers={"Cache-Control": "private, max-age=3600"})

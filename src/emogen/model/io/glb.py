@@ -113,6 +113,12 @@ class GlbBuilder:
             }
         )
 
+    def blob(self, data: bytes) -> int:
+        """A bufferView of its own holding ``data`` as is (an embedded image); its index."""
+        pool = self._pool(f"blob{len(self._pools)}")
+        pool.append(data)
+        return pool.view
+
     def sparse(self, values: np.ndarray, *, normalized: bool = False, min_max: bool = False) -> int:
         """An accessor of (n, k) values, mostly zero, stored as sparse (or as zeros alone)."""
         acc = self._accessor_header(values, normalized, min_max)

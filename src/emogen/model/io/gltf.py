@@ -15,6 +15,13 @@ Each primitive's ``extras.emogen`` maps its vertices and triangles back to the s
 re-imports in the source's vertex order with its regions (``asset.extras.emogen.regions``).
 UV seams duplicate vertices: a primitive lists its source vertices in source order first,
 then the seam copies.
+
+With ``textures`` (an identity's :class:`~emogen.appearance.textures.SkinTextures`) the GLB
+embeds the skin atlas and the detail tile as WebP images (``EXT_texture_webp``), records their
+texture indices, the appearance and the fitted camera in ``asset.extras.emogen``
+(``textures``, ``appearance``, ``camera``), and the skin materials show the atlas as their
+base colour (``KHR_texture_transform`` maps the UDIM ``u`` in tiles to the atlas) for viewers
+that show the GLB as is; EmoGen's viewer samples both images itself, as shade.glsl does.
 """
 
 from __future__ import annotations
@@ -35,7 +42,9 @@ from emogen.model.io.obj import write_obj
 from emogen.model.regions import ICT_VISIBLE_PARTS
 
 if TYPE_CHECKING:
+    from emogen.appearance.textures import SkinTextures
     from emogen.model.face import FaceModel
+    from emogen.render.look import Camera
 
 __all__ = [
     "ICT_COPYRIGHT",
@@ -71,6 +80,11 @@ _COLOURS = (
     ("tongue", (0.78, 0.40, 0.42)),
 )
 _SKIN = (0.82, 0.64, 0.55)
+#: Regions whose materials carry the skin atlas: the regions of look.json's ``skin`` part
+#: (tests/model/test_gltf.py checks they agree; the model layer does not read the look).
+SKIN_REGIONS = ("face", "head_neck")
+# Texture sampling as the offscreen renderer (emogen.render.gl.GLRenderer.set_textures).
+_LINEAR, _LINEAR_MIPMAP_LINEAR, _CLAMP, _REPEAT = 9729, 9987, 33071, 10497
 
 
 # ---- geometry -------------------------------------------------------------------------------
@@ -321,8 +335,8 @@ def _materials(model: FaceModel, layout: _Layout) -> list[dict[str, Any]]:
     return out
 
 
-def _primitive_extras(model: FaceModel, layout: _Layout, prim: _Primitive) -> dict[str, Any]:
-    regions = [
+def _primitive_regions(model: FaceModel, layout: _Layout, prim: _Primitive) -> list[str]:
+    return [
         p
         for p in layout.parts
         if np.any(
@@ -330,6 +344,10 @@ def _primitive_extras(model: FaceModel, layout: _Layout, prim: _Primitive) -> di
             & (prim.tri_polygon < model.regions[p].p_stop)
         )
     ]
+
+
+def _primitive_extras(model: FaceModel, layout: _Layout, prim: _Primitive) -> dict[str, Any]:
+    regions = _primitive_regions(model, layout, prim)
     return {
         "name": model.materials[prim.material] if prim.material < len(model.materials) else "",
         "emogen": {
@@ -347,6 +365,49 @@ def _uvs(model: FaceModel, prim: _Primitive) -> np.ndarray | None:
     uv[prim.uv < 0] = 0.0
     uv[:, 1] = 1.0 - uv[:, 1]  # OBJ's v points up, glTF's down
     return uv
+
+
+def _camera_extras(camera: Camera) -> dict[str, Any]:
+    return {
+        "position_cm": [float(x) for x in camera.position],
+        "target_cm": [float(x) for x in camera.target],
+        "up": [float(x) for x in camera.up],
+        "fov_y_deg": float(camera.fov_y_deg),
+        "near_cm": float(camera.near),
+        "far_cm": float(camera.far),
+    }
+
+
+def _add_textures(
+    doc: dict[str, Any],
+    b: GlbBuilder,
+    textures: SkinTextures,
+    skin_materials: list[int],
+) -> dict[str, int]:
+    """Embed the atlas and the detail tile (WebP) in ``doc``; the skin materials show the
+    atlas. Returns the texture indices ``{"skin": i, "detail": j}``."""
+    h, w = textures.albedo.shape[:2]
+    tiles = w / h  # the atlas holds SKIN_TILES square UDIM tiles side by side
+    doc["images"] = [
+        {"name": name, "bufferView": b.blob(data), "mimeType": "image/webp"}
+        for name, data in (("skin", textures.albedo_webp), ("detail", textures.detail_webp))
+    ]
+    doc["samplers"] = [
+        {"magFilter": _LINEAR, "minFilter": _LINEAR_MIPMAP_LINEAR, "wrapS": wrap, "wrapT": wrap}
+        for wrap in (_CLAMP, _REPEAT)
+    ]
+    doc["textures"] = [
+        {"name": name, "sampler": k, "extensions": {"EXT_texture_webp": {"source": k}}}
+        for k, name in enumerate(("skin", "detail"))
+    ]
+    for m in skin_materials:
+        pbr = doc["materials"][m]["pbrMetallicRoughness"]
+        pbr["baseColorFactor"] = [1.0, 1.0, 1.0, 1.0]
+        pbr["baseColorTexture"] = {
+            "index": 0,
+            "extensions": {"KHR_texture_transform": {"scale": [1.0 / tiles, 1.0]}},
+        }
+    return {"skin": 0, "detail": 1}
 
 
 def _write(path: Path, data: bytes) -> None:
@@ -423,6 +484,8 @@ def export_model_glb(
     corrective_tolerance_cm: float = CORRECTIVE_TOLERANCE_CM,
     corrective_normal_tolerance: float = CORRECTIVE_NORMAL_TOLERANCE,
     corrective_normals: bool = False,
+    textures: SkinTextures | None = None,
+    camera: Camera | None = None,
 ) -> ExportReport:
     """Write the model as a GLB with one morph target per shape (positions and normals).
 
@@ -437,6 +500,11 @@ def export_model_glb(
     ``corrective_tolerance_cm`` and are rounded to about that step; their NORMAL deltas are
     zero unless ``corrective_normals`` (then those under ``corrective_normal_tolerance``
     are left out), which keeps the ICT GLB under 3 MB gzipped.
+
+    ``textures``: the identity's skin textures, embedded as WebP (``EXT_texture_webp``) and
+    shown by the materials of :data:`SKIN_REGIONS`; ``asset.extras.emogen`` then records
+    ``textures`` (texture indices ``skin``, ``detail``) and ``appearance``. ``camera``: the
+    camera to view the face with (``asset.extras.emogen.camera``, centimetres).
     """
     path = Path(path)
     layout = _layout(model, parts)
@@ -539,12 +607,15 @@ def export_model_glb(
         mesh["weights"] = [0.0] * n_targets
         mesh["extras"] = {"targetNames": [*model.shape_names, *corrective_names]}
     gaze = _gaze_extras(model)
-    extras = {
+    extras: dict[str, Any] = {
         "shape_names": list(model.shape_names),
         **({"corrective_names": list(corrective_names)} if corrective_names else {}),
         "position_step_cm": step,
         **({"gaze": gaze} if gaze else {}),
+        **({"camera": _camera_extras(camera)} if camera is not None else {}),
     }
+    if textures is not None:
+        extras["appearance"] = textures.appearance.record()
     doc: dict[str, Any] = {
         "asset": _asset(model, layout, extras),
         "scene": 0,
@@ -553,8 +624,21 @@ def export_model_glb(
         "meshes": [mesh],
         "materials": _materials(model, layout),
     }
-    if quantize:
-        doc["extensionsUsed"] = doc["extensionsRequired"] = ["KHR_mesh_quantization"]
+    required = ["KHR_mesh_quantization"] if quantize else []
+    used = list(required)
+    if textures is not None:
+        skin = [
+            k
+            for k, prim in enumerate(layout.primitives)
+            if set(_primitive_regions(model, layout, prim)) & set(SKIN_REGIONS)
+        ]
+        doc["asset"]["extras"]["emogen"]["textures"] = _add_textures(doc, b, textures, skin)
+        required.append("EXT_texture_webp")
+        used += ["EXT_texture_webp", "KHR_texture_transform"]
+    if used:
+        doc["extensionsUsed"] = used
+    if required:
+        doc["extensionsRequired"] = required
     data = b.finish(doc)
     _write(path, data)
     return ExportReport(

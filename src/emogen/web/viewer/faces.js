@@ -2,12 +2,17 @@
 // geometry per GLB primitive, per-face meshes holding only their morph influences, each face
 // drawn into its slot's rectangle with viewport + scissor.
 import {
+  ClampToEdgeWrapping,
   ColorManagement,
   Color,
   Group,
+  LinearFilter,
+  LinearMipmapLinearFilter,
   LinearSRGBColorSpace,
   Matrix4,
+  NoColorSpace,
   PerspectiveCamera,
+  RepeatWrapping,
   Scene,
   Vector2,
   Vector3,
@@ -41,14 +46,37 @@ export function probeWebGL() {
   return probed;
 }
 
-function makeCamera() {
-  const c = look.camera;
+// The camera: the GLB's own (asset.extras.emogen.camera, fitted to its identity's face, as the
+// offscreen renderer fits it) or else the look's default framing.
+function makeCamera(c = look.framings[look.framing]) {
   const camera = new PerspectiveCamera(c.fov_y_deg, 1, c.near_cm, c.far_cm);
   camera.up.set(...c.up);
   camera.position.set(...c.position_cm);
   camera.lookAt(new Vector3(...c.target_cm));
   camera.updateMatrixWorld();
   return camera;
+}
+
+// The identity's skin atlas and detail tile from the GLB (asset.extras.emogen.textures), set up
+// as emogen.render.gl.GLRenderer.set_textures: trilinear mipmaps, the atlas clamped, the tile
+// repeated, texels passed as they are (shade.glsl linearises; no colour-space conversion, no
+// flip: row 0 is glTF v = 0). Null when the GLB has none.
+async function skinTextures(gltf, indices) {
+  if (!indices) return null;
+  const [skin, detail] = await Promise.all(
+    [indices.skin, indices.detail].map((i) => gltf.parser.getDependency('texture', i)),
+  );
+  for (const [t, wrap] of [[skin, ClampToEdgeWrapping], [detail, RepeatWrapping]]) {
+    t.colorSpace = NoColorSpace;
+    t.flipY = false;
+    t.wrapS = t.wrapT = wrap;
+    t.minFilter = LinearMipmapLinearFilter;
+    t.magFilter = LinearFilter;
+    t.generateMipmaps = true;
+    t.anisotropy = 1;
+    t.needsUpdate = true;
+  }
+  return { skin, detail };
 }
 
 export class FaceGrid {
@@ -83,6 +111,9 @@ export class FaceGrid {
     this.timings = { gltf_ms: performance.now() - t0 };
     const extras = gltf.asset?.extras?.emogen ?? {};
     this.asset = gltf.asset;
+    if (extras.camera) this.camera = makeCamera(extras.camera);
+    const textures = await skinTextures(gltf, extras.textures);
+    this.textured = textures !== null;
     gltf.scene.updateMatrixWorld(true);
     const meshes = [];
     gltf.scene.traverse((o) => o.isMesh && meshes.push(o));
@@ -121,7 +152,9 @@ export class FaceGrid {
       const copies = [];
       copy.traverse((o) => o.isMesh && copies.push(o));
       copies.forEach((mesh, k) => {
-        mesh.material = faceMaterial(prims[k].part, centres(meshes[k]), this.shapeNames.length);
+        mesh.material = faceMaterial(
+          prims[k].part, centres(meshes[k]), this.shapeNames.length, textures,
+        );
         mesh.renderOrder = order(prims[k].part);
         mesh.frustumCulled = false;
       });

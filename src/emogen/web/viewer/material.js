@@ -1,5 +1,7 @@
 // The face material: three.js morph targets + rigid eye rotation in the vertex shader, and the
-// fragment shading of shade.glsl (the same text the offscreen renderer compiles).
+// fragment shading of shade.glsl (the same text the offscreen renderer compiles). Skin is
+// textured by the identity's atlas and detail tile from the GLB (see faces.js), sampled with
+// glTF's TEXCOORD_0 (three's built-in `uv` attribute).
 import { DoubleSide, FrontSide, Matrix3, NormalBlending, ShaderMaterial, Vector3 } from 'three';
 import { glslDefines, shadeGlsl } from './look.js';
 
@@ -23,6 +25,7 @@ varying float vPart;
 varying vec3 vAlbedo;
 varying vec4 vSurface;
 varying vec4 vEye;
+varying vec2 vUv;
 void main() {
     vec3 objectNormal = vec3(normal);
     vec3 transformed = vec3(position);
@@ -51,6 +54,7 @@ void main() {
     vAlbedo = aAlbedo;
     vSurface = aSurface;
     vEye = aEye;
+    vUv = uv;
     gl_Position = projectionMatrix * viewMatrix * world;
 }
 `;
@@ -62,19 +66,24 @@ varying float vPart;
 varying vec3 vAlbedo;
 varying vec4 vSurface;
 varying vec4 vEye;
+varying vec2 vUv;
 void main() {
 #ifdef EMOGEN_DISCARD
     if (emogenHidden(vPart, vEye)) discard;
 #endif
     vec3 n = normalize(vNormal);
     vec3 v = normalize(cameraPosition - vWorld);
-    vec3 c = emogenShade(vPart, vAlbedo, vSurface.xyz, vWorld, n, v, vEye, gl_FrontFacing);
+    vec3 c = emogenShade(vPart, vAlbedo, vSurface.xyz, vWorld, n, v, vEye, gl_FrontFacing, vUv);
     gl_FragColor = vec4(c, vSurface.w);
 }
 `;
 
-/** A material for one primitive whose vertices belong to `part` (a look.json part). */
-export function faceMaterial(part, eyeCentres, nShapes) {
+/**
+ * A material for one primitive whose vertices belong to `part` (a look.json part).
+ * textures: {skin, detail} three.js Textures of the identity (see skinTextures in faces.js),
+ * or null: every part in its flat look.json colour.
+ */
+export function faceMaterial(part, eyeCentres, nShapes, textures = null) {
   const blended = part.opacity < 1 || part.fringe_cm > 0;
   const maxActive = Math.max(1, nShapes);
   return new ShaderMaterial({
@@ -88,6 +97,9 @@ export function faceMaterial(part, eyeCentres, nShapes) {
       uEyeCentreRight: { value: eyeCentres?.right?.clone() ?? new Vector3() },
       uActiveCount: { value: 0 },
       uActive: { value: new Int32Array(maxActive) },
+      emogenSkin: { value: textures?.skin ?? null },
+      emogenDetail: { value: textures?.detail ?? null },
+      emogenTextured: { value: textures ? 1 : 0 },
     },
     side: part.double_sided ? DoubleSide : FrontSide,
     transparent: blended,
