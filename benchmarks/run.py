@@ -139,7 +139,7 @@ def main() -> None:
     parser.add_argument(
         "--only",
         nargs="*",
-        choices=["gltf", "render", "appearance", "correct", "simulate", "study"],
+        choices=["gltf", "render", "viewer", "appearance", "correct", "simulate", "study"],
         help="run only these sections after the model benchmarks",
     )
     args = parser.parse_args()
