@@ -21,7 +21,7 @@ viewer_site = vs.viewer_site
 chromium = vs.chromium
 Site = vs.Site
 
-# A sanity bound only: the < 3 s page-ready target is measured by benchmarks/bench_render.py
+# A sanity bound only: the < 3 s page-ready target is measured by benchmarks/bench_viewer.py
 # (timed assertions in tests flake on a loaded 2-core machine).
 READY_LIMIT_S = 20.0
 # Browser vs offscreen, same face at 512²: see test_browser_and_offscreen_agree.
