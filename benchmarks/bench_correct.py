@@ -50,6 +50,7 @@ def ga_faces(rig, n: int, *, seed: int = 20261121) -> tuple[np.ndarray, np.ndarr
     """
     from emogen.config import PAPER_SELECTIONS, GAConfig
     from emogen.ga import Engine, protocol_init, random_faces
+    from emogen.ga.draws import BlockDraws
 
     rng = np.random.default_rng(seed)
     per = -(-n // 3)
@@ -61,7 +62,7 @@ def ga_faces(rig, n: int, *, seed: int = 20261121) -> tuple[np.ndarray, np.ndarr
         rows.append(rig.expand(g))
         count += len(g)
     source += ["protocol"] * count
-    rows.append(rig.expand(random_faces(per, genes_n, 6, rng=rng)))
+    rows.append(rig.expand(random_faces(per, genes_n, 6, BlockDraws([rng], per * 12))[0]))
     source += ["random"] * per
     config = GAConfig()
     evolved = 0

@@ -6,7 +6,15 @@ import numpy as np
 import pytest
 
 from emogen.errors import SelectionError
-from emogen.ga.classical import classical_next_generation, ranked_pairs
+from emogen.ga.algorithm import Offspring, ranked_pairs
+from emogen.ga.algorithm import classical_next_generation as batch_classical
+from emogen.ga.draws import BlockDraws
+
+
+def classical_next_generation(genes, ranking, *, rng, **kw) -> Offspring:  # type: ignore[no-untyped-def]
+    """One run (a batch of one) from ``rng``'s stream-2 block."""
+    off = batch_classical(genes[None], np.asarray(ranking)[None], draws=BlockDraws([rng], 8), **kw)
+    return Offspring(off.genes[0], off.parents[0], off.operators)
 
 
 def test_pairs_in_order_of_fitness_each_once() -> None:

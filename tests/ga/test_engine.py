@@ -137,7 +137,11 @@ def test_json_round_trip_is_exact(ict_model) -> None:
     assert a.to_json() == b.to_json()
     # the saved state is plain JSON with the record fields
     state = json.loads(text)
-    assert state["seed"] == 2**62 + 12345 and state["schema"] == "emogen.ga.engine/1"
+    assert (
+        state["seed"] == 2**62 + 12345
+        and state["schema"] == "emogen.ga.engine/2"
+        and state["stream"] == 2
+    )
     assert state["config"]["init"]["activation_range"] == [2, 9]
     assert len(state["selections"]) == 4
 

@@ -1,4 +1,9 @@
-"""The GA operators S, B, M, A, R: properties (hypothesis) and distributions (scipy.stats)."""
+"""The GA operators S, B, M, A, R: properties (hypothesis) and distributions (scipy.stats).
+
+B, M, R run over a leading run axis with their numbers from a Draws; the helpers below give each
+test's rows their own generators, on stream 1 or 2 (by the seed's parity), so both streams'
+draws are checked for the operators' distributions.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +15,38 @@ from hypothesis.extra.numpy import arrays
 from scipy import stats
 
 from emogen.errors import SelectionError, ShapeError
-from emogen.ga.operators import average, crossover, crossover_pair, mutate, random_faces, select
+from emogen.ga import operators as ops
+from emogen.ga.draws import BlockDraws, Draws, LegacyDraws
+from emogen.ga.operators import select
+
+
+def draws_for(rng: np.random.Generator, runs: int) -> Draws:
+    gens = rng.spawn(runs)
+    return LegacyDraws(gens) if int(rng.integers(2)) else BlockDraws(gens, 4)
+
+
+def crossover(a: np.ndarray, b: np.ndarray, *, rng: np.random.Generator) -> np.ndarray:
+    """Row i of a with row i of b, each row a run."""
+    return ops.crossover(a, b, draws_for(rng, len(a)))
+
+
+def crossover_pair(a, b, *, rng):  # type: ignore[no-untyped-def]
+    children = ops.crossover_pair(a, b, draws_for(rng, len(a)))
+    return children[:, 0], children[:, 1]
+
+
+def mutate(genes: np.ndarray, m: int, *, rng: np.random.Generator) -> np.ndarray:
+    """The faces of one run."""
+    return ops.mutate(np.asarray(genes)[None], m, draws_for(rng, 1))[0]
+
+
+def average(members: np.ndarray) -> np.ndarray:
+    return ops.average(np.asarray(members)[None])[0]
+
+
+def random_faces(n: int, k: int, x: int, *, rng: np.random.Generator) -> np.ndarray:
+    return ops.random_faces(n, k, x, draws_for(rng, 1))[0]
+
 
 unit = st.floats(0, 1, allow_nan=False)
 seeds = st.integers(0, 2**32 - 1)
@@ -55,7 +91,9 @@ def test_crossover_takes_each_gene_from_either_parent_with_probability_half() ->
 
 
 def test_crossover_rejects_mismatched_parents() -> None:
-    with pytest.raises(ShapeError, match="equal shapes"):
+    with pytest.raises(
+        ShapeError, match=r"both have shape \(n_runs, n_genes\); got \(1, 3\) and \(1, 4\)"
+    ):
         crossover(np.zeros((1, 3)), np.zeros((1, 4)), rng=np.random.default_rng(0))
 
 

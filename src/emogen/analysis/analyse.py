@@ -313,8 +313,8 @@ def final_faces_simulator(
     weights in the rig's shape order), with ``config``'s GA settings and a CD observer. Run r
     always uses the r-th seed spawned from ``seed``."""
     from emogen.rng import spawn_seeds
-    from emogen.simulate.batch import simulate_runs
     from emogen.simulate.runner import build_problem
+    from emogen.simulate.vectorised import simulate_runs
 
     problem = build_problem(
         config.model_copy(update={"runs": 1, "seed": seed}), rig, all_weights=True

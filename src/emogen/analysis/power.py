@@ -61,8 +61,8 @@ def final_faces_pool(
     """Final faces (pool, S) of GA runs toward ``prototype`` (full weights), one per
     simulated participant (each its own jittered prototype when ``participant_sd`` > 0)."""
     from emogen.rng import spawn_seeds
-    from emogen.simulate.batch import simulate_runs
     from emogen.simulate.runner import build_problem, run_simulation
+    from emogen.simulate.vectorised import simulate_runs
 
     named = {s: float(v) for s, v in zip(rig.shape_names, prototype, strict=True) if v > 0}
     if not named:

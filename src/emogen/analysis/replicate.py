@@ -190,8 +190,8 @@ class Replication:
         """Run (or fetch from the cache) one condition; options as :meth:`config`, plus
         ``training_weights`` (n, S) for the empirical metrics."""
         from emogen.rng import spawn_seeds
-        from emogen.simulate.batch import simulate_runs
         from emogen.simulate.runner import build_problem
+        from emogen.simulate.vectorised import simulate_runs
 
         training = options.pop("training_weights", None)
         key = (
@@ -240,8 +240,8 @@ class Replication:
 
         from emogen.analysis.targets import participant_target
         from emogen.rng import spawn_seeds
-        from emogen.simulate.batch import simulate_runs
         from emogen.simulate.runner import build_problem
+        from emogen.simulate.vectorised import simulate_runs
 
         rng = np.random.default_rng(seed)
         cfg = self.config(

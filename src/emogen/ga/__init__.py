@@ -1,12 +1,14 @@
-"""EmoGen's genetic algorithm: operators (S, B, M, A, R), initialisation, the engine."""
+"""EmoGen's genetic algorithm: operators (S, B, M, A, R), Algorithm 1 over runs, the engine."""
 
-from emogen.ga.classical import classical_next_generation
+from emogen.ga.algorithm import Offspring, classical_next_generation, next_generation
+from emogen.ga.draws import CURRENT_STREAM, Draws, generation_draws
 from emogen.ga.engine import Engine, Population
 from emogen.ga.init import fixed_init, protocol_init, read_fixed_sets
 from emogen.ga.operators import average, crossover, mutate, random_faces, select
-from emogen.ga.step import Offspring, next_generation
 
 __all__ = [
+    "CURRENT_STREAM",
+    "Draws",
     "Engine",
     "Offspring",
     "Population",
@@ -14,6 +16,7 @@ __all__ = [
     "classical_next_generation",
     "crossover",
     "fixed_init",
+    "generation_draws",
     "mutate",
     "next_generation",
     "protocol_init",

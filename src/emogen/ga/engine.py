@@ -19,14 +19,17 @@ import numpy as np
 
 from emogen.config import GAConfig, validate_config
 from emogen.errors import ConfigError, SelectionError
-from emogen.ga.classical import classical_next_generation
+from emogen.ga.algorithm import Offspring, classical_next_generation, next_generation
+from emogen.ga.draws import CURRENT_STREAM, block_size, check_stream, generation_draws
 from emogen.ga.init import first_generation, read_fixed_sets
 from emogen.ga.operators import select
-from emogen.ga.step import Offspring, next_generation
 from emogen.model.rig import Rig
 from emogen.rng import check_seed, generation_rng
 
-STATE_SCHEMA = "emogen.ga.engine/1"
+#: Engine states: ``/2`` records the GA's random stream (``stream``); ``/1`` states (made before
+#: the GA was written once over runs) have none and continue with stream 1, as they were drawn.
+STATE_SCHEMA = "emogen.ga.engine/2"
+STATE_SCHEMAS = {"emogen.ga.engine/1": 1, STATE_SCHEMA: None}
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -120,15 +123,28 @@ class Engine:
     """
 
     def __init__(
-        self, config: GAConfig, rig: Rig, seed: int, *, corrector: Corrector | None = None
+        self,
+        config: GAConfig,
+        rig: Rig,
+        seed: int,
+        *,
+        corrector: Corrector | None = None,
+        stream: int = CURRENT_STREAM,
     ) -> None:
-        self._setup(config, rig, seed, corrector)
+        self._setup(config, rig, seed, corrector, stream)
         self._population = self._initialise()
 
     def _setup(
-        self, config: GAConfig, rig: Rig, seed: int, corrector: Corrector | None = None
+        self,
+        config: GAConfig,
+        rig: Rig,
+        seed: int,
+        corrector: Corrector | None = None,
+        stream: int = CURRENT_STREAM,
     ) -> None:
         self.corrector = corrector
+        #: The GA's random stream (:mod:`emogen.ga.draws`), recorded in the state.
+        self.stream = check_stream(stream)
         self.config = config
         self.rig = rig
         self.seed = check_seed(seed)
@@ -217,20 +233,28 @@ class Engine:
             self._result = pop.row(e)
             return
         g = self.generation
-        rng = generation_rng(self.seed, self.trial, g + 1)
+        draws = generation_draws(
+            [self.seed],
+            self.trial,
+            g + 1,
+            stream=self.stream,
+            block=block_size(len(pop), pop.genes.shape[1], cfg.mutation_genes, cfg.random_genes),
+        )
         params = {
             "random_faces_count": cfg.random_faces,
             "mutation_genes": cfg.mutation_genes,
             "random_genes": cfg.random_genes,
         }
         off: Offspring
+        genes = pop.genes[None]
         if cfg.variant == "classical":
-            off = classical_next_generation(pop.genes, np.r_[e, o], rng=rng, **params)
+            off = classical_next_generation(genes, np.r_[e, o][None], draws=draws, **params)
         else:
-            off = next_generation(pop.genes, e, o, g, rng=rng, **params)
-        parent_ids = np.where(off.parents >= 0, pop.ids[np.maximum(off.parents, 0)], -1)
+            off = next_generation(genes, np.array([e]), o[None], g, draws=draws, **params)
+        parents = off.parents[0]
+        parent_ids = np.where(parents >= 0, pop.ids[np.maximum(parents, 0)], -1)
         self.generation = g + 1
-        self._population = self._make_population(off.genes, parent_ids, off.operators)
+        self._population = self._make_population(off.genes[0], parent_ids, off.operators)
 
     def reset(self) -> Population:
         """Start a new trial at generation 0 (``init.on_reset``: reinitialise or keep)."""
@@ -293,6 +317,7 @@ class Engine:
             init = {"genes": self._initial[0].tolist(), "labels": self._initial[1].tolist()}
         return {
             "schema": STATE_SCHEMA,
+            "stream": self.stream,
             "emogen_version": __version__,
             "config": self.config.model_dump(mode="json"),
             "rig": {"name": self.rig.name, "genes": list(self.gene_names)},
@@ -319,13 +344,9 @@ class Engine:
             data = json.loads(text) if isinstance(text, str) else dict(text)
         except json.JSONDecodeError as exc:
             raise ConfigError(f"engine state is not valid JSON: {exc}") from None
-        if data.get("schema") != STATE_SCHEMA:
-            raise ConfigError(
-                f"engine state schema must be '{STATE_SCHEMA}'; got {data.get('schema')!r}"
-            )
-        config = validate_config(GAConfig, data["config"], "(engine state)")
         self = cls.__new__(cls)
-        self._setup(config, rig, data["seed"], corrector)
+        config, seed, stream = _state_header(data)
+        self._setup(config, rig, seed, corrector, stream)
         if list(self.gene_names) != data["rig"]["genes"]:
             raise ConfigError(
                 f"engine state was saved with rig '{data['rig']['name']}' genes "
@@ -372,13 +393,15 @@ class Engine:
         *,
         trial: int | None = None,
         corrector: Corrector | None = None,
+        stream: int = CURRENT_STREAM,
     ) -> Engine:
         """A fresh engine driven through recorded selections ({trial, generation, elite, others}).
 
         ``trial``: the trial to end in, for a reset after the last recorded selection
-        (default: the last recorded selection's trial).
+        (default: the last recorded selection's trial). ``stream``: the stream the run was
+        recorded with (:func:`stream_of_state` reads it off a stored state).
         """
-        engine = cls(config, rig, seed, corrector=corrector)
+        engine = cls(config, rig, seed, corrector=corrector, stream=stream)
         for s in selections:
             while engine.trial < int(s["trial"]):
                 engine.reset()
@@ -396,3 +419,33 @@ class Engine:
             while engine.trial < trial:
                 engine.reset()
         return engine
+
+
+def stream_of_state(state: str | dict[str, Any] | None) -> int:
+    """The GA stream an engine state was recorded with (1 for ``emogen.ga.engine/1`` states).
+
+    ``None`` (nothing recorded yet) gives the current stream.
+    """
+    if state is None or state == "":
+        return CURRENT_STREAM
+    try:
+        data = json.loads(state) if isinstance(state, str) else dict(state)
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"engine state is not valid JSON: {exc}") from None
+    return _stream(data)
+
+
+def _stream(data: dict[str, Any]) -> int:
+    schema = data.get("schema")
+    if schema not in STATE_SCHEMAS:
+        raise ConfigError(
+            f"engine state schema must be one of {sorted(STATE_SCHEMAS)}; got {schema!r}"
+        )
+    legacy = STATE_SCHEMAS[schema]
+    return legacy if legacy is not None else check_stream(data.get("stream"))
+
+
+def _state_header(data: dict[str, Any]) -> tuple[GAConfig, int, int]:
+    """(config, seed, stream) of a stored state, checked."""
+    stream = _stream(data)
+    return validate_config(GAConfig, data["config"], "(engine state)"), data["seed"], stream

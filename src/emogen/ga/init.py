@@ -123,7 +123,8 @@ def _face_genes(rig: Rig, named: dict[str, float], where: str) -> np.ndarray:
                 f"{where}: gene '{gene.name}' has unequal weights on its shapes {values}; "
                 f"faces are symmetric, so name the gene ('{gene.name} = …') instead"
             )
-    return rig.contract(weights, True)[0]
+    genes: np.ndarray = rig.contract(weights, True)[0]
+    return genes
 
 
 def read_fixed_sets(

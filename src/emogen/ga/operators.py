@@ -1,9 +1,13 @@
-"""The GA's operators (Section III-B): S, B, M, A and R, pure functions of arrays and an rng.
+"""The GA's operators (Section III-B): S, B, M, A and R, over a leading run axis.
 
-Every operator works in *gene space*: ``genes : (n_faces, n_genes) float`` in [0, 1], one
-column per unique core shape of the rig (a left/right pair is one gene). Symmetry therefore
-holds by construction — :meth:`emogen.model.rig.Rig.expand` writes a gene's value to every
-shape of the gene — and corrective shapes, not being genes, are never evolved.
+Every operator works in *gene space*: genes are float in [0, 1], one column per unique core
+shape of the rig (a left/right pair is one gene). Symmetry therefore holds by construction —
+:meth:`emogen.model.rig.Rig.expand` writes a gene's value to every shape of the gene — and
+corrective shapes, not being genes, are never evolved.
+
+B, M and R take their random numbers from a :class:`~emogen.ga.draws.Draws` for R runs at once
+(axis 0 is the run; a single participant is a batch of one) and request them in a fixed order,
+documented per operator, which is part of the GA's stream (:mod:`emogen.ga.draws`).
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from emogen.errors import SelectionError, ShapeError
+from emogen.ga.draws import Draws
 
 
 def check_genes(genes: np.ndarray, name: str = "genes") -> np.ndarray:
@@ -69,78 +74,93 @@ def select(
 
 
 # ---- B: uniform crossover ----------------------------------------------------------------
-def crossover(a: np.ndarray, b: np.ndarray, *, rng: np.random.Generator) -> np.ndarray:
-    """B(α_s, α_s') (eq. 7): each gene from ``b`` if U(0,1) < ½, else from ``a``.
+def crossover(a: np.ndarray, b: np.ndarray, draws: Draws) -> np.ndarray:
+    """B(α_s, α_s') (eq. 7) for every run: each gene from ``b`` if U(0,1) < ½, else from ``a``.
 
-    a, b : (n_faces, n_genes) float, the pairs (row i of a with row i of b).
-    Returns (n_faces, n_genes): every gene is one parent's, independently per gene.
+    a, b : (R, K) float, one pair per run. Draws: ``uniforms((K,))``.
+    Returns (R, K): every gene is one parent's, independently per gene.
     """
-    a, b = check_genes(a, "a"), check_genes(b, "b")
-    if a.shape != b.shape:
-        raise ShapeError(f"crossover parents must have equal shapes; got {a.shape} and {b.shape}")
-    take_b = rng.random(a.shape) < 0.5
+    a, b = _pair(a, b)
+    take_b = draws.uniforms((a.shape[1],)) < 0.5
     return np.where(take_b, b, a)
 
 
-def crossover_pair(
-    a: np.ndarray, b: np.ndarray, *, rng: np.random.Generator
-) -> tuple[np.ndarray, np.ndarray]:
-    """Uniform crossover giving two complementary children (for the classical GA)."""
-    a, b = check_genes(a, "a"), check_genes(b, "b")
-    if a.shape != b.shape:
-        raise ShapeError(f"crossover parents must have equal shapes; got {a.shape} and {b.shape}")
-    take_b = rng.random(a.shape) < 0.5
-    return np.where(take_b, b, a), np.where(take_b, a, b)
+def crossover_pair(a: np.ndarray, b: np.ndarray, draws: Draws) -> np.ndarray:
+    """Uniform crossover giving two complementary children per run (the classical GA).
+
+    a, b : (R, K). Draws: ``uniforms((K,))``. Returns (R, 2, K): the child taking ``b`` where
+    U < ½, then its complement.
+    """
+    a, b = _pair(a, b)
+    take_b = draws.uniforms((a.shape[1],)) < 0.5
+    return np.stack([np.where(take_b, b, a), np.where(take_b, a, b)], axis=1)
+
+
+def _pair(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    if a.ndim != 2 or a.shape != b.shape:
+        raise ShapeError(
+            f"crossover parents must both have shape (n_runs, n_genes); got {a.shape} and {b.shape}"
+        )
+    return a, b
 
 
 # ---- M: mutation ---------------------------------------------------------------------------
-def mutate(genes: np.ndarray, m: int, *, rng: np.random.Generator) -> np.ndarray:
-    """M(α', {i}_m) (eq. 8): m gene indices drawn independently from U{0..K−1}, new values U(0,1).
+def mutate(genes: np.ndarray, m: int, draws: Draws) -> np.ndarray:
+    """M(α', {i}_m) (eq. 8): in each of M faces per run, m gene indices drawn independently from
+    U{0..K−1} get new values from U(0,1).
 
-    genes : (n_faces, K) float. Indices are drawn with replacement, so a face has *at most*
-    m changed genes. Values cover the whole range [0, 1). Returns a new array.
+    genes : (R, M, K) float. Draws (nothing when m = 0 or K = 0): ``integers(K, (M, m))``, then
+    ``uniforms((M, m))``. Indices are drawn with replacement, so a face has *at most* m changed
+    genes; values cover the whole range [0, 1). Returns a new array.
     """
-    genes = check_genes(genes)
+    genes = np.asarray(genes, dtype=np.float64)
+    if genes.ndim != 3:
+        raise ShapeError(f"genes must have shape (n_runs, n_faces, n_genes); got {genes.shape}")
     if m < 0:
         raise ShapeError(f"mutation_genes (m) must be >= 0; got {m}")
     out = genes.copy()
-    n, k = genes.shape
-    if m == 0 or k == 0:
-        return out
-    index = rng.integers(0, k, size=(n, m))
-    values = rng.random((n, m))
-    rows = np.repeat(np.arange(n), m)
-    out[rows, index.reshape(-1)] = values.reshape(-1)
+    _, n, k = genes.shape
+    if m and k:
+        _assign(out, draws.integers(k, (n, m)), draws.uniforms((n, m)))
     return out
+
+
+def _assign(faces: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
+    """faces[r, i, index[r, i, j]] = values[r, i, j], in place (later j wins on a repeat)."""
+    r, n, k = faces.shape
+    flat = faces.reshape(r * n, k)
+    rows = np.repeat(np.arange(r * n), index.shape[-1])
+    flat[rows, index.reshape(-1)] = values.reshape(-1)
 
 
 # ---- A: averaging (whole arithmetic recombination) ------------------------------------------
 def average(members: np.ndarray) -> np.ndarray:
-    """A({α_s}_S) (eq. 9): the mean of S chromosomes.
+    """A({α_s}_S) (eq. 9): the mean of S chromosomes, per run.
 
-    members : (S, n_genes) float, S >= 1. Returns (n_genes,) float, gene by gene within the
-    members' range.
+    members : (R, S, K) float, S >= 1. Returns (R, K) float, gene by gene within the members'
+    range.
     """
-    members = check_genes(members, "members")
-    if members.shape[0] == 0:
+    members = np.asarray(members, dtype=np.float64)
+    if members.ndim != 3:
+        raise ShapeError(f"members must have shape (n_runs, S, n_genes); got {members.shape}")
+    if members.shape[1] == 0:
         raise ShapeError("average needs at least one face; got 0")
-    return members.mean(axis=0)
+    mean: np.ndarray = members.mean(axis=1)
+    return mean
 
 
 # ---- R: random generation -------------------------------------------------------------------
-def random_faces(n: int, n_genes: int, x: int, *, rng: np.random.Generator) -> np.ndarray:
-    """R({i}_x) (eq. 10): n new faces, each with x indices drawn from U{0..K−1} set to U(0,1).
+def random_faces(n: int, n_genes: int, x: int, draws: Draws) -> np.ndarray:
+    """R({i}_x) (eq. 10): n new faces per run, each with x indices from U{0..K−1} set to U(0,1).
 
+    Draws (nothing when n, K or x is 0): ``integers(K, (n, x))``, then ``uniforms((n, x))``.
     Indices are drawn independently (with replacement), so a face has *at most* x active genes;
-    all other genes are 0. Returns (n, n_genes) float.
+    all other genes are 0. Returns (R, n, K) float.
     """
     if n < 0 or n_genes < 0 or x < 0:
         raise ShapeError(f"random_faces needs n, n_genes, x >= 0; got {n}, {n_genes}, {x}")
-    out = np.zeros((n, n_genes))
-    if n == 0 or n_genes == 0 or x == 0:
-        return out
-    index = rng.integers(0, n_genes, size=(n, x))
-    values = rng.random((n, x))
-    rows = np.repeat(np.arange(n), x)
-    out[rows, index.reshape(-1)] = values.reshape(-1)
+    out = np.zeros((draws.runs, n, n_genes))
+    if n and n_genes and x:
+        _assign(out, draws.integers(n_genes, (n, x)), draws.uniforms((n, x)))
     return out

@@ -1,8 +1,8 @@
 """Simulated studies: observers select by a metric, many runs vectorised, tidy tables, sweeps."""
 
 from emogen.simulate.backends import DaskBackend, LocalBackend, make_backend
-from emogen.simulate.batch import Problem, RunArrays, engine_run, simulate_runs
 from emogen.simulate.observer import CosineObserver, Metric, Observer, make_metric, rank_by_cosine
+from emogen.simulate.problem import Problem, RunArrays
 from emogen.simulate.runner import (
     SimulationResult,
     build_problem,
@@ -10,6 +10,7 @@ from emogen.simulate.runner import (
     simulate_run,
     write_simulation,
 )
+from emogen.simulate.vectorised import engine_run, simulate_runs
 
 __all__ = [
     "CosineObserver",

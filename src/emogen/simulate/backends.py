@@ -1,7 +1,7 @@
 """Where simulated runs are computed: in this process, a local process pool, or Dask.
 
 A backend takes tasks — (problem, run numbers, run seeds) — and yields each task's
-:class:`~emogen.simulate.batch.RunArrays` as it finishes. Every run draws from its own seeds,
+:class:`~emogen.simulate.problem.RunArrays` as it finishes. Every run draws from its own seeds,
 so the numbers do not depend on the backend, the chunking or the order tasks finish in.
 
 * :class:`LocalBackend` — ``workers=1``: in this process, one vectorised batch per task,
@@ -21,7 +21,8 @@ from typing import Any
 import numpy as np
 
 from emogen.errors import ConfigError
-from emogen.simulate.batch import Problem, RunArrays, simulate_runs
+from emogen.simulate.problem import Problem, RunArrays
+from emogen.simulate.vectorised import simulate_runs
 
 Progress = Callable[[int], None]
 

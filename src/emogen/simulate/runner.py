@@ -2,7 +2,7 @@
 
 :func:`run_simulation` spawns one child seed per run from the simulation's seed, groups the
 runs into tasks and has a backend compute them (:mod:`emogen.simulate.backends`; vectorised
-across runs, :mod:`emogen.simulate.batch`). It returns two tidy tables:
+across runs, :mod:`emogen.simulate.vectorised`). It returns two tidy tables:
 
 * ``table`` — one row per run and generation: ``run, generation, elite_error`` (CD of the
   elite to the target, the paper's convergence measure), ``elite_distance`` (the selection
@@ -29,23 +29,21 @@ import numpy as np
 import pandas as pd
 
 from emogen.config import SimulationConfig
+from emogen.ga.draws import CURRENT_STREAM
 from emogen.ga.init import read_fixed_sets
 from emogen.model.rig import Rig
 from emogen.rng import fresh_seed, spawn_seeds
 from emogen.simulate.backends import Backend, LocalBackend, Task
-from emogen.simulate.batch import (
-    Problem,
-    RunArrays,
-    engine_run,
-    make_correction,
-)
 from emogen.simulate.observer import make_metric, selection_count
+from emogen.simulate.problem import Problem, RunArrays, make_correction
 from emogen.simulate.targets import resolve_target
+from emogen.simulate.vectorised import engine_run
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
 
-RECORD_SCHEMA = "emogen.simulate/2"
+#: ``/3``: the record names the GA stream (``ga_stream``, :mod:`emogen.ga.draws`) its runs drew.
+RECORD_SCHEMA = "emogen.simulate/3"
 COLUMNS = ("run", "generation", "elite_error", "elite_distance", "n_selected", "run_seed")
 FACE_COLUMNS = ("run", "generation", "slot", "operator", "distance", "error", "rank")
 
@@ -173,6 +171,7 @@ def make_result(
         "config": config.model_dump(mode="json"),
         "seed": config.seed,
         "run_seeds": [int(s) for s in arrays.seeds],
+        "ga_stream": CURRENT_STREAM,
         "target_weights": {
             s: float(w) for s, w in zip(problem.columns, problem.target, strict=True) if w != 0
         },

@@ -63,7 +63,7 @@ from emogen.errors import ConfigError
 from emogen.model.rig import Rig
 from emogen.rng import spawn_seeds
 from emogen.simulate.backends import Backend, LocalBackend
-from emogen.simulate.batch import RunArrays
+from emogen.simulate.problem import RunArrays
 from emogen.simulate.runner import (
     RECORD_SCHEMA,
     build_problem,

@@ -16,7 +16,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import selectinload
 
 from emogen.errors import EmoGenError
-from emogen.ga.engine import Engine
+from emogen.ga.engine import Engine, stream_of_state
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
 from emogen.study.errors import SessionNotFound
@@ -145,6 +145,7 @@ def replay_session(
                     rig,
                     trial.seed,
                     corrector=correctors(trial.identity),
+                    stream=stream_of_state(trial.engine_state),  # as it was drawn
                 )
                 for p in pops:
                     where = f"trial {trial.position + 1} attempt {p.attempt + 1} generation {p.generation}"

@@ -3,9 +3,10 @@
 :func:`simulate_runs` keeps R runs as one genes array ``(R, N, K)``: each generation it expands
 them to weights, applies the corrections (if on), measures every face against the target,
 lets the observer choose (vectorised; per-run Gumbel draws for choice noise) and breeds the
-next generation with :func:`~emogen.ga.batch.next_generation_batch`. Run r draws from the
-generators the engine would use for its seed — :func:`~emogen.rng.generation_rng` (seed, 0, g)
-for the GA, :func:`~emogen.rng.observer_rng` for the choice noise — so its numbers equal those
+next generation with :func:`~emogen.ga.algorithm.next_generation` — the same function, over
+the same run axis, that the engine calls with one run. Run r draws from the generators the
+engine would use for its seed — :func:`~emogen.ga.draws.generation_draws` (seed, 0, g) for
+the GA, :func:`~emogen.rng.observer_rng` for the choice noise — so its numbers equal those
 of :func:`engine_run`, which drives the :class:`~emogen.ga.engine.Engine` one run at a time
 through ``ask()``/``tell()`` like a participant. Results depend on each run's seed only, never
 on how runs are grouped into chunks or spread over workers.
@@ -19,137 +20,17 @@ engine's 10 at a time gives the same weights, bit for bit.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from emogen.config import SimulationConfig
-from emogen.errors import ConfigError
-from emogen.ga.batch import classical_next_generation_batch, next_generation_batch
+from emogen.ga.algorithm import classical_next_generation, next_generation
+from emogen.ga.draws import CURRENT_STREAM, block_size, generation_draws
 from emogen.ga.engine import Engine
 from emogen.ga.init import first_generation
 from emogen.metrics import cosine_distance
-from emogen.model.rig import Rig
 from emogen.rng import generation_rng, observer_rng
-from emogen.simulate.observer import Metric, Observer, choice_order, selection_count
-
-if TYPE_CHECKING:
-    from emogen.model.face import FaceModel
-
-
-@dataclass(frozen=True, eq=False)
-class Correction:
-    """The model's corrections applied to every shown face (:meth:`FaceModel.correct`).
-
-    ``correction(weights (B, S))`` → the corrected full weight vectors (B, S + C): the
-    effective shape weights (companions capped), then every corrective weight (combinational
-    products, collision weights of eq. 5) in ``names[S:]`` order. The corrected face is the
-    blend of those weights (gaze on the shapes), so the metrics see exactly what a participant
-    sees. Identical faces of a batch are corrected once. The GA keeps evolving the uncorrected
-    genes, as with a participant, who only ever sees corrected faces.
-    """
-
-    model: FaceModel
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """Column names of the corrected vectors: the shapes, then the correctives."""
-        return tuple(self.model.shape_names) + tuple(self.model.correctives.names)
-
-    @property
-    def deltas(self) -> np.ndarray:
-        """(C, V, 3) the correctives' vertex offsets, in ``names[S:]`` order."""
-        c = self.model.correctives
-        return np.concatenate([c.combinational_deltas, c.collision_deltas])
-
-    def __call__(self, weights: np.ndarray) -> np.ndarray:
-        w = np.asarray(weights, dtype=np.float64)
-        unique, inverse = np.unique(w, axis=0, return_inverse=True)
-        result = self.model.correct(unique)
-        corrected = np.concatenate([result.weights, result.correctives], axis=1)
-        return np.asarray(corrected[inverse.reshape(-1)], dtype=np.float64)
-
-
-def make_correction(model: FaceModel | None) -> Correction:
-    """The corrections for ``correct = true`` (they need the face model, not only its rig)."""
-    if model is None:
-        raise ConfigError("correct = true needs the face model, not only its rig")
-    if not callable(getattr(model, "correct", None)):
-        raise ConfigError(
-            "correct = true needs FaceModel.correct (the correctives, emogen.correct), which "
-            "this model does not provide"
-        )
-    return Correction(model)
-
-
-@dataclass(frozen=True, eq=False)
-class Problem:
-    """Everything needed to simulate runs of one configuration (picklable, for workers).
-
-    target : the target's shown full weights, (n_shapes,) or, corrected, (n_shapes + C,) —
-    see :attr:`columns`; fixed_sets : (n_sets, N, K) for fixed initialisation.
-    """
-
-    config: SimulationConfig
-    rig: Rig
-    target: np.ndarray
-    metric: Metric
-    fixed_sets: np.ndarray | None = None
-    correction: Correction | None = None
-    all_weights: bool = False
-    target_source: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def n_generations(self) -> int:
-        """Generations shown: G + 1."""
-        return self.config.ga.generations + 1
-
-    @property
-    def columns(self) -> tuple[str, ...]:
-        """Names of the shown full weight vectors' columns (shapes, then any correctives)."""
-        return self.rig.shape_names if self.correction is None else self.correction.names
-
-
-@dataclass(frozen=True)
-class RunArrays:
-    """What R runs showed and chose, generation by generation.
-
-    runs, seeds : (R,) int; distance : (R, G+1, N) the selection metric to the target; error :
-    (R, G+1, N) CD to the target (the paper's convergence measure); rank : (R, G+1, N) int,
-    0 for the elite, 1… for the other selections in choice order, −1 unselected; operators :
-    (R, G+1, N) str; weights : (R, G+1, N, S) shown full weights, or None; fixed_options : (R,)
-    the fixed set used (−1 for protocol initialisation).
-    """
-
-    runs: np.ndarray
-    seeds: np.ndarray
-    distance: np.ndarray
-    error: np.ndarray
-    rank: np.ndarray
-    operators: np.ndarray
-    weights: np.ndarray | None
-    fixed_options: np.ndarray
-
-    @staticmethod
-    def concatenate(parts: list[RunArrays]) -> RunArrays:
-        """Parts of one simulation, in run order."""
-        parts = sorted(parts, key=lambda p: int(p.runs[0]) if len(p.runs) else 0)
-
-        def cat(name: str) -> np.ndarray:
-            return np.concatenate([getattr(p, name) for p in parts])
-
-        weights = [p.weights for p in parts]
-        return RunArrays(
-            runs=cat("runs"),
-            seeds=cat("seeds"),
-            distance=cat("distance"),
-            error=cat("error"),
-            rank=cat("rank"),
-            operators=cat("operators"),
-            weights=None if any(w is None for w in weights) else cat("weights"),
-            fixed_options=cat("fixed_options"),
-        )
+from emogen.simulate.observer import Observer, choice_order, selection_count
+from emogen.simulate.problem import Problem, RunArrays
 
 
 def _initial(problem: Problem, seed: int) -> tuple[np.ndarray, np.ndarray, int]:
@@ -198,6 +79,7 @@ def simulate_runs(
         "mutation_genes": ga.mutation_genes,
         "random_genes": ga.random_genes,
     }
+    block = block_size(n, genes.shape[2], ga.mutation_genes, ga.random_genes)
     for g in range(n_gen):
         shown = genes @ expansion
         if problem.correction is not None:
@@ -212,12 +94,12 @@ def simulate_runs(
         count = selection_count(cfg, g, n)
         rank[rows, g, order[:, :count]] = np.arange(count, dtype=np.int16)
         if g < n_gen - 1:
-            rngs = [generation_rng(int(s), 0, g + 1) for s in seeds]
+            draws = generation_draws(seeds, 0, g + 1, stream=CURRENT_STREAM, block=block)
             if ga.variant == "classical":
-                off = classical_next_generation_batch(genes, order[:, :count], rngs=rngs, **params)
+                off = classical_next_generation(genes, order[:, :count], draws=draws, **params)
             else:
-                off = next_generation_batch(
-                    genes, order[:, 0], order[:, 1:count], g, rngs=rngs, **params
+                off = next_generation(
+                    genes, order[:, 0], order[:, 1:count], g, draws=draws, **params
                 )
             genes = off.genes
             operators = np.broadcast_to(off.operators, (r_count, n))

@@ -11,16 +11,17 @@ from emogen.config import GAConfig, InitConfig, SimulationConfig
 from emogen.errors import ConfigError
 from emogen.metrics import vertex_rms
 from emogen.rng import spawn_seeds
-from emogen.simulate.batch import RunArrays, engine_run, simulate_runs
 from emogen.simulate.observer import choice_order
+from emogen.simulate.problem import RunArrays
 from emogen.simulate.runner import build_problem
+from emogen.simulate.vectorised import engine_run, simulate_runs
 
 TARGET = {"jawOpen": 1.0, "noseSneer": 0.4}
 FIELDS = ("distance", "error", "rank", "operators", "weights", "fixed_options")
 
 
 def assert_same_as_engine(problem, runs: int = 8, seed: int = 3) -> RunArrays:
-    """Bit for bit, corrected faces included (see simulate/batch.py)."""
+    """Bit for bit, corrected faces included (see simulate/vectorised.py)."""
     seeds = spawn_seeds(seed, runs)
     fast = simulate_runs(problem, np.arange(runs), np.array(seeds))
     for r in range(runs):
@@ -55,6 +56,30 @@ def assert_same_as_engine(problem, runs: int = 8, seed: int = 3) -> RunArrays:
 def test_vectorised_runs_equal_engine_runs(ict_model, options) -> None:
     cfg = SimulationConfig(target=TARGET, runs=8, seed=3, **options)
     assert_same_as_engine(build_problem(cfg, ict_model.rig, all_weights=True))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("variant", ["emogen", "classical"])
+def test_a_thousand_runs_equal_the_engine(ict_model, variant) -> None:
+    """The engine participants use and the vectorised runner make the same 1,000 runs."""
+    cfg = SimulationConfig(
+        target=TARGET, runs=1000, seed=11, noise_temperature=0.03, ga=GAConfig(variant=variant)
+    )
+    assert_same_as_engine(build_problem(cfg, ict_model.rig, all_weights=True), runs=1000, seed=11)
+
+
+@pytest.mark.slow
+def test_corrected_runs_equal_the_engine(ict_model) -> None:
+    """Corrections on (combinational + collision, every shown face), both variants."""
+    for variant in ("emogen", "classical"):
+        cfg = SimulationConfig(
+            target={"jawOpen": 0.9, "mouthFunnel": 0.6},
+            runs=100,
+            seed=8,
+            correct=True,
+            ga=GAConfig(generations=3, variant=variant),
+        )
+        assert_same_as_engine(build_problem(cfg, ict_model, all_weights=True), runs=100, seed=8)
 
 
 def test_vertex_rms_observer_equals_engine(ict_model) -> None:

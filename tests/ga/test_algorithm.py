@@ -1,4 +1,4 @@
-"""Algorithm 1: which operator fills which slot, and what each slot holds."""
+"""Algorithm 1: which operator fills which slot, and what each slot holds (both streams)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from emogen.errors import SelectionError
-from emogen.ga.step import next_generation
+from emogen.ga.algorithm import Offspring, next_generation
+from emogen.ga.draws import BlockDraws, LegacyDraws
 
 CM, RND = "crossover_mutation", "random"
 
@@ -20,10 +21,30 @@ def population(n: int = 10, k: int = 24, seed: int = 0) -> np.ndarray:
     return genes
 
 
-def step(genes, elite, others, g, seed=1, **kw):
-    return next_generation(
-        genes, elite, np.array(others, dtype=int), g, rng=np.random.default_rng(seed), **kw
+def one_run(off: Offspring) -> Offspring:
+    return Offspring(off.genes[0], off.parents[0], off.operators)
+
+
+@pytest.fixture(params=[1, 2], ids=["stream1", "stream2"])
+def stream(request: pytest.FixtureRequest) -> int:
+    return int(request.param)
+
+
+def draws_of(rng: np.random.Generator, stream: int = 2):  # type: ignore[no-untyped-def]
+    return LegacyDraws([rng]) if stream == 1 else BlockDraws([rng], 16)
+
+
+def step(genes, elite, others, g, seed=1, stream=2, **kw):  # type: ignore[no-untyped-def]
+    """One run (a batch of one), as the engine calls it."""
+    off = next_generation(
+        genes[None],
+        np.array([elite]),
+        np.array(others, dtype=int)[None],
+        g,
+        draws=draws_of(np.random.default_rng(seed), stream),
+        **kw,
     )
+    return one_run(off)
 
 
 @pytest.mark.parametrize(
@@ -41,17 +62,17 @@ def step(genes, elite, others, g, seed=1, **kw):
         ([], 1, ["elite", CM, CM, CM, CM, CM]),
     ],
 )
-def test_slots_follow_algorithm_1(others, g, expected) -> None:
-    off = step(population(), 2, others, g)
+def test_slots_follow_algorithm_1(others, g, expected, stream) -> None:
+    off = step(population(), 2, others, g, stream=stream)
     assert off.operators.tolist() == [*expected, RND, RND, RND, RND]
 
 
-def test_slot_contents() -> None:
+def test_slot_contents(stream) -> None:
     genes = population()
     elite, others = 2, np.array([4, 7, 8])
     selected = [elite, *others.tolist()]
     for seed in range(20):
-        off = step(genes, elite, others, 0, seed=seed)
+        off = step(genes, elite, others, 0, seed=seed, stream=stream)
         np.testing.assert_array_equal(off.genes[0], genes[elite])
         assert off.parents[0].tolist() == [elite, -1]
         np.testing.assert_allclose(off.genes[1], genes[selected].mean(0))
@@ -86,11 +107,11 @@ def test_elite_only_crossover_is_a_mutated_elite_copy() -> None:
     np.testing.assert_array_equal(off0.genes[1:6], np.repeat(genes[[5]], 5, axis=0))
 
 
-def test_pairs_are_drawn_uniformly_from_the_selection() -> None:
+def test_pairs_are_drawn_uniformly_from_the_selection(stream) -> None:
     genes = population(k=30)
     counts: dict[tuple[int, int], int] = {}
     for seed in range(400):
-        off = step(genes, 0, [1, 2], 5, seed=seed)
+        off = step(genes, 0, [1, 2], 5, seed=seed, stream=stream)
         for a, b in off.parents[3:6]:
             key = (min(a, b), max(a, b))
             counts[key] = counts.get(key, 0) + 1
@@ -116,15 +137,16 @@ def test_configurable_sizes(n, boost, m, x, g, n_sel, seed) -> None:
     genes = population(n=n, k=12, seed=seed % 100)
     rng = np.random.default_rng(seed)
     chosen = rng.permutation(n)[:n_sel]
-    off = next_generation(
+    off = step(
         genes,
         int(chosen[0]),
         chosen[1:],
         g,
+        seed=seed,
+        stream=1 + seed % 2,
         random_faces_count=boost,
         mutation_genes=m,
         random_genes=x,
-        rng=rng,
     )
     assert off.genes.shape == genes.shape and off.parents.shape == (n, 2)
     assert off.operators[0] == "elite"
@@ -134,5 +156,9 @@ def test_configurable_sizes(n, boost, m, x, g, n_sel, seed) -> None:
 
 
 def test_bad_indices_are_rejected() -> None:
-    with pytest.raises(SelectionError, match="selection indices"):
+    with pytest.raises(
+        SelectionError, match=r"selection indices must be in \[0, 10\); got \[\[12\]\]"
+    ):
         step(population(), 12, [], 0)
+    with pytest.raises(SelectionError, match=r"run 0 has \[3, 3\]"):
+        step(population(), 3, [3], 0)

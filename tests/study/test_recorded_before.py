@@ -1,0 +1,82 @@
+"""A study recorded before the GA was written once over runs (engine stream 1) still replays,
+and a session left in the middle then continues, with the stream it was drawn with."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+from sqlalchemy import select
+
+from emogen.ga.engine import stream_of_state
+from emogen.study.config import StudyConfig
+from emogen.study.replay import replay_session
+from emogen.study.sessions import StudyService
+from emogen.study.storage import SessionRow, Store, StudyRow, TrialRow
+from tests.study.drive import run_to_end, service_caller
+
+RECORDED = Path(__file__).parents[1] / "data" / "study_stream1.sqlite"
+OLD_2 = "_6O84B37ReuaCQMLGuN28Qw1lBIuGAFL"  # OLD-2's link: stopped in generation 3 of trial 1
+
+
+def _open(tmp_path: Path) -> Store:
+    copy = tmp_path / "recorded.sqlite"
+    shutil.copyfile(RECORDED, copy)
+    return Store(f"sqlite:///{copy}")
+
+
+def _sessions(store: Store) -> dict[str, int]:
+    with store.read() as db:
+        return {s.participant_id: s.id for s in db.scalars(select(SessionRow))}
+
+
+def _streams(store: Store, session_id: int) -> list[int]:
+    with store.read() as db:
+        rows = db.scalars(
+            select(TrialRow).where(TrialRow.session_id == session_id).order_by(TrialRow.position)
+        )
+        return [stream_of_state(r.engine_state) for r in rows]
+
+
+def test_recorded_study_replays_exactly(tmp_path: Path, ict_model) -> None:
+    store = _open(tmp_path)
+    try:
+        ids = _sessions(store)
+        assert set(ids) == {"OLD-1", "OLD-2"}
+        assert _streams(store, ids["OLD-1"]) == [1, 1]
+        for participant, populations in (("OLD-1", 13), ("OLD-2", 4)):
+            report = replay_session(
+                store, ids[participant], ict_model.rig, ict_model.model_hash, model=ict_model
+            )
+            assert report.mismatches == [], report.mismatches
+            assert report.populations == populations and report.faces == 10 * populations
+    finally:
+        store.dispose()
+
+
+def test_a_session_recorded_mid_trial_continues_and_replays(tmp_path: Path, ict_model) -> None:
+    store = _open(tmp_path)
+    try:
+        with store.read() as db:
+            study = db.scalars(select(StudyRow)).one()
+            config = StudyConfig.model_validate(json.loads(study.config_json))
+        service = StudyService(
+            config,
+            store,
+            ict_model.rig,
+            model_name=ict_model.name,
+            model_hash=ict_model.model_hash,
+            model=ict_model,
+        )
+        state = service.state(OLD_2)
+        assert state["progress"]["generation"] == 3
+        assert run_to_end(state, service_caller(service, OLD_2))["stage"] == "done"
+        old_2 = _sessions(store)["OLD-2"]
+        # trial 1 goes on with the stream it began with; trial 2 began after the upgrade
+        assert _streams(store, old_2) == [1, 2]
+        report = replay_session(store, old_2, ict_model.rig, ict_model.model_hash, model=ict_model)
+        assert report.mismatches == [], report.mismatches
+        assert report.populations == 10
+    finally:
+        store.dispose()
