@@ -159,18 +159,31 @@ def next_generation(
             else:
                 out[:, i], parents[:, i, 0], ops[i] = genes[:, i], i, KEPT
         else:
-            if s >= 2:
-                pair = draws.pairs(s)
-                a, b = selected[runs, pair[:, 0]], selected[runs, pair[:, 1]]
-                child = crossover(genes[runs, a], genes[runs, b], draws)
-                parents[:, i, 0], parents[:, i, 1] = a, b
-            else:
-                child = elite_genes
-                parents[:, i, 0] = elite
-            out[:, i] = mutate(child[:, None], mutation_genes, draws)[:, 0]
+            out[:, i], parents[:, i] = _bred(genes, selected, mutation_genes, draws)
             ops[i] = CROSSOVER_MUTATION
     out[:, n_bred:] = random_faces(n - n_bred, k, random_genes, draws)
     return Offspring(out, parents, np.array(ops))
+
+
+def _bred(
+    genes: np.ndarray, selected: np.ndarray, m: int, draws: Draws
+) -> tuple[np.ndarray, np.ndarray]:
+    """A crossover slot for every run: (child (R, K), parents (R, 2)).
+
+    Two distinct selected faces, crossed over and mutated; with only the elite selected there is
+    no pair, and the child is the elite's copy, mutated.
+    """
+    runs = np.arange(len(genes))
+    parents = np.full((len(genes), 2), -1, dtype=np.int64)
+    if selected.shape[1] >= 2:
+        pair = draws.pairs(selected.shape[1])
+        a, b = selected[runs, pair[:, 0]], selected[runs, pair[:, 1]]
+        child = crossover(genes[runs, a], genes[runs, b], draws)
+        parents[:, 0], parents[:, 1] = a, b
+    else:
+        child = genes[runs, selected[:, 0]]
+        parents[:, 0] = selected[:, 0]
+    return mutate(child[:, None], m, draws)[:, 0], parents
 
 
 def ranked_pairs(n_ranked: int) -> Iterator[tuple[int, int]]:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -23,75 +23,23 @@ from emogen.ga.algorithm import Offspring, classical_next_generation, next_gener
 from emogen.ga.draws import CURRENT_STREAM, block_size, check_stream, generation_draws
 from emogen.ga.init import first_generation, read_fixed_sets
 from emogen.ga.operators import select
+from emogen.ga.population import Population, readonly
 from emogen.model.rig import Rig
 from emogen.rng import check_seed, generation_rng
+
+__all__ = [
+    "STATE_SCHEMA",
+    "Corrector",
+    "Engine",
+    "Population",  # re-exported: it lives in emogen.ga.population
+    "correctives_of",
+    "stream_of_state",
+]
 
 #: Engine states: ``/2`` records the GA's random stream (``stream``); ``/1`` states (made before
 #: the GA was written once over runs) have none and continue with stream 1, as they were drawn.
 STATE_SCHEMA = "emogen.ga.engine/2"
 STATE_SCHEMAS = {"emogen.ga.engine/1": 1, STATE_SCHEMA: None}
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a = np.ascontiguousarray(a)
-    a.setflags(write=False)
-    return a
-
-
-@dataclass(frozen=True, eq=False)
-class Population:
-    """The faces shown in one generation (arrays read-only).
-
-    genes : (n_faces, n_genes) float in [0, 1], the rig's gene space
-    weights : (n_faces, n_shapes) float, full weight vectors (``rig.expand(genes)``)
-    ids : (n_faces,) int, unique within an engine
-    parent_ids : (n_faces, 2) int, ids of the parents in the previous generation, -1 for none
-      (a ``mean_all`` face's parents are all that generation's selections)
-    operators : (n_faces,) str — ``elite``, ``mean_all``, ``mean_elite_other``, ``kept``,
-      ``crossover_mutation``, ``random``, or ``init_<emotion>``, ``init_arbitrary``,
-      ``init_neutral``, ``init_fixed`` in generation 0
-    correctives : (n_faces, C) float or None, corrective weights computed after the core
-      weights by the engine's corrector (combinational, then collision); never evolved
-    corrective_names : (C,) names of those columns
-    """
-
-    genes: np.ndarray
-    weights: np.ndarray
-    ids: np.ndarray
-    parent_ids: np.ndarray
-    operators: np.ndarray
-    generation: int
-    trial: int
-    correctives: np.ndarray | None = None
-    corrective_names: tuple[str, ...] = ()
-
-    def __len__(self) -> int:
-        return len(self.ids)
-
-    def row(self, i: int) -> Population:
-        """Face ``i`` as a population of one."""
-        s = slice(i, i + 1)
-        return Population(
-            _readonly(self.genes[s]),
-            _readonly(self.weights[s]),
-            _readonly(self.ids[s]),
-            _readonly(self.parent_ids[s]),
-            _readonly(self.operators[s]),
-            self.generation,
-            self.trial,
-            None if self.correctives is None else _readonly(self.correctives[s]),
-            self.corrective_names,
-        )
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "generation": self.generation,
-            "trial": self.trial,
-            "ids": self.ids.tolist(),
-            "parent_ids": self.parent_ids.tolist(),
-            "operators": self.operators.tolist(),
-            "genes": self.genes.tolist(),
-        }
 
 
 #: Corrects a batch of full weight vectors before they are shown: returns
@@ -275,7 +223,7 @@ class Engine:
             )
             if self._fixed_sets is not None:
                 self.fixed_options.append(option)
-            self._initial = (_readonly(genes), _readonly(labels))
+            self._initial = (readonly(genes), readonly(labels))
         parents = np.full((len(genes), 2), -1, dtype=np.int64)
         return self._make_population(genes, parents, labels)
 
@@ -288,11 +236,11 @@ class Engine:
         genes = np.asarray(genes, dtype=np.float64)
         return self._corrected(
             Population(
-                genes=_readonly(genes),
-                weights=_readonly(self.rig.expand(genes, self.config.eye_motion)),
-                ids=_readonly(ids),
-                parent_ids=_readonly(np.asarray(parent_ids, dtype=np.int64)),
-                operators=_readonly(np.asarray(operators, dtype=str)),
+                genes=readonly(genes),
+                weights=readonly(self.rig.expand(genes, self.config.eye_motion)),
+                ids=readonly(ids),
+                parent_ids=readonly(np.asarray(parent_ids, dtype=np.int64)),
+                operators=readonly(np.asarray(operators, dtype=str)),
                 generation=self.generation,
                 trial=self.trial,
             )
@@ -304,7 +252,7 @@ class Engine:
             return population
         names, values = self.corrector(population.weights)
         return replace(
-            population, correctives=_readonly(np.asarray(values)), corrective_names=tuple(names)
+            population, correctives=readonly(np.asarray(values)), corrective_names=tuple(names)
         )
 
     # ---- records -------------------------------------------------------------------------
@@ -359,8 +307,8 @@ class Engine:
         self._selections = [dict(s) for s in data["selections"]]
         if data["initial"] is not None:
             self._initial = (
-                _readonly(np.array(data["initial"]["genes"], dtype=np.float64)),
-                _readonly(np.array(data["initial"]["labels"], dtype=str)),
+                readonly(np.array(data["initial"]["genes"], dtype=np.float64)),
+                readonly(np.array(data["initial"]["labels"], dtype=str)),
             )
         self._population = self._population_from(data["population"])
         self._result = None if data["result"] is None else self._population_from(data["result"])
@@ -370,11 +318,11 @@ class Engine:
         genes = np.array(d["genes"], dtype=np.float64).reshape(-1, len(self.gene_names))
         return self._corrected(
             Population(
-                genes=_readonly(genes),
-                weights=_readonly(self.rig.expand(genes, self.config.eye_motion)),
-                ids=_readonly(np.array(d["ids"], dtype=np.int64)),
-                parent_ids=_readonly(np.array(d["parent_ids"], dtype=np.int64).reshape(-1, 2)),
-                operators=_readonly(np.array(d["operators"], dtype=str)),
+                genes=readonly(genes),
+                weights=readonly(self.rig.expand(genes, self.config.eye_motion)),
+                ids=readonly(np.array(d["ids"], dtype=np.int64)),
+                parent_ids=readonly(np.array(d["parent_ids"], dtype=np.int64).reshape(-1, 2)),
+                operators=readonly(np.array(d["operators"], dtype=str)),
                 generation=int(d["generation"]),
                 trial=int(d["trial"]),
             )

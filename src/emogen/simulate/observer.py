@@ -26,7 +26,7 @@ import numpy as np
 
 from emogen.config import MetricConfig, SimulationConfig
 from emogen.errors import ConfigError, ShapeError
-from emogen.ga.engine import Population
+from emogen.ga.population import Population
 from emogen.metrics import (
     PCASpace,
     VertexMahalanobis,
