@@ -23,7 +23,7 @@ PAPER_TABLE_V = {  # target: (μ, σ) of the final CD error, Table V of the pape
 
 def table_v_targets(rig) -> dict[str, dict[str, float]]:  # type: ignore[no-untyped-def]
     """Analogues of Fig. 18's targets: 1, 3 and 12 active shapes, and a dense happy face."""
-    from emogen.analysis.targets import table_v_by_shapes
+    from emogen.analysis.paper_targets import table_v_by_shapes
 
     targets = table_v_by_shapes(rig)
     targets["dense (paper: 125-shape happy)"] = targets.pop("dense")

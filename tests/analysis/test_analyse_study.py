@@ -74,7 +74,7 @@ def drive(service: Any, participant: str, targets: dict[str, np.ndarray], *, res
 
 @pytest.fixture(scope="module")
 def export(ict_model, tmp_path_factory: pytest.TempPathFactory) -> Path:  # type: ignore[no-untyped-def]
-    from emogen.analysis.targets import participant_target
+    from emogen.analysis.paper_targets import participant_target
     from emogen.study.config import study_from_dict
     from emogen.study.export import export_tables, write_export
     from emogen.study.sessions import StudyService

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from emogen.analysis.targets import TARGET_1, table_v_by_shapes
-from emogen.analysis.targets import TARGET_2 as TARGET_12
+from emogen.analysis.paper_targets import TARGET_1, table_v_by_shapes
+from emogen.analysis.paper_targets import TARGET_2 as TARGET_12
 from emogen.config import GAConfig, InitConfig, SimulationConfig
 from emogen.simulate.runner import run_simulation
 

@@ -8,9 +8,9 @@
 * :mod:`~emogen.analysis.noise` — GA-noise threshold and the group-spread test;
 * :mod:`~emogen.analysis.prototypes` — per-participant prototypes, group means;
 * :mod:`~emogen.analysis.power` — power analysis by simulation;
-* :mod:`~emogen.analysis.plots`, :mod:`~emogen.analysis.heatmaps`,
+* :mod:`~emogen.analysis.plots`, :mod:`~emogen.analysis.face_sheets`,
   :mod:`~emogen.analysis.report` — figures, rendered heatmaps, the HTML/Markdown report;
-* :mod:`~emogen.analysis.analyse` and :mod:`~emogen.analysis.replicate` — the two reports.
+* :mod:`~emogen.analysis.analyse` and :mod:`~emogen.analysis.replication` — the two reports.
 """
 
 from __future__ import annotations
@@ -46,8 +46,8 @@ _WHERE = {
     "participant_prototypes": "emogen.analysis.prototypes",
     "power_analysis": "emogen.analysis.power",
     "repeatability_bins": "emogen.analysis.repeatability",
-    "ReplicateSettings": "emogen.analysis.replicate",
-    "replicate": "emogen.analysis.replicate",
+    "ReplicateSettings": "emogen.analysis.replication",
+    "replicate": "emogen.analysis.replication",
     "gmm_separability": "emogen.analysis.separability",
 }
 

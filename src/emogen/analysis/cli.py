@@ -96,7 +96,7 @@ def replicate_command(
 ) -> None:
     """Run the paper's Section IV experiments on our model and write the report, each finding
     beside the paper's numbers with a one-line verdict (holds / partly / differs)."""
-    from emogen.analysis.replicate import ReplicateSettings, replicate
+    from emogen.analysis.replication import ReplicateSettings, replicate
     from emogen.model import load_model
 
     extra: dict[str, object] = {"seed": seed, "render": render}

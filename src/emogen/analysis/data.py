@@ -122,7 +122,10 @@ def _group_labels(trials: pd.DataFrame) -> pd.Series:
     return emotion
 
 
-def load_study(folder: Path) -> Dataset:
+def _study_tables(
+    folder: Path,
+) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame, pd.DataFrame | None]:
+    """(trials, faces, selections, ratings) of a study export, their columns checked."""
     trials = _read(folder, "trials")
     faces = _read(folder, "faces")
     selections = _read(folder, "selections")
@@ -141,6 +144,11 @@ def load_study(folder: Path) -> Dataset:
             raise ConfigError(f"{folder}/{name}: missing columns {missing} (see docs/study.md)")
     if trials is None or faces is None or selections is None:  # for the type checker
         raise ConfigError(f"{folder}: incomplete study export")
+    return trials, faces, selections, ratings
+
+
+def load_study(folder: Path) -> Dataset:
+    trials, faces, selections, ratings = _study_tables(folder)
     notes: list[str] = []
     wcols = [c for c in faces.columns if str(c).startswith("w_")]
     columns = tuple(str(c)[2:] for c in wcols)
@@ -195,10 +203,39 @@ def load_study(folder: Path) -> Dataset:
         else []
     )
     groups = tuple(sorted(elites["group"].dropna().unique().tolist()))
-    # errors against each group's proxy target (mean final face)
-    bias_rows = []
     initial = faces[faces["generation"] == 0]
     initial = initial.merge(trials[[*key, "group"]], on=key, how="left")
+    bias_rows = _proxy_errors(elites, initial, groups, columns, wcols, generations)
+    ordered = ["group", "participant", "sample", "generation", "n_selected", "error", "complete"]
+    elites = elites[[*ordered, *columns]].sort_values(["group", "sample", "generation"])
+    return Dataset(
+        kind="study",
+        source=folder,
+        elites=elites.reset_index(drop=True),
+        columns=columns,
+        generations=generations,
+        error_kind="CD to the group's mean final face (proxy target)",
+        bias=pd.DataFrame(bias_rows, columns=["group", "sample", "best_initial_error"]),
+        groups=groups,
+        ratings=ratings,
+        population_size=pop_size,
+        selections=tuple(int(s) for s in sel_counts),
+        notes=notes,
+    )
+
+
+def _proxy_errors(
+    elites: pd.DataFrame,
+    initial: pd.DataFrame,
+    groups: tuple[str, ...],
+    columns: tuple[str, ...],
+    wcols: list[str],
+    generations: int,
+) -> list[dict[str, object]]:
+    """Fill ``elites["error"]`` with each elite's CD to its group's proxy target (the mean
+    final face); returns the bias rows: per sample, the best generation-0 face's CD to it."""
+    key = ["session_id", "trial"]
+    bias_rows: list[dict[str, object]] = []
     for g in groups:
         fin = elites[
             (elites["group"] == g) & elites["complete"] & (elites["generation"] == generations)
@@ -219,22 +256,7 @@ def load_study(folder: Path) -> Dataset:
                     "best_initial_error": float(cosine_distance(w, proxy).min()),
                 }
             )
-    ordered = ["group", "participant", "sample", "generation", "n_selected", "error", "complete"]
-    elites = elites[[*ordered, *columns]].sort_values(["group", "sample", "generation"])
-    return Dataset(
-        kind="study",
-        source=folder,
-        elites=elites.reset_index(drop=True),
-        columns=columns,
-        generations=generations,
-        error_kind="CD to the group's mean final face (proxy target)",
-        bias=pd.DataFrame(bias_rows, columns=["group", "sample", "best_initial_error"]),
-        groups=groups,
-        ratings=ratings,
-        population_size=pop_size,
-        selections=tuple(int(s) for s in sel_counts),
-        notes=notes,
-    )
+    return bias_rows
 
 
 # ---- simulation output ---------------------------------------------------------------------

@@ -21,7 +21,6 @@ the same statistic), so α = 0.05 needs at least n = 4 however large the differe
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,9 +59,9 @@ def final_faces_pool(
 ) -> np.ndarray:
     """Final faces (pool, S) of GA runs toward ``prototype`` (full weights), one per
     simulated participant (each its own jittered prototype when ``participant_sd`` > 0)."""
+    from emogen.analysis.elites import simulate_elites, simulate_participants
     from emogen.rng import spawn_seeds
-    from emogen.simulate.runner import build_problem, run_simulation
-    from emogen.simulate.vectorised import simulate_runs
+    from emogen.simulate import build_problem
 
     named = {s: float(v) for s, v in zip(rig.shape_names, prototype, strict=True) if v > 0}
     if not named:
@@ -70,31 +69,20 @@ def final_faces_pool(
     cfg = config.model_copy(
         update={"target": named, "target_file": None, "runs": pool, "seed": seed}
     )
-    if participant_sd <= 0:
-        result = run_simulation(cfg, rig, all_weights=True)
-        faces = result.faces
-        if faces is None:  # pragma: no cover - all_weights gives faces
-            raise ConfigError("the simulation returned no faces")
-        last = cfg.ga.generations
-        fin = faces[(faces["generation"] == last) & (faces["rank"] == 0)].sort_values("run")
-        return fin[list(rig.shape_names)].to_numpy(dtype=np.float64)
     problem = build_problem(cfg.model_copy(update={"runs": 1}), rig, all_weights=True)
+    if participant_sd <= 0:
+        seeds = np.array(spawn_seeds(seed, pool), dtype=np.int64)
+        return simulate_elites(problem, np.arange(pool), seeds).final
     genes = rig.contract(np.asarray(prototype, dtype=np.float64)[None], cfg.ga.eye_motion)[0]
     rng = np.random.default_rng(seed)
-    out = []
-    for r, s in enumerate(spawn_seeds(seed, pool)):
+    targets = []
+    for _ in range(pool):
         g = np.clip(genes + rng.normal(0.0, participant_sd, size=genes.shape), 0.0, 1.0)
         if not np.any(g > 0):
             g = genes
-        target = rig.expand(g[None], cfg.ga.eye_motion)[0]
-        arrays = simulate_runs(
-            dataclasses.replace(problem, target=target), np.array([r]), np.array([s])
-        )
-        if arrays.weights is None:  # pragma: no cover
-            raise ConfigError("the simulation returned no weights")
-        elite = int(np.argmax(arrays.rank[0, -1] == 0))
-        out.append(arrays.weights[0, -1, elite])
-    return np.stack(out)
+        targets.append(rig.expand(g[None], cfg.ga.eye_motion)[0])
+    elites = simulate_participants(problem, np.stack(targets), spawn_seeds(seed, pool))
+    return np.stack([e.final[0] for e in elites])
 
 
 def _statistic(mean_a: np.ndarray, mean_b: np.ndarray, kind: str) -> np.ndarray:

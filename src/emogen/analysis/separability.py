@@ -22,11 +22,15 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from emogen.errors import ConfigError, ShapeError
+
+if TYPE_CHECKING:
+    from sklearn.mixture import GaussianMixture
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,6 +86,87 @@ def _full_covariances(gmm: object, k: int) -> np.ndarray:
     return np.stack([np.eye(d) * c for c in cov])
 
 
+def _check_input(
+    x: np.ndarray, y: np.ndarray, groups: tuple[str, ...], n_components: int | None
+) -> int:
+    """The number of clusters, after checking samples and labels."""
+    if x.ndim != 2 or y.shape != (len(x),):
+        raise ShapeError(f"weights (n, S) and labels (n,) must agree; got {x.shape}, {y.shape}")
+    k = len(groups) if n_components is None else int(n_components)
+    if k < 2:
+        raise ConfigError(f"separability needs at least 2 clusters; got {k}")
+    present = np.unique(y)
+    if len(present) != len(groups) or present.min() < 0 or present.max() >= len(groups):
+        raise ConfigError(f"every group of {list(groups)} needs samples; labels hold {present}")
+    if len(x) < 2 * k:
+        raise ConfigError(
+            f"separability needs at least {2 * k} samples for {k} clusters; got {len(x)}"
+        )
+    return k
+
+
+def _fit_mixture(
+    z: np.ndarray,
+    y: np.ndarray,
+    n_groups: int,
+    k: int,
+    covariance_type: str | None,
+    n_init: int,
+    seed: int,
+) -> tuple[GaussianMixture, list[str]]:
+    """A k-component Gaussian mixture fitted to z (n, d), and notes on how it was fitted."""
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.mixture import GaussianMixture
+
+    notes: list[str] = []
+    d = z.shape[1]
+    smallest = int(np.bincount(y, minlength=n_groups).min())
+    cov = covariance_type or ("full" if smallest >= 10 * d * (d + 1) // 2 else "tied")
+    if cov != "full":
+        notes.append(
+            f"{cov} covariances: {smallest} samples in the smallest group are too few for a full "
+            f"covariance per component in {d} dimensions"
+        )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ConvergenceWarning)
+        gmm = GaussianMixture(
+            n_components=k,
+            covariance_type=cov,
+            n_init=n_init,
+            max_iter=500,
+            reg_covar=1e-6,
+            random_state=seed,
+        ).fit(z)
+    if any(issubclass(w.category, ConvergenceWarning) for w in caught):
+        notes.append("the Gaussian mixture's best initialisation did not fully converge")
+    return gmm, notes
+
+
+def _confusion(
+    y: np.ndarray,
+    pred: np.ndarray,
+    groups: tuple[str, ...],
+    names: list[str],
+    of_group: dict[str, int],
+) -> pd.DataFrame:
+    """Samples per (group, cluster), the clusters in the groups' order, unnamed ones last."""
+    k = len(names)
+    counts = np.zeros((len(groups), k), dtype=np.int64)
+    np.add.at(counts, (y, pred), 1)
+    confusion = pd.DataFrame(
+        counts,
+        index=pd.Index([f"{g} samples" for g in groups], name="classified as →"),
+        columns=names,
+    )
+    # columns in the groups' order, unnamed clusters last
+    rank = {
+        c: min((i for i, g in enumerate(groups) if of_group[g] == c), default=len(groups))
+        for c in range(k)
+    }
+    confusion = confusion.iloc[:, sorted(range(k), key=lambda c: (rank[c], c))]
+    return confusion
+
+
 def gmm_separability(
     weights: np.ndarray,
     labels: np.ndarray,
@@ -102,25 +187,12 @@ def gmm_separability(
     covariance): with few samples a full-covariance component can collapse onto one outlier.
     """
     from sklearn.decomposition import PCA
-    from sklearn.exceptions import ConvergenceWarning
     from sklearn.metrics import adjusted_rand_score
-    from sklearn.mixture import GaussianMixture
 
     x = np.asarray(weights, dtype=np.float64)
     y = np.asarray(labels, dtype=np.int64)
     groups = tuple(groups)
-    if x.ndim != 2 or y.shape != (len(x),):
-        raise ShapeError(f"weights (n, S) and labels (n,) must agree; got {x.shape}, {y.shape}")
-    k = len(groups) if n_components is None else int(n_components)
-    if k < 2:
-        raise ConfigError(f"separability needs at least 2 clusters; got {k}")
-    present = np.unique(y)
-    if len(present) != len(groups) or present.min() < 0 or present.max() >= len(groups):
-        raise ConfigError(f"every group of {list(groups)} needs samples; labels hold {present}")
-    if len(x) < 2 * k:
-        raise ConfigError(
-            f"separability needs at least {2 * k} samples for {k} clusters; got {len(x)}"
-        )
+    k = _check_input(x, y, groups, n_components)
     t = None if targets is None else np.asarray(targets, dtype=np.float64)
     fit_on = x if t is None else np.concatenate([x, t])
     max_dims = min(fit_on.shape[0] - 1, fit_on.shape[1])
@@ -129,27 +201,7 @@ def gmm_separability(
     else:
         pca = PCA(n_components=min(int(n_pca), max_dims), svd_solver="full").fit(fit_on)
     z = pca.transform(x)
-    notes: list[str] = []
-    d = z.shape[1]
-    smallest = int(np.bincount(y, minlength=len(groups)).min())
-    cov = covariance_type or ("full" if smallest >= 10 * d * (d + 1) // 2 else "tied")
-    if cov != "full":
-        notes.append(
-            f"{cov} covariances: {smallest} samples in the smallest group are too few for a full "
-            f"covariance per component in {d} dimensions"
-        )
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ConvergenceWarning)
-        gmm = GaussianMixture(
-            n_components=k,
-            covariance_type=cov,
-            n_init=n_init,
-            max_iter=500,
-            reg_covar=1e-6,
-            random_state=seed,
-        ).fit(z)
-    if any(issubclass(w.category, ConvergenceWarning) for w in caught):
-        notes.append("the Gaussian mixture's best initialisation did not fully converge")
+    gmm, notes = _fit_mixture(z, y, len(groups), k, covariance_type, n_init, seed)
     pred = gmm.predict(z)
     group_means = np.stack([z[y == i].mean(0) for i in range(len(groups))])
     of_group = dict(zip(groups, (int(c) for c in gmm.predict(group_means)), strict=True))
@@ -159,19 +211,7 @@ def gmm_separability(
         target_coords = pca.transform(t)
         of_target = dict(zip(groups, (int(c) for c in gmm.predict(target_coords)), strict=True))
     names = _cluster_names(groups, of_group, k)
-    counts = np.zeros((len(groups), k), dtype=np.int64)
-    np.add.at(counts, (y, pred), 1)
-    confusion = pd.DataFrame(
-        counts,
-        index=pd.Index([f"{g} samples" for g in groups], name="classified as →"),
-        columns=names,
-    )
-    # columns in the groups' order, unnamed clusters last
-    rank = {
-        c: min((i for i, g in enumerate(groups) if of_group[g] == c), default=len(groups))
-        for c in range(k)
-    }
-    confusion = confusion.iloc[:, sorted(range(k), key=lambda c: (rank[c], c))]
+    confusion = _confusion(y, pred, groups, names, of_group)
     owners = {c: [g for g in groups if of_group[g] == c] for c in range(k)}
     correct = np.array(
         [pred[i] == of_group[groups[y[i]]] and len(owners[pred[i]]) == 1 for i in range(len(y))]

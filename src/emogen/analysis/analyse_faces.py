@@ -1,0 +1,157 @@
+"""``emogen analyse``'s sections on the faces themselves: separability of the groups (PCA +
+GMM) and the prototypes (each participant's mean final face, group means, renders)."""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pandas as pd
+
+from emogen.analysis import plots
+from emogen.analysis.analyse_options import AnalysisOptions
+from emogen.analysis.data import Dataset
+from emogen.analysis.prototypes import group_means, participant_prototypes, top_weights
+from emogen.analysis.report import Report
+from emogen.analysis.separability import gmm_separability
+from emogen.errors import EmoGenError
+
+if TYPE_CHECKING:
+    from emogen.model.face import FaceModel
+
+log = logging.getLogger(__name__)
+
+
+def separability_section(
+    ds: Dataset, report: Report, summary: dict[str, Any], opts: AnalysisOptions
+) -> None:
+    report.heading("Separability of the groups (PCA + GMM)")
+    if not ds.has_weights or len(ds.groups) < 2:
+        report.paragraph("Skipped: needs face weights and at least two groups.")
+        return
+    final = ds.final
+    counts = final.groupby("group").size().reindex(list(ds.groups), fill_value=0)
+    if (counts < 2).any() or counts.sum() < 2 * len(ds.groups) + 1:
+        report.paragraph(
+            f"Skipped: too few final faces per group for a {len(ds.groups)}-component mixture "
+            f"({', '.join(f'{g}: {n}' for g, n in counts.items())}; at least 2 per group)."
+        )
+        return
+    x = final[list(ds.columns)].to_numpy(dtype=np.float64)
+    labels = final["group"].map({g: i for i, g in enumerate(ds.groups)}).to_numpy()
+    targets = np.stack([ds.targets[g] for g in ds.groups]) if ds.targets else None
+    try:
+        sep = gmm_separability(
+            x, labels, ds.groups, targets=targets, n_pca=opts.gmm_dims, seed=opts.seed
+        )
+    except EmoGenError as exc:
+        report.paragraph(f"Skipped: {exc}")
+        return
+    report.paragraph(
+        f"PCA of the final faces{' and the targets' if targets is not None else ''}; a "
+        f"{len(ds.groups)}-component Gaussian mixture in the first {sep.n_pca} components "
+        f"({sep.explained_variance:.0%} of the variance). Clusters are named after the groups "
+        'whose mean face they contain ("unnamed": none). Accuracy: share of faces in the '
+        f"cluster of their own group alone = **{sep.accuracy:.1%}**; adjusted Rand index "
+        f"{sep.ari:.3f}; one cluster per group: {'yes' if sep.one_to_one else 'no'}."
+    )
+    report.table(
+        sep.confusion, "confusion", "GMM classification of each group's final faces", index=True
+    )
+    if sep.cluster_of_target:
+        corr = pd.DataFrame(
+            {
+                "group": list(ds.groups),
+                "cluster of group mean": [
+                    sep.cluster_names[sep.cluster_of_group[g]] for g in ds.groups
+                ],
+                "cluster of target": [
+                    sep.cluster_names[sep.cluster_of_target[g]] for g in ds.groups
+                ],
+            }
+        )
+        report.table(corr, "correspondence", "Cluster-to-target correspondence")
+    report.bullets([f"Note: {n}" for n in sep.notes])
+    report.figure(
+        plots.separability(sep, report.figures / "separability.png"),
+        "Final faces in the first two PCA components; GMM components (1σ, 2σ), group "
+        "means (×) and targets (★).",
+    )
+    summary["separability"] = {
+        "accuracy": sep.accuracy,
+        "ari": sep.ari,
+        "one_to_one": sep.one_to_one,
+        "n_pca": sep.n_pca,
+    }
+
+
+def prototypes_section(
+    ds: Dataset,
+    report: Report,
+    summary: dict[str, Any],
+    opts: AnalysisOptions,
+    model: FaceModel | None,
+) -> None:
+    report.heading("Prototypes and mean faces")
+    if not ds.has_weights or ds.final.empty:
+        report.paragraph("Skipped: needs final faces with weights.")
+        return
+    cols = list(ds.columns)
+    protos = participant_prototypes(ds.final, cols)
+    means = group_means(protos, cols)
+    if ds.kind == "study":
+        protos.to_csv(report.out / "tables" / "prototypes.csv", index=False)
+        show = protos[["group", "participant", "n_trials"]].copy()
+        show["largest weights"] = [top_weights(r, cols) for r in protos[cols].to_numpy()]
+        report.table(
+            show,
+            None,
+            "Per-participant prototypes: mean final face per group "
+            "(full weights in tables/prototypes.csv)",
+        )
+    mean_rows: list[dict[str, object]] = [
+        {"group": g, "largest weights of the mean face": top_weights(m, cols, 8)}
+        for g, m in means.items()
+    ]
+    if ds.targets:
+        from emogen.metrics import cosine_distance
+
+        for r in mean_rows:
+            t = ds.targets[str(r["group"])]
+            r["CD(mean, target)"] = float(cosine_distance(means[str(r["group"])], t))
+            r["|mean| / |target|"] = float(
+                np.linalg.norm(means[str(r["group"])]) / np.linalg.norm(t)
+            )
+    report.table(pd.DataFrame(mean_rows), "group_means", "Group mean faces (mean of prototypes)")
+    summary["group_means"] = {g: m.tolist() for g, m in means.items()}
+    if model is None or not opts.render:
+        report.paragraph("Renders skipped (no face model, or --no-render).")
+        return
+    from emogen.analysis.face_sheets import Panel, face_sheet, heatmap_sheet, model_weights
+
+    try:
+        mw = {g: model_weights(m, cols, model) for g, m in means.items()}
+        sheet = face_sheet(
+            model,
+            np.stack(list(mw.values())),
+            list(mw),
+            report.figures / "mean_faces.png",
+            size=opts.render_size,
+        )
+        report.figure(sheet, "Mean final face of each group.")
+        neutral = np.zeros(model.n_shapes)
+        if ds.targets:
+            panels = [Panel(g, mw[g], model_weights(ds.targets[g], cols, model)) for g in mw]
+            caption = "Distance (cm) of each group's mean final face to its target (Fig. 9)."
+        else:
+            panels = [Panel(g, mw[g], neutral) for g in mw]
+            caption = "Distance (cm) of each group's mean final face from the neutral face."
+        stats = heatmap_sheet(
+            model, panels, report.figures / "mean_face_heatmaps.png", size=opts.render_size
+        )
+        report.figure(report.figures / "mean_face_heatmaps.png", caption)
+        report.table(stats, "mean_face_distances", "Vertex distances of the mean faces (cm)")
+    except EmoGenError as exc:
+        log.warning("rendering failed: %s", exc)
+        report.paragraph(f"Renders failed: {exc}")

@@ -1,0 +1,19 @@
+"""Options of ``emogen analyse``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from emogen.config import GAConfig
+
+
+@dataclass(frozen=True)
+class AnalysisOptions:
+    render: bool = True
+    noise_runs: int = 500
+    noise_draws: int = 2000
+    seed: int = 1
+    gmm_dims: float = 2
+    alpha: float = 0.05
+    ga: GAConfig | None = None  # the study's GA settings (default: inferred from the data)
+    render_size: int = 256

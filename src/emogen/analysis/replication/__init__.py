@@ -1,0 +1,39 @@
+"""``emogen replicate``: the paper's Section IV experiments on our model, each finding beside
+the paper's.
+
+:func:`replicate` runs the sections and writes the report (``index.html``, ``README.md``,
+``figures/``, ``tables/``) and returns the findings, one line each: what the paper found, its
+numbers, ours, and a verdict — **holds**, **partly** (some of it, or only qualitatively) or
+**differs**.
+
+Each section is an experiment taking typed inputs (a :class:`ConditionRunner` that simulates
+conditions, the training set, …) and returning a typed result (its tables, the data of its
+figures, its findings); the report is written from those results:
+
+* :mod:`.theoretical_metrics`, :mod:`.empirical_metrics` — Section IV-B (Tables I–II);
+* :mod:`.initialisation`, :mod:`.bias_repeatability`, :mod:`.ga_settings` — Section IV-C
+  (Tables III–V, Figs. 14–18, selection pressure);
+* :mod:`.analysis_tools` — our GA-noise test and separability on simulated participants, a
+  power analysis;
+* :mod:`.write_report`, :mod:`.write_metrics`, :mod:`.write_ga`, :mod:`.write_tools` — the
+  report; :mod:`.run` — the order of the sections.
+
+Every simulation uses the same seed (common random numbers: conditions differ only by their
+settings). ``quick`` uses 100 runs per condition and 60 simulated participants instead of 500
+and 240, and a lighter power analysis: a few minutes on two cores, for CI.
+"""
+
+from emogen.analysis.replication.conditions import Condition, ConditionRunner, ConditionSpec
+from emogen.analysis.replication.findings import Finding
+from emogen.analysis.replication.run import SECTIONS, replicate
+from emogen.analysis.replication.settings import ReplicateSettings
+
+__all__ = [
+    "SECTIONS",
+    "Condition",
+    "ConditionRunner",
+    "ConditionSpec",
+    "Finding",
+    "ReplicateSettings",
+    "replicate",
+]

@@ -1,0 +1,56 @@
+"""Comparing faces on the mesh: vertex RMS in cm, the intensity line of a target, and the
+ratio of two genes in a face."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from emogen.metrics import cosine_distance
+
+if TYPE_CHECKING:
+    from emogen.metrics import VertexRMS
+    from emogen.model.face import FaceModel
+
+
+@dataclass(eq=False)
+class FaceGeometry:
+    """Geometric comparisons of faces (full weights) on ``model``."""
+
+    model: FaceModel
+    _vertex_rms: VertexRMS | None = field(default=None, repr=False)
+
+    def rms_cm(self, a: np.ndarray, b: np.ndarray) -> float:
+        """Vertex RMS (eq. 13) between two faces, in cm."""
+        if self._vertex_rms is None:
+            from emogen.metrics import VertexRMS
+
+            self._vertex_rms = VertexRMS(self.model)
+        return float(self._vertex_rms(a, b))
+
+    def intensity_fit(self, face: np.ndarray, target: np.ndarray) -> tuple[float, float]:
+        """How well ``face`` lies on the target's intensity line, geometrically: the scale s*
+        that best maps the target's vertex displacement (from the neutral) onto the face's, and
+        the residual ‖d_face − s* d_target‖ / ‖d_target‖ (0: exactly a scaled target)."""
+        v = self.model.evaluate(np.stack([face, target, np.zeros_like(target)]).astype(np.float32))
+        d_face = (v[0] - v[2]).astype(np.float64).ravel()
+        d_target = (v[1] - v[2]).astype(np.float64).ravel()
+        s = float(d_face @ d_target / (d_target @ d_target))
+        return s, float(np.linalg.norm(d_face - s * d_target) / np.linalg.norm(d_target))
+
+    def gene_ratio(self, w: np.ndarray, gene: str, over: str) -> float:
+        """Mean weight of ``gene``'s shapes over that of ``over``'s (NaN when ``over`` is off)."""
+        below = self._gene(w, over)
+        return self._gene(w, gene) / below if below > 1e-9 else float("nan")
+
+    def _gene(self, w: np.ndarray, gene: str) -> float:
+        rig = self.model.rig
+        idx = [rig.shape_names.index(s) for g in rig.genes if g.name == gene for s in g.shapes]
+        return float(np.mean(w[idx]))
+
+
+def mean_cd(faces: np.ndarray, target: np.ndarray) -> float:
+    """Mean CD of faces (n, S) to a target (S,)."""
+    return float(np.mean(cosine_distance(faces, target)))

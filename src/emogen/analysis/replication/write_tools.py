@@ -1,0 +1,90 @@
+"""The report's checks of our tools: the spread test and separability on simulated
+participants, and the power analysis."""
+
+from __future__ import annotations
+
+from emogen.analysis import plots
+from emogen.analysis.replication.analysis_tools import ParticipantTools, PowerStudy
+from emogen.analysis.replication.settings import ReplicateSettings
+from emogen.analysis.report import Report
+
+
+def write_participant_tools(r: Report, res: ParticipantTools, settings: ReplicateSettings) -> None:
+    r.heading("The analysis tools on simulated participants")
+    k, n_control = res.groups, res.group_size
+    r.paragraph(
+        f"The {settings.participants} simulated participants per emotion of the empirical-metrics "
+        "section, final faces only. Each evolved their own target (core building blocks of the "
+        "emotion, plus some optional ones), so a group's spread holds real between-participant "
+        "differences on top of GA noise: the spread test should find them. As a check of the "
+        f"test itself, {k} control groups of {n_control} runs toward target 1 (sparse) and {k} "
+        "toward target 2 (one shared target each, fresh seeds) should mostly not exceed the "
+        "noise: the share that does is the test's false-alarm rate (nominal 5%)."
+    )
+    r.table(
+        res.spread,
+        "spread_test_participants",
+        "Spread of each emotion group against simulated GA noise (one-sided, α = 0.05)",
+    )
+    r.figure(
+        plots.spread(res.spread, r.figures / "spread_participants.png"),
+        "Mean proxy error per group against the GA noise expected at the same n.",
+    )
+    r.table(
+        res.candidates,
+        "spread_candidates_participants",
+        "Latent-target candidates (τ: weights below τ × max zeroed, then refined)",
+    )
+    r.table(
+        res.controls,
+        "spread_test_controls",
+        "Control groups (one shared target each): the test's false alarms",
+    )
+    sep, sep90 = res.separability, res.separability_90
+    r.paragraph(
+        f"Separability of the four emotions' final faces: accuracy {sep.accuracy:.1%} in 2 PCA "
+        f"components, {sep90.accuracy:.1%} in {sep90.n_pca} (90% of the variance); ARI "
+        f"{sep.ari:.2f} / {sep90.ari:.2f}."
+    )
+    r.table(
+        sep.confusion,
+        "emotions_confusion",
+        "GMM classification of the emotions' final faces (2 components)",
+        index=True,
+    )
+    r.figure(
+        plots.separability(
+            sep,
+            r.figures / "emotions_separability.png",
+            title=f"four emotions: accuracy {sep.accuracy:.0%}",
+        ),
+        "Simulated participants' final faces in PCA components 1–2, by emotion.",
+    )
+
+
+def write_power(r: Report, res: PowerStudy, s: ReplicateSettings) -> None:
+    r.heading("Power analysis")
+    power = res.result
+    r.paragraph(
+        "Two groups whose happy prototypes differ by raised inner brows (browInnerUp 0.4 added; "
+        f"CD between the prototypes {res.prototype_cd:.3f}). Each participant holds "
+        f"the prototype plus N(0, {res.participant_sd}²) per gene and makes one face (10 "
+        f"generations, choice noise T = {s.participant_noise}); the test compares the groups' "
+        f"mean faces by CD with {s.power_permutations} permutations; {s.power_replicates} "
+        f"simulated experiments per n ({s.power_pool} simulated participants per group drawn "
+        "from). `emogen power` runs this for any two prototypes."
+    )
+    r.table(power.curve, "power_curve", "Power against participants per group (α = 0.05)")
+    r.figure(
+        plots.power_curve(
+            power.curve, r.figures / "power.png", target=0.8, n_required=power.n_required
+        ),
+        "Power curve; dashed: 80%.",
+    )
+    r.paragraph(
+        f"**{power.n_required} participants per group** reach 80% power on the fitted curve "
+        f"(logistic in log n, binomial maximum likelihood); the smallest simulated n whose own "
+        f"estimate reached it: {power.n_observed}."
+        if power.n_required is not None
+        else f"80% power is not reached within {s.power_max_n} participants per group."
+    )
