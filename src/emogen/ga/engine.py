@@ -97,10 +97,12 @@ Corrector = Callable[[np.ndarray], tuple[tuple[str, ...], np.ndarray]]
 
 
 def correctives_of(model: Any) -> Corrector:
-    """A corrector from a face model: ``model.correct`` (combinational + collision correctives)."""
+    """A corrector from a face model: :func:`emogen.correct.correct_faces` (combinational +
+    collision correctives)."""
+    from emogen.correct.faces import correct_faces
 
     def correct(weights: np.ndarray) -> tuple[tuple[str, ...], np.ndarray]:
-        result = model.correct(weights)
+        result = correct_faces(model, weights)
         return tuple(result.corrective_names), np.asarray(result.correctives, dtype=np.float64)
 
     return correct
