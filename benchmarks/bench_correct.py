@@ -26,6 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from emogen.correct import correct_faces, corrected_vertices
+
 REPO = Path(__file__).resolve().parents[1]
 
 
@@ -109,7 +111,7 @@ def _plausibility(model, weights: np.ndarray, combinational: bool) -> dict[str, 
     for start in range(0, len(weights), 256):
         w = weights[start : start + 256]
         if combinational:
-            verts = model.evaluate_correction(model.correct(w, collisions=False), gaze=False)
+            verts = corrected_vertices(model, correct_faces(model, w, collisions=False), gaze=False)
         else:
             verts = model.evaluate(w, gaze=False)
         for k, v in measure.measure(verts).items():
@@ -123,16 +125,16 @@ import numpy as np
 from emogen.model import load_model
 model = load_model(sys.argv[1])
 w = np.load(sys.argv[2])
-model.correct(w[:4])  # warm up: correctives loaded, caches filled
+correct_faces(model, w[:4])  # warm up: correctives loaded, caches filled
 times, cpu, collided = [], [], []
 for i in range(len(w)):
     t, c = time.perf_counter(), time.process_time()
-    r = model.correct(w[i : i + 1])
+    r = correct_faces(model, w[i : i + 1])
     times.append(time.perf_counter() - t)
     cpu.append(time.process_time() - c)
     collided.append(bool(r.collided[0]))
 t = time.perf_counter()
-model.correct(w)
+correct_faces(model, w)
 batch = time.perf_counter() - t
 print(json.dumps({"times": times, "cpu": cpu, "collided": collided, "batch_s": batch}))
 """
@@ -186,8 +188,8 @@ def contact_sheets(
     for name, idx in picks.items():
         w = weights[idx]
         before = model.evaluate(w)
-        res = model.correct(w, collisions=not name.startswith("combinational"))
-        after = model.evaluate_correction(res)
+        res = correct_faces(model, w, collisions=not name.startswith("combinational"))
+        after = corrected_vertices(model, res)
         path = out / f"{name}.npz"
         np.savez_compressed(
             path,
@@ -259,7 +261,7 @@ def run(
     )
 
     t0 = time.perf_counter()
-    result = model.correct(weights)
+    result = correct_faces(model, weights)
     print(f"corrected in {time.perf_counter() - t0:.1f} s (batched)")
     changed = result.collision.any(axis=1)
     pen_before = _interpenetration(model, weights, corrected=False)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 
 def run(model) -> dict[str, float]:  # type: ignore[no-untyped-def]
-    from emogen.model.io.gltf import export_model_glb
+    from emogen.render.model_glb import export_model_glb
 
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "face.glb"

@@ -25,8 +25,12 @@ __all__ = [
 
 
 def __getattr__(name: str):  # lazy: `import emogen` stays light for the CLI
-    if name in ("FaceModel", "load_model"):
-        from emogen.model import face
+    if name == "FaceModel":
+        from emogen.model.face import FaceModel
 
-        return getattr(face, name)
+        return FaceModel
+    if name == "load_model":
+        from emogen.model.load import load_model
+
+        return load_model
     raise AttributeError(name)

@@ -1,3 +1,3 @@
-from emogen.cli import app
+from emogen.cli.app import app
 
 app()

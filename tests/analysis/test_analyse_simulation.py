@@ -60,9 +60,12 @@ def test_analyse_simulations_end_to_end(sims: Path, ict_model, tmp_path: Path) -
     summary = json.loads((out / "analysis.json").read_text())
     # two very different targets are perfectly separable
     assert summary["separability"]["accuracy"] > 0.95
-    # runs toward one target do not spread beyond GA noise
+    # runs toward one target do not spread beyond GA noise. The report flags p < 0.05, which a
+    # consistent group reaches 1 time in 20 by design (measured: 1 of 16 groups over seeds 1-8
+    # of this setting); what must not happen is a clear rejection of runs made to be consistent.
     spread = pd.read_csv(out / "tables" / "spread_test.csv")
-    assert not spread["exceeds noise"].any()
+    assert (spread["p"] > 0.01).all(), spread[["group", "p"]]
+    assert spread["exceeds noise"].tolist() == (spread["p"] < 0.05).tolist()
     html = res.html.read_text()
     assert "Separability" in html and "figures/mean_face_heatmaps.png" in html
     assert "Separability" in res.markdown.read_text()

@@ -19,7 +19,7 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from emogen.analysis.cli import analysis_app
+from emogen.cli.analysis import analysis_app
 from emogen.metrics import cosine_distance
 
 STUDY: dict[str, Any] = {

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
-from emogen.analysis.cli import analysis_app
+from emogen.cli.analysis import analysis_app
 
 runner = CliRunner()
 

@@ -5,10 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from emogen.correct import model_correctives
+
 
 @pytest.fixture(scope="session")
 def ict_correctives(ict_model):  # type: ignore[no-untyped-def]
-    return ict_model.correctives
+    return model_correctives(ict_model)
 
 
 @pytest.fixture(scope="session")

@@ -1,4 +1,4 @@
-"""``emogen correct`` through a tiny Typer app (the command is registered in emogen.cli)."""
+"""``emogen correct`` through a tiny Typer app (the command is registered in emogen.cli.app)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ import pandas as pd
 import typer
 from typer.testing import CliRunner
 
-from emogen.correct.cli import correct_command
+from emogen.cli.correct import correct_command
+from emogen.correct import evaluate_corrected
 
 app = typer.Typer()
 app.command("correct")(correct_command)
@@ -38,7 +39,7 @@ def test_correct_csv_adds_corrective_columns_and_saves_meshes(
     z = np.load(mesh)
     assert z["vertices"].shape == (2, ict_model.n_vertices, 3)
     w = table[list(ict_model.shape_names)].to_numpy()
-    np.testing.assert_allclose(z["vertices"], ict_model.evaluate(w, correct=True), atol=1e-5)
+    np.testing.assert_allclose(z["vertices"], evaluate_corrected(ict_model, w), atol=1e-5)
 
 
 def test_unknown_column_is_an_error_naming_it(ict_dir: Path, tmp_path: Path) -> None:

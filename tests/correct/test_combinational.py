@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from emogen.correct import correct_faces, evaluate_corrected, model_correctives
 from emogen.correct.combinational import activations, double_counted, mirror, overlap_score
 from emogen.errors import ConfigError
 
@@ -86,10 +87,10 @@ def test_a_pair_at_full_weight_moves_no_further_than_its_larger_shape(
 
 def test_mouth_close_is_capped_at_jaw_open(ict_model) -> None:
     w = ict_model.rig.weights_from_names({"mouthClose": 0.8, "jawOpen": 0.3})[None]
-    r = ict_model.correct(w)
+    r = correct_faces(ict_model, w)
     assert r.core[0, ict_model.shape_index("mouthClose")] == 0.8
     assert r.weights[0, ict_model.shape_index("mouthClose")] == pytest.approx(0.3)
-    alone = ict_model.correct(ict_model.rig.weights_from_names({"mouthClose": 1.0})[None])
+    alone = correct_faces(ict_model, ict_model.rig.weights_from_names({"mouthClose": 1.0})[None])
     assert alone.weights[0, ict_model.shape_index("mouthClose")] == 0.0
 
 
@@ -117,15 +118,15 @@ def test_artist_corrective_from_an_obj_file(tiny_dir: Path) -> None:
     (tiny_dir.parent / "fix_smile.obj").write_text("\n".join(lines) + "\n")
     (tiny_dir.parent / "rig.toml").write_text(RIG_WITH_FILE)
     model = emogen.load_model(tiny_dir, rig=tiny_dir.parent / "rig.toml")
-    c = model.correctives
+    c = model_correctives(model)
     assert c.combinational_names == ("fix_smile", "fix_jaw_smile")
     assert c.n_collision == 0  # no mouth regions on this model
     np.testing.assert_allclose(c.combinational_deltas[0], shape - neutral, atol=1e-6)
     w = np.array([[0.5, 0.4, 0.9, 0, 0, 0, 0]])  # jawOpen, smile_L, smile_R (capped at 0.4)
     w = w[:, : model.n_shapes]
-    r = model.correct(w)
+    r = correct_faces(model, w)
     np.testing.assert_allclose(r.combinational, [[0.4 * 0.4, 0.5 * 0.4]])
-    verts = model.evaluate(w, correct=True)
+    verts = evaluate_corrected(model, w)
     plain = model.evaluate(r.weights)
     expect = plain[0] + 0.16 * c.combinational_deltas[0] + 0.2 * c.combinational_deltas[1]
     np.testing.assert_allclose(verts[0], expect, atol=1e-5)

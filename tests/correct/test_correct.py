@@ -1,4 +1,4 @@
-"""FaceModel.correct / evaluate(correct=True): exactness, records, and the before/after figures."""
+"""correct_faces / evaluate_corrected: exactness, records, and the before/after figures."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from emogen.correct import correct_faces, corrected_vertices, evaluate_corrected
 from emogen.correct.measure import Interpenetration
 from emogen.errors import ShapeError
 
@@ -30,10 +31,10 @@ AWAY_FROM_MOUTH = (
 )
 def test_a_face_without_collision_comes_back_unchanged_exactly(ict_model, values) -> None:
     w = ict_model.rig.weights_from_names(dict(zip(AWAY_FROM_MOUTH, values, strict=True)))[None]
-    r = ict_model.correct(w)
+    r = correct_faces(ict_model, w)
     assert not r.collided[0] and np.all(r.collision == 0)
     plain = ict_model.evaluate(w)
-    corrected = ict_model.evaluate(w, correct=True)
+    corrected = evaluate_corrected(ict_model, w)
     if not r.changed()[0]:
         np.testing.assert_array_equal(corrected, plain)  # bit for bit
     else:  # only combinational correctives (their drivers were both on)
@@ -44,17 +45,17 @@ def test_ga_faces_without_collision_keep_zero_collision_weights_and_their_vertic
     ict_model, ga_weights
 ) -> None:
     w = ga_weights[0][:120]
-    r = ict_model.correct(w)
+    r = correct_faces(ict_model, w)
     clean = ~r.collided
     assert clean.any() and (~clean).any()
     assert np.all(r.collision[clean] == 0)
     untouched = ~r.changed()
     if untouched.any():
         np.testing.assert_array_equal(
-            ict_model.evaluate(w[untouched], correct=True), ict_model.evaluate(w[untouched])
+            evaluate_corrected(ict_model, w[untouched]), ict_model.evaluate(w[untouched])
         )
     # batch = one at a time
-    one = ict_model.correct(w[5:6])
+    one = correct_faces(ict_model, w[5:6])
     np.testing.assert_allclose(one.collision[0], r.collision[5], atol=1e-9)
 
 
@@ -62,7 +63,7 @@ def test_result_records_core_and_correctives_separately(ict_model, ict_correctiv
     w = ict_model.rig.weights_from_names(
         {"mouthShrugLower": 1.0, "mouthPress": 0.8, "eyeBlink": 0.5, "eyeLookDown": 0.5}
     )[None]
-    r = ict_model.correct(w)
+    r = correct_faces(ict_model, w)
     np.testing.assert_array_equal(r.core, w)
     assert r.collision.shape == (1, 8) and r.collided[0] and not r.remaining[0]
     assert r.corrective_names == ict_correctives.names
@@ -71,7 +72,7 @@ def test_result_records_core_and_correctives_separately(ict_model, ict_correctiv
     cols = r.columns()
     assert list(cols)[: ict_model.n_shapes] == list(ict_model.shape_names)
     assert "collision_lip_inner_left" in cols
-    verts = ict_model.evaluate(w, correct=True)
+    verts = evaluate_corrected(ict_model, w)
     expect = ict_model.evaluate(r.weights)[0] + np.einsum(
         "c,cvd->vd",
         r.correctives[0],
@@ -82,15 +83,15 @@ def test_result_records_core_and_correctives_separately(ict_model, ict_correctiv
 
 def test_correct_rejects_bad_weights(ict_model) -> None:
     with pytest.raises(ShapeError, match=r"\[0, 1\]"):
-        ict_model.correct(np.full((1, ict_model.n_shapes), 1.5))
+        correct_faces(ict_model, np.full((1, ict_model.n_shapes), 1.5))
     with pytest.raises(ShapeError, match="2-D"):
-        ict_model.correct(np.zeros(ict_model.n_shapes))
+        correct_faces(ict_model, np.zeros(ict_model.n_shapes))
 
 
 def test_identities_are_corrected_with_their_own_neutral(ict_model) -> None:
     w = ict_model.rig.weights_from_names({"mouthShrugLower": 1.0})[None]
     for identity in ("male", "female"):
-        r = ict_model.with_identity(identity).correct(w)
+        r = correct_faces(ict_model.with_identity(identity), w)
         assert r.collided[0] and not r.remaining[0]
 
 
@@ -116,11 +117,11 @@ def test_interpenetration_before_and_after_on_ga_faces(ict_model, ga_weights, mo
         ict_model.base_neutral.astype(np.float64), ict_model.regions, mouth
     )
     assert not test.penetrating(ict_model.evaluate(np.zeros((1, ict_model.n_shapes))))[0]
-    r = ict_model.correct(w)
+    r = correct_faces(ict_model, w)
     before = test.penetrating(ict_model.evaluate(w, gaze=False))
     changed = np.flatnonzero(r.collision.any(1))
     after = before.copy()
-    after[changed] = test.penetrating(ict_model.evaluate_correction(r, gaze=False)[changed])
+    after[changed] = test.penetrating(corrected_vertices(ict_model, r, gaze=False)[changed])
     assert before.mean() > 0.2  # GA faces often collide: the test has something to find
     assert after.mean() <= 0.005, f"after correction {after.sum()} of {len(w)} faces interpenetrate"
     assert r.remaining.mean() <= 0.005
@@ -135,15 +136,15 @@ def test_a_faces_correction_does_not_depend_on_its_batch_or_the_blas_threads(
     from threadpoolctl import threadpool_limits
 
     w = ga_weights[0][:200]
-    whole = ict_model.correct(w)
+    whole = correct_faces(ict_model, w)
     assert whole.collided.sum() > 20
     for rows in ([slice(i, i + 1) for i in range(0, 200, 9)], [slice(3, 10), slice(10, 77)]):
         for s in rows:
-            part = ict_model.correct(w[s])
+            part = correct_faces(ict_model, w[s])
             np.testing.assert_array_equal(part.correctives, whole.correctives[s])
             np.testing.assert_array_equal(part.weights, whole.weights[s])
     with threadpool_limits(limits=1):
-        np.testing.assert_array_equal(ict_model.correct(w).correctives, whole.correctives)
+        np.testing.assert_array_equal(correct_faces(ict_model, w).correctives, whole.correctives)
 
 
 def test_blend_is_start_plus_weights_times_rows_in_a_fixed_order() -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from emogen.config import GAConfig
+from emogen.correct import correct_faces
 from emogen.ga.engine import Engine, correctives_of
 
 
@@ -17,7 +18,7 @@ def test_populations_carry_their_correctives(ict_model) -> None:
         # the core weights are the GA's own, untouched by the correction
         np.testing.assert_array_equal(p.weights, c.weights)
         assert p.correctives is None
-        ref = ict_model.correct(c.weights)  # independent call of the model's corrector
+        ref = correct_faces(ict_model, c.weights)  # independent call of the model's corrector
         assert c.corrective_names == tuple(ref.corrective_names)
         np.testing.assert_array_equal(c.correctives, ref.correctives)
         assert c.correctives.shape == (10, len(c.corrective_names))

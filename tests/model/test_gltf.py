@@ -16,22 +16,18 @@ import pygltflib
 import pytest
 
 import emogen
+from emogen.correct import correct_faces, evaluate_corrected, model_correctives
 from emogen.errors import ModelFileError
 from emogen.model.face import FaceModel
+from emogen.model.geometry import vertex_normals
 from emogen.model.io.glb import glb_bytes, read_gltf
-from emogen.model.io.gltf import (
-    CM_TO_M,
-    ICT_COPYRIGHT,
-    ExportReport,
-    export_face_glb,
-    export_face_obj,
-    export_model_glb,
-    import_glb,
-    vertex_normals,
-)
+from emogen.model.io.gltf import export_face_glb, export_face_obj
+from emogen.model.io.gltf_asset import CM_TO_M, ICT_COPYRIGHT
+from emogen.model.io.gltf_import import import_glb
 from emogen.model.io.obj import parse_topology, parse_vertices
 from emogen.model.regions import ICT_VISIBLE_PARTS
 from emogen.model.rig import generic_rig
+from emogen.render.model_glb import SKIN_REGIONS, ExportReport, export_model_glb
 
 REPO = Path(__file__).resolve().parents[2]
 ICT_DIR = REPO.parent / "shared" / "ict-facekit" / "FaceXModel"
@@ -129,8 +125,8 @@ def test_model_glb_layout_for_threejs(
     assert gltf is not None
     assert len(gltf.meshes) == 1
     mesh = gltf.meshes[0]
-    names = [*model.shape_names, *model.correctives.names]
-    assert report.corrective_names == model.correctives.names and report.n_correctives > 0
+    names = [*model.shape_names, *model_correctives(model).names]
+    assert report.corrective_names == model_correctives(model).names and report.n_correctives > 0
     assert mesh.extras["targetNames"] == names
     assert len(mesh.weights) == len(names) == report.n_targets
     assert (
@@ -189,7 +185,7 @@ def test_corrective_targets_evaluate_to_the_corrected_face(
     model: FaceModel, exported: tuple[Path, ExportReport]
 ) -> None:
     """Shapes then correctives (the full vector) through the GLB's own morph deltas equal
-    model.evaluate(w, correct=True) within the quantization + corrective tolerance bound."""
+    evaluate_corrected(model, w) within the quantization + corrective tolerance bound."""
     path, report = exported
     g = read_gltf(path)
     prims = g.doc["meshes"][0]["primitives"]
@@ -199,11 +195,11 @@ def test_corrective_targets_evaluate_to_the_corrected_face(
     rng = np.random.default_rng(11)
     core = rng.uniform(0, 0.6, (6, model.n_shapes))
     core[:, model.shape_index("jawOpen")] = [0.0, 0.2, 0.5, 0.8, 1.0, 0.4]
-    result = model.correct(core)
+    result = correct_faces(model, core)
     assert result.correctives.any()
     full = np.hstack([result.weights, result.correctives])
     assert full.shape[1] == report.n_targets
-    want = model.evaluate(core, gaze=False, correct=True)[:, u]
+    want = evaluate_corrected(model, core, gaze=False)[:, u]
     bound = report.max_error_bound_cm(full)
     for prim in prims:
         runs = prim["extras"]["emogen"]["source_vertices"]
@@ -620,7 +616,7 @@ def test_textured_glb_embeds_the_webp_images_and_camera(
     assert all(s["minFilter"] == 9987 and s["magFilter"] == 9729 for s in samplers)
     # the skin materials (look.json's skin regions) show the atlas, one UDIM tile per 1/2 of u
     skin_part = next(p for p in look_json()["parts"] if p["name"] == "skin")
-    assert tuple(skin_part["regions"]) == emogen.model.io.gltf.SKIN_REGIONS
+    assert tuple(skin_part["regions"]) == SKIN_REGIONS
     textured_materials = {
         doc["materials"][p["material"]]["name"]
         for p in doc["meshes"][0]["primitives"]

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from emogen.appearance.identities import PRESETS
 from emogen.appearance.params import GENERATOR_VERSION, Appearance
-from emogen.render.cli import render_app
+from emogen.cli.render import render_app
 from emogen.render.images import read_png
 
 app = typer.Typer()

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from emogen.errors import ConfigError
-from emogen.model.io.gltf import vertex_normals
+from emogen.model.geometry import vertex_normals
 from emogen.render.look import Camera, default_look, look_from_dict, look_json, parse_colour
 from emogen.render.scene import eye_frame, face_mesh, sphere_centre
 

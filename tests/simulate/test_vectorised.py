@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from emogen.config import GAConfig, InitConfig, SimulationConfig
+from emogen.correct import evaluate_corrected
 from emogen.errors import ConfigError
 from emogen.metrics import vertex_rms
 from emogen.rng import spawn_seeds
@@ -93,7 +94,7 @@ def test_vertex_rms_observer_equals_engine(ict_model) -> None:
 
 
 def test_corrections_are_applied_to_every_shown_face(ict_model) -> None:
-    """Real correctives (FaceModel.correct): the vectorised runs still equal the engine's (bit for
+    """Real correctives (correct_faces): the vectorised runs still equal the engine's (bit for
     bit: a face's correction does not depend on the batch it is corrected in), the
     metrics see the corrected full weight vectors, and vertex RMS stays exact."""
     cfg = SimulationConfig(
@@ -110,20 +111,20 @@ def test_corrections_are_applied_to_every_shown_face(ict_model) -> None:
     assert names[:n_shapes] == ict_model.shape_names and len(names) > n_shapes
     fast = assert_same_as_engine(problem, runs=2)
     shown = fast.weights.reshape(-1, len(names))
-    # the shown weights are FaceModel.correct's: effective weights, then every corrective
+    # the shown weights are correct_faces': effective weights, then every corrective
     jaw, close = names.index("jawOpen"), names.index("mouthClose")
     assert np.all(shown[:, close] <= shown[:, jaw] + 1e-12)
     # vertex RMS on corrected weights = eq. 13 on the model's corrected vertices
     faces = ict_model.rig.expand(np.random.default_rng(1).random((5, 30)) * 0.6)
     faces[:, jaw] = [0.2, 0.5, 0.8, 1.0, 0.9]  # open jaws: collisions to correct
     corrected = problem.correction(faces)
-    verts = ict_model.evaluate(faces, correct=True).astype(np.float64)
+    verts = evaluate_corrected(ict_model, faces).astype(np.float64)
     np.testing.assert_allclose(
         problem.metric(corrected, corrected[0]), vertex_rms(verts, verts[0]), rtol=1e-4, atol=1e-6
     )
     with pytest.raises(ConfigError, match="needs the face model"):
         build_problem(cfg, ict_model.rig)
-    with pytest.raises(ConfigError, match=r"FaceModel\.correct"):
+    with pytest.raises(ConfigError, match="needs a FaceModel"):
         build_problem(cfg, types.SimpleNamespace(rig=ict_model.rig))  # type: ignore[arg-type]
 
 

@@ -11,7 +11,7 @@ from sqlalchemy import select
 from typer.testing import CliRunner
 
 from emogen import __version__
-from emogen.study.cli import replay_command, study_app
+from emogen.cli.study import replay_command, study_app
 from emogen.study.export import STAMPS, TABLES, export_tables, write_export
 from emogen.study.replay import replay_session
 from emogen.study.sessions import StudyService
@@ -157,7 +157,7 @@ def test_migrations_are_idempotent_and_match_the_models(db_url: str) -> None:
 
 
 def test_serve_command_reports_a_bad_config(tmp_path: Path) -> None:
-    from emogen.study.cli import serve_command
+    from emogen.cli.serve import serve_command
 
     app = typer.Typer()
     app.command("serve")(serve_command)

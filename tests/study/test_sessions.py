@@ -8,6 +8,7 @@ import threading
 import pytest
 from sqlalchemy import func, select
 
+from emogen.correct import correct_faces, model_correctives
 from emogen.errors import ConfigError, SelectionError
 from emogen.ga.engine import Engine, correctives_of
 from emogen.study.errors import SessionNotFound, StepConflict
@@ -261,10 +262,10 @@ def test_correct_setting_decides_the_corrective_columns(db_url: str, ict_model) 
         corrected, store, ict_model.rig, model_name=ict_model.name,
         model_hash=ict_model.model_hash, model=ict_model,
     )  # fmt: skip
-    assert svc.ctx.weight_names == (*ict_model.shape_names, *ict_model.correctives.names)
+    assert svc.ctx.weight_names == (*ict_model.shape_names, *model_correctives(ict_model).names)
     token, _ = svc.create_session("P-C1")
     shown = np.array([f["weights"] for f in svc.begin(token, new_key())["population"]["faces"]])
-    result = ict_model.correct(shown[:, : ict_model.n_shapes])
+    result = correct_faces(ict_model, shown[:, : ict_model.n_shapes])
     np.testing.assert_array_equal(shown[:, ict_model.n_shapes :], result.correctives)
     plain = study_from_dict({**SMALL_STUDY, "name": "plain", "correct": False})
     svc = StudyService(

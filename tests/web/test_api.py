@@ -9,6 +9,7 @@ import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import func, select
 
+from emogen.correct import correct_faces, model_correctives
 from emogen.study.storage import FaceRow, PopulationRow, SelectionRow, StepRow
 from tests.study.drive import choose, new_key, run_to_end, step_args
 from tests.web.study_app import RESEARCHER_TOKEN, app, client, db_url, pg_cluster  # noqa: F401
@@ -151,7 +152,7 @@ def test_shown_and_stored_faces_carry_their_correctives(
     client: TestClient, app: Any, ict_model
 ) -> None:  # type: ignore[no-untyped-def]
     """correct = true (the default): the shown vector is shapes then correctives, in the model
-    GLB's target order, and the stored columns equal model.correct(weights)."""
+    GLB's target order, and the stored columns equal correct_faces(model, weights)."""
     import json
 
     import numpy as np
@@ -163,7 +164,7 @@ def test_shown_and_stored_faces_carry_their_correctives(
     faces = state["population"]["faces"]
     shown = np.array([f["weights"] for f in faces])
     n = ict_model.n_shapes
-    result = ict_model.correct(shown[:, :n])
+    result = correct_faces(ict_model, shown[:, :n])
     assert shown.shape[1] == n + len(result.corrective_names)
     np.testing.assert_array_equal(shown[:, :n], result.weights)  # effective = core for GA faces
     np.testing.assert_array_equal(shown[:, n:], result.correctives)
@@ -176,7 +177,7 @@ def test_shown_and_stored_faces_carry_their_correctives(
         }
         names = json.loads(db.scalars(select(StudyRow)).first().weight_names)
     assert [stored[f["id"]] for f in faces] == shown.tolist()
-    targets = [*ict_model.shape_names, *ict_model.correctives.names]
+    targets = [*ict_model.shape_names, *model_correctives(ict_model).names]
     assert names == targets == list(ict_model.shape_names) + list(result.corrective_names)
     # the viewer's GLB has one morph target per column, in the same order
     glb = client.get("/api/model/generic.glb")

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from emogen.correct import model_correctives
 from emogen.render.examples import example_weights
 from tests.web import viewer_site as vs
 
@@ -73,7 +74,7 @@ def test_ten_faces_load_fast_and_follow_their_weights(chromium: Any, site: Site,
     assert min(timings) < READY_LIMIT_S, timings
     assert page.evaluate("window.emogen.mode") == "webgl"
     # morph targets: the shapes, then the correctives (a shorter vector leaves them at 0)
-    targets = [*ict_model.shape_names, *ict_model.correctives.names]
+    targets = [*ict_model.shape_names, *model_correctives(ict_model).names]
     assert page.evaluate("window.emogen.shapeNames") == targets
     assert "ICT-FaceKit © 2020 USC ICT, MIT licence" in page.inner_text("footer")
     faces = [{}, {"jawOpen": 1.0}, {"mouthSmile": 1.0, "jawOpen": 0.3}, {"eyeBlink": 1.0},

@@ -90,8 +90,8 @@ def offscreen_renderer(
 def export_site_glb(ict_model: Any, path: Path, name: str = IDENTITY) -> Any:
     """The identity's textured GLB with its fitted camera (as emogen.web.assets.ModelGLBs)."""
     from emogen.appearance.textures import skin_textures
-    from emogen.model.io.gltf import export_model_glb
     from emogen.render.look import default_look, fitted_look
+    from emogen.render.model_glb import export_model_glb
 
     model, appearance = identity_model(ict_model, name)
     look = default_look()

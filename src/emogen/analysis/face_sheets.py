@@ -60,7 +60,7 @@ def heatmap_sheet(
     (eq. 13, all vertices) and the largest distance over the coloured parts (skin, mouth,
     teeth; cm) of the face to its reference, and the shared scale's top."""
     from emogen.render import Renderer, contact_sheet, render_heatmap, save_png
-    from emogen.render.heatmap import HEAT_PARTS, nice_ceiling, vertex_distances
+    from emogen.render.distance_map import HEAT_PARTS, nice_ceiling, vertex_distances
 
     faces = model.evaluate(np.stack([p.face for p in panels]).astype(np.float32))
     refs = model.evaluate(np.stack([p.reference for p in panels]).astype(np.float32))

@@ -14,21 +14,13 @@ import numpy as np
 
 from emogen.errors import ShapeError
 from emogen.model.face import FaceModel
+from emogen.model.geometry import sphere_fit
 
 BROW_SHAPES = ("browDown", "browInnerUp", "browOuterUp")
 RIGHT_BROW = (21, 20, 19, 18, 17)  # subject's right (x < 0), head (medial) first
 LEFT_BROW = (22, 23, 24, 25, 26)
 OUTER_LIPS = tuple(range(48, 60))
 INNER_LIPS = tuple(range(60, 68))
-
-
-def sphere_fit(points: np.ndarray) -> tuple[np.ndarray, float]:
-    """Least-squares sphere (centre (3,), radius) of points (n, 3)."""
-    p = np.asarray(points, dtype=np.float64)
-    a = np.c_[2 * p, np.ones(len(p))]
-    sol, *_ = np.linalg.lstsq(a, (p**2).sum(1), rcond=None)
-    c = sol[:3]
-    return c, float(np.sqrt(sol[3] + c @ c))
 
 
 def catmull_rom(points: np.ndarray, per_segment: int = 16, closed: bool = True) -> np.ndarray:

@@ -81,7 +81,7 @@ def vertex_cavity(vertices: np.ndarray, triangles: np.ndarray, normals: np.ndarr
 
 def texels(model: FaceModel, layout: SkinLayout, features: FaceFeatures) -> Texels:
     """The painters' inputs at the covered texels of ``layout``."""
-    from emogen.model.io.gltf import vertex_normals
+    from emogen.model.geometry import vertex_normals
 
     n = model.neutral.astype(np.float64)
     index = np.flatnonzero(layout.covered)

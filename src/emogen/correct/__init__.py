@@ -10,10 +10,30 @@
 * :mod:`~emogen.correct.apply` — :class:`Corrector` and :class:`CorrectionResult`;
 * :mod:`~emogen.correct.measure` — independent measures (interpenetration, plausibility).
 
-Use it through the model: ``model.correct(weights)`` and ``model.evaluate(weights, correct=True)``.
+* :mod:`~emogen.correct.faces` — the entry points, taking the model as an argument:
+  ``correct_faces(model, weights)``, ``corrected_vertices(model, result)``,
+  ``evaluate_corrected(model, weights)``, ``model_correctives(model)``.
 """
 
 from emogen.correct.apply import CorrectionResult, Corrector
 from emogen.correct.correctives import Correctives, build_correctives, correctives_for
+from emogen.correct.faces import (
+    correct_faces,
+    corrected_vertices,
+    corrector_for,
+    evaluate_corrected,
+    model_correctives,
+)
 
-__all__ = ["CorrectionResult", "Correctives", "Corrector", "build_correctives", "correctives_for"]
+__all__ = [
+    "CorrectionResult",
+    "Correctives",
+    "Corrector",
+    "build_correctives",
+    "correct_faces",
+    "corrected_vertices",
+    "correctives_for",
+    "corrector_for",
+    "evaluate_corrected",
+    "model_correctives",
+]

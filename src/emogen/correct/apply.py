@@ -103,7 +103,10 @@ class Corrector:
     """Corrects faces of one model (one identity); see the module docstring."""
 
     def __init__(self, model: FaceModel, correctives: Correctives | None = None) -> None:
-        self.model = model
+        # Only what correcting needs, not the model: a cache keyed weakly by the model
+        # (:func:`emogen.correct.faces.corrector_for`) must not keep it alive.
+        self.shape_names = model.shape_names
+        self.n_vertices = model.n_vertices
         self.correctives = correctives if correctives is not None else correctives_for(model)
         c = self.correctives
         self._companions = {int(f): int(lead) for f, lead in c.companions}
@@ -164,7 +167,7 @@ class Corrector:
                 )
                 depth[rows], iters[rows] = sol.depth_after, sol.iterations
         return CorrectionResult(
-            shape_names=self.model.shape_names,
+            shape_names=self.shape_names,
             combinational_names=c.combinational_names,
             collision_names=c.collision_names,
             core=core,
@@ -181,7 +184,7 @@ class Corrector:
     def corrective_rows(self) -> np.ndarray:
         """(C + 8, V·3) float32: every corrective's offsets, in ``names`` order."""
         c = self.correctives
-        width = 3 * self.model.n_vertices
+        width = 3 * self.n_vertices
         rows = np.concatenate(
             [
                 c.combinational_deltas.reshape(c.n_combinational, width),

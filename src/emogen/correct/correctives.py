@@ -22,6 +22,7 @@ from emogen.correct import collision
 from emogen.correct.combinational import DerivedPair, derive_pairs, double_counted, overlap_score
 from emogen.correct.lips import LIP_MESH_REGIONS, UPPER_FRONT_TEETH, mouth_geometry
 from emogen.errors import ModelFileError
+from emogen.model.io.digest import file_sha256
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
@@ -169,7 +170,7 @@ def _design() -> dict[str, object]:
 
 def _file_digest(path: str) -> str:
     try:
-        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+        return file_sha256(path)
     except OSError as exc:
         raise ModelFileError(f"cannot read corrective shape file {path}: {exc.strerror}") from None
 

@@ -17,13 +17,14 @@ from typing import Any
 
 import numpy as np
 
-from emogen.config import GAConfig, validate_config
+from emogen.config import GAConfig
 from emogen.errors import ConfigError, SelectionError
 from emogen.ga.algorithm import Offspring, classical_next_generation, next_generation
 from emogen.ga.draws import CURRENT_STREAM, block_size, check_stream, generation_draws
 from emogen.ga.init import first_generation, read_fixed_sets
 from emogen.ga.operators import select
 from emogen.ga.population import Population, readonly
+from emogen.ga.state import STATE_SCHEMA, read_state_header, stream_of_state
 from emogen.model.rig import Rig
 from emogen.rng import check_seed, generation_rng
 
@@ -36,11 +37,6 @@ __all__ = [
     "stream_of_state",
 ]
 
-#: Engine states: ``/2`` records the GA's random stream (``stream``); ``/1`` states (made before
-#: the GA was written once over runs) have none and continue with stream 1, as they were drawn.
-STATE_SCHEMA = "emogen.ga.engine/2"
-STATE_SCHEMAS = {"emogen.ga.engine/1": 1, STATE_SCHEMA: None}
-
 
 #: Corrects a batch of full weight vectors before they are shown: returns
 #: (corrective names, (n_faces, C) corrective weights). ``correctives_of(model)`` makes one.
@@ -48,10 +44,12 @@ Corrector = Callable[[np.ndarray], tuple[tuple[str, ...], np.ndarray]]
 
 
 def correctives_of(model: Any) -> Corrector:
-    """A corrector from a face model: ``model.correct`` (combinational + collision correctives)."""
+    """A corrector from a face model: :func:`emogen.correct.correct_faces` (combinational +
+    collision correctives)."""
+    from emogen.correct.faces import correct_faces
 
     def correct(weights: np.ndarray) -> tuple[tuple[str, ...], np.ndarray]:
-        result = model.correct(weights)
+        result = correct_faces(model, weights)
         return tuple(result.corrective_names), np.asarray(result.correctives, dtype=np.float64)
 
     return correct
@@ -293,7 +291,7 @@ class Engine:
         except json.JSONDecodeError as exc:
             raise ConfigError(f"engine state is not valid JSON: {exc}") from None
         self = cls.__new__(cls)
-        config, seed, stream = _state_header(data)
+        config, seed, stream = read_state_header(data)
         self._setup(config, rig, seed, corrector, stream)
         if list(self.gene_names) != data["rig"]["genes"]:
             raise ConfigError(
@@ -367,33 +365,3 @@ class Engine:
             while engine.trial < trial:
                 engine.reset()
         return engine
-
-
-def stream_of_state(state: str | dict[str, Any] | None) -> int:
-    """The GA stream an engine state was recorded with (1 for ``emogen.ga.engine/1`` states).
-
-    ``None`` (nothing recorded yet) gives the current stream.
-    """
-    if state is None or state == "":
-        return CURRENT_STREAM
-    try:
-        data = json.loads(state) if isinstance(state, str) else dict(state)
-    except json.JSONDecodeError as exc:
-        raise ConfigError(f"engine state is not valid JSON: {exc}") from None
-    return _stream(data)
-
-
-def _stream(data: dict[str, Any]) -> int:
-    schema = data.get("schema")
-    if schema not in STATE_SCHEMAS:
-        raise ConfigError(
-            f"engine state schema must be one of {sorted(STATE_SCHEMAS)}; got {schema!r}"
-        )
-    legacy = STATE_SCHEMAS[schema]
-    return legacy if legacy is not None else check_stream(data.get("stream"))
-
-
-def _state_header(data: dict[str, Any]) -> tuple[GAConfig, int, int]:
-    """(config, seed, stream) of a stored state, checked."""
-    stream = _stream(data)
-    return validate_config(GAConfig, data["config"], "(engine state)"), data["seed"], stream

@@ -55,7 +55,7 @@ class VertexRMS:
     eyeball, the second moments T of its pivot-relative neutral and deltas; it does not keep
     the model (it pickles small, for worker processes). ``gaze=False`` treats the eyeballs as
     blend-only, like ``model.evaluate(w, gaze=False)``. ``extra_deltas`` (C, N, 3): further
-    shapes blended after the model's (the correctives of ``evaluate(w, correct=True)``); the
+    shapes blended after the model's (the correctives of :func:`emogen.correct.evaluate_corrected`); the
     weights are then (…, S + C), the model's shapes first.
 
     **Eyeballs in closed form.** An eyeball vertex is p = x Rᵀ + c with x = (B₀ − c) + α D

@@ -1,6 +1,7 @@
 """The face: mesh, blendshape deltas, identities, rig and regions."""
 
-from emogen.model.face import FaceModel, load_model
+from emogen.model.face import FaceModel
+from emogen.model.load import load_model
 from emogen.model.regions import Region
 from emogen.model.rig import Rig, load_rig
 

@@ -6,24 +6,18 @@ top unchanged. Arrays are read-only; a model with another identity shares the de
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from emogen.errors import ConfigError, ShapeError
+from emogen.model.geometry import sphere_fit
 from emogen.model.io.ict import ModelArrays
 from emogen.model.io.obj import ObjTopology, triangulate
 from emogen.model.regions import Region, ict_regions
 from emogen.model.rig import Rig
-
-if TYPE_CHECKING:
-    from emogen.correct.apply import CorrectionResult, Corrector
-    from emogen.correct.correctives import Correctives
 
 # Faces evaluated per matrix product: bounds the working memory beyond the output
 # (one chunk of float32 vertices is CHUNK × V × 12 bytes, 80 MB for ICT at 256).
@@ -36,14 +30,6 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     a = np.ascontiguousarray(a)
     a.setflags(write=False)
     return a
-
-
-def _sphere_center(points: np.ndarray) -> np.ndarray:
-    """Least-squares sphere centre: solve 2 p·c + (r² − |c|²) = |p|²."""
-    a = np.c_[2 * points, np.ones(len(points))]
-    b = (points**2).sum(1)
-    sol, *_ = np.linalg.lstsq(a, b, rcond=None)
-    return sol[:3]
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,7 +97,8 @@ class FaceModel:
             ) from None
 
     # ---- evaluation ---------------------------------------------------------------------
-    def _check_weights(self, weights: np.ndarray, dtype: type = np.float32) -> np.ndarray:
+    def check_weights(self, weights: np.ndarray, dtype: type = np.float32) -> np.ndarray:
+        """``weights`` as a contiguous (n_faces, n_shapes) array of ``dtype``; ShapeError if not."""
         w: np.ndarray = np.asarray(weights, dtype=dtype)
         if w.ndim == 1:
             raise ShapeError(
@@ -131,21 +118,16 @@ class FaceModel:
         gaze: bool = True,
         out: np.ndarray | None = None,
         chunk: int = DEFAULT_CHUNK,
-        correct: bool = False,
     ) -> np.ndarray:
         """Vertices of faces: weights (n_faces, n_shapes) → (n_faces, n_vertices, 3) float32.
 
         The blend is one matrix product per chunk of faces, written straight into ``out``
         (allocated when None; pass a memory map to stream huge batches to disk). Beyond the
         output, working memory is bounded by ``chunk``. With ``gaze`` and a rig that declares
-        it, the eyeballs rotate rigidly with the ``eyeLook*`` weights. With ``correct`` the
-        faces are corrected first (:meth:`correct`): companions capped, combinational and
-        collision correctives added; a face none of them touches is bit-identical to
-        ``correct=False``.
+        it, the eyeballs rotate rigidly with the ``eyeLook*`` weights. Corrected faces:
+        :func:`emogen.correct.evaluate_corrected`.
         """
-        if correct:
-            return self.evaluate_correction(self.correct(weights), gaze=gaze, out=out, chunk=chunk)
-        w = self._check_weights(weights)
+        w = self.check_weights(weights)
         n = w.shape[0]
         if out is None:
             out = np.empty((n, self.n_vertices, 3), dtype=np.float32)
@@ -164,7 +146,7 @@ class FaceModel:
 
         The yielded buffer is reused between chunks; copy what you keep.
         """
-        w = self._check_weights(weights)
+        w = self.check_weights(weights)
         buf = np.empty((min(chunk, max(len(w), 1)), self.n_vertices, 3), dtype=np.float32)
         for start, stop in _chunks(len(w), chunk):
             view = buf[: stop - start]
@@ -189,7 +171,7 @@ class FaceModel:
             if name not in self.regions:
                 raise ConfigError(f"rig gaze names region '{name}', which this model does not have")
             sl = self.regions[name].vertices
-            pivots.append((sl, _sphere_center(self.neutral[sl].astype(np.float64))))
+            pivots.append((sl, sphere_fit(self.neutral[sl])[0]))
         return pivots
 
     def _rotate_eyes(self, w: np.ndarray, out: np.ndarray) -> None:
@@ -216,50 +198,6 @@ class FaceModel:
                 rotated = np.matmul(out[moving, sl], rot_t32)
                 rotated += shift
                 out[moving, sl] = rotated
-
-    def evaluate_correction(
-        self,
-        result: CorrectionResult,
-        *,
-        gaze: bool = True,
-        out: np.ndarray | None = None,
-        chunk: int = DEFAULT_CHUNK,
-    ) -> np.ndarray:
-        """Vertices of corrected faces (from :meth:`correct`): (n_faces, n_vertices, 3) float32.
-
-        The effective shape weights are blended as by :meth:`evaluate`, then the correctives'
-        offsets are added to the faces that have any (the others stay bit-identical).
-        """
-        out = self.evaluate(result.weights, gaze=gaze, out=out, chunk=chunk)
-        self._corrector.add_offsets(result, out)
-        return out
-
-    # ---- correctives --------------------------------------------------------------------
-    @property
-    def correctives(self) -> Correctives:
-        """The model's corrective shapes (built from its geometry once, cached on disk)."""
-        return self._corrector.correctives
-
-    @cached_property
-    def _corrector(self) -> Corrector:
-        from emogen.correct.apply import Corrector
-
-        return Corrector(self)
-
-    def correct(self, weights: np.ndarray, *, collisions: bool = True) -> CorrectionResult:
-        """Correct faces (paper Section III-A): weights (n_faces, n_shapes) → the correction.
-
-        Companion shapes are capped at their leads (``mouthClose`` ≤ ``jawOpen``), the
-        combinational correctives take the product of their drivers' weights, and the eight
-        collision correctives are solved (eq. 5) until no lip or teeth collision remains. The
-        result keeps the core weights, the effective weights and every corrective weight
-        separately, and says what remains uncorrected. A face without collision gets collision
-        weights of exactly zero.
-        """
-        w = self._check_weights(weights, np.float64)
-        if np.any((w < 0) | (w > 1)):
-            raise ShapeError("weights must lie in [0, 1] to be corrected")
-        return self._corrector.correct(w, collisions=collisions)
 
     # ---- identities ---------------------------------------------------------------------
     def with_identity(self, identity: IdentityLike) -> FaceModel:
@@ -382,37 +320,3 @@ def from_arrays(
         source=source,
         landmarks=_readonly(np.asarray(arrays.landmarks, dtype=np.int32)),
     )
-
-
-def load_model(
-    path: str | os.PathLike[str] | None = None,
-    identity: IdentityLike = None,
-    *,
-    rig: str | os.PathLike[str] | None = None,
-    use_cache: bool = True,
-) -> FaceModel:
-    """Load a face model: an ICT-FaceKit ``FaceXModel`` folder or an ARKit-named GLB.
-
-    ``path`` None looks in ``$EMOGEN_MODEL``, then the user cache (``emogen model fetch``).
-    ``identity``: None (generic neutral), a preset name (``male``, ``female``) or coefficients.
-    ``rig``: a rig TOML; the packaged ICT rig by default.
-    """
-    from emogen.model.io import cache
-    from emogen.model.io.ict import load_ict_folder
-    from emogen.model.locate import find_model
-    from emogen.model.rig import load_rig
-
-    where = find_model(path)
-    rig_path = Path(rig) if rig is not None else None
-    if where.suffix.lower() in (".glb", ".gltf"):
-        from emogen.model.io.gltf import import_glb
-
-        model = import_glb(where, rig=rig_path)
-    else:
-        arrays = cache.load_cached(where) if use_cache else None
-        if arrays is None:
-            arrays = load_ict_folder(where)
-            if use_cache:
-                cache.store(where, arrays)
-        model = from_arrays(arrays, load_rig(arrays.shape_names, rig_path), source=str(where))
-    return model if identity is None else model.with_identity(identity)

@@ -25,8 +25,8 @@ __all__ = [
 _WHERE = {
     "Renderer": "emogen.render.renderer",
     "render_faces": "emogen.render.renderer",
-    "render_heatmap": "emogen.render.heatmap",
-    "vertex_distances": "emogen.render.heatmap",
+    "render_heatmap": "emogen.render.distance_map",
+    "vertex_distances": "emogen.render.distance_map",
     "add_footer": "emogen.render.images",
     "contact_sheet": "emogen.render.images",
     "save_png": "emogen.render.images",

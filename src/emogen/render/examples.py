@@ -72,7 +72,7 @@ def render_examples(
 
 def write_doc_images(model: FaceModel, folder: str | Path) -> list[Path]:
     """docs/images: each example, a heatmap (jawOpen 1 vs 0.5) and a contact sheet."""
-    from emogen.render.heatmap import render_heatmap
+    from emogen.render.distance_map import render_heatmap
     from emogen.render.images import contact_sheet, save_png
     from emogen.render.renderer import Renderer
 

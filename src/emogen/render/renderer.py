@@ -18,6 +18,7 @@ import numpy as np
 
 from emogen.appearance.params import Appearance
 from emogen.appearance.textures import SkinTextures, skin_textures
+from emogen.correct.faces import evaluate_corrected
 from emogen.errors import ShapeError
 from emogen.model.face import FaceModel
 from emogen.render.gl import GLRenderer
@@ -100,17 +101,20 @@ class Renderer:
     ) -> np.ndarray:
         """Faces of ``weights (n_faces, n_shapes)`` → ``(n_faces, size, size, 3) uint8`` sRGB.
 
-        correct : apply the model's correctives first (``FaceModel.evaluate(correct=True)``:
-        combinational and lip/teeth collision correctives). The browser viewer's GLB holds the
+        correct : apply the model's correctives first
+        (:func:`~emogen.correct.faces.evaluate_corrected`: combinational and lip/teeth
+        collision correctives). The browser viewer's GLB holds the
         corrective targets too, so given the full vector (shapes then corrective weights) it
         draws the corrected face.
         """
         # BLAS on one thread: a few faces gain nothing from more, and OpenBLAS's idle threads
         # spin on the cores that llvmpipe then rasterises with (measured: ~15 ms a 512² face).
         with _blas().limit(limits=1, user_api="blas"):
-            vertices = self.model.evaluate(
-                np.asarray(weights, dtype=np.float32), gaze=gaze, correct=correct
-            )
+            w = np.asarray(weights, dtype=np.float32)
+            if correct:
+                vertices = evaluate_corrected(self.model, w, gaze=gaze)
+            else:
+                vertices = self.model.evaluate(w, gaze=gaze)
         return self.render_vertices(vertices)
 
     def render_vertices(

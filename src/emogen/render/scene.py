@@ -22,6 +22,7 @@ from scipy.spatial import cKDTree
 
 from emogen.errors import ShapeError
 from emogen.model.face import FaceModel
+from emogen.model.geometry import triangle_incidence, vertex_normals
 from emogen.model.io.obj import triangulate
 from emogen.model.regions import ICT_VISIBLE_PARTS
 from emogen.render.look import Look
@@ -113,15 +114,7 @@ class FaceMesh:
         v = np.asarray(vertices, dtype=np.float32)
         if v.ndim != 3 or v.shape[1] != self.n_vertices:
             raise ShapeError(f"vertices must be (n_faces, {self.n_vertices}, 3); got {v.shape}")
-        t = self.triangles
-        a = v[:, t[:, 0]]
-        face = np.cross(v[:, t[:, 1]] - a, v[:, t[:, 2]] - a)  # (B, T, 3)
-        b = len(v)
-        summed = self.incidence @ face.transpose(1, 0, 2).reshape(len(t), b * 3)
-        n = np.asarray(summed, dtype=np.float32).reshape(self.n_vertices, b, 3).transpose(1, 0, 2)
-        length = np.linalg.norm(n, axis=-1, keepdims=True)
-        np.maximum(length, 1e-12, out=length)
-        return np.ascontiguousarray(n / length)
+        return vertex_normals(v, self.triangles, dtype=np.float32, incidence=self.incidence)
 
 
 def _part_codes(model: FaceModel, look: Look) -> np.ndarray:
@@ -218,12 +211,7 @@ def face_mesh(model: FaceModel, look: Look) -> FaceMesh:
         np.array([[p.specular, p.shininess, p.cavity] for p in look.parts])[code],
         _opacity(model, look, code),
     ]
-    rows = triangles.reshape(-1)
-    cols = np.repeat(np.arange(len(triangles)), 3)
-    incidence = sparse.csr_matrix(
-        (np.ones(len(rows), dtype=np.float32), (rows, cols)),
-        shape=(model.n_vertices, len(triangles)),
-    )
+    incidence = triangle_incidence(triangles, model.n_vertices, np.float32)
     return FaceMesh(
         n_vertices=model.n_vertices,
         triangles=triangles,

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from emogen.config import SimulationConfig
+from emogen.correct.faces import correct_faces, model_correctives
 from emogen.errors import ConfigError
 from emogen.model.rig import Rig
 from emogen.simulate.observer import Metric
@@ -23,7 +24,7 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True, eq=False)
 class Correction:
-    """The model's corrections applied to every shown face (:meth:`FaceModel.correct`).
+    """The model's corrections applied to every shown face (:func:`emogen.correct.correct_faces`).
 
     ``correction(weights (B, S))`` → the corrected full weight vectors (B, S + C): the
     effective shape weights (companions capped), then every corrective weight (combinational
@@ -38,18 +39,18 @@ class Correction:
     @property
     def names(self) -> tuple[str, ...]:
         """Column names of the corrected vectors: the shapes, then the correctives."""
-        return tuple(self.model.shape_names) + tuple(self.model.correctives.names)
+        return tuple(self.model.shape_names) + tuple(model_correctives(self.model).names)
 
     @property
     def deltas(self) -> np.ndarray:
         """(C, V, 3) the correctives' vertex offsets, in ``names[S:]`` order."""
-        c = self.model.correctives
+        c = model_correctives(self.model)
         return np.concatenate([c.combinational_deltas, c.collision_deltas])
 
     def __call__(self, weights: np.ndarray) -> np.ndarray:
         w = np.asarray(weights, dtype=np.float64)
         unique, inverse = np.unique(w, axis=0, return_inverse=True)
-        result = self.model.correct(unique)
+        result = correct_faces(self.model, unique)
         corrected = np.concatenate([result.weights, result.correctives], axis=1)
         return np.asarray(corrected[inverse.reshape(-1)], dtype=np.float64)
 
@@ -58,10 +59,12 @@ def make_correction(model: FaceModel | None) -> Correction:
     """The corrections for ``correct = true`` (they need the face model, not only its rig)."""
     if model is None:
         raise ConfigError("correct = true needs the face model, not only its rig")
-    if not callable(getattr(model, "correct", None)):
+    from emogen.model.face import FaceModel
+
+    if not isinstance(model, FaceModel):
         raise ConfigError(
-            "correct = true needs FaceModel.correct (the correctives, emogen.correct), which "
-            "this model does not provide"
+            "correct = true needs a FaceModel (its geometry gives the correctives, "
+            f"emogen.correct); got {type(model).__name__}"
         )
     return Correction(model)
 

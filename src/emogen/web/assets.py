@@ -72,7 +72,7 @@ class ModelGLBs:
             )
             path = self.folder / name
             if not path.is_file() or not path.with_suffix(".glb.gz").is_file():
-                from emogen.model.io.gltf import export_model_glb
+                from emogen.render.model_glb import export_model_glb
 
                 self.folder.mkdir(parents=True, exist_ok=True)
                 camera = fitted_look(look, model, resolved.appearance).camera

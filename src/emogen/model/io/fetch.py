@@ -35,6 +35,7 @@ from typing import IO, Any
 import platformdirs
 
 from emogen.errors import ConfigError, ModelFileError
+from emogen.model.io.digest import file_sha256
 
 __all__ = [
     "DEFAULT_BASE_URL",
@@ -228,20 +229,12 @@ class _TransientError(Exception):
         self.connecting = connecting
 
 
-def _sha256_file(path: Path) -> str:
-    digest = hashlib.sha256()
-    with path.open("rb") as handle:
-        for chunk in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
-
-
 def _is_verified(dest: Path, entry: ManifestFile) -> bool:
     target = dest / entry.path
     try:
         if not target.is_file() or target.stat().st_size != entry.size:
             return False
-        return _sha256_file(target) == entry.sha256
+        return file_sha256(target) == entry.sha256
     except OSError:
         return False
 

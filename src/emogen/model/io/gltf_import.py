@@ -4,7 +4,7 @@ Every triangle mesh of the default scene is read with its node's world transform
 targets are matched across meshes by the names in ``mesh.extras.targetNames`` (ARKit's
 ``jawOpen``, ``eyeBlinkLeft`` …, or ICT-FaceKit's ``_L``/``_R``). Quantized (normalized int8/int16,
 uint8/uint16) and sparse accessors are decoded. glTF is in metres; the model comes out in
-centimetres like ICT-FaceKit. A GLB written by :func:`~emogen.model.io.gltf.export_model_glb`
+centimetres like ICT-FaceKit. A GLB written by :func:`~emogen.render.model_glb.export_model_glb`
 comes back in its source's vertex order with quads and named regions, from its extras.
 """
 
@@ -14,19 +14,17 @@ import logging
 import os
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from emogen.errors import ConfigError, ModelFileError
+from emogen.model.face import FaceModel, from_arrays
 from emogen.model.io.glb import Gltf, read_gltf
 from emogen.model.io.ict import ModelArrays, model_content_hash
 from emogen.model.io.obj import ObjTopology
 from emogen.model.regions import Region
 from emogen.model.rig import Rig, generic_rig, load_rig
-
-if TYPE_CHECKING:
-    from emogen.model.face import FaceModel
 
 log = logging.getLogger(__name__)
 M_TO_CM = 100.0
@@ -352,8 +350,6 @@ def import_glb(
     ``rig``: a rig TOML; by default the packaged ICT rig when the target names are ICT-FaceKit's,
     else :func:`~emogen.model.rig.generic_rig` (left/right twins paired).
     """
-    from emogen.model.face import from_arrays
-
     path = Path(path)
     g = read_gltf(path)
     try:

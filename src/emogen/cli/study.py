@@ -1,7 +1,7 @@
-"""Study commands: ``emogen study status|export``, ``emogen serve``, ``emogen replay``.
+"""Study commands: ``emogen study status|export`` and ``emogen replay``.
 
-``study_app`` is a Typer sub-app; ``serve_command`` and ``replay_command`` are plain functions
-for the top-level app (``app.command("serve")(serve_command)``).
+``study_app`` is a Typer sub-app; ``replay_command`` is a plain function for the top-level app
+(``app.command("replay")(replay_command)``). ``emogen serve`` is :mod:`emogen.cli.serve`.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from emogen.clitools import friendly_errors
+from emogen.cli.options import friendly_errors
 
 if TYPE_CHECKING:
     from emogen.study.storage import Store
@@ -104,27 +104,6 @@ def export(
     for path in paths:
         typer.echo(f"wrote {path} ({len(tables[path.stem])} rows)")
     store.dispose()
-
-
-@friendly_errors
-def serve_command(
-    config: Annotated[
-        Path | None,
-        typer.Argument(help="Study TOML (default: the packaged demo study)."),
-    ] = None,
-    host: Annotated[str, typer.Option("--host", help="Address to listen on.")] = "127.0.0.1",
-    port: Annotated[int, typer.Option("--port", help="Port.")] = 8000,
-    database_url: DatabaseOpt = None,
-    model: Annotated[
-        Path | None, typer.Option("--model", help="Face model (default: as in the config).")
-    ] = None,
-) -> None:
-    """Run a participant study: prints the URL to open; Ctrl-C stops it."""
-    from emogen.study.config import demo_study_path
-    from emogen.web.server import run_server
-
-    path = config if config is not None else demo_study_path()
-    run_server(path, host=host, port=port, database_url=database_url, model=model)
 
 
 @friendly_errors

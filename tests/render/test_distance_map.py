@@ -9,7 +9,7 @@ import pytest
 from PIL import Image
 
 from emogen.errors import ConfigError, ShapeError
-from emogen.render.heatmap import colour_lut, nice_ceiling, render_heatmap, vertex_distances
+from emogen.render.distance_map import colour_lut, nice_ceiling, render_heatmap, vertex_distances
 from emogen.render.images import (
     add_footer,
     colourbar,

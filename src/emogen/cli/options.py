@@ -83,3 +83,6 @@ def parse_named_weights(items: list[str] | None, option: str = "--weight") -> di
         except ValueError:
             raise ConfigError(f"{option} {item!r}: value {value!r} is not a number") from None
     return out
+
+
+SeedOpt = Annotated[int, typer.Option("--seed", help="Seed of every simulation (recorded).")]

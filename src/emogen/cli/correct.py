@@ -1,7 +1,6 @@
 """``emogen correct IN.csv --out OUT.csv [--mesh OUT.npz]``: correct faces given as weights.
 
-Register with ``app.command("correct")(correct_command)`` *after* the option aliases of
-:mod:`emogen.cli` are defined (this module imports them).
+A plain command function, registered on the top-level app by :mod:`emogen.cli.app`.
 """
 
 from __future__ import annotations
@@ -12,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated
 import numpy as np
 import typer
 
-from emogen.clitools import IdentityOpt, ModelOpt, RigOpt, friendly_errors
+from emogen.cli.options import IdentityOpt, ModelOpt, RigOpt, friendly_errors
 from emogen.errors import ConfigError
 
 if TYPE_CHECKING:
@@ -78,7 +77,9 @@ def correct_csv(
     import pandas as pd
 
     weights, _ = read_weights_csv(source, model)
-    result = model.correct(weights)
+    from emogen.correct.faces import correct_faces, corrected_vertices
+
+    result = correct_faces(model, weights)
     table = pd.DataFrame(result.columns())
     table["collision_detected"] = result.collided
     table["collision_remaining"] = result.remaining
@@ -86,7 +87,7 @@ def correct_csv(
     out.parent.mkdir(parents=True, exist_ok=True)
     table.to_csv(out, index=False)
     if mesh is not None:
-        vertices = model.evaluate_correction(result)
+        vertices = corrected_vertices(model, result)
         mesh.parent.mkdir(parents=True, exist_ok=True)
         np.savez(
             mesh,

@@ -1,0 +1,34 @@
+"""``emogen serve``: run a participant study (the web server)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from emogen.cli.options import friendly_errors
+from emogen.cli.study import DatabaseOpt
+
+__all__ = ["serve_command"]
+
+
+@friendly_errors
+def serve_command(
+    config: Annotated[
+        Path | None,
+        typer.Argument(help="Study TOML (default: the packaged demo study)."),
+    ] = None,
+    host: Annotated[str, typer.Option("--host", help="Address to listen on.")] = "127.0.0.1",
+    port: Annotated[int, typer.Option("--port", help="Port.")] = 8000,
+    database_url: DatabaseOpt = None,
+    model: Annotated[
+        Path | None, typer.Option("--model", help="Face model (default: as in the config).")
+    ] = None,
+) -> None:
+    """Run a participant study: prints the URL to open; Ctrl-C stops it."""
+    from emogen.study.config import demo_study_path
+    from emogen.web.server import run_server
+
+    path = config if config is not None else demo_study_path()
+    run_server(path, host=host, port=port, database_url=database_url, model=model)

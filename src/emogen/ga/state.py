@@ -1,0 +1,45 @@
+"""Engine states on disk: their schemas, and the GA stream each was recorded with."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from emogen.config import GAConfig, validate_config
+from emogen.errors import ConfigError
+from emogen.ga.draws import CURRENT_STREAM, check_stream
+
+#: Engine states: ``/2`` records the GA's random stream (``stream``); ``/1`` states (made before
+#: the GA was written once over runs) have none and continue with stream 1, as they were drawn.
+STATE_SCHEMA = "emogen.ga.engine/2"
+STATE_SCHEMAS = {"emogen.ga.engine/1": 1, STATE_SCHEMA: None}
+
+
+def stream_of_state(state: str | dict[str, Any] | None) -> int:
+    """The GA stream an engine state was recorded with (1 for ``emogen.ga.engine/1`` states).
+
+    ``None`` (nothing recorded yet) gives the current stream.
+    """
+    if state is None or state == "":
+        return CURRENT_STREAM
+    try:
+        data = json.loads(state) if isinstance(state, str) else dict(state)
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"engine state is not valid JSON: {exc}") from None
+    return state_stream(data)
+
+
+def state_stream(data: dict[str, Any]) -> int:
+    schema = data.get("schema")
+    if schema not in STATE_SCHEMAS:
+        raise ConfigError(
+            f"engine state schema must be one of {sorted(STATE_SCHEMAS)}; got {schema!r}"
+        )
+    legacy = STATE_SCHEMAS[schema]
+    return legacy if legacy is not None else check_stream(data.get("stream"))
+
+
+def read_state_header(data: dict[str, Any]) -> tuple[GAConfig, int, int]:
+    """(config, seed, stream) of a stored state, checked."""
+    stream = state_stream(data)
+    return validate_config(GAConfig, data["config"], "(engine state)"), data["seed"], stream
