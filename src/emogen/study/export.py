@@ -23,7 +23,8 @@ from emogen.appearance.identities import Identity
 from emogen.appearance.params import GENERATOR_VERSION, Appearance
 from emogen.errors import ConfigError
 from emogen.study.config import StudyConfig
-from emogen.study.storage import (
+from emogen.study.storage import Store
+from emogen.study.tables import (
     SCHEMA_VERSION,
     FaceRow,
     PopulationRow,
@@ -31,7 +32,6 @@ from emogen.study.storage import (
     RestartRow,
     SelectionRow,
     SessionRow,
-    Store,
     StudyRow,
     TrialRow,
     as_utc,
