@@ -28,7 +28,7 @@ node_modules/.installed: package.json package-lock.json
 	npm ci --no-audit --no-fund --loglevel=error
 	touch $@
 
-$(VIEWER): node_modules/.installed $(wildcard src/emogen/web/viewer/* src/emogen/web/build_study_viewer.mjs src/emogen/render/look.json src/emogen/render/shaders/*)
+$(VIEWER): node_modules/.installed $(wildcard src/emogen/web/viewer/* src/emogen/web/build.mjs src/emogen/web/viewer_entry.js src/emogen/render/look.json src/emogen/render/shaders/*)
 	npm run build
 	touch $@
 
@@ -36,8 +36,11 @@ lint: setup
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
+	npx --no-install eslint .
+	npx --no-install tsc -p tsconfig.json
 
 test: lint
+	node --test tests/web/js/
 	$(BIN)/python -m pytest -q
 
 demo: setup

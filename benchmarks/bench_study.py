@@ -73,7 +73,7 @@ def write_study_toml(data: dict[str, Any], path: Path) -> Path:
 
 
 class ServerProcess:
-    """``python -m emogen.web.server`` on 127.0.0.1; ``kill()`` sends SIGKILL."""
+    """``emogen serve`` (``python -m emogen serve``) on 127.0.0.1; ``kill()`` sends SIGKILL."""
 
     def __init__(self, config: Path, database_url: str, model: Path, log: Path) -> None:
         self.config, self.database_url, self.model, self.log = config, database_url, model, log
@@ -89,7 +89,7 @@ class ServerProcess:
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(
                 [
-                    sys.executable, "-m", "emogen.web.server", str(self.config),
+                    sys.executable, "-m", "emogen", "serve", str(self.config),
                     "--port", str(self.port), "--database-url", self.database_url,
                     "--model", str(self.model),
                 ],

@@ -15,7 +15,7 @@ from emogen.cli.study import replay_command, study_app
 from emogen.study.export import STAMPS, TABLES, export_tables, write_export
 from emogen.study.replay import replay_session
 from emogen.study.sessions import StudyService
-from emogen.study.storage import SCHEMA_VERSION, FaceRow
+from emogen.study.tables import SCHEMA_VERSION, FaceRow
 from tests.study.drive import new_key, run_to_end, service_caller, step_args
 
 runner = CliRunner()
@@ -138,7 +138,8 @@ def test_migrations_are_idempotent_and_match_the_models(db_url: str) -> None:
     from alembic.runtime.migration import MigrationContext
 
     from emogen.study.migrations import current_revision
-    from emogen.study.storage import Base, Store
+    from emogen.study.storage import Store
+    from emogen.study.tables import Base
 
     store = Store(db_url)
     store.migrate()  # a second upgrade does nothing

@@ -13,7 +13,8 @@ from emogen.ga.engine import stream_of_state
 from emogen.study.config import StudyConfig
 from emogen.study.replay import replay_session
 from emogen.study.sessions import StudyService
-from emogen.study.storage import SessionRow, Store, StudyRow, TrialRow
+from emogen.study.storage import Store
+from emogen.study.tables import SessionRow, StudyRow, TrialRow
 from tests.study.drive import run_to_end, service_caller
 
 RECORDED = Path(__file__).parents[1] / "data" / "study_stream1.sqlite"

@@ -13,14 +13,8 @@ from emogen.errors import ConfigError, SelectionError
 from emogen.ga.engine import Engine, correctives_of
 from emogen.study.errors import SessionNotFound, StepConflict
 from emogen.study.sessions import StudyService, full_weights
-from emogen.study.storage import (
-    FaceRow,
-    PopulationRow,
-    SelectionRow,
-    StepRow,
-    Store,
-    TrialRow,
-)
+from emogen.study.storage import Store
+from emogen.study.tables import FaceRow, PopulationRow, SelectionRow, StepRow, TrialRow
 from tests.study.drive import choose, new_key, run_to_end, service_caller, step_args
 
 
@@ -198,7 +192,7 @@ def test_participant_ids_resume_only_with_their_token(service: StudyService) -> 
 
 def test_sessions_get_recorded_seeds_and_orders(service: StudyService) -> None:
     from emogen.rng import spawn_seeds
-    from emogen.study.storage import SessionRow
+    from emogen.study.tables import SessionRow
 
     for i in range(3):
         service.create_session(f"S-{i}")

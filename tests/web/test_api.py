@@ -10,7 +10,7 @@ from fastapi.testclient import TestClient
 from sqlalchemy import func, select
 
 from emogen.correct import correct_faces, model_correctives
-from emogen.study.storage import FaceRow, PopulationRow, SelectionRow, StepRow
+from emogen.study.tables import FaceRow, PopulationRow, SelectionRow, StepRow
 from tests.study.drive import choose, new_key, run_to_end, step_args
 from tests.web.study_app import RESEARCHER_TOKEN, app, client, db_url, pg_cluster  # noqa: F401
 
@@ -157,7 +157,7 @@ def test_shown_and_stored_faces_carry_their_correctives(
 
     import numpy as np
 
-    from emogen.study.storage import StudyRow
+    from emogen.study.tables import StudyRow
 
     token, _ = start(client, "H-9")
     state = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()

@@ -15,7 +15,7 @@ import schemathesis
 from hypothesis import HealthCheck, given, settings
 from sqlalchemy import func, select
 
-from emogen.study.storage import FaceRow, PopulationRow, SelectionRow, StepRow
+from emogen.study.tables import FaceRow, PopulationRow, SelectionRow, StepRow
 from tests.study.drive import new_key
 from tests.web.study_app import app, client, db_url, pg_cluster  # noqa: F401
 

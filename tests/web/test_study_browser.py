@@ -50,7 +50,7 @@ new PerformanceObserver((list) => {
 def _bundle_stale() -> bool:
     if not BUNDLE.is_file():
         return True
-    sources = [WEB / "viewer_entry.js", WEB / "build_study_viewer.mjs", *(WEB / "viewer").glob("*")]
+    sources = [WEB / "viewer_entry.js", WEB / "build.mjs", *(WEB / "viewer").glob("*")]
     return max(p.stat().st_mtime for p in sources if p.is_file()) > BUNDLE.stat().st_mtime
 
 
@@ -62,7 +62,7 @@ def viewer_bundle() -> Path:
         if node is None or not (REPO / "node_modules" / "three").is_dir():
             pytest.fail("the study viewer needs Node.js and `npm ci` (three, esbuild)")
         proc = subprocess.run(
-            [node, str(WEB / "build_study_viewer.mjs")], cwd=REPO, capture_output=True, text=True
+            [node, str(WEB / "build.mjs")], cwd=REPO, capture_output=True, text=True
         )
         if proc.returncode != 0:
             pytest.fail(f"building the study viewer failed:\n{proc.stdout}\n{proc.stderr}")

@@ -23,27 +23,27 @@ from emogen.appearance.identities import Identity
 from emogen.appearance.params import GENERATOR_VERSION, Appearance
 from emogen.errors import ConfigError
 from emogen.study.config import StudyConfig
-from emogen.study.storage import (
+from emogen.study.export_rows import (
+    face_rows,
+    iso,
+    load_records,
+    rating_rows,
+    restart_rows,
+    selection_rows,
+    session_rows,
+    trial_rows,
+)
+from emogen.study.storage import Store
+from emogen.study.tables import (
     SCHEMA_VERSION,
-    FaceRow,
-    PopulationRow,
-    RatingRow,
-    RestartRow,
     SelectionRow,
     SessionRow,
-    Store,
     StudyRow,
     TrialRow,
-    as_utc,
 )
 
 TABLES = ("sessions", "trials", "faces", "selections", "restarts", "ratings", "identities")
 STAMPS = ("schema_version", "package_version", "model_hash", "study_config_hash")
-
-
-def _iso(t: Any) -> str | None:
-    t = as_utc(t)
-    return None if t is None else t.isoformat()
 
 
 def study_status(store: Store) -> list[dict[str, Any]]:
@@ -77,7 +77,7 @@ def study_status(store: Store) -> list[dict[str, Any]]:
                     "name": study.name,
                     "config_hash": study.config_hash,
                     "model_hash": study.model_hash,
-                    "created_at": _iso(study.created_at),
+                    "created_at": iso(study.created_at),
                     "sessions": int(sum(stages.values())),
                     "by_stage": {k: int(v) for k, v in sorted(stages.items())},
                     "trials_done": int(trials_done or 0),
@@ -113,9 +113,9 @@ def session_progress(store: Store, study_id: int | None = None) -> list[dict[str
                     "trials": len(json.loads(s.trial_order)),
                     "generation": None if t is None else t.generation,
                     "attempt": None if t is None else t.attempt + 1,
-                    "created_at": _iso(s.created_at),
-                    "updated_at": _iso(s.updated_at),
-                    "completed_at": _iso(s.completed_at),
+                    "created_at": iso(s.created_at),
+                    "updated_at": iso(s.updated_at),
+                    "completed_at": iso(s.completed_at),
                 }
             )
     return out
@@ -125,190 +125,23 @@ def export_tables(
     store: Store, *, study: str | None = None, session_ids: list[int] | None = None
 ) -> dict[str, pd.DataFrame]:
     """Every table (see the module doc) as a DataFrame; ``study`` limits to studies of that name."""
-    rows: dict[str, list[dict[str, Any]]] = {t: [] for t in TABLES}
     with store.read() as db:
         studies = {s.id: s for s in db.scalars(select(StudyRow))}
         if study is not None:
             studies = {k: v for k, v in studies.items() if v.name == study}
             if not studies:
                 raise ConfigError(f"no study named '{study}' in {store.describe()}")
-        q = select(SessionRow).where(SessionRow.study_id.in_(list(studies))).order_by(SessionRow.id)
-        if session_ids is not None:
-            q = q.where(SessionRow.id.in_(session_ids))
-        sessions = list(db.scalars(q))
-        sids = [s.id for s in sessions]
-        trials = list(
-            db.scalars(
-                select(TrialRow)
-                .where(TrialRow.session_id.in_(sids))
-                .order_by(TrialRow.session_id, TrialRow.position)
-            )
-        )
-        tids = [t.id for t in trials]
-        pops = list(
-            db.scalars(
-                select(PopulationRow)
-                .where(PopulationRow.trial_id.in_(tids))
-                .order_by(PopulationRow.id)
-            )
-        )
-        pids = [p.id for p in pops]
-        faces = list(
-            db.scalars(
-                select(FaceRow)
-                .where(FaceRow.population_id.in_(pids))
-                .order_by(FaceRow.population_id, FaceRow.position)
-            )
-        )
-        selections = list(
-            db.scalars(select(SelectionRow).where(SelectionRow.population_id.in_(pids)))
-        )
-        restarts = list(db.scalars(select(RestartRow).where(RestartRow.population_id.in_(pids))))
-        ratings = list(db.scalars(select(RatingRow).where(RatingRow.trial_id.in_(tids))))
-
-    by_session = {s.id: s for s in sessions}
-    by_trial = {t.id: t for t in trials}
-    by_pop = {p.id: p for p in pops}
-
-    def stamp(session: SessionRow) -> dict[str, Any]:
-        st = studies[session.study_id]
-        return {
-            "schema_version": SCHEMA_VERSION,
-            "package_version": session.package_version,
-            "model_hash": st.model_hash,
-            "study_config_hash": st.config_hash,
-        }
-
-    def key(trial: TrialRow) -> dict[str, Any]:
-        s = by_session[trial.session_id]
-        return {
-            "study": studies[s.study_id].name,
-            "session_id": s.id,
-            "participant_id": s.participant_id,
-            "trial": trial.position,
-        }
-
-    for s in sessions:
-        rows["sessions"].append(
-            {
-                "study": studies[s.study_id].name,
-                "session_id": s.id,
-                "participant_id": s.participant_id,
-                "participant_source": s.participant_source,
-                "session_number": s.number,
-                "seed": s.seed,
-                "order_kind": s.order_kind,
-                "order_row": s.order_row,
-                "trial_order": s.trial_order,
-                "stage": s.stage,
-                "n_trials": len(json.loads(s.trial_order)),
-                "user_agent": s.user_agent,
-                "created_at": _iso(s.created_at),
-                "consented_at": _iso(s.consented_at),
-                "started_at": _iso(s.started_at),
-                "completed_at": _iso(s.completed_at),
-                **stamp(s),
-            }
-        )
-    for t in trials:
-        rows["trials"].append(
-            {
-                **key(t),
-                "condition": t.condition,
-                "emotion": t.emotion,
-                "identity": t.identity,
-                "repetition": t.repetition,
-                "seed": t.seed,
-                "status": t.status,
-                "attempts": t.attempt + 1,
-                "generation_reached": t.generation,
-                "final_face_id": t.final_face_id,
-                "started_at": _iso(t.started_at),
-                "finished_at": _iso(t.finished_at),
-                **stamp(by_session[t.session_id]),
-            }
-        )
-    gene_cols = {sid: json.loads(st.gene_names) for sid, st in studies.items()}
-    weight_cols = {sid: json.loads(st.weight_names) for sid, st in studies.items()}
-    for f in faces:
-        p = by_pop[f.population_id]
-        t = by_trial[p.trial_id]
-        s = by_session[t.session_id]
-        row: dict[str, Any] = {
-            **key(t),
-            "attempt": p.attempt,
-            "generation": p.generation,
-            "position": f.position,
-            "face_id": f.face_id,
-            "parent_a": f.parent_a,
-            "parent_b": f.parent_b,
-            "operator": f.operator,
-            "shown_at": _iso(p.shown_at),
-        }
-        row.update(zip((f"g_{n}" for n in gene_cols[s.study_id]), json.loads(f.genes), strict=True))
-        row.update(
-            zip((f"w_{n}" for n in weight_cols[s.study_id]), json.loads(f.weights), strict=True)
-        )
-        row.update(stamp(s))
-        rows["faces"].append(row)
-    for sel in sorted(selections, key=lambda x: x.id):
-        p = by_pop[sel.population_id]
-        t = by_trial[p.trial_id]
-        others = json.loads(sel.other_face_ids)
-        for rank, (face, role) in enumerate(
-            [(sel.elite_face_id, "elite")] + [(o, "other") for o in others]
-        ):
-            rows["selections"].append(
-                {
-                    **key(t),
-                    "attempt": p.attempt,
-                    "generation": p.generation,
-                    "face_id": face,
-                    "role": role,
-                    "rank": rank,
-                    "n_selected": 1 + len(others),
-                    "shown_at": _iso(p.shown_at),
-                    "submitted_at": _iso(sel.submitted_at),
-                    "server_response_ms": sel.server_response_ms,
-                    "client_response_ms": sel.client_response_ms,
-                    "step_key": sel.step_key,
-                    **stamp(by_session[t.session_id]),
-                }
-            )
-    for r in sorted(restarts, key=lambda x: x.id):
-        p = by_pop[r.population_id]
-        t = by_trial[p.trial_id]
-        rows["restarts"].append(
-            {
-                **key(t),
-                "attempt": p.attempt,
-                "generation": p.generation,
-                "shown_at": _iso(p.shown_at),
-                "submitted_at": _iso(r.submitted_at),
-                "server_response_ms": r.server_response_ms,
-                "client_response_ms": r.client_response_ms,
-                "step_key": r.step_key,
-                **stamp(by_session[t.session_id]),
-            }
-        )
-    for rt in sorted(ratings, key=lambda x: x.id):
-        t = by_trial[rt.trial_id]
-        rows["ratings"].append(
-            {
-                **key(t),
-                "emotion": t.emotion,
-                "identity": t.identity,
-                "face_id": rt.face_id,
-                "value": rt.value,
-                "points": rt.points,
-                "submitted_at": _iso(rt.submitted_at),
-                "server_response_ms": rt.server_response_ms,
-                "client_response_ms": rt.client_response_ms,
-                "step_key": rt.step_key,
-                **stamp(by_session[t.session_id]),
-            }
-        )
-    shown = {s.study_id for s in sessions} if session_ids is not None else set(studies)
+        rec = load_records(db, studies, session_ids)
+    rows: dict[str, list[dict[str, Any]]] = {
+        "sessions": list(session_rows(rec)),
+        "trials": list(trial_rows(rec)),
+        "faces": list(face_rows(rec)),
+        "selections": list(selection_rows(rec)),
+        "restarts": list(restart_rows(rec)),
+        "ratings": list(rating_rows(rec)),
+        "identities": [],
+    }
+    shown = {s.study_id for s in rec.sessions} if session_ids is not None else set(studies)
     for sid in sorted(shown):
         rows["identities"].extend(identity_rows(studies[sid]))
     return {name: _frame(name, rows[name]) for name in TABLES}

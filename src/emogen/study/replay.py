@@ -20,17 +20,17 @@ from emogen.ga.engine import Engine, stream_of_state
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
 from emogen.study.errors import SessionNotFound
-from emogen.study.sessions import StudyCorrectors, full_weights
+from emogen.study.weights import StudyCorrectors, full_weights
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
 
-from emogen.study.storage import (
+from emogen.study.storage import Store
+from emogen.study.tables import (
     PopulationRow,
     RestartRow,
     SelectionRow,
     SessionRow,
-    Store,
     StudyRow,
     TrialRow,
 )

@@ -1,4 +1,4 @@
-"""Study storage: SQLAlchemy 2.x tables, engines for SQLite (WAL) and PostgreSQL, migrations.
+"""Study storage: engines for SQLite (WAL) and PostgreSQL, transactions, migrations on open.
 
 SQLite is the default (a file in the user data folder); PostgreSQL by URL
 (``postgresql://user@host/db``, driven by psycopg 3). The schema is created and upgraded by
@@ -13,240 +13,23 @@ polling), on PostgreSQL by ``SELECT … FOR UPDATE`` on the session row.
 
 from __future__ import annotations
 
-import json
 import os
 import queue
 import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
 from contextlib import contextmanager
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, TypeVar
 
-from sqlalchemy import (
-    BigInteger,
-    DateTime,
-    Float,
-    ForeignKey,
-    Integer,
-    String,
-    Text,
-    UniqueConstraint,
-    create_engine,
-    event,
-    text,
-)
+from sqlalchemy import create_engine, event, text
 from sqlalchemy.engine import Engine, make_url
-from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column, relationship
+from sqlalchemy.orm import Session
 
 from emogen.errors import ConfigError
 
 T = TypeVar("T")
-SCHEMA_VERSION = "emogen.study/1"
 DATABASE_ENV = "EMOGEN_DATABASE_URL"
-
-
-def utcnow() -> datetime:
-    return datetime.now(UTC)
-
-
-def as_utc(t: datetime | None) -> datetime | None:
-    """SQLite returns naive datetimes: they were stored in UTC."""
-    if t is None:
-        return None
-    return t.replace(tzinfo=UTC) if t.tzinfo is None else t.astimezone(UTC)
-
-
-def dumps(value: Any) -> str:
-    return json.dumps(value, separators=(",", ":"))
-
-
-class Base(DeclarativeBase):
-    pass
-
-
-Stamp = DateTime(timezone=True)
-
-
-class StudyRow(Base):
-    """One study config as served (a changed config is a new row)."""
-
-    __tablename__ = "studies"
-    __table_args__ = (UniqueConstraint("name", "config_hash", name="uq_studies_name_hash"),)
-
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
-    name: Mapped[str] = mapped_column(String(64))
-    config_hash: Mapped[str] = mapped_column(String(64))
-    config_json: Mapped[str] = mapped_column(Text)
-    model_name: Mapped[str] = mapped_column(String(128))
-    model_hash: Mapped[str] = mapped_column(String(128))
-    #: JSON lists: gene names and full weight column names (shapes, then correctives).
-    gene_names: Mapped[str] = mapped_column(Text)
-    weight_names: Mapped[str] = mapped_column(Text)
-    package_version: Mapped[str] = mapped_column(String(32))
-    created_at: Mapped[datetime] = mapped_column(Stamp)
-
-
-class SessionRow(Base):
-    """One participant's session; ``token`` is the participant's secret, ``id`` the researcher's."""
-
-    __tablename__ = "sessions"
-    __table_args__ = (
-        UniqueConstraint("study_id", "participant_id", name="uq_sessions_participant"),
-        UniqueConstraint("study_id", "number", name="uq_sessions_number"),
-    )
-
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
-    study_id: Mapped[int] = mapped_column(ForeignKey("studies.id"), index=True)
-    token: Mapped[str] = mapped_column(String(64), unique=True)
-    participant_id: Mapped[str] = mapped_column(String(128))
-    participant_source: Mapped[str] = mapped_column(String(16))
-    number: Mapped[int] = mapped_column(Integer)
-    seed: Mapped[int] = mapped_column(BigInteger)
-    order_kind: Mapped[str] = mapped_column(String(16))
-    order_row: Mapped[int] = mapped_column(Integer)
-    trial_order: Mapped[str] = mapped_column(Text)
-    #: instructions → trial → done
-    stage: Mapped[str] = mapped_column(String(16))
-    current_trial: Mapped[int] = mapped_column(Integer)
-    package_version: Mapped[str] = mapped_column(String(32))
-    user_agent: Mapped[str] = mapped_column(String(256))
-    created_at: Mapped[datetime] = mapped_column(Stamp)
-    consented_at: Mapped[datetime] = mapped_column(Stamp)
-    started_at: Mapped[datetime | None] = mapped_column(Stamp, nullable=True)
-    completed_at: Mapped[datetime | None] = mapped_column(Stamp, nullable=True)
-    updated_at: Mapped[datetime] = mapped_column(Stamp)
-
-    study: Mapped[StudyRow] = relationship()
-    trials: Mapped[list[TrialRow]] = relationship(
-        back_populates="session", order_by="TrialRow.position"
-    )
-
-
-class TrialRow(Base):
-    """One trial (an emotion × identity × repetition) of a session; ``attempt`` counts restarts."""
-
-    __tablename__ = "trials"
-    __table_args__ = (UniqueConstraint("session_id", "position", name="uq_trials_position"),)
-
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
-    session_id: Mapped[int] = mapped_column(ForeignKey("sessions.id"), index=True)
-    position: Mapped[int] = mapped_column(Integer)
-    condition: Mapped[int] = mapped_column(Integer)
-    emotion: Mapped[str] = mapped_column(String(64))
-    identity: Mapped[str] = mapped_column(String(64))
-    repetition: Mapped[int] = mapped_column(Integer)
-    seed: Mapped[int] = mapped_column(BigInteger)
-    #: pending → active → rating → done
-    status: Mapped[str] = mapped_column(String(16))
-    attempt: Mapped[int] = mapped_column(Integer)
-    generation: Mapped[int] = mapped_column(Integer)
-    engine_state: Mapped[str | None] = mapped_column(Text, nullable=True)
-    final_face_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
-    started_at: Mapped[datetime | None] = mapped_column(Stamp, nullable=True)
-    finished_at: Mapped[datetime | None] = mapped_column(Stamp, nullable=True)
-
-    session: Mapped[SessionRow] = relationship(back_populates="trials")
-
-
-class PopulationRow(Base):
-    """One generation shown: stored before it is sent to the participant."""
-
-    __tablename__ = "populations"
-    __table_args__ = (
-        UniqueConstraint("trial_id", "attempt", "generation", name="uq_populations_generation"),
-    )
-
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
-    trial_id: Mapped[int] = mapped_column(ForeignKey("trials.id"), index=True)
-    attempt: Mapped[int] = mapped_column(Integer)
-    generation: Mapped[int] = mapped_column(Integer)
-    shown_at: Mapped[datetime] = mapped_column(Stamp)
-
-    faces: Mapped[list[FaceRow]] = relationship(order_by="FaceRow.position")
-
-
-class FaceRow(Base):
-    """One face of a population: engine face id, parents, operator, genes and full weights."""
-
-    __tablename__ = "faces"
-    __table_args__ = (
-        UniqueConstraint("population_id", "position", name="uq_faces_position"),
-        UniqueConstraint("population_id", "face_id", name="uq_faces_face_id"),
-    )
-
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
-    population_id: Mapped[int] = mapped_column(ForeignKey("populations.id"), index=True)
-    position: Mapped[int] = mapped_column(Integer)
-    face_id: Mapped[int] = mapped_column(Integer)
-    parent_a: Mapped[int] = mapped_column(Integer)
-    parent_b: Mapped[int] = mapped_column(Integer)
-    operator: Mapped[str] = mapped_column(String(32))
-    #: JSON lists of floats (exact: shortest round-trip repr).
-    genes: Mapped[str] = mapped_column(Text)
-    weights: Mapped[str] = mapped_column(Text)
-
-
-class SelectionRow(Base):
-    """A participant's selection in one population (one per population, ever)."""
-
-    __tablename__ = "selections"
-
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
-    population_id: Mapped[int] = mapped_column(ForeignKey("populations.id"), unique=True)
-    trial_id: Mapped[int] = mapped_column(ForeignKey("trials.id"), index=True)
-    elite_face_id: Mapped[int] = mapped_column(Integer)
-    #: JSON list of the other selected face ids, in the order they were told.
-    other_face_ids: Mapped[str] = mapped_column(Text)
-    submitted_at: Mapped[datetime] = mapped_column(Stamp)
-    server_response_ms: Mapped[float] = mapped_column(Float)
-    client_response_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
-    step_key: Mapped[str] = mapped_column(String(64))
-
-
-class RestartRow(Base):
-    """'Start again' pressed while a population was shown."""
-
-    __tablename__ = "restarts"
-
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
-    population_id: Mapped[int] = mapped_column(ForeignKey("populations.id"), unique=True)
-    trial_id: Mapped[int] = mapped_column(ForeignKey("trials.id"), index=True)
-    submitted_at: Mapped[datetime] = mapped_column(Stamp)
-    server_response_ms: Mapped[float] = mapped_column(Float)
-    client_response_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
-    step_key: Mapped[str] = mapped_column(String(64))
-
-
-class RatingRow(Base):
-    """The satisfaction rating of a trial's final face."""
-
-    __tablename__ = "ratings"
-
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
-    trial_id: Mapped[int] = mapped_column(ForeignKey("trials.id"), unique=True)
-    face_id: Mapped[int] = mapped_column(Integer)
-    value: Mapped[int] = mapped_column(Integer)
-    points: Mapped[int] = mapped_column(Integer)
-    submitted_at: Mapped[datetime] = mapped_column(Stamp)
-    server_response_ms: Mapped[float] = mapped_column(Float)
-    client_response_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
-    step_key: Mapped[str] = mapped_column(String(64))
-
-
-class StepRow(Base):
-    """Idempotency keys: a step submitted twice with the same key is done once."""
-
-    __tablename__ = "steps"
-    __table_args__ = (UniqueConstraint("session_id", "key", name="uq_steps_key"),)
-
-    id: Mapped[int] = mapped_column(Integer, primary_key=True)
-    session_id: Mapped[int] = mapped_column(ForeignKey("sessions.id"), index=True)
-    key: Mapped[str] = mapped_column(String(64))
-    kind: Mapped[str] = mapped_column(String(16))
-    request_hash: Mapped[str] = mapped_column(String(64))
-    created_at: Mapped[datetime] = mapped_column(Stamp)
 
 
 # ---- engines ---------------------------------------------------------------------------------

@@ -2,61 +2,66 @@
 
 Participant pages (``/``, ``/s/{token}``) and their JSON API (``/api/sessions``, ``/api/s/{token}/…``),
 the researcher dashboard (``/researcher``) and its token-protected API (``/api/researcher/…``).
-The core (``emogen.study``) never imports FastAPI; this layer maps its errors to 4xx responses.
+The core (``emogen.study``) never imports FastAPI; this layer maps its errors to 4xx responses
+(:mod:`emogen.web.errors`) and caps request bodies (:mod:`emogen.web.limits`).
 """
 
 from __future__ import annotations
 
-import logging
 import os
-import time
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Any
 
-from fastapi import FastAPI, Request
-from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse
+from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
-from sqlalchemy.exc import IntegrityError, OperationalError
 
 from emogen import __version__
-from emogen.errors import EmoGenError, ModelFileError
 from emogen.model.face import FaceModel
 from emogen.study.config import StudyConfig, load_study_config
-from emogen.study.errors import StudyError
 from emogen.study.sessions import StudyService
 from emogen.study.storage import Store, resolve_database_url
 from emogen.web.assets import ModelGLBs
+from emogen.web.errors import install_error_handlers
 from emogen.web.faces import FacePNGs
-
-log = logging.getLogger("emogen.web")
+from emogen.web.limits import BodyLimit, add_response_headers
+from emogen.web.schemas import MAX_BODY_BYTES
 
 HERE = Path(__file__).resolve().parent
 RESEARCHER_TOKEN_ENV = "EMOGEN_RESEARCHER_TOKEN"
 
 
-def _status_for(exc: EmoGenError) -> int:
-    if isinstance(exc, StudyError):
-        return exc.status
-    if isinstance(exc, ModelFileError):
-        return 503
-    return 422  # SelectionError, ConfigError, ShapeError: the request's values break a rule
-
-
-def _validation_message(exc: RequestValidationError) -> str:
-    parts = []
-    for err in exc.errors():
-        loc = ".".join(str(p) for p in err.get("loc", ()) if p not in ("body",))
-        parts.append(f"{loc or 'request'}: {err.get('msg', 'invalid')}")
-    return "invalid request: " + "; ".join(parts[:5])
-
-
 def viewer_built() -> bool:
-    """Whether the 3D viewer bundle (``node src/emogen/web/build_study_viewer.mjs``) exists."""
+    """Whether the 3D viewer bundle (``npm run build``) exists."""
     return (HERE / "static" / "build" / "study-viewer.js").is_file()
+
+
+def _lifespan(store: Store) -> Any:
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        yield
+        faces, app.state.faces = app.state.faces, None
+        if faces is not None:
+            faces.close()
+        store.dispose()
+
+    return lifespan
+
+
+def _routes(app: FastAPI, store: Store, config: StudyConfig) -> None:
+    from emogen.web import assets, participant, researcher
+
+    @app.get("/healthz", include_in_schema=False)
+    def healthz() -> dict[str, Any]:
+        store.ping()
+        return {"ok": True, "study": config.name, "version": __version__}
+
+    app.include_router(participant.router)
+    app.include_router(assets.router)
+    app.include_router(researcher.router)
+    app.mount("/static", StaticFiles(directory=str(HERE / "static")), name="static")
 
 
 def create_app(
@@ -89,17 +94,8 @@ def create_app(
     token = (
         researcher_token if researcher_token is not None else os.environ.get(RESEARCHER_TOKEN_ENV)
     )
-
-    @asynccontextmanager
-    async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
-        yield
-        faces, _app.state.faces = _app.state.faces, None
-        if faces is not None:
-            faces.close()
-        store.dispose()
-
     app = FastAPI(
-        lifespan=lifespan,
+        lifespan=_lifespan(store),
         title=f"EmoGen study: {config.name}",
         version=__version__,
         description="Participant and researcher API of an EmoGen study server.",
@@ -117,66 +113,8 @@ def create_app(
     app.state.glbs = ModelGLBs(model, identities=identities)
     # no thread or OpenGL context until the first PNG is asked for
     app.state.faces = FacePNGs(model, correct=config.correct, identities=identities)
-
-    @app.middleware("http")
-    async def timing(request: Request, call_next: Any) -> Any:
-        t0 = time.perf_counter()
-        response = await call_next(request)
-        ms = (time.perf_counter() - t0) * 1000
-        response.headers["Server-Timing"] = f"app;dur={ms:.2f}"
-        response.headers["X-Content-Type-Options"] = "nosniff"
-        response.headers["Referrer-Policy"] = "no-referrer"
-        if request.url.path.startswith("/api/"):
-            response.headers["Cache-Control"] = "no-store"
-        return response
-
-    @app.exception_handler(EmoGenError)
-    async def emogen_error(_request: Request, exc: EmoGenError) -> JSONResponse:
-        return JSONResponse({"detail": str(exc)}, status_code=_status_for(exc))
-
-    @app.exception_handler(RequestValidationError)
-    async def invalid(_request: Request, exc: RequestValidationError) -> JSONResponse:
-        return JSONResponse(
-            {"detail": _validation_message(exc), "errors": _safe_errors(exc)}, status_code=422
-        )
-
-    @app.exception_handler(IntegrityError)
-    async def integrity(_request: Request, _exc: IntegrityError) -> JSONResponse:
-        return JSONResponse(
-            {"detail": "this step was already recorded by another request; reload the page"},
-            status_code=409,
-        )
-
-    @app.exception_handler(OperationalError)
-    async def busy(_request: Request, exc: OperationalError) -> JSONResponse:
-        log.warning("database error: %s", exc)
-        return JSONResponse(
-            {"detail": "the database is busy; try again in a moment"}, status_code=503
-        )
-
-    from emogen.web import assets, participant, researcher
-
-    @app.get("/healthz", include_in_schema=False)
-    def healthz() -> dict[str, Any]:
-        store.ping()
-        return {"ok": True, "study": config.name, "version": __version__}
-
-    app.include_router(participant.router)
-    app.include_router(assets.router)
-    app.include_router(researcher.router)
-    app.mount("/static", StaticFiles(directory=str(HERE / "static")), name="static")
-
+    add_response_headers(app)
+    app.add_middleware(BodyLimit, max_bytes=MAX_BODY_BYTES)
+    install_error_handlers(app)
+    _routes(app, store, config)
     return app
-
-
-def _safe_errors(exc: RequestValidationError) -> list[dict[str, Any]]:
-    out = []
-    for err in exc.errors()[:10]:
-        out.append(
-            {
-                "loc": [str(p) for p in err.get("loc", ())],
-                "msg": str(err.get("msg", "")),
-                "type": str(err.get("type", "")),
-            }
-        )
-    return out

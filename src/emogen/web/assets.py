@@ -25,6 +25,7 @@ from emogen.appearance.identities import Identity, resolve_identity
 from emogen.errors import ConfigError
 from emogen.model.face import FaceModel
 from emogen.study.errors import SessionNotFound
+from emogen.web.schemas import error_responses
 
 router = APIRouter()
 #: Bumped when the GLB's layout changes (2: corrective morph targets after the shapes;
@@ -89,7 +90,7 @@ class ModelGLBs:
 
 @router.get(
     "/api/model/{identity}.glb",
-    responses={200: {"content": {"model/gltf-binary": {}}}},
+    responses={200: {"content": {"model/gltf-binary": {}}}, **error_responses(404, 422, 503)},
     response_class=FileResponse,
 )
 def model_glb(

@@ -6,84 +6,28 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, Path, Request
 from fastapi.responses import HTMLResponse, JSONResponse, Response
-from pydantic import BaseModel, ConfigDict, Field
 
 from emogen.study.sessions import StudyService
+from emogen.study.view import SessionState
+from emogen.web.schemas import (
+    TOKEN_PATTERN,
+    Begin,
+    Created,
+    NewSession,
+    Rating,
+    Restart,
+    Selection,
+    error_responses,
+)
 
 router = APIRouter()
 
 Token = Annotated[
     str,
-    Path(
-        pattern=r"^[A-Za-z0-9_-]{16,64}$",
-        description="The session's secret token (from the session link).",
-    ),
+    Path(pattern=TOKEN_PATTERN, description="The session's secret token (from the session link)."),
 ]
-#: A client-made key per step (e.g. a UUID); the same key again is the same step.
-StepKey = Annotated[str, Field(pattern=r"^[A-Za-z0-9_-]{8,64}$")]
-Index = Annotated[int, Field(ge=0, le=100_000)]
-FaceId = Annotated[int, Field(ge=0, le=2**31 - 1)]
-Millis = Annotated[float, Field(ge=0, le=86_400_000, allow_inf_nan=False)]
-
-
-class _Body(BaseModel):
-    model_config = ConfigDict(extra="forbid", strict=True)
-
-
-class NewSession(_Body):
-    participant_id: Annotated[str, Field(max_length=128)] | None = None
-    #: The token this browser holds for the participant's session, to resume it.
-    resume_token: Annotated[str, Field(pattern=r"^[A-Za-z0-9_-]{16,64}$")] | None = None
-
-
-class Begin(_Body):
-    key: StepKey
-
-
-class Selection(_Body):
-    key: StepKey
-    trial: Index
-    attempt: Index
-    generation: Index
-    elite: FaceId
-    others: Annotated[list[FaceId], Field(max_length=100)] = []
-    response_ms: Millis | None = None
-
-
-class Restart(_Body):
-    key: StepKey
-    trial: Index
-    attempt: Index
-    generation: Index
-    response_ms: Millis | None = None
-
-
-class Rating(_Body):
-    key: StepKey
-    trial: Index
-    value: Annotated[int, Field(ge=1, le=11)]
-    response_ms: Millis | None = None
-
-
-class State(BaseModel):
-    """The participant's view of the session (see ``StudyService._state``)."""
-
-    stage: str
-    participant_id: str
-    progress: dict[str, int]
-    limits: dict[str, int]
-    allow_restart: bool
-    trial: dict[str, Any] | None
-    population: dict[str, Any] | None
-    rating: dict[str, Any] | None
-    completion: dict[str, Any] | None
-    replayed: bool = False
-
-
-class Created(BaseModel):
-    token: str
-    url: str
-    state: State
+#: Error codes of the session's steps (a POST with a body).
+STEP_ERRORS = error_responses(404, 409, 413, 422, 503)
 
 
 def _service(request: Request) -> StudyService:
@@ -111,7 +55,12 @@ def session_page(request: Request, token: Token) -> HTMLResponse:
     return _page(request, "session.html", token=token)
 
 
-@router.post("/api/sessions", status_code=201, response_model=Created)
+@router.post(
+    "/api/sessions",
+    status_code=201,
+    response_model=Created,
+    responses=error_responses(409, 413, 422, 503),
+)
 def create_session(request: Request, body: NewSession) -> JSONResponse:
     """Consent given: start a session (or resume this browser's session of the participant)."""
     token, state = _service(request).create_session(
@@ -122,24 +71,29 @@ def create_session(request: Request, body: NewSession) -> JSONResponse:
     return JSONResponse({"token": token, "url": f"/s/{token}", "state": state}, status_code=201)
 
 
-def _json(state: dict[str, Any]) -> JSONResponse:
-    """The state as JSON, serialised directly (no per-float encoder pass)."""
+def _json(state: SessionState) -> JSONResponse:
+    """The state as JSON, serialised directly (no per-float encoder pass): the core's
+    :class:`SessionState` is the declared ``response_model``, checked by the contract tests."""
     return JSONResponse(state)
 
 
-@router.get("/api/s/{token}/state", response_model=State)
+@router.get(
+    "/api/s/{token}/state",
+    response_model=SessionState,
+    responses=error_responses(404, 409, 422, 503),
+)
 def get_state(request: Request, token: Token) -> JSONResponse:
     """Where the session is: stage, progress, the population shown, or the rating asked."""
     return _json(_service(request).state(token))
 
 
-@router.post("/api/s/{token}/begin", response_model=State)
+@router.post("/api/s/{token}/begin", response_model=SessionState, responses=STEP_ERRORS)
 def begin(request: Request, token: Token, body: Begin) -> JSONResponse:
     """Instructions read: the first trial starts."""
     return _json(_service(request).begin(token, body.key))
 
 
-@router.post("/api/s/{token}/select", response_model=State)
+@router.post("/api/s/{token}/select", response_model=SessionState, responses=STEP_ERRORS)
 def select_faces(request: Request, token: Token, body: Selection) -> JSONResponse:
     """The best face (elite) and the other acceptable faces of the shown generation."""
     state = _service(request).select(
@@ -155,7 +109,7 @@ def select_faces(request: Request, token: Token, body: Selection) -> JSONRespons
     return _json(state)
 
 
-@router.post("/api/s/{token}/restart", response_model=State)
+@router.post("/api/s/{token}/restart", response_model=SessionState, responses=STEP_ERRORS)
 def restart(request: Request, token: Token, body: Restart) -> JSONResponse:
     """Start the current trial again at generation 0."""
     state = _service(request).restart(
@@ -169,7 +123,7 @@ def restart(request: Request, token: Token, body: Restart) -> JSONResponse:
     return _json(state)
 
 
-@router.post("/api/s/{token}/rating", response_model=State)
+@router.post("/api/s/{token}/rating", response_model=SessionState, responses=STEP_ERRORS)
 def rate(request: Request, token: Token, body: Rating) -> JSONResponse:
     """The satisfaction rating (1 … points) of the trial's final face."""
     return _json(
@@ -181,7 +135,7 @@ def rate(request: Request, token: Token, body: Rating) -> JSONResponse:
 
 @router.get(
     "/api/s/{token}/faces/{face_id}.png",
-    responses={200: {"content": {"image/png": {}}}},
+    responses={200: {"content": {"image/png": {}}}, **error_responses(404, 409, 422, 503)},
     response_class=Response,
 )
 async def face_png(

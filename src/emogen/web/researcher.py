@@ -11,6 +11,7 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
 from emogen.study.errors import Forbidden
 from emogen.study.export import TABLES, export_tables, session_progress, study_status
+from emogen.web.schemas import error_responses
 
 router = APIRouter()
 _bearer = HTTPBearer(auto_error=False, description="EMOGEN_RESEARCHER_TOKEN")
@@ -41,7 +42,7 @@ def dashboard(request: Request) -> HTMLResponse:
     )
 
 
-@router.get("/api/researcher/status")
+@router.get("/api/researcher/status", responses=error_responses(403, 503))
 def status(request: Request, _auth: Researcher) -> dict[str, Any]:
     """Progress of every study in the database, and of this study's sessions."""
     store = request.app.state.store
@@ -56,7 +57,7 @@ def status(request: Request, _auth: Researcher) -> dict[str, Any]:
 
 @router.get(
     "/api/researcher/export/{table}.csv",
-    responses={200: {"content": {"text/csv": {}}}},
+    responses={200: {"content": {"text/csv": {}}}, **error_responses(403, 422, 503)},
     response_class=Response,
 )
 def export_csv(

@@ -1,16 +1,9 @@
-"""Run the study server: ``python -m emogen.web.server STUDY.toml --port 8000``.
-
-``emogen serve`` calls :func:`run_server`; tests and the benchmark start this module in a
-subprocess.
-"""
+"""Run the study server: ``emogen serve STUDY.toml --port 8000`` calls :func:`run_server`."""
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
-
-from emogen.errors import EmoGenError
 
 
 def run_server(
@@ -52,31 +45,3 @@ def run_server(
         access_log=False,
         timeout_graceful_shutdown=3,
     )
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m emogen.web.server")
-    parser.add_argument("config", type=Path)
-    parser.add_argument("--host", default="127.0.0.1")
-    parser.add_argument("--port", type=int, default=8000)
-    parser.add_argument("--database-url", default=None)
-    parser.add_argument("--model", type=Path, default=None)
-    parser.add_argument("--log-level", default="warning")
-    args = parser.parse_args(argv)
-    try:
-        run_server(
-            args.config,
-            host=args.host,
-            port=args.port,
-            database_url=args.database_url,
-            model=args.model,
-            log_level=args.log_level,
-        )
-    except EmoGenError as exc:
-        sys.stderr.write(f"error: {exc}\n")
-        return 2
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,3 +1,3 @@
 // The study page's entry into the face viewer (src/emogen/web/viewer): bundled by
-// build_study_viewer.mjs into static/build/study-viewer.js, imported by static/viewer-adapter.js.
+// build.mjs into static/build/study-viewer.js, imported by static/viewer-adapter.js.
 export { FaceGrid } from "./viewer/faces.js";

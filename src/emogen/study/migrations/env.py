@@ -2,7 +2,7 @@
 
 from alembic import context
 
-from emogen.study.storage import Base
+from emogen.study.tables import Base
 
 connection = context.config.attributes["connection"]
 context.configure(

@@ -1,15 +1,32 @@
 // JSON requests to the study server, retried on network errors and 503 (same idempotency key).
 
+/** An answer other than 2xx: its HTTP status (0: no connection) and the server's ``detail``. */
 export class ApiError extends Error {
+  /**
+   * @param {number} status
+   * @param {string} message
+   */
   constructor(status, message) {
     super(message);
     this.status = status;
   }
 }
 
+/** @param {number} ms */
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
+/**
+ * @typedef {{ method?: string, body?: unknown, retries?: number, headers?: Record<string, string> }} ApiOptions
+ */
+
+/**
+ * A JSON request; errors (status >= 400) throw an {@link ApiError} with the server's message.
+ * @param {string} path
+ * @param {ApiOptions} [options]
+ * @returns {Promise<any>}
+ */
 export async function api(path, { method = "GET", body, retries = 4, headers = {} } = {}) {
+  /** @type {ApiError | undefined} */
   let lastError;
   for (let attempt = 0; attempt <= retries; attempt++) {
     let response;
@@ -20,7 +37,7 @@ export async function api(path, { method = "GET", body, retries = 4, headers = {
         body: body === undefined ? undefined : JSON.stringify(body),
         cache: "no-store",
       });
-    } catch (err) {
+    } catch {
       lastError = new ApiError(0, "The connection to the study server was lost; retrying…");
       await sleep(400 * 2 ** attempt);
       continue;
@@ -30,7 +47,7 @@ export async function api(path, { method = "GET", body, retries = 4, headers = {
       await sleep(400 * 2 ** attempt);
       continue;
     }
-    let data = null;
+    let data;
     try {
       data = await response.json();
     } catch {

@@ -3,6 +3,7 @@
 // comes from the server, so a reload or a server restart resumes exactly.
 import { api, ApiError, newKey } from "./api.js";
 import { createFaceDisplay } from "./faces.js";
+import * as selection from "./selection.js";
 
 const token = document.body.dataset.token;
 const $ = (id) => document.getElementById(id);
@@ -71,61 +72,36 @@ function saveSelection() {
 }
 
 function restoreSelection(ids) {
-  ui.elite = null;
-  ui.others = [];
   ui.key = newKey();
+  let saved = null;
   try {
-    const saved = JSON.parse(sessionStorage.getItem(selectionKey()) || "null");
-    if (saved) {
-      ui.elite = ids.includes(saved.elite) ? saved.elite : null;
-      ui.others = (saved.others || []).filter((id) => ids.includes(id) && id !== ui.elite);
-      if (saved.key) ui.key = saved.key;
-    }
+    saved = JSON.parse(sessionStorage.getItem(selectionKey()) || "null");
   } catch {
-    /* ignore */
+    /* storage unavailable or garbled: start afresh */
   }
+  ({ elite: ui.elite, others: ui.others } = selection.restoreChoice(saved, ids));
+  if (saved && typeof saved.key === "string") ui.key = saved.key;
 }
 
 function count() {
-  return (ui.elite === null ? 0 : 1) + ui.others.length;
+  return selection.count(ui);
 }
 
-function toggle(id) {
-  const { max_selections: max } = ui.state.limits;
-  if (ui.elite === id) {
-    ui.elite = null;
-  } else if (ui.others.includes(id)) {
-    ui.others = ui.others.filter((o) => o !== id);
-  } else if (count() >= max) {
-    say(`You can choose at most ${max} faces. Remove one first.`);
+// A click (toggle) or the star (makeBest): the pure rule decides, the page shows the result.
+function choose(rule, id) {
+  const { choice, refused } = rule({ elite: ui.elite, others: ui.others }, id, ui.state.limits);
+  if (refused) {
+    say(refused);
     return;
-  } else if (ui.elite === null) {
-    ui.elite = id;
-  } else {
-    ui.others.push(id);
   }
+  ({ elite: ui.elite, others: ui.others } = choice);
   say("");
   saveSelection();
   paintSelection();
 }
 
-function makeBest(id) {
-  const { max_selections: max } = ui.state.limits;
-  if (ui.elite === id) return;
-  const wasSelected = ui.others.includes(id);
-  if (!wasSelected && count() >= max && ui.elite === null) {
-    say(`You can choose at most ${max} faces. Remove one first.`);
-    return;
-  }
-  ui.others = ui.others.filter((o) => o !== id);
-  if (ui.elite !== null) {
-    if (count() + 1 <= max) ui.others.unshift(ui.elite);
-  }
-  ui.elite = id;
-  say("");
-  saveSelection();
-  paintSelection();
-}
+const toggle = (id) => choose(selection.toggle, id);
+const makeBest = (id) => choose(selection.makeBest, id);
 
 function paintSelection() {
   const { min_selections: min, max_selections: max } = ui.state.limits;
@@ -148,7 +124,7 @@ function paintSelection() {
   else if (n < min) status = `Choose at least ${min} faces (${n} chosen).`;
   else status = `${n} chosen (up to ${max}): ★ best + ${ui.others.length} also acceptable. Then press Next generation.`;
   $("selection-status").textContent = status;
-  $("next").disabled = ui.busy || ui.elite === null || n < min || n > max;
+  $("next").disabled = ui.busy || !selection.complete(ui, ui.state.limits);
 }
 
 // ---- the grid --------------------------------------------------------------------------------
@@ -288,15 +264,16 @@ function showDone(state) {
 async function render(state) {
   ui.state = state;
   renderProgress(state);
-  if (state.stage === "instructions") {
+  const view = selection.viewOf(state);
+  if (view === "instructions") {
     show("instructions");
     setReady(true);
     $("begin").focus();
-  } else if (state.stage === "trial" && state.trial.status === "active") {
+  } else if (view === "trial") {
     await showTrial(state);
-  } else if (state.stage === "trial" && state.trial.status === "rating") {
+  } else if (view === "rating") {
     await showRating(state);
-  } else if (state.stage === "done") {
+  } else {
     showDone(state);
   }
 }
@@ -344,13 +321,7 @@ $("begin").addEventListener("click", () => step("begin", { key: newKey() }));
 
 $("next").addEventListener("click", () => {
   if (ui.elite === null || ui.busy) return;
-  step("select", {
-    key: ui.key,
-    ...position(),
-    elite: ui.elite,
-    others: ui.others,
-    response_ms: elapsed(),
-  });
+  step("select", selection.selectionBody(ui.state, ui, ui.key, elapsed()));
 });
 
 $("restart").addEventListener("click", () => {

@@ -1,0 +1,73 @@
+"""What a study service knows of its study: the config, the rig and the study row it records to."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from sqlalchemy import select
+from sqlalchemy.exc import IntegrityError
+
+from emogen import __version__
+from emogen.errors import ConfigError
+from emogen.model.rig import Rig
+from emogen.study.config import StudyConfig
+from emogen.study.storage import Store
+from emogen.study.tables import StudyRow, dumps, utcnow
+
+
+@dataclass(frozen=True)
+class StudyContext:
+    """The config, the rig, the model's name and hash, the study row's id and its columns."""
+
+    config: StudyConfig
+    rig: Rig
+    model_name: str
+    model_hash: str
+    study_id: int
+    gene_names: tuple[str, ...]
+    weight_names: tuple[str, ...]
+
+
+def register_study(
+    store: Store,
+    config: StudyConfig,
+    *,
+    model_name: str,
+    model_hash: str,
+    gene_names: tuple[str, ...],
+    weight_names: tuple[str, ...],
+) -> int:
+    """The id of the study row of this config (made if new); a different model is an error."""
+    chash = config.config_hash()
+    for _ in range(2):
+        try:
+            with store.write() as db:
+                row = db.scalar(
+                    select(StudyRow).where(
+                        StudyRow.name == config.name, StudyRow.config_hash == chash
+                    )
+                )
+                if row is None:
+                    row = StudyRow(
+                        name=config.name,
+                        config_hash=chash,
+                        config_json=config.canonical_json(),
+                        model_name=model_name[:128],
+                        model_hash=model_hash,
+                        gene_names=dumps(list(gene_names)),
+                        weight_names=dumps(list(weight_names)),
+                        package_version=__version__,
+                        created_at=utcnow(),
+                    )
+                    db.add(row)
+                    db.flush()
+                elif row.model_hash != model_hash:
+                    raise ConfigError(
+                        f"study '{config.name}' (config {chash[:12]}) was recorded with model "
+                        f"{row.model_hash[:16]}…; this server loaded {model_hash[:16]}…: "
+                        "serve it with the same model, or rename the study"
+                    )
+                return row.id
+        except IntegrityError:  # another process registered it at the same moment
+            continue
+    raise ConfigError(f"could not register study '{config.name}'")  # pragma: no cover

@@ -1,0 +1,125 @@
+"""Consent given: a participant's session is made (or resumed with its token).
+
+A session gets the next number in the study, a seed (a child of the study's seed, else fresh),
+a trial order (the study design) and one trial row per condition, each with its own seed.
+"""
+
+from __future__ import annotations
+
+import re
+import secrets
+
+import numpy as np
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from emogen import __version__
+from emogen.errors import ConfigError
+from emogen.rng import fresh_seed, spawn_seeds
+from emogen.study.context import StudyContext
+from emogen.study.design import trial_order
+from emogen.study.errors import StepConflict
+from emogen.study.queries import count_sessions, lock_study, session_of_participant
+from emogen.study.storage import Store
+from emogen.study.tables import SessionRow, TrialRow, dumps, utcnow
+from emogen.study.view import SessionState, session_state
+
+PARTICIPANT_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:@+-]{0,127}$")
+
+
+def checked_participant(participant_id: str | None) -> tuple[str, str]:
+    """(participant id, its source): the URL's id checked, or a generated one when none came."""
+    if participant_id is None or participant_id == "":
+        return "anon-" + secrets.token_hex(8), "generated"
+    if not PARTICIPANT_ID.match(participant_id):
+        raise ConfigError(
+            f"participant id must be 1-128 letters, digits or ._:@+- (starting with a letter "
+            f"or digit); got {participant_id[:40]!r}"
+        )
+    return participant_id, "url"
+
+
+def _new_session(
+    db: Session, ctx: StudyContext, participant_id: str, source: str, user_agent: str
+) -> SessionRow:
+    cfg = ctx.config
+    number = count_sessions(db, ctx.study_id)
+    seed = spawn_seeds(cfg.seed, number + 1)[number] if cfg.seed is not None else fresh_seed()
+    order_seed, *trial_seeds = spawn_seeds(seed, cfg.n_trials + 1)
+    order = trial_order(cfg, session_number=number, rng=np.random.default_rng(order_seed))
+    now = utcnow()
+    sess = SessionRow(
+        study_id=ctx.study_id,
+        token=secrets.token_urlsafe(24),
+        participant_id=participant_id,
+        participant_source=source,
+        number=number,
+        seed=seed,
+        order_kind=order.kind,
+        order_row=order.row,
+        trial_order=dumps(list(order.order)),
+        stage="instructions",
+        current_trial=0,
+        package_version=__version__,
+        user_agent=user_agent[:256],
+        created_at=now,
+        consented_at=now,
+        updated_at=now,
+    )
+    db.add(sess)
+    db.flush()
+    conditions = cfg.conditions()
+    for pos, cond in enumerate(order.order):
+        emotion, identity, rep = conditions[cond]
+        db.add(
+            TrialRow(
+                session_id=sess.id,
+                position=pos,
+                condition=cond,
+                emotion=emotion,
+                identity=identity,
+                repetition=rep,
+                seed=trial_seeds[pos],
+                status="pending",
+                attempt=0,
+                generation=0,
+            )
+        )
+    db.flush()
+    return sess
+
+
+def create_session(
+    store: Store,
+    ctx: StudyContext,
+    participant_id: str | None,
+    *,
+    resume_token: str | None = None,
+    user_agent: str = "",
+) -> tuple[str, SessionState]:
+    """A new session (token, state), or the participant's own one again.
+
+    A participant id that already has a session is resumed only with that session's token
+    (``resume_token``, kept by the participant's browser); otherwise it is a conflict.
+    """
+    pid, source = checked_participant(participant_id)
+
+    def work(db: Session) -> tuple[str, SessionState]:
+        lock_study(db, ctx.study_id)  # one new session at a time per study (session numbers)
+        existing = session_of_participant(db, ctx.study_id, pid)
+        if existing is not None:
+            if resume_token is None or not secrets.compare_digest(existing.token, resume_token):
+                raise StepConflict(
+                    f"participant '{pid}' already has a session in this "
+                    "study; reopen the link you were given (it holds your session)"
+                )
+        else:
+            existing = _new_session(db, ctx, pid, source, user_agent)
+        return existing.token, session_state(db, ctx.config, existing)
+
+    for _ in range(3):
+        try:
+            return store.transact(work)
+        except IntegrityError:  # the same participant or session number at the same moment
+            continue
+    raise StepConflict("the server is busy creating sessions; please try again")

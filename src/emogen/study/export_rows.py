@@ -1,0 +1,244 @@
+"""The rows of the export tables, one function per table, from the records of a read.
+
+:func:`load_records` reads the sessions (and everything under them) of some studies;
+each ``*_rows`` function turns them into the tidy rows of one table (see :mod:`emogen.study.export`).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from emogen.study.tables import (
+    SCHEMA_VERSION,
+    FaceRow,
+    PopulationRow,
+    RatingRow,
+    RestartRow,
+    SelectionRow,
+    SessionRow,
+    StudyRow,
+    TrialRow,
+    as_utc,
+)
+
+Row = dict[str, Any]
+
+
+def iso(t: datetime | None) -> str | None:
+    u = as_utc(t)
+    return None if u is None else u.isoformat()
+
+
+@dataclass
+class Records:
+    """The rows read for an export, and lookups by id."""
+
+    studies: dict[int, StudyRow]
+    sessions: list[SessionRow]
+    trials: list[TrialRow]
+    populations: list[PopulationRow]
+    faces: list[FaceRow]
+    selections: list[SelectionRow]
+    restarts: list[RestartRow]
+    ratings: list[RatingRow]
+    by_session: dict[int, SessionRow] = field(init=False)
+    by_trial: dict[int, TrialRow] = field(init=False)
+    by_population: dict[int, PopulationRow] = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.by_session = {s.id: s for s in self.sessions}
+        self.by_trial = {t.id: t for t in self.trials}
+        self.by_population = {p.id: p for p in self.populations}
+
+    def stamp(self, session: SessionRow) -> Row:
+        """The record stamp of every row: schema, package version, model and config hashes."""
+        st = self.studies[session.study_id]
+        return {
+            "schema_version": SCHEMA_VERSION,
+            "package_version": session.package_version,
+            "model_hash": st.model_hash,
+            "study_config_hash": st.config_hash,
+        }
+
+    def key(self, trial: TrialRow) -> Row:
+        """The columns that name a trial: study, session, participant, trial position."""
+        s = self.by_session[trial.session_id]
+        return {
+            "study": self.studies[s.study_id].name,
+            "session_id": s.id,
+            "participant_id": s.participant_id,
+            "trial": trial.position,
+        }
+
+    def trial_stamp(self, trial: TrialRow) -> Row:
+        return self.stamp(self.by_session[trial.session_id])
+
+
+def load_records(
+    db: Session, studies: dict[int, StudyRow], session_ids: list[int] | None
+) -> Records:
+    """The sessions of these studies (only ``session_ids`` if given) and all rows under them."""
+    q = select(SessionRow).where(SessionRow.study_id.in_(list(studies))).order_by(SessionRow.id)
+    if session_ids is not None:
+        q = q.where(SessionRow.id.in_(session_ids))
+    sessions = list(db.scalars(q))
+    sids = [s.id for s in sessions]
+    trials = list(
+        db.scalars(
+            select(TrialRow)
+            .where(TrialRow.session_id.in_(sids))
+            .order_by(TrialRow.session_id, TrialRow.position)
+        )
+    )
+    tids = [t.id for t in trials]
+    pops = list(
+        db.scalars(
+            select(PopulationRow).where(PopulationRow.trial_id.in_(tids)).order_by(PopulationRow.id)
+        )
+    )
+    pids = [p.id for p in pops]
+    faces = list(
+        db.scalars(
+            select(FaceRow)
+            .where(FaceRow.population_id.in_(pids))
+            .order_by(FaceRow.population_id, FaceRow.position)
+        )
+    )
+    selections = list(db.scalars(select(SelectionRow).where(SelectionRow.population_id.in_(pids))))
+    restarts = list(db.scalars(select(RestartRow).where(RestartRow.population_id.in_(pids))))
+    ratings = list(db.scalars(select(RatingRow).where(RatingRow.trial_id.in_(tids))))
+    return Records(studies, sessions, trials, pops, faces, selections, restarts, ratings)
+
+
+def session_rows(rec: Records) -> Iterator[Row]:
+    for s in rec.sessions:
+        yield {
+            "study": rec.studies[s.study_id].name,
+            "session_id": s.id,
+            "participant_id": s.participant_id,
+            "participant_source": s.participant_source,
+            "session_number": s.number,
+            "seed": s.seed,
+            "order_kind": s.order_kind,
+            "order_row": s.order_row,
+            "trial_order": s.trial_order,
+            "stage": s.stage,
+            "n_trials": len(json.loads(s.trial_order)),
+            "user_agent": s.user_agent,
+            "created_at": iso(s.created_at),
+            "consented_at": iso(s.consented_at),
+            "started_at": iso(s.started_at),
+            "completed_at": iso(s.completed_at),
+            **rec.stamp(s),
+        }
+
+
+def trial_rows(rec: Records) -> Iterator[Row]:
+    for t in rec.trials:
+        yield {
+            **rec.key(t),
+            "condition": t.condition,
+            "emotion": t.emotion,
+            "identity": t.identity,
+            "repetition": t.repetition,
+            "seed": t.seed,
+            "status": t.status,
+            "attempts": t.attempt + 1,
+            "generation_reached": t.generation,
+            "final_face_id": t.final_face_id,
+            "started_at": iso(t.started_at),
+            "finished_at": iso(t.finished_at),
+            **rec.trial_stamp(t),
+        }
+
+
+def face_rows(rec: Records) -> Iterator[Row]:
+    gene_cols = {sid: json.loads(st.gene_names) for sid, st in rec.studies.items()}
+    weight_cols = {sid: json.loads(st.weight_names) for sid, st in rec.studies.items()}
+    for f in rec.faces:
+        p = rec.by_population[f.population_id]
+        t = rec.by_trial[p.trial_id]
+        s = rec.by_session[t.session_id]
+        row: Row = {
+            **rec.key(t),
+            "attempt": p.attempt,
+            "generation": p.generation,
+            "position": f.position,
+            "face_id": f.face_id,
+            "parent_a": f.parent_a,
+            "parent_b": f.parent_b,
+            "operator": f.operator,
+            "shown_at": iso(p.shown_at),
+        }
+        row.update(zip((f"g_{n}" for n in gene_cols[s.study_id]), json.loads(f.genes), strict=True))
+        row.update(
+            zip((f"w_{n}" for n in weight_cols[s.study_id]), json.loads(f.weights), strict=True)
+        )
+        row.update(rec.stamp(s))
+        yield row
+
+
+def selection_rows(rec: Records) -> Iterator[Row]:
+    for sel in sorted(rec.selections, key=lambda x: x.id):
+        p = rec.by_population[sel.population_id]
+        t = rec.by_trial[p.trial_id]
+        others = json.loads(sel.other_face_ids)
+        chosen = [(sel.elite_face_id, "elite")] + [(o, "other") for o in others]
+        for rank, (face, role) in enumerate(chosen):
+            yield {
+                **rec.key(t),
+                "attempt": p.attempt,
+                "generation": p.generation,
+                "face_id": face,
+                "role": role,
+                "rank": rank,
+                "n_selected": 1 + len(others),
+                "shown_at": iso(p.shown_at),
+                "submitted_at": iso(sel.submitted_at),
+                "server_response_ms": sel.server_response_ms,
+                "client_response_ms": sel.client_response_ms,
+                "step_key": sel.step_key,
+                **rec.trial_stamp(t),
+            }
+
+
+def restart_rows(rec: Records) -> Iterator[Row]:
+    for r in sorted(rec.restarts, key=lambda x: x.id):
+        p = rec.by_population[r.population_id]
+        t = rec.by_trial[p.trial_id]
+        yield {
+            **rec.key(t),
+            "attempt": p.attempt,
+            "generation": p.generation,
+            "shown_at": iso(p.shown_at),
+            "submitted_at": iso(r.submitted_at),
+            "server_response_ms": r.server_response_ms,
+            "client_response_ms": r.client_response_ms,
+            "step_key": r.step_key,
+            **rec.trial_stamp(t),
+        }
+
+
+def rating_rows(rec: Records) -> Iterator[Row]:
+    for rt in sorted(rec.ratings, key=lambda x: x.id):
+        t = rec.by_trial[rt.trial_id]
+        yield {
+            **rec.key(t),
+            "emotion": t.emotion,
+            "identity": t.identity,
+            "face_id": rt.face_id,
+            "value": rt.value,
+            "points": rt.points,
+            "submitted_at": iso(rt.submitted_at),
+            "server_response_ms": rt.server_response_ms,
+            "client_response_ms": rt.client_response_ms,
+            "step_key": rt.step_key,
+            **rec.trial_stamp(t),
+        }

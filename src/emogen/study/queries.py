@@ -1,0 +1,123 @@
+"""Reads of the study database the steps and the view need; each takes an open session."""
+
+from __future__ import annotations
+
+import json
+from datetime import datetime
+
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session, selectinload
+
+from emogen.study.errors import SessionNotFound, StepConflict
+from emogen.study.tables import (
+    FaceRow,
+    PopulationRow,
+    SelectionRow,
+    SessionRow,
+    StepRow,
+    StudyRow,
+    TrialRow,
+)
+
+
+def session_by_token(db: Session, token: str, study_id: int, *, lock: bool = False) -> SessionRow:
+    """The session of this token in this study (locked for update if asked)."""
+    query = select(SessionRow).where(SessionRow.token == token)
+    if lock:
+        query = query.with_for_update()
+    sess = db.scalar(query)
+    if sess is None:
+        raise SessionNotFound("no session with this link; check the address")
+    if sess.study_id != study_id:
+        raise StepConflict(
+            "this session belongs to another version of the study config than the one the "
+            "server runs now; ask the researcher"
+        )
+    return sess
+
+
+def lock_study(db: Session, study_id: int) -> None:
+    """Lock the study's row until the transaction ends (PostgreSQL; SQLite writes are serial)."""
+    db.get(StudyRow, study_id, with_for_update=True)
+
+
+def session_of_participant(db: Session, study_id: int, participant_id: str) -> SessionRow | None:
+    return db.scalar(
+        select(SessionRow).where(
+            SessionRow.study_id == study_id, SessionRow.participant_id == participant_id
+        )
+    )
+
+
+def count_sessions(db: Session, study_id: int) -> int:
+    n = db.scalar(
+        select(func.count()).select_from(SessionRow).where(SessionRow.study_id == study_id)
+    )
+    return int(n or 0)
+
+
+def n_trials(sess: SessionRow) -> int:
+    """How many trials the session has (its stored trial order)."""
+    return len(json.loads(sess.trial_order))
+
+
+def trial_at(db: Session, session_id: int, position: int) -> TrialRow | None:
+    return db.scalar(
+        select(TrialRow).where(TrialRow.session_id == session_id, TrialRow.position == position)
+    )
+
+
+def population_at(
+    db: Session, trial_id: int, attempt: int, generation: int, *, with_faces: bool = False
+) -> PopulationRow | None:
+    """The stored population of a trial's attempt and generation (its faces loaded if asked)."""
+    query = select(PopulationRow).where(
+        PopulationRow.trial_id == trial_id,
+        PopulationRow.attempt == attempt,
+        PopulationRow.generation == generation,
+    )
+    if with_faces:
+        query = query.options(selectinload(PopulationRow.faces))
+    return db.scalar(query)
+
+
+def final_face(db: Session, trial: TrialRow) -> FaceRow | None:
+    """The trial's final face (the last elite) in its current attempt."""
+    return db.scalar(
+        select(FaceRow)
+        .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
+        .where(
+            PopulationRow.trial_id == trial.id,
+            PopulationRow.attempt == trial.attempt,
+            FaceRow.face_id == trial.final_face_id,
+        )
+    )
+
+
+def last_selection_time(db: Session, trial_id: int) -> datetime | None:
+    return db.scalar(
+        select(SelectionRow.submitted_at)
+        .where(SelectionRow.trial_id == trial_id)
+        .order_by(SelectionRow.id.desc())
+        .limit(1)
+    )
+
+
+def step_with_key(db: Session, session_id: int, key: str) -> StepRow | None:
+    return db.scalar(select(StepRow).where(StepRow.session_id == session_id, StepRow.key == key))
+
+
+def current_face(db: Session, sess: SessionRow, face_id: int) -> tuple[str, str] | None:
+    """(weights JSON, identity) of a face in the session's current trial, if there is one."""
+    found = db.execute(
+        select(FaceRow.weights, TrialRow.identity)
+        .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
+        .join(TrialRow, PopulationRow.trial_id == TrialRow.id)
+        .where(
+            TrialRow.session_id == sess.id,
+            TrialRow.position == sess.current_trial,
+            FaceRow.face_id == face_id,
+        )
+        .limit(1)
+    ).first()
+    return None if found is None else (str(found[0]), str(found[1]))

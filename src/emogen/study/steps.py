@@ -1,0 +1,244 @@
+"""The study's steps: each one transaction, committed before it is answered, and idempotent.
+
+A session goes consent (its creation) → instructions → trial 1 … T → done. In a trial the GA
+engine shows generations 0 … G; every shown population is stored when it is made, every
+selection / restart / rating with its timestamps and response times. The engine's JSON state is
+kept with the trial, so a reload or a server restart resumes exactly where the participant was.
+
+Every state-changing step carries an idempotency key: the same key again returns the current
+state without doing anything (a double click, a retried request); a key reused for a different
+request, or a request for a generation that is no longer shown, is a conflict (HTTP 409).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Callable, Mapping
+from datetime import datetime
+
+from sqlalchemy.orm import Session
+
+from emogen.errors import SelectionError
+from emogen.study.context import StudyContext
+from emogen.study.errors import SessionNotFound, StepConflict
+from emogen.study.queries import (
+    last_selection_time,
+    n_trials,
+    population_at,
+    session_by_token,
+    step_with_key,
+    trial_at,
+)
+from emogen.study.storage import Store
+from emogen.study.tables import (
+    PopulationRow,
+    RatingRow,
+    RestartRow,
+    SelectionRow,
+    SessionRow,
+    StepRow,
+    TrialRow,
+    as_utc,
+    dumps,
+    utcnow,
+)
+from emogen.study.trials import TrialEngines, store_population
+from emogen.study.view import SessionState, ShownPopulation, session_state
+
+#: What a step's request held (hashed to tell a replayed key from a reused one).
+Payload = Mapping[str, int | float | list[int] | None]
+#: A step's work on the locked session; returns the population it has just shown, if any.
+Action = Callable[[Session, SessionRow], ShownPopulation | None]
+
+
+def request_hash(kind: str, payload: Payload) -> str:
+    text = kind + ":" + json.dumps(payload, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def elapsed_ms(later: datetime, earlier: datetime | None) -> float:
+    """Milliseconds from ``earlier`` to ``later`` (0 when there is no earlier time)."""
+    e = as_utc(earlier)
+    later_utc = as_utc(later)
+    if e is None or later_utc is None:
+        return 0.0
+    return max(0.0, (later_utc - e).total_seconds() * 1000.0)
+
+
+class SessionSteps:
+    """The transitions of a session: begin, select, restart, rate (each under a step key)."""
+
+    def __init__(self, ctx: StudyContext, store: Store, engines: TrialEngines) -> None:
+        self.ctx = ctx
+        self.store = store
+        self.engines = engines
+
+    def run(
+        self, token: str, kind: str, key: str, payload: Payload, action: Action
+    ) -> SessionState:
+        """Do ``action`` once per key, in one transaction; answer the session's state."""
+        digest = request_hash(kind, payload)
+        config = self.ctx.config
+
+        def work(db: Session) -> SessionState:
+            sess = session_by_token(db, token, self.ctx.study_id, lock=True)
+            done = step_with_key(db, sess.id, key)
+            if done is not None:
+                if done.kind != kind or done.request_hash != digest:
+                    raise StepConflict(
+                        f"step key '{key}' was already used for a different request "
+                        f"({done.kind}); send a new key for a new step"
+                    )
+                state = session_state(db, config, sess)
+                state["replayed"] = True
+                return state
+            shown = action(db, sess)
+            now = utcnow()
+            db.add(
+                StepRow(session_id=sess.id, key=key, kind=kind, request_hash=digest, created_at=now)
+            )
+            sess.updated_at = now
+            db.flush()
+            return session_state(db, config, sess, shown)
+
+        return self.store.transact(work)
+
+    # ---- the steps' work -------------------------------------------------------------------
+    def begin(self, db: Session, sess: SessionRow) -> ShownPopulation:
+        """Instructions read: the first trial starts (generation 0 is made and stored)."""
+        if sess.stage != "instructions":
+            raise StepConflict(f"the session is past the instructions (stage '{sess.stage}')")
+        sess.stage = "trial"
+        sess.started_at = utcnow()
+        return self.engines.start(db, sess, 0)
+
+    def select(
+        self, db: Session, sess: SessionRow, *, key: str, trial: int, attempt: int,
+        generation: int, elite: int, others: list[int], response_ms: float | None,
+    ) -> ShownPopulation | None:  # fmt: skip
+        """The participant's selection of the shown generation; the next one is stored."""
+        row, pop = self._shown(db, sess, trial, attempt, generation)
+        engine = self.engines.restore(row)
+        engine.tell(elite, others)
+        now = utcnow()
+        db.add(
+            SelectionRow(
+                population_id=pop.id,
+                trial_id=row.id,
+                elite_face_id=elite,
+                other_face_ids=dumps(list(others)),
+                submitted_at=now,
+                server_response_ms=elapsed_ms(now, pop.shown_at),
+                client_response_ms=response_ms,
+                step_key=key,
+            )
+        )
+        shown = None
+        if engine.done:
+            row.status = "rating"
+            row.final_face_id = int(engine.result.ids[0])
+        else:
+            shown = store_population(db, row, engine.ask())
+        row.generation = engine.generation
+        row.engine_state = engine.to_json()
+        return shown
+
+    def restart(
+        self, db: Session, sess: SessionRow, *, key: str, trial: int, attempt: int,
+        generation: int, response_ms: float | None,
+    ) -> ShownPopulation:  # fmt: skip
+        """'Start again': a new attempt of the trial at generation 0 (reinitialised or kept)."""
+        if not self.ctx.config.allow_restart:
+            raise StepConflict("this study does not allow starting a trial again")
+        row, pop = self._shown(db, sess, trial, attempt, generation)
+        engine = self.engines.restore(row)
+        now = utcnow()
+        db.add(
+            RestartRow(
+                population_id=pop.id,
+                trial_id=row.id,
+                submitted_at=now,
+                server_response_ms=elapsed_ms(now, pop.shown_at),
+                client_response_ms=response_ms,
+                step_key=key,
+            )
+        )
+        population = engine.reset()
+        row.attempt = engine.trial
+        row.generation = engine.generation
+        shown = store_population(db, row, population)
+        row.engine_state = engine.to_json()
+        return shown
+
+    def rate(
+        self, db: Session, sess: SessionRow, *, key: str, trial: int, value: int,
+        response_ms: float | None,
+    ) -> ShownPopulation | None:  # fmt: skip
+        """The rating of the trial's final face; then the next trial starts (or the session ends)."""
+        points = self.ctx.config.rating.points
+        row = self._current_trial(db, sess, trial)
+        if row.status != "rating":
+            raise StepConflict(
+                f"trial {trial + 1} is not waiting for a rating (it is at generation "
+                f"{row.generation}); reload the page"
+            )
+        if not 1 <= value <= points:
+            raise SelectionError(f"rating must be an integer in [1, {points}]; got {value}")
+        now = utcnow()
+        db.add(
+            RatingRow(
+                trial_id=row.id,
+                face_id=int(row.final_face_id if row.final_face_id is not None else -1),
+                value=value,
+                points=points,
+                submitted_at=now,
+                server_response_ms=elapsed_ms(now, last_selection_time(db, row.id)),
+                client_response_ms=response_ms,
+                step_key=key,
+            )
+        )
+        row.status = "done"
+        row.finished_at = now
+        if trial + 1 < n_trials(sess):
+            sess.current_trial = trial + 1
+            return self.engines.start(db, sess, trial + 1)
+        sess.stage = "done"
+        sess.completed_at = now
+        return None
+
+    # ---- guards ----------------------------------------------------------------------------
+    def _current_trial(self, db: Session, sess: SessionRow, trial: int) -> TrialRow:
+        if sess.stage != "trial":
+            raise StepConflict(
+                f"the session is not in a trial (stage '{sess.stage}'); reload the page"
+            )
+        if trial != sess.current_trial:
+            raise StepConflict(
+                f"this request is for trial {trial + 1}, but the session is at trial "
+                f"{sess.current_trial + 1}; reload the page"
+            )
+        row = trial_at(db, sess.id, trial)
+        if row is None:  # pragma: no cover - created with the session
+            raise SessionNotFound(f"trial {trial + 1} does not exist")
+        return row
+
+    def _shown(
+        self, db: Session, sess: SessionRow, trial: int, attempt: int, generation: int
+    ) -> tuple[TrialRow, PopulationRow]:
+        row = self._current_trial(db, sess, trial)
+        if row.status != "active":
+            raise StepConflict(
+                f"trial {trial + 1} has no generation to select from (it is waiting for the "
+                "rating); reload the page"
+            )
+        if (attempt, generation) != (row.attempt, row.generation):
+            raise StepConflict(
+                f"this request is for generation {generation} (attempt {attempt + 1}) of trial "
+                f"{trial + 1}, but generation {row.generation} (attempt {row.attempt + 1}) is "
+                "shown now; reload the page"
+            )
+        pop = population_at(db, row.id, attempt, generation)
+        if pop is None:  # pragma: no cover - stored with the engine state
+            raise StepConflict("the shown generation was not stored; reload the page")
+        return row, pop

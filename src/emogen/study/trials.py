@@ -1,0 +1,79 @@
+"""A trial's GA engine: started from the trial's seed, restored from its stored state, and every
+population it makes stored (genes, full weights, ids, parents, operators) before it is shown."""
+
+from __future__ import annotations
+
+from sqlalchemy import insert
+from sqlalchemy.orm import Session
+
+from emogen.ga.engine import Engine, Population
+from emogen.study.context import StudyContext
+from emogen.study.errors import SessionNotFound
+from emogen.study.queries import trial_at
+from emogen.study.tables import FaceRow, PopulationRow, SessionRow, TrialRow, dumps, utcnow
+from emogen.study.view import FaceView, ShownPopulation
+from emogen.study.weights import StudyCorrectors, full_weights
+
+
+class TrialEngines:
+    """Makes and restores the engines of a study's trials, each with its identity's corrector."""
+
+    def __init__(self, ctx: StudyContext, correctors: StudyCorrectors) -> None:
+        self.ctx = ctx
+        self.correctors = correctors
+
+    def restore(self, row: TrialRow) -> Engine:
+        """The trial's engine, restored from its stored state."""
+        return Engine.from_json(
+            row.engine_state or "", self.ctx.rig, corrector=self.correctors(row.identity)
+        )
+
+    def start(self, db: Session, sess: SessionRow, position: int) -> ShownPopulation:
+        """Start the session's trial at ``position``: its generation 0 is made and stored."""
+        row = trial_at(db, sess.id, position)
+        if row is None:  # pragma: no cover - created with the session
+            raise SessionNotFound(f"trial {position + 1} does not exist")
+        engine = Engine(
+            self.ctx.config.ga_for(row.identity),
+            self.ctx.rig,
+            row.seed,
+            corrector=self.correctors(row.identity),
+        )
+        row.status = "active"
+        row.started_at = utcnow()
+        row.attempt = engine.trial
+        row.generation = engine.generation
+        shown = store_population(db, row, engine.ask())
+        row.engine_state = engine.to_json()
+        return shown
+
+
+def store_population(db: Session, trial: TrialRow, population: Population) -> ShownPopulation:
+    """Store a population about to be shown; returns it as the view shows it."""
+    pop = PopulationRow(
+        trial_id=trial.id,
+        attempt=population.trial,
+        generation=population.generation,
+        shown_at=utcnow(),
+    )
+    db.add(pop)
+    db.flush()
+    weights: list[list[float]] = full_weights(population).tolist()
+    db.execute(
+        insert(FaceRow),
+        [
+            {
+                "population_id": pop.id,
+                "position": i,
+                "face_id": int(population.ids[i]),
+                "parent_a": int(population.parent_ids[i, 0]),
+                "parent_b": int(population.parent_ids[i, 1]),
+                "operator": str(population.operators[i]),
+                "genes": dumps(population.genes[i].tolist()),
+                "weights": dumps(weights[i]),
+            }
+            for i in range(len(population))
+        ],
+    )
+    faces = [FaceView(id=int(i), weights=w) for i, w in zip(population.ids, weights, strict=True)]
+    return ShownPopulation(trial.id, population.trial, population.generation, faces)

@@ -1,0 +1,203 @@
+"""The participant's view of a session: the state the browser shows, as typed JSON.
+
+These TypedDicts are the browser contract: the web layer answers with them and its OpenAPI
+schema (and the JS types generated from it) are derived from them. A step that has just shown a
+population passes it in (:class:`ShownPopulation`) so it is not read back from the database.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import Literal, NotRequired
+from urllib.parse import quote
+
+from sqlalchemy.orm import Session
+from typing_extensions import TypedDict
+
+from emogen.study.config import StudyConfig
+from emogen.study.queries import final_face, n_trials, population_at, trial_at
+from emogen.study.tables import SessionRow, TrialRow
+
+Stage = Literal["instructions", "trial", "done"]
+TrialStatus = Literal["pending", "active", "rating", "done"]
+
+
+class Progress(TypedDict):
+    """Trial and generation shown (0-based) of how many."""
+
+    trial: int
+    trials: int
+    generation: int
+    generations: int
+
+
+class Limits(TypedDict):
+    """How many faces a selection takes (the elite included)."""
+
+    min_selections: int
+    max_selections: int
+
+
+class TrialView(TypedDict):
+    """The current trial: which emotion on which identity, and where it is."""
+
+    position: int
+    emotion: str
+    prompt: str
+    identity: str
+    attempt: int
+    status: TrialStatus
+
+
+class FaceView(TypedDict):
+    """A face: its engine id and full weights (shapes, then correctives) in GLB target order."""
+
+    id: int
+    weights: list[float]
+
+
+class PopulationView(TypedDict):
+    """The generation shown for selection."""
+
+    attempt: int
+    generation: int
+    faces: list[FaceView]
+
+
+class RatingView(TypedDict):
+    """The rating asked of the trial's final face."""
+
+    question: str
+    low_label: str
+    high_label: str
+    points: int
+    face: FaceView | None
+
+
+class Completion(TypedDict):
+    """What a participant sees at the end: a message, a code, a link back."""
+
+    message: str
+    code: str | None
+    redirect_url: str | None
+
+
+class SessionState(TypedDict):
+    """The participant's view of the session."""
+
+    stage: Stage
+    participant_id: str
+    progress: Progress
+    limits: Limits
+    allow_restart: bool
+    trial: TrialView | None
+    population: PopulationView | None
+    rating: RatingView | None
+    completion: Completion | None
+    #: true when the request's step key was already done (nothing was changed)
+    replayed: NotRequired[bool]
+
+
+@dataclass(frozen=True)
+class ShownPopulation:
+    """A population a step has just stored and shows, keyed by where it belongs."""
+
+    trial_id: int
+    attempt: int
+    generation: int
+    faces: list[FaceView]
+
+
+def completion(config: StudyConfig, participant_id: str) -> Completion:
+    """The end of the study, with the participant's code and redirect link filled in."""
+    c = config.completion
+    url = None
+    if c.redirect_url:
+        url = c.redirect_url.replace("{code}", quote(c.code or "", safe="")).replace(
+            "{participant}", quote(participant_id, safe="")
+        )
+    return {"message": c.message, "code": c.code, "redirect_url": url}
+
+
+def _face(face_id: int, weights_json: str) -> FaceView:
+    return {"id": face_id, "weights": json.loads(weights_json)}
+
+
+def _population(db: Session, row: TrialRow, shown: ShownPopulation | None) -> PopulationView | None:
+    if shown is not None and (shown.trial_id, shown.attempt, shown.generation) == (
+        row.id,
+        row.attempt,
+        row.generation,
+    ):
+        return {"attempt": shown.attempt, "generation": shown.generation, "faces": shown.faces}
+    pop = population_at(db, row.id, row.attempt, row.generation, with_faces=True)
+    if pop is None:
+        return None
+    faces = [_face(f.face_id, f.weights) for f in pop.faces]
+    return {"attempt": pop.attempt, "generation": pop.generation, "faces": faces}
+
+
+def _rating(db: Session, config: StudyConfig, row: TrialRow) -> RatingView:
+    face = final_face(db, row)
+    r = config.rating
+    return {
+        "question": r.question,
+        "low_label": r.low_label,
+        "high_label": r.high_label,
+        "points": r.points,
+        "face": None if face is None else _face(face.face_id, face.weights),
+    }
+
+
+def session_state(
+    db: Session, config: StudyConfig, sess: SessionRow, shown: ShownPopulation | None = None
+) -> SessionState:
+    """The session as the participant sees it now (``shown``: a population just stored)."""
+    trials = n_trials(sess)
+    generations = config.ga.generations
+    stage: Stage = (
+        "done" if sess.stage == "done" else "trial" if sess.stage == "trial" else "instructions"
+    )
+    state: SessionState = {
+        "stage": stage,
+        "participant_id": sess.participant_id,
+        "progress": {
+            "trial": sess.current_trial,
+            "trials": trials,
+            "generation": 0,
+            "generations": generations,
+        },
+        "limits": {
+            "min_selections": config.ga.min_selections,
+            "max_selections": config.ga.max_selections,
+        },
+        "allow_restart": config.allow_restart,
+        "trial": None,
+        "population": None,
+        "rating": None,
+        "completion": None,
+    }
+    if stage == "done":
+        state["completion"] = completion(config, sess.participant_id)
+        state["progress"]["trial"] = trials - 1
+        state["progress"]["generation"] = generations
+        return state
+    row = trial_at(db, sess.id, sess.current_trial) if stage == "trial" else None
+    if row is None:
+        return state
+    status: TrialStatus = row.status  # type: ignore[assignment]  # a stored TrialStatus
+    state["trial"] = {
+        "position": row.position,
+        "emotion": row.emotion,
+        "prompt": config.prompt_for(row.emotion),
+        "identity": row.identity,
+        "attempt": row.attempt,
+        "status": status,
+    }
+    state["progress"]["generation"] = row.generation
+    if row.status == "active":
+        state["population"] = _population(db, row, shown)
+    elif row.status == "rating":
+        state["rating"] = _rating(db, config, row)
+    return state

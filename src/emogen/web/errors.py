@@ -1,0 +1,68 @@
+"""The web layer's error answers: every error is JSON ``{"detail": str}`` (a 422 adds ``errors``).
+
+:func:`install_error_handlers` maps the core's :class:`~emogen.errors.EmoGenError` to 4xx/503,
+request validation to 422 and database conflicts / busy databases to 409 / 503.
+"""
+
+from __future__ import annotations
+
+import logging
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from sqlalchemy.exc import IntegrityError, OperationalError
+
+from emogen.errors import EmoGenError, ModelFileError
+from emogen.study.errors import StudyError
+from emogen.web.schemas import FieldError, InvalidRequest, Problem
+
+log = logging.getLogger("emogen.web")
+
+
+def status_for(exc: EmoGenError) -> int:
+    if isinstance(exc, StudyError):
+        return exc.status
+    if isinstance(exc, ModelFileError):
+        return 503
+    return 422  # SelectionError, ConfigError, ShapeError: the request's values break a rule
+
+
+def invalid_request(exc: RequestValidationError) -> InvalidRequest:
+    """The 422 body: one message naming the bad values, and the first ten broken rules."""
+    errors = [
+        FieldError(
+            loc=[str(p) for p in err.get("loc", ())],
+            msg=str(err.get("msg", "")),
+            type=str(err.get("type", "")),
+        )
+        for err in exc.errors()[:10]
+    ]
+    parts = []
+    for err in errors[:5]:
+        loc = ".".join(p for p in err.loc if p != "body")
+        parts.append(f"{loc or 'request'}: {err.msg or 'invalid'}")
+    return InvalidRequest(detail="invalid request: " + "; ".join(parts), errors=errors)
+
+
+def problem(status: int, detail: str) -> JSONResponse:
+    return JSONResponse(Problem(detail=detail).model_dump(), status_code=status)
+
+
+def install_error_handlers(app: FastAPI) -> None:
+    @app.exception_handler(EmoGenError)
+    async def emogen_error(_request: Request, exc: EmoGenError) -> JSONResponse:
+        return problem(status_for(exc), str(exc))
+
+    @app.exception_handler(RequestValidationError)
+    async def invalid(_request: Request, exc: RequestValidationError) -> JSONResponse:
+        return JSONResponse(invalid_request(exc).model_dump(), status_code=422)
+
+    @app.exception_handler(IntegrityError)
+    async def integrity(_request: Request, _exc: IntegrityError) -> JSONResponse:
+        return problem(409, "this step was already recorded by another request; reload the page")
+
+    @app.exception_handler(OperationalError)
+    async def busy(_request: Request, exc: OperationalError) -> JSONResponse:
+        log.warning("database error: %s", exc)
+        return problem(503, "the database is busy; try again in a moment")

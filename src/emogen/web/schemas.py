@@ -1,0 +1,105 @@
+"""The participant API's bodies: requests (strict pydantic models), responses, error bodies.
+
+The session state is :class:`emogen.study.view.SessionState` (a TypedDict the study core
+answers with); pydantic derives its schema, so the OpenAPI document and the JS types generated
+from it (``src/emogen/web/static/api-types.d.ts``) follow the core's view.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from emogen.study.view import SessionState
+
+#: A client-made key per step (e.g. a UUID); the same key again is the same step.
+StepKey = Annotated[str, Field(pattern=r"^[A-Za-z0-9_-]{8,64}$")]
+Index = Annotated[int, Field(ge=0, le=100_000)]
+FaceId = Annotated[int, Field(ge=0, le=2**31 - 1)]
+Millis = Annotated[float, Field(ge=0, le=86_400_000, allow_inf_nan=False)]
+TOKEN_PATTERN = r"^[A-Za-z0-9_-]{16,64}$"
+#: The largest request body the API reads (bytes); a larger one is answered 413.
+MAX_BODY_BYTES = 64 * 1024
+
+
+class _Body(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+
+class NewSession(_Body):
+    participant_id: Annotated[str, Field(max_length=128)] | None = None
+    #: The token this browser holds for the participant's session, to resume it.
+    resume_token: Annotated[str, Field(pattern=TOKEN_PATTERN)] | None = None
+
+
+class Begin(_Body):
+    key: StepKey
+
+
+class Selection(_Body):
+    key: StepKey
+    trial: Index
+    attempt: Index
+    generation: Index
+    elite: FaceId
+    others: Annotated[list[FaceId], Field(max_length=100)] = []
+    response_ms: Millis | None = None
+
+
+class Restart(_Body):
+    key: StepKey
+    trial: Index
+    attempt: Index
+    generation: Index
+    response_ms: Millis | None = None
+
+
+class Rating(_Body):
+    key: StepKey
+    trial: Index
+    value: Annotated[int, Field(ge=1, le=11)]
+    response_ms: Millis | None = None
+
+
+class Created(BaseModel):
+    """A session made (or resumed): its secret token, its page and its state."""
+
+    token: str
+    url: str
+    state: SessionState
+
+
+class Problem(BaseModel):
+    """An error: what went wrong and what to do, in one sentence for people."""
+
+    detail: str
+
+
+class FieldError(BaseModel):
+    """One rule a request broke: where (``loc``), what (``msg``) and its kind (``type``)."""
+
+    loc: list[str]
+    msg: str
+    type: str
+
+
+class InvalidRequest(Problem):
+    """A request whose values break a rule (HTTP 422): the message, then each broken rule."""
+
+    errors: list[FieldError] = []
+
+
+ERRORS: dict[int, tuple[type[BaseModel], str]] = {
+    403: (Problem, "Researcher endpoints without the right token (or disabled)."),
+    404: (Problem, "No session with this token, or no such face now."),
+    409: (Problem, "The request does not fit the session now (stale page, reused step key)."),
+    413: (Problem, f"The request body is larger than {MAX_BODY_BYTES} bytes."),
+    422: (InvalidRequest, "The request's values break a rule (the message names the value)."),
+    503: (Problem, "The server is busy or shutting down; try again in a moment."),
+}
+
+
+def error_responses(*codes: int) -> dict[int | str, dict[str, Any]]:
+    """OpenAPI ``responses`` entries of these error codes, each with its body model."""
+    return {code: {"model": ERRORS[code][0], "description": ERRORS[code][1]} for code in codes}
