@@ -197,7 +197,7 @@ class Store:
     def migrate(self) -> None:
         from emogen.study.migrations import upgrade
 
-        upgrade(self)
+        upgrade(self._write_engine)
 
     @contextmanager
     def read(self) -> Iterator[Session]:

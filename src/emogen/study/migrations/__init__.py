@@ -13,8 +13,7 @@ from sqlalchemy import text
 
 if TYPE_CHECKING:
     from alembic.config import Config
-
-    from emogen.study.storage import Store
+    from sqlalchemy.engine import Engine
 
 HERE = Path(__file__).resolve().parent
 # Serialises concurrent upgrades on PostgreSQL (two servers starting at once).
@@ -29,12 +28,14 @@ def alembic_config() -> Config:
     return cfg
 
 
-def upgrade(store: Store, revision: str = "head") -> None:
-    """Bring the store's schema to ``revision`` (default: the newest)."""
+def upgrade(engine: Engine, revision: str = "head") -> None:
+    """Bring the database's schema to ``revision`` (default: the newest).
+
+    engine : the store's writing engine (``BEGIN IMMEDIATE`` on SQLite).
+    """
     from alembic import command
 
     cfg = alembic_config()
-    engine = store._write_engine  # BEGIN IMMEDIATE on SQLite
     with engine.begin() as conn:
         if conn.dialect.name == "postgresql":
             conn.execute(text("SELECT pg_advisory_xact_lock(:k)"), {"k": _PG_LOCK_ID})
@@ -42,8 +43,9 @@ def upgrade(store: Store, revision: str = "head") -> None:
         command.upgrade(cfg, revision)
 
 
-def current_revision(store: Store) -> str | None:
+def current_revision(engine: Engine) -> str | None:
+    """The database's schema revision (None before the first migration)."""
     from alembic.runtime.migration import MigrationContext
 
-    with store.engine.connect() as conn:
+    with engine.connect() as conn:
         return MigrationContext.configure(conn).get_current_revision()
