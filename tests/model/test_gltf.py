@@ -26,7 +26,7 @@ from emogen.model.io.gltf_asset import CM_TO_M, ICT_COPYRIGHT
 from emogen.model.io.gltf_import import import_glb
 from emogen.model.io.obj import parse_topology, parse_vertices
 from emogen.model.regions import ICT_VISIBLE_PARTS
-from emogen.model.rig import generic_rig
+from emogen.model.rig_build import generic_rig
 from emogen.render.model_glb import SKIN_REGIONS, ExportReport, export_model_glb
 
 REPO = Path(__file__).resolve().parents[2]

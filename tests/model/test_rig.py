@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from emogen.errors import ConfigError, ShapeError
-from emogen.model.rig import load_rig
+from emogen.model.rig_build import load_rig
 
 
 def test_gene_space_of_ict(ict_model) -> None:

@@ -26,7 +26,7 @@ def test_weights_from_shape_and_gene_columns(ict_model) -> None:
     np.testing.assert_array_equal(w, expect)
     with pytest.raises(ConfigError, match="no column is a shape or gene name"):
         weights_from_table(pd.DataFrame({"x": [1.0]}), rig)
-    with pytest.raises(ConfigError, match="'jawOpen' has missing"):
+    with pytest.raises(ConfigError, match="column 'jawOpen' row 2: empty or missing"):
         weights_from_table(pd.DataFrame({"jawOpen": [0.1, None]}), rig)
 
 

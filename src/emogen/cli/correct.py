@@ -12,7 +12,6 @@ import numpy as np
 import typer
 
 from emogen.cli.options import IdentityOpt, ModelOpt, RigOpt, friendly_errors
-from emogen.errors import ConfigError
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -25,42 +24,13 @@ STATUS_COLUMNS = ("collision_detected", "collision_remaining", "collision_iterat
 def read_weights_csv(path: Path, model: FaceModel) -> tuple[np.ndarray, pd.DataFrame]:
     """A CSV of faces (one per row; columns = shape or gene names) → weights (B, S).
 
-    Shapes without a column are 0. An unknown column, a non-number or a value outside [0, 1]
-    is a ConfigError naming it.
+    Shapes without a column are 0. An unknown column, an empty cell, a non-number or a value
+    outside [0, 1] is an error naming it (:func:`emogen.model.face_table.read_face_table`).
     """
-    import pandas as pd
+    from emogen.model.face_table import read_face_table
 
-    try:
-        frame = pd.read_csv(path)
-    except FileNotFoundError:
-        raise ConfigError(f"input CSV not found: {path}") from None
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"cannot read {path} as CSV: {exc}") from None
-    rig = model.rig
-    shapes = {s: i for i, s in enumerate(model.shape_names)}
-    genes = {g.name: g.shapes for g in rig.genes}
-    weights = np.zeros((len(frame), model.n_shapes))
-    for column in frame.columns:
-        name = str(column).strip()
-        if name in shapes:
-            targets = [shapes[name]]
-        elif name in genes:
-            targets = [shapes[s] for s in genes[name]]
-        else:
-            raise ConfigError(
-                f"{path}: unknown column '{name}'; columns must be shape (or gene) names of "
-                f"model '{model.name}': {', '.join(model.shape_names)}"
-            )
-        values = pd.to_numeric(frame[column], errors="coerce").to_numpy(dtype=np.float64)
-        bad = np.flatnonzero(~np.isfinite(values) | (values < 0) | (values > 1))
-        if len(bad):
-            row = int(bad[0])
-            raise ConfigError(
-                f"{path}: column '{name}' row {row + 1}: weight must be a number in [0, 1]; "
-                f"got {frame[column].iloc[row]!r}"
-            )
-        weights[:, targets] = values[:, None]
-    return weights, frame
+    table = read_face_table(path, model.rig, what="input CSV", others="error", unit_range=True)
+    return table.weights, table.frame
 
 
 def correct_csv(

@@ -26,7 +26,7 @@ def load_model(
     from emogen.model.io import cache
     from emogen.model.io.ict import load_ict_folder
     from emogen.model.locate import find_model
-    from emogen.model.rig import load_rig
+    from emogen.model.rig_build import load_rig
 
     where = find_model(path)
     rig_path = Path(rig) if rig is not None else None

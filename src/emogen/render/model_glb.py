@@ -38,6 +38,7 @@ from emogen.render.morph_targets import (
     CORRECTIVE_NORMAL_TOLERANCE,
     CORRECTIVE_TOLERANCE_CM,
     EncodedTargets,
+    MorphTargets,
     float32,
     max_errors,
     morph_targets,
@@ -164,7 +165,6 @@ def export_model_glb(
         corrective_normals=corrective_normals,
     )
     enc = quantized(targets, corrective_tolerance_cm) if quantize else float32(targets)
-    max_err, max_corrective_err = max_errors(targets, enc)
     names = targets.corrective_names
     b = GlbBuilder()
     mesh: dict[str, Any] = {
@@ -174,18 +174,8 @@ def export_model_glb(
     if model.n_shapes:
         mesh["weights"] = [0.0] * targets.n_targets
         mesh["extras"] = {"targetNames": [*model.shape_names, *names]}
-    gaze = gaze_extras(model)
-    extras: dict[str, Any] = {
-        "shape_names": list(model.shape_names),
-        **({"corrective_names": list(names)} if names else {}),
-        "position_step_cm": enc.step,
-        **({"gaze": gaze} if gaze else {}),
-        **({"camera": _camera_extras(camera)} if camera is not None else {}),
-    }
-    if textures is not None:
-        extras["appearance"] = textures.appearance.record()
     doc: dict[str, Any] = {
-        "asset": asset_header(model, layout, extras),
+        "asset": asset_header(model, layout, _emogen_extras(model, names, enc, textures, camera)),
         "scene": 0,
         "scenes": [{"name": model.name, "nodes": [0]}],
         "nodes": [{"name": model.name, "mesh": 0, **enc.node}],
@@ -195,6 +185,43 @@ def export_model_glb(
     _declare_extensions(doc, b, model, layout, quantize, textures)
     data = b.finish(doc)
     write_file(path, data)
+    return _report(path, data, model, layout, targets, enc, quantize, corrective_tolerance_cm)
+
+
+def _emogen_extras(
+    model: FaceModel,
+    corrective_names: tuple[str, ...],
+    enc: EncodedTargets,
+    textures: SkinTextures | None,
+    camera: Camera | None,
+) -> dict[str, Any]:
+    """EmoGen's entries of ``asset.extras.emogen`` (before the textures' indices are added)."""
+    gaze = gaze_extras(model)
+    extras: dict[str, Any] = {
+        "shape_names": list(model.shape_names),
+        **({"corrective_names": list(corrective_names)} if corrective_names else {}),
+        "position_step_cm": enc.step,
+        **({"gaze": gaze} if gaze else {}),
+        **({"camera": _camera_extras(camera)} if camera is not None else {}),
+    }
+    if textures is not None:
+        extras["appearance"] = textures.appearance.record()
+    return extras
+
+
+def _report(
+    path: Path,
+    data: bytes,
+    model: FaceModel,
+    layout: ExportLayout,
+    targets: MorphTargets,
+    enc: EncodedTargets,
+    quantize: bool,
+    corrective_tolerance_cm: float,
+) -> ExportReport:
+    """What was written to ``path`` (``data``): sizes, counts and the encoding's errors."""
+    max_err, max_corrective_err = max_errors(targets, enc)
+    names = targets.corrective_names
     return ExportReport(
         path=path,
         raw_bytes=len(data),

@@ -18,21 +18,8 @@ import pandas as pd
 
 from emogen.config import SimulationConfig
 from emogen.errors import ConfigError
+from emogen.model.face_table import face_weights, read_face_table, read_table
 from emogen.model.rig import Rig
-
-
-def read_table(path: Path) -> pd.DataFrame:
-    """A Parquet (.parquet, .pq) or CSV (.csv) table."""
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix not in (".parquet", ".pq", ".csv"):
-        raise ConfigError(f"face table {path}: expected a .parquet or .csv file; got '{suffix}'")
-    try:
-        return pd.read_parquet(path) if suffix != ".csv" else pd.read_csv(path)
-    except FileNotFoundError:
-        raise ConfigError(f"face table {path} does not exist") from None
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"cannot read face table {path}: {exc}") from None
 
 
 def file_digest(path: Path) -> str:
@@ -46,36 +33,12 @@ def file_digest(path: Path) -> str:
 
 def weights_from_table(table: pd.DataFrame, rig: Rig, source: str = "table") -> np.ndarray:
     """(n_rows, n_shapes) full weights from a table's shape- and gene-name columns."""
-    shapes = {s: i for i, s in enumerate(rig.shape_names)}
-    genes = {g.name: [shapes[s] for s in g.shapes] for g in rig.genes}
-    used = [c for c in table.columns if c in shapes or c in genes]
-    if not used:
-        raise ConfigError(
-            f"{source}: no column is a shape or gene name of rig '{rig.name}' (e.g. "
-            f"{', '.join(rig.shape_names[:3])}); columns are: {', '.join(map(str, table.columns))}"
-        )
-    w = np.zeros((len(table), len(rig.shape_names)))
-    for c in used:
-        values = pd.to_numeric(table[c], errors="coerce").to_numpy(dtype=np.float64)
-        if not np.all(np.isfinite(values)):
-            raise ConfigError(f"{source}: column '{c}' has missing or non-numeric values")
-        w[:, genes[c] if c in genes else [shapes[c]]] = values[:, None]
-    return w
+    return face_weights(table, rig, source).weights
 
 
 def read_faces(path: Path, rig: Rig, *, query: str | None = None) -> np.ndarray:
     """Full weights of every face (row) of a table, optionally filtered by a pandas query."""
-    table = read_table(path)
-    if query:
-        try:
-            table = table.query(query)
-        except Exception as exc:  # pandas raises many kinds for a bad expression
-            raise ConfigError(f"query {query!r} on {path} failed: {exc}") from None
-    if len(table) == 0:
-        raise ConfigError(
-            f"face table {path} has no rows{' matching ' + repr(query) if query else ''}"
-        )
-    return weights_from_table(table, rig, str(path))
+    return read_face_table(path, rig, query=query).weights
 
 
 @dataclass(frozen=True)
@@ -93,7 +56,7 @@ def resolve_target(config: SimulationConfig, rig: Rig) -> Target:
     path = config.target_file
     if path is None:  # the config's validator rules this out
         raise ConfigError("a simulation needs target or target_file")
-    table = read_table(path)
+    table = read_table(path, what="target_file")
     row = config.target_row
     if row is None:
         if len(table) != 1:

@@ -24,7 +24,8 @@ from emogen.model.io.glb import Gltf, read_gltf
 from emogen.model.io.ict import ModelArrays, model_content_hash
 from emogen.model.io.obj import ObjTopology
 from emogen.model.regions import Region
-from emogen.model.rig import Rig, generic_rig, load_rig
+from emogen.model.rig import Rig
+from emogen.model.rig_build import generic_rig, load_rig
 
 log = logging.getLogger(__name__)
 M_TO_CM = 100.0
@@ -348,7 +349,7 @@ def import_glb(
     """Read a GLB/glTF with named morph targets as a FaceModel (centimetres).
 
     ``rig``: a rig TOML; by default the packaged ICT rig when the target names are ICT-FaceKit's,
-    else :func:`~emogen.model.rig.generic_rig` (left/right twins paired).
+    else :func:`~emogen.model.rig_build.generic_rig` (left/right twins paired).
     """
     path = Path(path)
     g = read_gltf(path)
