@@ -7,6 +7,8 @@ request validation to 422 and database conflicts / busy databases to 409 / 503.
 from __future__ import annotations
 
 import logging
+from collections.abc import Mapping
+from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -39,10 +41,21 @@ def invalid_request(exc: RequestValidationError) -> InvalidRequest:
         for err in exc.errors()[:10]
     ]
     parts = []
-    for err in errors[:5]:
+    for err, raw in zip(errors[:5], exc.errors()[:5], strict=True):
         loc = ".".join(p for p in err.loc if p != "body")
-        parts.append(f"{loc or 'request'}: {err.msg or 'invalid'}")
+        parts.append(f"{loc or 'request'}: {err.msg or 'invalid'}{_got(raw)}")
     return InvalidRequest(detail="invalid request: " + "; ".join(parts), errors=errors)
+
+
+def _got(err: Mapping[str, Any]) -> str:
+    """``; got <value>`` for a short, plain bad value (never a whole body or a missing one)."""
+    if err.get("type") == "missing" or "input" not in err:
+        return ""
+    value = err["input"]
+    if isinstance(value, dict | list) or value is None:
+        return ""
+    text = repr(value)
+    return f"; got {text}" if len(text) <= 60 else f"; got {text[:57]}..."
 
 
 def problem(status: int, detail: str) -> JSONResponse:
