@@ -1,4 +1,4 @@
-"""Study commands: ``emogen study status|export`` and ``emogen replay``.
+"""Study commands: ``emogen study status|export|resume-link`` and ``emogen replay``.
 
 ``study_app`` is a Typer sub-app; ``replay_command`` is a plain function for the top-level app
 (``app.command("replay")(replay_command)``). ``emogen serve`` is :mod:`emogen.cli.serve`.
@@ -54,11 +54,12 @@ def status(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
 ) -> None:
     """Sessions by stage, trials done and selections made, per study in the database."""
-    from emogen.study.export import session_progress, study_status
+    from emogen.study.export import study_status
+    from emogen.study.progress import progress_as_shown
 
     store = _store(database_url, config)
     studies = study_status(store)
-    lines = session_progress(store) if sessions else []
+    lines = progress_as_shown(store) if sessions else []
     if as_json:
         typer.echo(json.dumps({"studies": studies, "sessions": lines}, indent=2))
         return
@@ -74,8 +75,7 @@ def status(
     for line in lines:
         typer.echo(
             f"  session {line['session_id']:>5}  {line['participant_id']:<24} {line['stage']:<12} "
-            f"trial {line['trial']}/{line['trials']}  generation {line['generation']}  "
-            f"updated {line['updated_at']}"
+            f"{line['step']:<34} updated {line['updated_at']}"
         )
     store.dispose()
 
@@ -104,6 +104,43 @@ def export(
     for path in paths:
         typer.echo(f"wrote {path} ({len(tables[path.stem])} rows)")
     store.dispose()
+
+
+BASE_URL_ENV = "EMOGEN_BASE_URL"
+
+
+@study_app.command("resume-link")
+@friendly_errors
+def resume_link(
+    participant: Annotated[str, typer.Argument(help="The participant id (as in the study link).")],
+    database_url: DatabaseOpt = None,
+    base_url: Annotated[
+        str | None,
+        typer.Option(
+            "--base-url",
+            help="The server's public address, e.g. https://study.example.org (default: "
+            "$EMOGEN_BASE_URL, then http://127.0.0.1:8000 as `emogen serve` listens).",
+        ),
+    ] = None,
+    study: Annotated[
+        str | None, typer.Option("--study", help="The study's name (when the id is in several).")
+    ] = None,
+    config: Annotated[
+        Path | None, typer.Option("--config", help="Study TOML (for its database_url).")
+    ] = None,
+) -> None:
+    """Print a participant's personal session link, to give back to them (exit 2 if none)."""
+    import os
+
+    from emogen.study.progress import participant_token, session_link
+
+    store = _store(database_url, config)
+    try:
+        token = participant_token(store, participant, study=study)
+    finally:
+        store.dispose()
+    base = base_url or os.environ.get(BASE_URL_ENV) or "http://127.0.0.1:8000"
+    typer.echo(session_link(base, token))
 
 
 @friendly_errors

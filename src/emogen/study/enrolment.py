@@ -110,8 +110,9 @@ def create_session(
         if existing is not None:
             if resume_token is None or not secrets.compare_digest(existing.token, resume_token):
                 raise StepConflict(
-                    f"participant '{pid}' already has a session in this "
-                    "study; reopen the link you were given (it holds your session)"
+                    f"participant '{pid}' already has a session in this study: open your "
+                    "personal session link (shown on the first page of your session), or ask "
+                    "the researcher for it"
                 )
         else:
             existing = _new_session(db, ctx, pid, source, user_agent)

@@ -17,8 +17,9 @@ from emogen.ga.engine import Engine
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig, check_identities
 from emogen.study.context import StudyContext, register_study
-from emogen.study.enrolment import PARTICIPANT_ID, create_session
+from emogen.study.enrolment import PARTICIPANT_ID, checked_participant, create_session
 from emogen.study.errors import SessionNotFound
+from emogen.study.progress import participant_token
 from emogen.study.queries import current_face, session_by_token
 from emogen.study.steps import Payload, SessionSteps, request_hash
 from emogen.study.storage import Store
@@ -115,6 +116,11 @@ class StudyService:
             lambda db, sess: self.steps.rate(db, sess, key=key, trial=trial, value=value,
                                              response_ms=response_ms),
         )  # fmt: skip
+
+    def participant_token(self, participant_id: str) -> str:
+        """The token of the participant's session in this study (404 when there is none)."""
+        checked_participant(participant_id)  # a bad id is named as such
+        return participant_token(self.store, participant_id, study_id=self.ctx.study_id)
 
     def completion(self, participant_id: str) -> Completion:
         return completion(self.ctx.config, participant_id)

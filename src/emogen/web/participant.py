@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import re
 from typing import Annotated, Any
+from urllib.parse import quote
 
 from fastapi import APIRouter, HTTPException, Path, Request
-from fastapi.responses import HTMLResponse, JSONResponse, Response
+from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse, Response
 
+from emogen.study.errors import StudyError
 from emogen.study.sessions import StudyService
 from emogen.study.view import SessionState
 from emogen.web.schemas import (
@@ -49,9 +52,43 @@ def landing(request: Request) -> HTMLResponse:
     return _page(request, "landing.html")
 
 
-@router.get("/s/{token}", response_class=HTMLResponse, include_in_schema=False)
-def session_page(request: Request, token: Token) -> HTMLResponse:
-    _service(request).state(token)  # 404 for an unknown token
+LINK_ADVICE = (
+    "Check that you opened the whole link you were given (copied links are sometimes cut "
+    "short), or open the study link you were given to start.",
+    "If you have already started, ask the researcher for your personal session link: it "
+    "brings you back to where you were.",
+)
+
+
+def link_error(request: Request, status: int, detail: str) -> HTMLResponse:
+    """A participant-facing HTML page for a session link that leads nowhere."""
+    response = _page(
+        request,
+        "error.html",
+        heading="This session link is not valid",
+        detail=detail,
+        advice=LINK_ADVICE,
+    )
+    response.status_code = status
+    return response
+
+
+@router.get("/s/{link}", response_class=HTMLResponse, include_in_schema=False)
+def session_page(request: Request, link: str) -> Response:
+    """The session page. ``/s/TOKEN&render=png`` (``&`` typed for ``?``) is sent on to
+    ``/s/TOKEN?render=png``; an unknown link gets a friendly HTML page, not JSON."""
+    token, amp, rest = link.partition("&")
+    if amp:
+        query = "&".join(q for q in (rest, request.url.query) if q)
+        target = f"/s/{quote(token, safe='')}" + (f"?{query}" if query else "")
+        return RedirectResponse(target, status_code=307)
+    if not re.fullmatch(TOKEN_PATTERN, token):
+        shown = token if len(token) <= 40 else token[:37] + "..."
+        return link_error(request, 404, f"“{shown}” is not a session link of this study.")
+    try:
+        _service(request).state(token)
+    except StudyError as exc:  # unknown token (404), a session of an older config (409)
+        return link_error(request, exc.status, str(exc))
     return _page(request, "session.html", token=token)
 
 

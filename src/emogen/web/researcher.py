@@ -8,9 +8,11 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, Path, Request
 from fastapi.responses import HTMLResponse, Response
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+from pydantic import BaseModel, Field
 
 from emogen.study.errors import Forbidden
-from emogen.study.export import TABLES, export_tables, session_progress, study_status
+from emogen.study.export import TABLES, export_tables, study_status
+from emogen.study.progress import progress_as_shown
 from emogen.web.schemas import error_responses
 
 router = APIRouter()
@@ -51,8 +53,35 @@ def status(request: Request, _auth: Researcher) -> dict[str, Any]:
         "study": service.ctx.config.name,
         "study_id": service.ctx.study_id,
         "studies": study_status(store),
-        "sessions": session_progress(store, service.ctx.study_id),
+        "sessions": progress_as_shown(store, service.ctx.study_id),
     }
+
+
+class ResumeLink(BaseModel):
+    """A participant's personal session link (the same link each time it is asked for)."""
+
+    participant_id: str
+    path: str = Field(description="/s/<token>: the session page, relative to the server.")
+    url: str = Field(description="The link as this request reached the server.")
+
+
+@router.get(
+    "/api/researcher/participants/{participant_id}/link",
+    response_model=ResumeLink,
+    responses=error_responses(403, 404, 422, 503),
+)
+def resume_link(
+    request: Request,
+    _auth: Researcher,
+    participant_id: Annotated[str, Path(max_length=128, description="The participant id.")],
+) -> ResumeLink:
+    """The participant's personal session link, to give back to them (another browser or
+    device reaches the session only with it)."""
+    token = request.app.state.service.participant_token(participant_id)
+    path = f"/s/{token}"
+    return ResumeLink(
+        participant_id=participant_id, path=path, url=str(request.base_url).rstrip("/") + path
+    )
 
 
 @router.get(

@@ -45,6 +45,27 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/researcher/participants/{participant_id}/link": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Resume Link
+         * @description The participant's personal session link, to give back to them (another browser or
+         *     device reaches the session only with it).
+         */
+        get: operations["resume_link_api_researcher_participants__participant_id__link_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/researcher/status": {
         parameters: {
             query?: never;
@@ -362,6 +383,24 @@ export interface components {
             /** Trial */
             trial: number;
         };
+        /**
+         * ResumeLink
+         * @description A participant's personal session link (the same link each time it is asked for).
+         */
+        ResumeLink: {
+            /** Participant Id */
+            participant_id: string;
+            /**
+             * Path
+             * @description /s/<token>: the session page, relative to the server.
+             */
+            path: string;
+            /**
+             * Url
+             * @description The link as this request reached the server.
+             */
+            url: string;
+        };
         /** Selection */
         Selection: {
             /** Attempt */
@@ -506,6 +545,65 @@ export interface operations {
             };
             /** @description Researcher endpoints without the right token (or disabled). */
             403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The request's values break a rule (the message names the value). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["InvalidRequest"];
+                };
+            };
+            /** @description The server is busy or shutting down; try again in a moment. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+        };
+    };
+    resume_link_api_researcher_participants__participant_id__link_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description The participant id. */
+                participant_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ResumeLink"];
+                };
+            };
+            /** @description Researcher endpoints without the right token (or disabled). */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description No session with this token, or no such face now. */
+            404: {
                 headers: {
                     [name: string]: unknown;
                 };

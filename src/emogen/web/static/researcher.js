@@ -8,6 +8,41 @@ function headers() {
   return { Authorization: `Bearer ${token}` };
 }
 
+// Generations numbered as the participant's page shows them: "Generation 3 of 11", "Rating".
+function shownGeneration(s) {
+  if (s.stage !== "trial") return "";
+  if (s.generation_shown == null) return "rating";
+  return `${s.generation_shown} of ${s.generations_shown}`;
+}
+
+// The participant's personal session link, fetched only when asked for (never in the table).
+function linkCell(participant) {
+  const td = document.createElement("td");
+  const button = document.createElement("button");
+  button.type = "button";
+  button.className = "link";
+  button.textContent = "show link";
+  button.addEventListener("click", async () => {
+    try {
+      const link = await api(
+        `/api/researcher/participants/${encodeURIComponent(participant)}/link`,
+        { headers: headers(), retries: 0 },
+      );
+      const field = document.createElement("input");
+      field.type = "text";
+      field.readOnly = true;
+      field.value = link.url;
+      field.setAttribute("aria-label", `session link of ${participant}`);
+      td.replaceChildren(field);
+      field.select();
+    } catch (err) {
+      $("message").textContent = err.message;
+    }
+  });
+  td.appendChild(button);
+  return td;
+}
+
 async function refresh() {
   try {
     const status = await api("/api/researcher/status", { headers: headers(), retries: 0 });
@@ -22,12 +57,13 @@ async function refresh() {
     body.replaceChildren();
     for (const s of status.sessions) {
       const tr = document.createElement("tr");
-      for (const v of [s.session_id, s.participant_id, s.stage, `${s.trial} / ${s.trials}`,
-        s.generation ?? "", s.attempt ?? "", s.created_at, s.updated_at]) {
+      for (const v of [s.session_id, s.participant_id, s.stage, `${s.trial} of ${s.trials}`,
+        shownGeneration(s), s.attempt ?? "", s.created_at, s.updated_at]) {
         const td = document.createElement("td");
         td.textContent = String(v);
         tr.appendChild(td);
       }
+      tr.appendChild(linkCell(s.participant_id));
       body.appendChild(tr);
     }
     $("sessions").hidden = false;
