@@ -15,9 +15,26 @@ function shownGeneration(s) {
   return `${s.generation_shown} of ${s.generations_shown}`;
 }
 
-// The participant's personal session link, fetched only when asked for (never in the table).
+// The participant's personal session link, fetched only when asked for (never in the table);
+// links shown stay shown when the table refreshes.
+const shownLinks = new Map();
+
+function linkField(td, participant, url) {
+  const field = document.createElement("input");
+  field.type = "text";
+  field.readOnly = true;
+  field.value = url;
+  field.setAttribute("aria-label", `session link of ${participant}`);
+  td.replaceChildren(field);
+  return field;
+}
+
 function linkCell(participant) {
   const td = document.createElement("td");
+  if (shownLinks.has(participant)) {
+    linkField(td, participant, shownLinks.get(participant));
+    return td;
+  }
   const button = document.createElement("button");
   button.type = "button";
   button.className = "link";
@@ -28,13 +45,8 @@ function linkCell(participant) {
         `/api/researcher/participants/${encodeURIComponent(participant)}/link`,
         { headers: headers(), retries: 0 },
       );
-      const field = document.createElement("input");
-      field.type = "text";
-      field.readOnly = true;
-      field.value = link.url;
-      field.setAttribute("aria-label", `session link of ${participant}`);
-      td.replaceChildren(field);
-      field.select();
+      shownLinks.set(participant, link.url);
+      linkField(td, participant, link.url).select();
     } catch (err) {
       $("message").textContent = err.message;
     }

@@ -1,0 +1,51 @@
+# ruff: noqa: F811  (pytest fixtures imported by name, then requested by name)
+"""The researcher dashboard in Chromium: generations numbered as the participant's page does,
+and a participant's session link shown on request."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+from benchmarks.bench_study import ServerProcess, write_study_toml
+
+from tests.study.drive import new_key
+from tests.study_fixtures import db_url, pg_cluster  # noqa: F401
+from tests.web.test_study_browser import BROWSER_STUDY, browser  # noqa: F401
+
+pytestmark = [pytest.mark.browser, pytest.mark.slow]
+
+
+@pytest.fixture
+def server(db_url: str, tmp_path: Path, ict_dir: Path) -> Iterator[ServerProcess]:
+    config = write_study_toml(BROWSER_STUDY, tmp_path / "dash.toml")
+    srv = ServerProcess(config, db_url, ict_dir, tmp_path / "server.log").start()
+    yield srv
+    srv.stop()
+
+
+@pytest.mark.parametrize("db_url", ["sqlite"], indirect=True)
+def test_dashboard_shows_the_participants_numbers_and_links(
+    server: ServerProcess, browser: Any
+) -> None:
+    created = httpx.post(f"{server.url}/api/sessions", json={"participant_id": "DASH-1"}).json()
+    token = created["token"]
+    httpx.post(f"{server.url}/api/s/{token}/begin", json={"key": new_key()}).raise_for_status()
+    page = browser.new_page()
+    page.goto(f"{server.url}/researcher")
+    page.fill("#token", "bench-token")
+    page.click("#token-form button")
+    row = page.locator("#sessions tbody tr", has_text="DASH-1")
+    row.wait_for(timeout=20_000)
+    cells = row.locator("td").all_inner_texts()
+    # the page shows "Trial 1 of 2 · Generation 1 of 2" (ga.generations = 1)
+    assert cells[3:5] == ["1 of 2", "1 of 2"], cells
+    assert token not in page.content()  # links only on request
+    row.get_by_role("button", name="show link").click()
+    field = row.get_by_role("textbox", name="session link of DASH-1")
+    field.wait_for(timeout=10_000)
+    assert field.input_value() == f"{server.url}/s/{token}"
+    page.close()
