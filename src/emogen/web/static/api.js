@@ -1,4 +1,6 @@
-// JSON requests to the study server, retried on network errors and 503 (same idempotency key).
+// JSON requests to the study server, retried with the same request (and so the same idempotency
+// key) on lost connections and busy answers, with capped exponential backoff (connection.js).
+import { ONLINE, failed, retryable } from "./connection.js";
 
 /** An answer other than 2xx: its HTTP status (0: no connection) and the server's ``detail``. */
 export class ApiError extends Error {
@@ -16,7 +18,16 @@ export class ApiError extends Error {
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
 /**
- * @typedef {{ method?: string, body?: unknown, retries?: number, headers?: Record<string, string> }} ApiOptions
+ * `retries`: how many times a lost connection or a busy answer is retried (Infinity: until the
+ * server answers); `onLink` hears of each failure (with the time of the next try) and of the
+ * answer that ends them, so the page can say what is happening.
+ * @typedef {{
+ *   method?: string,
+ *   body?: unknown,
+ *   retries?: number,
+ *   headers?: Record<string, string>,
+ *   onLink?: (link: import("./connection.js").Link) => void,
+ * }} ApiOptions
  */
 
 /**
@@ -25,10 +36,10 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
  * @param {ApiOptions} [options]
  * @returns {Promise<any>}
  */
-export async function api(path, { method = "GET", body, retries = 4, headers = {} } = {}) {
-  /** @type {ApiError | undefined} */
-  let lastError;
-  for (let attempt = 0; attempt <= retries; attempt++) {
+export async function api(path, { method = "GET", body, retries = 4, headers = {}, onLink } = {}) {
+  /** @type {import("./connection.js").Link} */
+  let link = ONLINE;
+  for (let attempt = 0; ; attempt++) {
     let response;
     try {
       response = await fetch(path, {
@@ -38,28 +49,38 @@ export async function api(path, { method = "GET", body, retries = 4, headers = {
         cache: "no-store",
       });
     } catch {
-      lastError = new ApiError(0, "The connection to the study server was lost; retrying…");
-      await sleep(400 * 2 ** attempt);
+      response = null;
+    }
+    const status = response ? response.status : 0;
+    if (retryable(status)) {
+      if (attempt >= retries) {
+        if (onLink) onLink(ONLINE);
+        throw new ApiError(
+          status,
+          status === 0
+            ? "The study server cannot be reached. Check your connection and try again."
+            : "The study server is busy. Please try again in a minute.",
+        );
+      }
+      link = failed(link, status, Date.now());
+      if (onLink) onLink(link);
+      await sleep(Math.max(0, link.retryAt - Date.now()));
       continue;
     }
-    if (response.status === 503 && attempt < retries) {
-      lastError = new ApiError(503, "The server is busy; retrying…");
-      await sleep(400 * 2 ** attempt);
-      continue;
-    }
+    if (link.kind !== "online" && onLink) onLink(ONLINE);
+    const answer = /** @type {Response} */ (response);
     let data;
     try {
-      data = await response.json();
+      data = await answer.json();
     } catch {
       data = null;
     }
-    if (!response.ok) {
-      const detail = data && typeof data.detail === "string" ? data.detail : response.statusText;
-      throw new ApiError(response.status, detail);
+    if (!answer.ok) {
+      const detail = data && typeof data.detail === "string" ? data.detail : answer.statusText;
+      throw new ApiError(answer.status, detail);
     }
     return data;
   }
-  throw lastError;
 }
 
 export function newKey() {

@@ -1,10 +1,12 @@
 // Face display: the 3D viewer (three.js, WebGL) when available, else PNGs rendered by the server.
 //
 //   const display = await createFaceDisplay({ token });
-//   await display.show(slots, faces, identity);   // slots: elements; faces: [{id, weights}]
+//   await display.show(slots, faces, identity, onProgress);   // slots: elements; faces: [{id, weights}]
 //
 // `show` resolves when every face is drawn (or has failed to load), so the caller can start
-// the response-time clock and set the page's ready flag.
+// the response-time clock and set the page's ready flag. `onProgress(done, total, unit)` hears
+// how far the loading is: unit "faces" (images loaded) or "bytes" (the 3D model; total 0 when
+// the server did not say the size).
 
 function webglAvailable() {
   try {
@@ -21,7 +23,13 @@ class PngDisplay {
     this.kind = "png";
   }
 
-  show(slots, faces, _identity) {
+  show(slots, faces, _identity, onProgress = () => {}) {
+    let done = 0;
+    onProgress(0, faces.length, "faces");
+    const loaded = (ok) => {
+      onProgress(++done, faces.length, "faces");
+      return ok;
+    };
     const loads = faces.map((face, i) => {
       const slot = slots[i];
       let img = slot.querySelector("img");
@@ -41,7 +49,7 @@ class PngDisplay {
           resolve(false);
         };
         img.src = `/api/s/${this.token}/faces/${face.id}.png`;
-      });
+      }).then(loaded);
     });
     return Promise.all(loads);
   }

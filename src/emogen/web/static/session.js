@@ -2,6 +2,7 @@
 // ratings, completion. Every step is sent with an idempotency key and the page state always
 // comes from the server, so a reload or a server restart resumes exactly.
 import { api, ApiError, newKey } from "./api.js";
+import { statusText } from "./connection.js";
 import { createFaceDisplay } from "./faces.js";
 import * as selection from "./selection.js";
 
@@ -19,7 +20,11 @@ const ui = {
   elite: null, // face id
   others: [], // face ids, in the order chosen
   busy: false,
+  loading: false, // faces being fetched or drawn
   focus: 0,
+  link: /** @type {import("./connection.js").Link} */ ({ kind: "online" }),
+  linkTimer: 0,
+  said: "", // the last message that was not about the connection
 };
 // Tests and the researcher's tools read this.
 window.emogenStudy = { ready: false, stage: null, display: null };
@@ -35,7 +40,67 @@ function show(view) {
 }
 
 function say(text) {
-  $("message").textContent = text || "";
+  ui.said = text || "";
+  if (ui.link.kind === "online") $("message").textContent = ui.said;
+}
+
+// ---- the connection: said at once, with a countdown to the next try ----------------------------
+function paintLink() {
+  const text = statusText(ui.link, Date.now());
+  $("message").textContent = text || ui.said;
+  document.body.dataset.link = ui.link.kind;
+}
+
+function onLink(link) {
+  const wasOnline = ui.link.kind === "online";
+  ui.link = link;
+  clearInterval(ui.linkTimer);
+  if (link.kind !== "online") {
+    ui.linkTimer = setInterval(paintLink, 250);
+  } else if (!wasOnline) {
+    ui.said = "Connected again.";
+    setTimeout(() => {
+      if (ui.said === "Connected again.") say("");
+    }, 4000);
+  }
+  paintLink();
+}
+
+/** Requests of the session: retried until the server answers. */
+const call = (path, options = {}) => api(path, { retries: Infinity, onLink, ...options });
+
+// ---- loading progress ------------------------------------------------------------------------
+function megabytes(bytes) {
+  return (bytes / 1e6).toFixed(1);
+}
+
+function onLoadProgress(done, total, unit) {
+  const text =
+    unit === "faces"
+      ? `Loading faces: ${done} of ${total}…`
+      : total > 0
+        ? `Loading the 3D faces: ${megabytes(done)} of ${megabytes(total)} MB…`
+        : `Loading the 3D faces: ${megabytes(done)} MB…`;
+  $("load-text").textContent = text;
+  const bar = $("load-bar");
+  if (total > 0) bar.value = Math.min(1, done / total);
+  else bar.removeAttribute("value"); // indeterminate
+  $("load-status").hidden = false;
+  document.body.dataset.loaded = `${done}/${total} ${unit}`;
+}
+
+async function drawFaces(slots, faces, identity) {
+  ui.loading = true;
+  $("load-text").textContent = "Loading faces…";
+  $("load-bar").removeAttribute("value");
+  const timer = setTimeout(() => ($("load-status").hidden = false), 150);
+  try {
+    await ui.display.show(slots, faces, identity, onLoadProgress);
+  } finally {
+    clearTimeout(timer);
+    ui.loading = false;
+    $("load-status").hidden = true;
+  }
 }
 
 // ---- progress -------------------------------------------------------------------------------
@@ -120,11 +185,14 @@ function paintSelection() {
   }
   const n = count();
   let status;
-  if (ui.elite === null) status = "Click the face that looks most like the emotion: it becomes ★ best.";
+  if (ui.busy) status = "Saving your choice…";
+  else if (ui.loading) status = "Loading the faces: please wait until they appear.";
+  else if (ui.elite === null) status = "Click the face that looks most like the emotion: it becomes ★ best.";
   else if (n < min) status = `Choose at least ${min} faces (${n} chosen).`;
   else status = `${n} chosen (up to ${max}): ★ best + ${ui.others.length} also acceptable. Then press Next generation.`;
   $("selection-status").textContent = status;
-  $("next").disabled = ui.busy || !selection.complete(ui, ui.state.limits);
+  $("next").disabled = ui.busy || ui.loading || !selection.complete(ui, ui.state.limits);
+  $("next").textContent = ui.busy ? "Saving…" : "Next generation";
 }
 
 // ---- the grid --------------------------------------------------------------------------------
@@ -138,7 +206,7 @@ function buildGrid(n) {
     cell.className = "cell";
     cell.dataset.pos = String(i);
     cell.innerHTML =
-      `<button type="button" class="face" tabindex="${i === 0 ? 0 : -1}" aria-pressed="false">` +
+      `<button type="button" class="face" aria-pressed="false">` +
       `<span class="slot"></span><span class="num" aria-hidden="true">${i + 1}</span>` +
       `<span class="badge" aria-hidden="true"></span></button>` +
       `<button type="button" class="star" tabindex="-1" title="Make this the best face" aria-label="Make face ${i + 1} the best">★</button>`;
@@ -168,10 +236,8 @@ function columns() {
 function focusCell(pos) {
   const cells = cellsOf();
   pos = Math.max(0, Math.min(cells.length - 1, pos));
-  for (const c of cells) c.querySelector(".face").tabIndex = -1;
-  const face = cells[pos].querySelector(".face");
-  face.tabIndex = 0;
-  face.focus({ preventScroll: false });
+  // Every face is in the Tab order (as the instructions say); the arrows move by rows too.
+  cells[pos].querySelector(".face").focus({ preventScroll: false });
   ui.focus = pos;
 }
 
@@ -207,10 +273,11 @@ async function showTrial(state) {
   restoreSelection(ids);
   show("trial");
   $("restart").hidden = !state.allow_restart;
-  paintSelection();
   setReady(false);
+  ui.loading = true;
+  paintSelection();
   $("grid").setAttribute("aria-busy", "true");
-  await ui.display.show(
+  await drawFaces(
     cells.map((c) => c.querySelector(".slot")),
     pop.faces,
     state.trial.identity,
@@ -238,7 +305,7 @@ async function showRating(state) {
   $("rate").disabled = true;
   show("rating");
   setReady(false);
-  if (r.face) await ui.display.show([$("rating-slot")], [r.face], state.trial.identity);
+  if (r.face) await drawFaces([$("rating-slot")], [r.face], state.trial.identity);
   ui.shownAt = performance.now();
   setReady(true);
 }
@@ -266,6 +333,7 @@ async function render(state) {
   renderProgress(state);
   const view = selection.viewOf(state);
   if (view === "instructions") {
+    $("resume-link").value = `${location.origin}/s/${token}`;
     show("instructions");
     setReady(true);
     $("begin").focus();
@@ -278,21 +346,37 @@ async function render(state) {
   }
 }
 
+const savingLabels = { begin: ["begin", "Starting…"], rating: ["rate", "Saving…"] };
+
+function paintBusy(path) {
+  const [id, label] = savingLabels[path] || [];
+  if (!id) return;
+  const button = $(id);
+  button.dataset.label = button.dataset.label || button.textContent;
+  button.textContent = ui.busy ? label : button.dataset.label;
+  button.disabled = ui.busy;
+}
+
 async function step(path, body) {
+  if (ui.busy) return; // one step at a time (and the key makes a repeat harmless)
   ui.busy = true;
   setReady(false);
   paintIfTrial();
+  paintBusy(path);
   try {
-    const state = await api(`/api/s/${token}/${path}`, { method: "POST", body });
+    const state = await call(`/api/s/${token}/${path}`, { method: "POST", body });
     say("");
     ui.busy = false;
+    paintBusy(path);
+    guardHistory();
     await render(state);
   } catch (err) {
     ui.busy = false;
+    paintBusy(path);
     if (err instanceof ApiError && err.status === 409) {
       // The page was out of date (another tab, a double submission): show the server's state.
       say("");
-      await render(await api(`/api/s/${token}/state`));
+      await render(await call(`/api/s/${token}/state`));
     } else {
       say(err.message);
       setReady(true);
@@ -300,6 +384,38 @@ async function step(path, body) {
     }
   }
 }
+
+// ---- the Back button stays in the study ------------------------------------------------------
+// The page keeps one entry of its own above the session's entry; Back lands on the session's
+// entry (same URL: nothing reloads), and the page puts its entry back and says why.
+function guardHistory() {
+  if (history.state && history.state.emogen === "guard") return;
+  history.replaceState({ emogen: "session" }, "", location.href);
+  history.pushState({ emogen: "guard" }, "", location.href);
+}
+
+window.addEventListener("popstate", () => {
+  guardHistory();
+  say("Your answers are saved as you go, so Back does not undo them: carry on here.");
+});
+
+// ---- the personal link -----------------------------------------------------------------------
+async function copyLink() {
+  const input = $("resume-link");
+  let copied;
+  try {
+    await navigator.clipboard.writeText(input.value);
+    copied = true;
+  } catch {
+    input.select();
+    copied = document.queryCommandSupported("copy") && document.execCommand("copy");
+  }
+  $("copy-status").textContent = copied
+    ? "Copied. Keep it somewhere safe (an e-mail to yourself, a note)."
+    : "Your browser would not copy it: select the link and copy it yourself.";
+}
+$("copy-link").addEventListener("click", copyLink);
+$("resume-link").addEventListener("focus", (event) => event.target.select());
 
 function paintIfTrial() {
   if (ui.state && ui.state.stage === "trial" && ui.state.trial.status === "active") paintSelection();
@@ -348,9 +464,10 @@ $("rating-form").addEventListener("submit", (event) => {
 
 async function main() {
   try {
+    guardHistory();
     ui.display = await createFaceDisplay({ token });
     window.emogenStudy.display = ui.display.kind;
-    await render(await api(`/api/s/${token}/state`));
+    await render(await call(`/api/s/${token}/state`));
   } catch (err) {
     say(err.message);
   }

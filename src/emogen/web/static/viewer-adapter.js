@@ -11,6 +11,29 @@ function webgl2Available() {
   }
 }
 
+// The GLB read with a running count of bytes (GLTFLoader reports none we can use), handed to the
+// loader as an object URL (the GLB is self-contained).
+async function fetchGlb(url, onProgress) {
+  const response = await fetch(url);
+  if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
+  const declared = Number(response.headers.get("Content-Length")) || 0;
+  const encoded = Boolean(response.headers.get("Content-Encoding"));
+  const total = encoded ? 0 : declared; // a compressed length does not count the bytes read
+  if (!response.body) return response.blob();
+  const reader = response.body.getReader();
+  const chunks = [];
+  let loaded = 0;
+  onProgress(0, total, "bytes");
+  for (;;) {
+    const { done, value } = await reader.read();
+    if (done) break;
+    chunks.push(value);
+    loaded += value.length;
+    onProgress(loaded, Math.max(total, total ? loaded : 0), "bytes");
+  }
+  return new Blob(chunks, { type: "model/gltf-binary" });
+}
+
 const nextFrame = () => new Promise((resolve) => requestAnimationFrame(() => resolve()));
 
 class ViewerDisplay {
@@ -19,7 +42,7 @@ class ViewerDisplay {
     this.grids = new Map(); // container -> {url, count, ready: Promise<FaceGrid>}
   }
 
-  gridFor(container, slots, url) {
+  gridFor(container, slots, url, onProgress) {
     const entry = this.grids.get(container);
     if (entry && entry.url === url && entry.count === slots.length) return entry.ready;
     if (entry) {
@@ -29,20 +52,36 @@ class ViewerDisplay {
       }, () => {});
     }
     const grid = new FaceGrid(container, slots);
-    const ready = grid.load(url).then(() => grid);
-    this.grids.set(container, { url, count: slots.length, ready });
+    const ready = fetchGlb(url, onProgress).then(async (blob) => {
+      const local = URL.createObjectURL(blob);
+      try {
+        await grid.load(local);
+      } finally {
+        URL.revokeObjectURL(local);
+      }
+      return grid;
+    });
+    const entry2 = { url, count: slots.length, ready };
+    this.grids.set(container, entry2);
+    // a failed load (a lost connection) is tried afresh next time
+    ready.catch(() => {
+      if (this.grids.get(container) === entry2) this.grids.delete(container);
+      grid.renderer.dispose();
+      grid.canvas.remove();
+    });
     return ready;
   }
 
   /**
    * slots: elements of one container; faces: [{id, weights}] in the GLB's morph-target order
    * (shapes, then correctives when the study corrects faces); longer vectors are cut to the
-   * GLB's targets, shorter ones padded with 0 by the grid.
+   * GLB's targets, shorter ones padded with 0 by the grid. onProgress(done, total, "bytes")
+   * follows the GLB's download (the first time a container shows an identity).
    */
-  async show(slots, faces, identity = "generic") {
+  async show(slots, faces, identity = "generic", onProgress = () => {}) {
     const container = slots[0].closest("[data-viewer-container]");
     const url = `/api/model/${encodeURIComponent(identity)}.glb`;
-    const grid = await this.gridFor(container, slots, url);
+    const grid = await this.gridFor(container, slots, url, onProgress);
     const n = grid.shapeNames.length;
     grid.setFaces(faces.map((f) => f.weights.slice(0, n)));
     await nextFrame();

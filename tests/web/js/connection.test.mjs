@@ -1,0 +1,49 @@
+// Unit tests of the page's connection policy (src/emogen/web/static/connection.js):
+// `node --test tests/web/js/` (run by `make test`).
+import assert from "node:assert/strict";
+import { test } from "node:test";
+
+import {
+  BACKOFF,
+  ONLINE,
+  failed,
+  retryDelay,
+  retryable,
+  statusText,
+} from "../../../src/emogen/web/static/connection.js";
+
+test("the backoff doubles from 1 s and stops at 30 s", () => {
+  const waits = Array.from({ length: 8 }, (_, n) => retryDelay(n));
+  assert.deepEqual(waits, [1000, 2000, 4000, 8000, 16000, 30000, 30000, 30000]);
+  assert.equal(retryDelay(1000), BACKOFF.capMs); // no overflow to Infinity or NaN
+  assert.equal(retryDelay(2, { baseMs: 100, capMs: 250 }), 250);
+  assert.throws(() => retryDelay(-1), /non-negative integer; got -1/);
+});
+
+test("lost connections and busy answers are retried; other answers are not", () => {
+  for (const s of [0, 502, 503, 504]) assert.equal(retryable(s), true, String(s));
+  for (const s of [200, 400, 404, 409, 413, 422, 500]) assert.equal(retryable(s), false, String(s));
+});
+
+test("failures in a row count up and schedule the next try; any answer ends them", () => {
+  let link = failed(ONLINE, 0, 10_000);
+  assert.deepEqual(link, { kind: "offline", attempt: 0, retryAt: 11_000 });
+  link = failed(link, 0, 11_000);
+  assert.deepEqual(link, { kind: "offline", attempt: 1, retryAt: 13_000 });
+  link = failed(link, 503, 13_000);
+  assert.deepEqual(link, { kind: "busy", attempt: 2, retryAt: 17_000 });
+  // the retries never stop: after many failures the wait stays at the cap
+  for (let i = 0; i < 50; i++) link = failed(link, 0, 0);
+  assert.equal(link.kind === "online" ? -1 : link.retryAt, 30_000);
+});
+
+test("the message says at once that the connection is lost and when the next try is", () => {
+  const link = failed(ONLINE, 0, 0);
+  assert.equal(statusText(ONLINE, 0), "");
+  const t = (/** @type {number} */ now, over = {}) => statusText({ ...link, ...over }, now);
+  assert.match(t(0), /^Connection lost — retrying in 1 s…/);
+  assert.match(t(0, { retryAt: 8000 }), /retrying in 8 s…/);
+  assert.match(t(7200, { retryAt: 8000 }), /retrying in 1 s…/); // rounded up, never "0 s"
+  assert.match(t(8000, { retryAt: 8000 }), /retrying now…/);
+  assert.match(statusText(failed(ONLINE, 503, 0), 0), /^The study server is busy — retrying in 1 s…/);
+});
