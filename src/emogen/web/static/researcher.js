@@ -11,7 +11,7 @@ function headers() {
 // Generations numbered as the participant's page shows them: "Generation 3 of 11", "Rating".
 function shownGeneration(s) {
   if (s.stage !== "trial") return "";
-  if (s.generation_shown == null) return "rating";
+  if (s.generation_shown === null || s.generation_shown === undefined) return "rating";
   return `${s.generation_shown} of ${s.generations_shown}`;
 }
 
