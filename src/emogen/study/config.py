@@ -89,7 +89,8 @@ class StudyConfig(_Strict):
 
     name: Annotated[str, Field(min_length=1)] = "study"
     title: str = "Making facial expressions"
-    #: Study seed: session k's seed is child k of it (None: a fresh seed per session, recorded).
+    #: Study seed: a session's seed is a keyed hash of it and the participant id (the same
+    #: participant, the same seed, whoever else came; None: a fresh seed per session, recorded).
     seed: Annotated[int, Field(ge=0, lt=2**63)] | None = None
     emotions: tuple[str, ...] = Field(default=("happy",), min_length=1)
     repetitions: Annotated[int, Field(ge=1, le=100)] = 1
@@ -99,7 +100,8 @@ class StudyConfig(_Strict):
     #: The lab's own identities, ``[identity.NAME]`` tables: ``shape`` (generic, a rig preset or
     #: identity coefficients) plus any :class:`~emogen.appearance.Appearance` key.
     identity: dict[str, Identity] = Field(default_factory=dict)
-    #: random (seeded per session), latin_square (balanced, row = session number), fixed.
+    #: random (seeded per session), latin_square (balanced, row from a keyed hash of the
+    #: participant id), fixed.
     order: Literal["random", "latin_square", "fixed"] = "random"
     #: URL parameter carrying the participant id (e.g. Prolific's PROLIFIC_PID); also accepted:
     #: ``participant``. Without one, an id is generated.

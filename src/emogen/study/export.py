@@ -205,8 +205,33 @@ def _frame(name: str, rows: list[dict[str, Any]]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+#: A text cell starting with one of these is a formula to a spreadsheet (CSV injection).
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def neutralise_formulas(df: pd.DataFrame) -> pd.DataFrame:
+    """A copy whose text cells that a spreadsheet would run as formulas (starting with
+    ``= + - @``, tab or CR) start with ``'`` instead; numbers (negative ones too) stay as they
+    are. For CSV only: Parquet keeps the raw values."""
+
+    def cell(v: Any) -> Any:
+        return "'" + v if isinstance(v, str) and v.startswith(FORMULA_STARTS) else v
+
+    out = df.copy()
+    for col in out.columns:
+        if out[col].dtype == object:
+            out[col] = out[col].map(cell)
+    return out
+
+
+def csv_text(df: pd.DataFrame) -> str:
+    """One export table as CSV text, formulas neutralised (:func:`neutralise_formulas`)."""
+    return str(neutralise_formulas(df).to_csv(index=False))
+
+
 def write_export(tables: dict[str, pd.DataFrame], out: Path, fmt: str = "parquet") -> list[Path]:
-    """``<table>.parquet`` or ``<table>.csv`` for every table, in ``out``."""
+    """``<table>.parquet`` or ``<table>.csv`` for every table, in ``out`` (CSV text cells
+    that a spreadsheet would run as formulas are neutralised: :func:`neutralise_formulas`)."""
     if fmt not in ("parquet", "csv"):
         raise ConfigError(f"--format must be parquet or csv; got {fmt!r}")
     out = Path(out)
@@ -217,6 +242,6 @@ def write_export(tables: dict[str, pd.DataFrame], out: Path, fmt: str = "parquet
         if fmt == "parquet":
             df.to_parquet(path, index=False)
         else:
-            df.to_csv(path, index=False)
+            path.write_text(csv_text(df), encoding="utf-8")
         paths.append(path)
     return paths

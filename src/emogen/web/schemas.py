@@ -96,10 +96,24 @@ ERRORS: dict[int, tuple[type[BaseModel], str]] = {
     409: (Problem, "The request does not fit the session now (stale page, reused step key)."),
     413: (Problem, f"The request body is larger than {MAX_BODY_BYTES} bytes."),
     422: (InvalidRequest, "The request's values break a rule (the message names the value)."),
+    429: (Problem, "Too many requests from this address; wait Retry-After seconds."),
     503: (Problem, "The server is busy or shutting down; try again in a moment."),
+}
+_RETRY_AFTER = {
+    "Retry-After": {
+        "description": "Seconds to wait before trying again.",
+        "schema": {"type": "integer", "minimum": 1},
+    }
 }
 
 
 def error_responses(*codes: int) -> dict[int | str, dict[str, Any]]:
     """OpenAPI ``responses`` entries of these error codes, each with its body model."""
-    return {code: {"model": ERRORS[code][0], "description": ERRORS[code][1]} for code in codes}
+    return {
+        code: {
+            "model": ERRORS[code][0],
+            "description": ERRORS[code][1],
+            **({"headers": _RETRY_AFTER} if code == 429 else {}),
+        }
+        for code in codes
+    }
