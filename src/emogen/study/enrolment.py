@@ -63,7 +63,7 @@ def _new_session(
         stage="instructions",
         current_trial=0,
         package_version=__version__,
-        user_agent=user_agent[:256],
+        user_agent=user_agent[:256] if cfg.collect_user_agent else None,
         created_at=now,
         consented_at=now,
         updated_at=now,
@@ -103,6 +103,7 @@ def create_session(
 
     A participant id that already has a session is resumed only with that session's token
     (``resume_token``, kept by the participant's browser); otherwise it is a conflict.
+    ``user_agent`` is stored only when the study collects it (``collect_user_agent``).
     """
     pid, source = checked_participant(participant_id)
 

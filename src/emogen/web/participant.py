@@ -111,6 +111,7 @@ def select_faces(request: Request, token: Token, body: Selection) -> JSONRespons
         elite=body.elite,
         others=list(body.others),
         response_ms=body.response_ms,
+        load_ms=body.load_ms,
     )
     return _json(state)
 
@@ -125,6 +126,7 @@ def restart(request: Request, token: Token, body: Restart) -> JSONResponse:
         attempt=body.attempt,
         generation=body.generation,
         response_ms=body.response_ms,
+        load_ms=body.load_ms,
     )
     return _json(state)
 

@@ -45,6 +45,9 @@ class Selection(_Body):
     elite: FaceId
     others: Annotated[list[FaceId], Field(max_length=100)] = []
     response_ms: Millis | None = None
+    #: Page's time from receiving this population to all its faces drawn (generation 0: page,
+    #: model and textures); the server's ``server_response_ms`` excludes it.
+    load_ms: Millis | None = None
 
 
 class Restart(_Body):
@@ -53,6 +56,9 @@ class Restart(_Body):
     attempt: Index
     generation: Index
     response_ms: Millis | None = None
+    #: Page's time from receiving this population to all its faces drawn (generation 0: page,
+    #: model and textures); the server's ``server_response_ms`` excludes it.
+    load_ms: Millis | None = None
 
 
 class Rating(_Body):
