@@ -232,8 +232,9 @@ def neutralise_formulas(df: pd.DataFrame) -> pd.DataFrame:
 
     out = df.copy()
     for col in out.columns:
-        if out[col].dtype == object:
-            out[col] = out[col].map(cell)
+        column = out[col]
+        if column.dtype == object or pd.api.types.is_string_dtype(column.dtype):
+            out[col] = column.map(cell)
     return out
 
 
