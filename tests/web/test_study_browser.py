@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import shutil
 import subprocess
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -88,8 +89,29 @@ def server(
     srv.stop()
 
 
+#: Records the page's Content-Security-Policy violations (none allowed: the pages run under
+#: the server's policy, no inline script or style, no eval).
+CSP_PROBE = """
+window.__cspViolations = [];
+document.addEventListener("securitypolicyviolation", (e) => {
+  window.__cspViolations.push(`${e.violatedDirective} ${e.blockedURI}`);
+});
+"""
+
+
+def wait_for(page: Any, expression: str, timeout: float = 30_000) -> None:
+    """``page.wait_for_function`` without eval in the page (its string predicates are eval'd,
+    which the Content-Security-Policy forbids): poll through the devtools protocol instead."""
+    deadline = time.monotonic() + timeout / 1000
+    while not page.evaluate(f"() => Boolean({expression})"):
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"waited {timeout} ms for {expression}")
+        page.wait_for_timeout(50)
+
+
 def wait_ready(page: Any, stage: str) -> None:
-    page.wait_for_function(
+    wait_for(
+        page,
         f"window.emogenStudy && window.emogenStudy.ready && window.emogenStudy.stage === '{stage}'",
         timeout=60_000,
     )
@@ -104,6 +126,7 @@ def test_participant_completes_two_trials(
 ) -> None:  # type: ignore[no-untyped-def]
     context = browser.new_context(viewport={"width": 1366, "height": 768})
     context.add_init_script(LAYOUT_SHIFT_PROBE)
+    context.add_init_script(CSP_PROBE)
     page = context.new_page()
     page.on("dialog", lambda d: d.accept())  # "Start again?" confirmation
     errors: list[str] = []
@@ -146,9 +169,7 @@ def test_participant_completes_two_trials(
     page.focus("#next")
     page.keyboard.press("Enter")
     chosen.append((0, 0, 0, ids[7], [ids[2]]))
-    page.wait_for_function(
-        "document.querySelector('#progress').innerText.includes('Generation 2 of 2')"
-    )
+    wait_for(page, "document.querySelector('#progress').innerText.includes('Generation 2 of 2')")
     wait_ready(page, "trial")
 
     # ---- trial 1, generation 1: min 2 and max 3 selections enforced in the page ----
@@ -170,14 +191,12 @@ def test_participant_completes_two_trials(
     page.click("#rate")
 
     # ---- trial 2: a restart, then two generations with the mouse ----
-    page.wait_for_function("document.querySelector('#prompt').innerText.includes('SAD')")
+    wait_for(page, "document.querySelector('#prompt').innerText.includes('SAD')")
     wait_ready(page, "trial")
     shown.append((1, 0, 0, shown_faces(page)))
     page.set_viewport_size({"width": 1024, "height": 768})
     page.click("#restart")
-    page.wait_for_function(
-        f"document.querySelector('#grid > .cell').dataset.face !== '{shown[-1][3][0]}'"
-    )
+    wait_for(page, f"document.querySelector('#grid > .cell').dataset.face !== '{shown[-1][3][0]}'")
     wait_ready(page, "trial")
     for generation in (0, 1):
         ids = shown_faces(page)
@@ -198,6 +217,7 @@ def test_participant_completes_two_trials(
     assert page.evaluate("window.__shift") < 0.01, "layout shifted while faces loaded"
     del boxes
     assert errors == []
+    assert page.evaluate("window.__cspViolations") == []
     context.close()
 
     # ---- the export holds every generation shown and every selection made ----

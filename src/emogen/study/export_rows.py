@@ -15,6 +15,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from emogen.ga.state import stream_of_state
 from emogen.study.tables import (
     SCHEMA_VERSION,
     FaceRow,
@@ -149,6 +150,7 @@ def trial_rows(rec: Records) -> Iterator[Row]:
             "identity": t.identity,
             "repetition": t.repetition,
             "seed": t.seed,
+            "ga_stream": stream_of_state(t.engine_state) if t.engine_state else None,
             "status": t.status,
             "attempts": t.attempt + 1,
             "generation_reached": t.generation,
