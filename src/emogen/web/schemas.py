@@ -9,14 +9,22 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 
+from emogen.study.enrolment import PARTICIPANT_ID
 from emogen.study.view import SessionState
 
 #: A client-made key per step (e.g. a UUID); the same key again is the same step.
 StepKey = Annotated[str, Field(pattern=r"^[A-Za-z0-9_-]{8,64}$")]
-Index = Annotated[int, Field(ge=0, le=100_000)]
-FaceId = Annotated[int, Field(ge=0, le=2**31 - 1)]
+
+
+def _whole_number(value: Any) -> Any:
+    """JSON Schema counts 3.0 as an integer: take it as 3 (3.5 stays a float and is refused)."""
+    return int(value) if isinstance(value, float) and value.is_integer() else value
+
+
+Index = Annotated[int, Field(ge=0, le=100_000), BeforeValidator(_whole_number)]
+FaceId = Annotated[int, Field(ge=0, le=2**31 - 1), BeforeValidator(_whole_number)]
 Millis = Annotated[float, Field(ge=0, le=86_400_000, allow_inf_nan=False)]
 TOKEN_PATTERN = r"^[A-Za-z0-9_-]{16,64}$"
 #: The largest request body the API reads (bytes); a larger one is answered 413.
@@ -28,7 +36,10 @@ class _Body(BaseModel):
 
 
 class NewSession(_Body):
-    participant_id: Annotated[str, Field(max_length=128)] | None = None
+    #: The URL's participant id (empty or absent: one is generated), as the core checks it.
+    participant_id: (
+        Annotated[str, Field(max_length=128, pattern=f"^$|{PARTICIPANT_ID.pattern}")] | None
+    ) = None
     #: The token this browser holds for the participant's session, to resume it.
     resume_token: Annotated[str, Field(pattern=TOKEN_PATTERN)] | None = None
 
@@ -64,7 +75,7 @@ class Restart(_Body):
 class Rating(_Body):
     key: StepKey
     trial: Index
-    value: Annotated[int, Field(ge=1, le=11)]
+    value: Annotated[int, Field(ge=1, le=11), BeforeValidator(_whole_number)]
     response_ms: Millis | None = None
 
 
