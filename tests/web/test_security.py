@@ -261,9 +261,11 @@ def test_the_researcher_token_is_never_logged(
     # the server runs without an access log (session links carry their token in the path)
     import uvicorn
 
+    import emogen.study.config as config
     from emogen.web import app as web_app
     from emogen.web import server
 
+    monkeypatch.setattr(config, "load_study_config", lambda path: study_from_dict(SMALL_STUDY))
     seen: dict[str, Any] = {}
     monkeypatch.setattr(uvicorn, "run", lambda app, **kw: seen.update(kw))
     monkeypatch.setattr(web_app, "create_app", lambda *a, **kw: _FakeApp())
@@ -273,18 +275,6 @@ def test_the_researcher_token_is_never_logged(
 
 class _FakeApp:
     pass
-
-
-@pytest.fixture(autouse=True)
-def _no_config_file(monkeypatch: pytest.MonkeyPatch) -> None:
-    import emogen.study.config as config
-
-    real = config.load_study_config
-    monkeypatch.setattr(
-        config,
-        "load_study_config",
-        lambda path: study_from_dict(SMALL_STUDY) if str(path) == "x.toml" else real(path),
-    )
 
 
 def test_researcher_page_says_when_the_api_is_disabled(tmp_path: Path, ict_model: Any) -> None:

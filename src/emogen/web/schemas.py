@@ -36,9 +36,14 @@ class _Body(BaseModel):
 
 
 class NewSession(_Body):
-    #: The URL's participant id (empty or absent: one is generated), as the core checks it.
+    #: The URL's participant id (empty or absent: one is generated). The schema states the
+    #: core's rule (``PARTICIPANT_ID``); the core checks it and names the rule in its 422.
     participant_id: (
-        Annotated[str, Field(max_length=128, pattern=f"^$|{PARTICIPANT_ID.pattern}")] | None
+        Annotated[
+            str,
+            Field(max_length=128, json_schema_extra={"pattern": f"^$|{PARTICIPANT_ID.pattern}"}),
+        ]
+        | None
     ) = None
     #: The token this browser holds for the participant's session, to resume it.
     resume_token: Annotated[str, Field(pattern=TOKEN_PATTERN)] | None = None
