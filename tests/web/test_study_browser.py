@@ -102,8 +102,16 @@ document.addEventListener("securitypolicyviolation", (e) => {
 def wait_for(page: Any, expression: str, timeout: float = 30_000) -> None:
     """``page.wait_for_function`` without eval in the page (its string predicates are eval'd,
     which the Content-Security-Policy forbids): poll through the devtools protocol instead."""
+    from playwright.sync_api import Error
+
     deadline = time.monotonic() + timeout / 1000
-    while not page.evaluate(f"() => Boolean({expression})"):
+    while True:
+        try:
+            if page.evaluate(f"() => Boolean({expression})"):
+                return
+        except Error as exc:  # the page navigated while asked: ask the new page
+            if "context was destroyed" not in str(exc) and "navigat" not in str(exc):
+                raise
         if time.monotonic() > deadline:
             raise TimeoutError(f"waited {timeout} ms for {expression}")
         page.wait_for_timeout(50)
