@@ -191,7 +191,7 @@ def test_participant_ids_resume_only_with_their_token(service: StudyService) -> 
 
 
 def test_sessions_get_recorded_seeds_and_orders(service: StudyService) -> None:
-    from emogen.rng import spawn_seeds
+    from emogen.study.design import participant_seed
     from emogen.study.tables import SessionRow
 
     for i in range(3):
@@ -200,7 +200,9 @@ def test_sessions_get_recorded_seeds_and_orders(service: StudyService) -> None:
         rows = db.scalars(select(SessionRow).order_by(SessionRow.number)).all()
         seeds = [r.seed for r in rows]
         orders = [json.loads(r.trial_order) for r in rows]
-    assert seeds == spawn_seeds(1234, 3)  # study seed 1234: session k gets child k
+    # study seed 1234: a participant's seed is a keyed hash of it and the participant id
+    assert seeds == [participant_seed(1234, f"S-{i}") for i in range(3)]
+    assert len(set(seeds)) == 3
     assert all(sorted(o) == [0, 1] for o in orders)
 
 

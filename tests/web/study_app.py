@@ -19,12 +19,15 @@ RESEARCHER_TOKEN = "researcher-secret-123"
 def app(db_url: str, ict_model):  # type: ignore[no-untyped-def]
     from emogen.study.config import study_from_dict
     from emogen.web import create_app
+    from emogen.web.ratelimit import RateLimit
 
     application = create_app(
         study_from_dict(SMALL_STUDY),
         db_url,
         model=ict_model,
         researcher_token=RESEARCHER_TOKEN,
+        # these tests make many sessions from one address: the limit has its own tests
+        session_limit=RateLimit.parse("off"),
     )
     yield application
     application.state.store.dispose()

@@ -21,7 +21,7 @@ from typing import Any
 import pytest
 from benchmarks.bench_study import ServerProcess, write_study_toml
 
-from tests.web.test_study_browser import BROWSER_STUDY, browser, viewer_bundle, wait_ready
+from tests.web.test_study_browser import BROWSER_STUDY, browser, viewer_bundle, wait_for, wait_ready
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 
@@ -183,8 +183,10 @@ def test_a_lost_connection_is_said_at_once_and_retried_until_the_server_answers(
     page.route("**/select", lambda route: route.abort("internetdisconnected"))
     choose_two(page)
     page.click("#next")
-    page.wait_for_function(
-        "document.querySelector('#message').innerText.includes('Connection lost')", timeout=3000
+    wait_for(
+        page,
+        "document.querySelector('#message').innerText.includes('Connection lost')",
+        timeout=3000,
     )
     assert re.search(r"Connection lost — retrying in \d+ s…", page.inner_text("#message"))
     assert page.is_disabled("#next") and page.inner_text("#next") == "Saving…"
@@ -195,8 +197,8 @@ def test_a_lost_connection_is_said_at_once_and_retried_until_the_server_answers(
     assert len(sent) >= 3
     assert "retrying" in page.inner_text("#message")
     page.unroute("**/select")
-    page.wait_for_function(
-        f"document.querySelector('#grid > .cell').dataset.face !== '{before}'", timeout=15_000
+    wait_for(
+        page, f"document.querySelector('#grid > .cell').dataset.face !== '{before}'", timeout=15_000
     )
     wait_ready(page, "trial")
     assert "Generation 2 of 2" in page.inner_text("#progress")
@@ -232,7 +234,7 @@ def test_the_personal_link_is_shown_copied_and_works_elsewhere(
     assert link == f"{site.url}/s/{token}"
     assert "another device" in page.inner_text("#resume")
     page.click("#copy-link")
-    page.wait_for_function("document.querySelector('#copy-status').innerText.includes('Copied')")
+    wait_for(page, "document.querySelector('#copy-status').innerText.includes('Copied')")
     assert page.evaluate("navigator.clipboard.readText()") == link
     page.click("#begin")
     wait_ready(page, "trial")

@@ -81,6 +81,8 @@ def call(case: Any, app: Any, live_tokens: list[str]) -> None:
         )
     response = case.call(headers=headers)
     assert response.status_code < 500, (case.method, case.formatted_path, response.text)
+    # schema conformance: documented status codes, content types, headers and bodies
+    case.validate_response(response)
     if response.status_code >= 400:
         detail = response.json().get("detail")
         assert isinstance(detail, str) and detail, response.text

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import shutil
 import subprocess
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -88,8 +89,37 @@ def server(
     srv.stop()
 
 
+#: Records the page's Content-Security-Policy violations (none allowed: the pages run under
+#: the server's policy, no inline script or style, no eval).
+CSP_PROBE = """
+window.__cspViolations = [];
+document.addEventListener("securitypolicyviolation", (e) => {
+  window.__cspViolations.push(`${e.violatedDirective} ${e.blockedURI}`);
+});
+"""
+
+
+def wait_for(page: Any, expression: str, timeout: float = 30_000) -> None:
+    """``page.wait_for_function`` without eval in the page (its string predicates are eval'd,
+    which the Content-Security-Policy forbids): poll through the devtools protocol instead."""
+    from playwright.sync_api import Error
+
+    deadline = time.monotonic() + timeout / 1000
+    while True:
+        try:
+            if page.evaluate(f"() => Boolean({expression})"):
+                return
+        except Error as exc:  # the page navigated while asked: ask the new page
+            if "context was destroyed" not in str(exc) and "navigat" not in str(exc):
+                raise
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"waited {timeout} ms for {expression}")
+        page.wait_for_timeout(50)
+
+
 def wait_ready(page: Any, stage: str) -> None:
-    page.wait_for_function(
+    wait_for(
+        page,
         f"window.emogenStudy && window.emogenStudy.ready && window.emogenStudy.stage === '{stage}'",
         timeout=60_000,
     )
@@ -104,6 +134,7 @@ def test_participant_completes_two_trials(
 ) -> None:  # type: ignore[no-untyped-def]
     context = browser.new_context(viewport={"width": 1366, "height": 768})
     context.add_init_script(LAYOUT_SHIFT_PROBE)
+    context.add_init_script(CSP_PROBE)
     page = context.new_page()
     page.on("dialog", lambda d: d.accept())  # "Start again?" confirmation
     errors: list[str] = []
@@ -146,9 +177,7 @@ def test_participant_completes_two_trials(
     page.focus("#next")
     page.keyboard.press("Enter")
     chosen.append((0, 0, 0, ids[7], [ids[2]]))
-    page.wait_for_function(
-        "document.querySelector('#progress').innerText.includes('Generation 2 of 2')"
-    )
+    wait_for(page, "document.querySelector('#progress').innerText.includes('Generation 2 of 2')")
     wait_ready(page, "trial")
 
     # ---- trial 1, generation 1: min 2 and max 3 selections enforced in the page ----
@@ -170,14 +199,12 @@ def test_participant_completes_two_trials(
     page.click("#rate")
 
     # ---- trial 2: a restart, then two generations with the mouse ----
-    page.wait_for_function("document.querySelector('#prompt').innerText.includes('SAD')")
+    wait_for(page, "document.querySelector('#prompt').innerText.includes('SAD')")
     wait_ready(page, "trial")
     shown.append((1, 0, 0, shown_faces(page)))
     page.set_viewport_size({"width": 1024, "height": 768})
     page.click("#restart")
-    page.wait_for_function(
-        f"document.querySelector('#grid > .cell').dataset.face !== '{shown[-1][3][0]}'"
-    )
+    wait_for(page, f"document.querySelector('#grid > .cell').dataset.face !== '{shown[-1][3][0]}'")
     wait_ready(page, "trial")
     for generation in (0, 1):
         ids = shown_faces(page)
@@ -198,6 +225,7 @@ def test_participant_completes_two_trials(
     assert page.evaluate("window.__shift") < 0.01, "layout shifted while faces loaded"
     del boxes
     assert errors == []
+    assert page.evaluate("window.__cspViolations") == []
     context.close()
 
     # ---- the export holds every generation shown and every selection made ----
@@ -218,8 +246,12 @@ def test_participant_completes_two_trials(
         assert rows.face_id.tolist() == [elite, *others], (trial, generation)
         assert rows.role.tolist() == ["elite"] + ["other"] * len(others)
         assert (rows.client_response_ms > 0).all()
+        # the page reports how long its faces took to draw (then not counted as response time)
+        assert rows.load_ms.notna().all() and (rows.load_ms > 0).all(), rows.load_ms.tolist()
+        assert (rows.load_ms < 60_000).all()
     assert len(sel) == sum(1 + len(c[4]) for c in chosen)
     assert len(tables["restarts"]) == 1
+    assert tables["restarts"].load_ms.notna().all() and (tables["restarts"].load_ms > 0).all()
     assert tables["ratings"].value.tolist() == [6, 2]
     assert tables["sessions"].stage.tolist() == ["done"]
     assert replay_session(store, 1, ict_model.rig, ict_model.model_hash, model=ict_model).ok

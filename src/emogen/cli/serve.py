@@ -25,10 +25,30 @@ def serve_command(
     model: Annotated[
         Path | None, typer.Option("--model", help="Face model (default: as in the config).")
     ] = None,
+    session_limit: Annotated[
+        str | None,
+        typer.Option(
+            "--session-limit",
+            help="New sessions per client address, e.g. '20/min' (default), "
+            "'5/min,burst=10' or 'off'.",
+        ),
+    ] = None,
+    hsts: Annotated[
+        bool,
+        typer.Option("--hsts", help="Send Strict-Transport-Security (only behind HTTPS)."),
+    ] = False,
 ) -> None:
     """Run a participant study: prints the URL to open; Ctrl-C stops it."""
     from emogen.study.config import demo_study_path
     from emogen.web.server import run_server
 
     path = config if config is not None else demo_study_path()
-    run_server(path, host=host, port=port, database_url=database_url, model=model)
+    run_server(
+        path,
+        host=host,
+        port=port,
+        database_url=database_url,
+        model=model,
+        session_limit=session_limit,
+        hsts=hsts,
+    )

@@ -9,11 +9,12 @@ from __future__ import annotations
 import json
 from enum import StrEnum
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from emogen.cli.options import friendly_errors
+from emogen.errors import ConfigError
 
 if TYPE_CHECKING:
     from emogen.study.storage import Store
@@ -146,36 +147,80 @@ def resume_link(
 @friendly_errors
 def replay_command(
     session_id: Annotated[
-        int, typer.Argument(help="Session id (see `emogen study status --sessions`).")
-    ],
+        int | None,
+        typer.Argument(
+            help="Session id (see `emogen study status --sessions`); with "
+            "--from-export, default every exported session."
+        ),
+    ] = None,
     database_url: DatabaseOpt = None,
+    from_export: Annotated[
+        Path | None,
+        typer.Option(
+            "--from-export",
+            help="Replay from a folder written by `emogen study "
+            "export` (Parquet or CSV) instead of the database.",
+        ),
+    ] = None,
     model: Annotated[
         Path | None, typer.Option("--model", help="Face model (default: the study's).")
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
 ) -> None:
     """Regenerate every population of a session from its seeds and selections; compare."""
-    from emogen.model import load_model
-    from emogen.study.replay import replay_session, study_of_session
-
-    store = _store(database_url)
-    cfg = study_of_session(store, session_id)
-    face_model = load_model(model if model is not None else cfg.model, rig=cfg.rig)
-    report = replay_session(
-        store, session_id, face_model.rig, face_model.model_hash, model=face_model
-    )
-    store.dispose()
-    if as_json:
-        typer.echo(json.dumps(report.to_dict(), indent=2))
+    if from_export is not None:
+        reports = _replay_export(from_export, session_id, model)
     else:
-        verdict = "every face matches" if report.ok else "MISMATCH"
-        typer.echo(
-            f"session {session_id}: {report.populations} populations, {report.faces} faces "
-            f"replayed: {verdict}"
-        )
-        if not report.model_hash_matches:
-            typer.echo("  the model differs from the one the session was recorded with")
-        for m in report.mismatches[:20]:
-            typer.echo(f"  {m}")
-    if not report.ok:
+        from emogen.model import load_model
+        from emogen.study.replay import replay_session, study_of_session
+
+        if session_id is None:
+            raise ConfigError("replay needs a SESSION_ID (or --from-export FOLDER)")
+        store = _store(database_url)
+        cfg = study_of_session(store, session_id)
+        face_model = load_model(model if model is not None else cfg.model, rig=cfg.rig)
+        reports = [
+            replay_session(
+                store, session_id, face_model.rig, face_model.model_hash, model=face_model
+            )
+        ]
+        store.dispose()
+    if as_json:
+        data = [r.to_dict() for r in reports]
+        typer.echo(json.dumps(data[0] if from_export is None else data, indent=2))
+    else:
+        for report in reports:
+            _echo_report(report)
+    if not all(r.ok for r in reports):
         raise typer.Exit(1)
+
+
+def _replay_export(folder: Path, session_id: int | None, model: Path | None) -> list[Any]:
+    from emogen.model import load_model
+    from emogen.study.config import StudyConfig
+    from emogen.study.replay_export import read_exported, replay_exported
+
+    configs = read_exported(folder)["study"]["config_json"]
+    if len(configs) == 0:
+        raise ConfigError(f"the export at {folder} holds no study")
+    cfg = StudyConfig.model_validate(json.loads(configs.iloc[0]))
+    face_model = load_model(model if model is not None else cfg.model, rig=cfg.rig)
+    return replay_exported(
+        folder,
+        face_model.rig,
+        face_model.model_hash,
+        model=face_model,
+        session_ids=None if session_id is None else [session_id],
+    )
+
+
+def _echo_report(report: Any) -> None:
+    verdict = "every face matches" if report.ok else "MISMATCH"
+    typer.echo(
+        f"session {report.session_id}: {report.populations} populations, {report.faces} faces "
+        f"replayed: {verdict}"
+    )
+    if not report.model_hash_matches:
+        typer.echo("  the model differs from the one the session was recorded with")
+    for m in report.mismatches[:20]:
+        typer.echo(f"  {m}")

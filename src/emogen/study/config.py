@@ -49,6 +49,12 @@ DEFAULT_CONSENT = (
     "participant id; no other personal data are collected. You may stop at any time by "
     "closing the page.\n\nBy clicking “I agree” you consent to take part."
 )
+#: The default consent text of a study that collects the browser's user agent.
+DEFAULT_CONSENT_USER_AGENT = DEFAULT_CONSENT.replace(
+    "no other personal data are collected.",
+    "your browser's identification string (its user agent: browser, version and operating "
+    "system) is also recorded; no other personal data are collected.",
+)
 DEFAULT_INSTRUCTIONS = (
     "You will see ten faces at a time. Click the face that best shows the emotion you are asked "
     "for: it is marked with a star (★). Then click any other faces that are also acceptable: "
@@ -89,7 +95,8 @@ class StudyConfig(_Strict):
 
     name: Annotated[str, Field(min_length=1)] = "study"
     title: str = "Making facial expressions"
-    #: Study seed: session k's seed is child k of it (None: a fresh seed per session, recorded).
+    #: Study seed: a session's seed is a keyed hash of it and the participant id (the same
+    #: participant, the same seed, whoever else came; None: a fresh seed per session, recorded).
     seed: Annotated[int, Field(ge=0, lt=2**63)] | None = None
     emotions: tuple[str, ...] = Field(default=("happy",), min_length=1)
     repetitions: Annotated[int, Field(ge=1, le=100)] = 1
@@ -99,13 +106,18 @@ class StudyConfig(_Strict):
     #: The lab's own identities, ``[identity.NAME]`` tables: ``shape`` (generic, a rig preset or
     #: identity coefficients) plus any :class:`~emogen.appearance.Appearance` key.
     identity: dict[str, Identity] = Field(default_factory=dict)
-    #: random (seeded per session), latin_square (balanced, row = session number), fixed.
+    #: random (seeded per session), latin_square (balanced, row from a keyed hash of the
+    #: participant id), fixed.
     order: Literal["random", "latin_square", "fixed"] = "random"
     #: URL parameter carrying the participant id (e.g. Prolific's PROLIFIC_PID); also accepted:
     #: ``participant``. Without one, an id is generated.
     participant_param: str = "PROLIFIC_PID"
     prompt: str = "Make the face look {EMOTION}"
+    #: Default: :data:`DEFAULT_CONSENT` (or, when ``collect_user_agent``, the text that says so).
     consent: str = DEFAULT_CONSENT
+    #: Record the browser's user agent with each session (personal data: off by default; the
+    #: default consent text then says it is recorded). Off: ``user_agent`` is NULL.
+    collect_user_agent: bool = False
     instructions: str = DEFAULT_INSTRUCTIONS
     #: Show "Start again" (what it does is ga.init.on_reset: reinitialise or keep).
     allow_restart: bool = True
@@ -179,6 +191,14 @@ class StudyConfig(_Strict):
         """As written in the TOML: ``shape`` and the appearance keys side by side."""
         return {name: identity_table(ident) for name, ident in v.items()}
 
+    @model_validator(mode="before")
+    @classmethod
+    def _consent_says_user_agent(cls, data: Any) -> Any:
+        collects = isinstance(data, dict) and data.get("collect_user_agent") is True
+        if collects and data.get("consent", DEFAULT_CONSENT) == DEFAULT_CONSENT:
+            return {**data, "consent": DEFAULT_CONSENT_USER_AGENT}
+        return data
+
     @model_validator(mode="after")
     def _consistent(self) -> StudyConfig:
         if self.n_trials > 500:
@@ -231,6 +251,8 @@ class StudyConfig(_Strict):
         data = self.model_dump(mode="json")
         if not data["identity"]:  # studies without their own identities keep their hash
             del data["identity"]
+        if not data["collect_user_agent"]:  # nor do studies that do not collect user agents
+            del data["collect_user_agent"]
         return json.dumps(data, sort_keys=True, separators=(",", ":"))
 
 

@@ -1,15 +1,45 @@
-"""Trial order: random (seeded per session), balanced Latin square (by session number), fixed.
+"""Trial order: random (seeded per session), balanced Latin square (row by participant), fixed.
 
 Trials are the conditions emotions × identities × repetitions (``StudyConfig.conditions``).
+A participant's seed and Latin-square row come from a keyed hash of the study seed and the
+participant id (:func:`participant_seed`, :func:`participant_slot`), never from the order of
+arrival: sessions made by others (anonymous or not) shift nobody's seeds or trial order.
 """
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 
 import numpy as np
 
+from emogen.rng import fresh_seed
 from emogen.study.config import StudyConfig
+
+#: Domain of the keyed hashes (changing it would change every new participant's assignment).
+ASSIGNMENT_KEY = b"emogen.study/assignment/1"
+
+
+def _digest(purpose: str, key: str, participant_id: str) -> bytes:
+    message = "\x1f".join((purpose, key, participant_id)).encode()
+    return hashlib.blake2b(message, key=ASSIGNMENT_KEY, digest_size=16).digest()
+
+
+def participant_seed(study_seed: int | None, participant_id: str) -> int:
+    """The seed of a participant's session: a keyed hash of the study seed and the participant
+    id (the same participant always gets the same seed); a fresh seed when the study has none."""
+    if study_seed is None:
+        return fresh_seed()
+    words = np.frombuffer(_digest("seed", str(study_seed), participant_id), dtype="<u4")
+    entropy = [int(study_seed), *(int(w) for w in words)]
+    return int(np.random.SeedSequence(entropy).generate_state(2, np.uint64)[0] >> np.uint64(1))
+
+
+def participant_slot(config: StudyConfig, participant_id: str) -> int:
+    """A participant's assignment slot (a large non-negative int; the Latin-square row is it
+    modulo the number of rows): uniform over participants, so rows stay balanced in expectation."""
+    key = str(config.seed) if config.seed is not None else "name:" + config.name
+    return int.from_bytes(_digest("order", key, participant_id)[:8], "little")
 
 
 @dataclass(frozen=True)
@@ -36,15 +66,14 @@ def balanced_latin_square(n: int) -> list[list[int]]:
     return rows
 
 
-def trial_order(
-    config: StudyConfig, *, session_number: int, rng: np.random.Generator
-) -> TrialOrder:
-    """The order of a session's trials (session_number counts sessions of the study from 0)."""
+def trial_order(config: StudyConfig, *, slot: int, rng: np.random.Generator) -> TrialOrder:
+    """The order of a session's trials: the Latin-square row is ``slot`` modulo the rows
+    (``slot`` is :func:`participant_slot`; sessions recorded before it used their number)."""
     n = config.n_trials
     if config.order == "fixed":
         return TrialOrder(tuple(range(n)), "fixed", -1)
     if config.order == "latin_square":
         rows = balanced_latin_square(n)
-        row = session_number % len(rows)
+        row = slot % len(rows)
         return TrialOrder(tuple(rows[row]), "latin_square", row)
     return TrialOrder(tuple(int(i) for i in rng.permutation(n)), "random", -1)

@@ -1,7 +1,8 @@
 """Consent given: a participant's session is made (or resumed with its token).
 
-A session gets the next number in the study, a seed (a child of the study's seed, else fresh),
-a trial order (the study design) and one trial row per condition, each with its own seed.
+A session gets the next number in the study (arrival order, for display only), a seed and a
+trial order that depend on the participant id alone (a keyed hash with the study seed:
+:mod:`emogen.study.design`), and one trial row per condition, each with its own seed.
 """
 
 from __future__ import annotations
@@ -15,9 +16,9 @@ from sqlalchemy.orm import Session
 
 from emogen import __version__
 from emogen.errors import ConfigError
-from emogen.rng import fresh_seed, spawn_seeds
+from emogen.rng import spawn_seeds
 from emogen.study.context import StudyContext
-from emogen.study.design import trial_order
+from emogen.study.design import participant_seed, participant_slot, trial_order
 from emogen.study.errors import StepConflict
 from emogen.study.queries import count_sessions, lock_study, session_of_participant
 from emogen.study.storage import Store
@@ -44,9 +45,10 @@ def _new_session(
 ) -> SessionRow:
     cfg = ctx.config
     number = count_sessions(db, ctx.study_id)
-    seed = spawn_seeds(cfg.seed, number + 1)[number] if cfg.seed is not None else fresh_seed()
+    seed = participant_seed(cfg.seed, participant_id)
     order_seed, *trial_seeds = spawn_seeds(seed, cfg.n_trials + 1)
-    order = trial_order(cfg, session_number=number, rng=np.random.default_rng(order_seed))
+    slot = participant_slot(cfg, participant_id)
+    order = trial_order(cfg, slot=slot, rng=np.random.default_rng(order_seed))
     now = utcnow()
     sess = SessionRow(
         study_id=ctx.study_id,
@@ -61,7 +63,7 @@ def _new_session(
         stage="instructions",
         current_trial=0,
         package_version=__version__,
-        user_agent=user_agent[:256],
+        user_agent=user_agent[:256] if cfg.collect_user_agent else None,
         created_at=now,
         consented_at=now,
         updated_at=now,
@@ -101,6 +103,7 @@ def create_session(
 
     A participant id that already has a session is resumed only with that session's token
     (``resume_token``, kept by the participant's browser); otherwise it is a conflict.
+    ``user_agent`` is stored only when the study collects it (``collect_user_agent``).
     """
     pid, source = checked_participant(participant_id)
 

@@ -6,7 +6,8 @@ Tables (one row per …): ``sessions`` (session), ``trials`` (trial of a session
 ``ratings`` (trial) and ``identities`` (identity of a study: its ``shape`` — a preset name, or
 ``shape_coefficients`` as a JSON list — and one column per appearance parameter, with
 ``appearance_generator``, so any stimulus can be re-rendered exactly; join on ``study`` and
-``identity``). Every row carries ``schema_version``, ``package_version`` (the version that
+``identity``), and ``study`` (study: its resolved config itself as ``config_json``, the model,
+gene and weight column names). Every row carries ``schema_version``, ``package_version`` (the version that
 recorded the session; for ``identities``, the study), ``model_hash`` and ``study_config_hash``.
 """
 
@@ -31,6 +32,7 @@ from emogen.study.export_rows import (
     restart_rows,
     selection_rows,
     session_rows,
+    study_rows,
     trial_rows,
 )
 from emogen.study.storage import Store
@@ -42,7 +44,16 @@ from emogen.study.tables import (
     TrialRow,
 )
 
-TABLES = ("sessions", "trials", "faces", "selections", "restarts", "ratings", "identities")
+TABLES = (
+    "sessions",
+    "trials",
+    "faces",
+    "selections",
+    "restarts",
+    "ratings",
+    "identities",
+    "study",
+)
 STAMPS = ("schema_version", "package_version", "model_hash", "study_config_hash")
 
 
@@ -144,6 +155,7 @@ def export_tables(
     shown = {s.study_id for s in rec.sessions} if session_ids is not None else set(studies)
     for sid in sorted(shown):
         rows["identities"].extend(identity_rows(studies[sid]))
+    rows["study"] = list(study_rows([studies[sid] for sid in sorted(shown)]))
     return {name: _frame(name, rows[name]) for name in TABLES}
 
 
@@ -196,6 +208,7 @@ _EMPTY_COLUMNS = {
     "restarts": ["study", "session_id", "participant_id", "trial", "attempt", "generation"],
     "ratings": ["study", "session_id", "participant_id", "trial"],
     "identities": ["study", "identity", "shape", "shape_coefficients"],
+    "study": ["study", "config_json", "model_name", "gene_names", "weight_names", "created_at"],
 }
 
 
@@ -205,8 +218,34 @@ def _frame(name: str, rows: list[dict[str, Any]]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+#: A text cell starting with one of these is a formula to a spreadsheet (CSV injection).
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def neutralise_formulas(df: pd.DataFrame) -> pd.DataFrame:
+    """A copy whose text cells that a spreadsheet would run as formulas (starting with
+    ``= + - @``, tab or CR) start with ``'`` instead; numbers (negative ones too) stay as they
+    are. For CSV only: Parquet keeps the raw values."""
+
+    def cell(v: Any) -> Any:
+        return "'" + v if isinstance(v, str) and v.startswith(FORMULA_STARTS) else v
+
+    out = df.copy()
+    for col in out.columns:
+        column = out[col]
+        if column.dtype == object or pd.api.types.is_string_dtype(column.dtype):
+            out[col] = column.map(cell)
+    return out
+
+
+def csv_text(df: pd.DataFrame) -> str:
+    """One export table as CSV text, formulas neutralised (:func:`neutralise_formulas`)."""
+    return str(neutralise_formulas(df).to_csv(index=False))
+
+
 def write_export(tables: dict[str, pd.DataFrame], out: Path, fmt: str = "parquet") -> list[Path]:
-    """``<table>.parquet`` or ``<table>.csv`` for every table, in ``out``."""
+    """``<table>.parquet`` or ``<table>.csv`` for every table, in ``out`` (CSV text cells
+    that a spreadsheet would run as formulas are neutralised: :func:`neutralise_formulas`)."""
     if fmt not in ("parquet", "csv"):
         raise ConfigError(f"--format must be parquet or csv; got {fmt!r}")
     out = Path(out)
@@ -217,6 +256,6 @@ def write_export(tables: dict[str, pd.DataFrame], out: Path, fmt: str = "parquet
         if fmt == "parquet":
             df.to_parquet(path, index=False)
         else:
-            df.to_csv(path, index=False)
+            path.write_text(csv_text(df), encoding="utf-8")
         paths.append(path)
     return paths

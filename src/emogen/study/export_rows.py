@@ -15,6 +15,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from emogen.ga.state import stream_of_state
 from emogen.study.tables import (
     SCHEMA_VERSION,
     FaceRow,
@@ -149,6 +150,7 @@ def trial_rows(rec: Records) -> Iterator[Row]:
             "identity": t.identity,
             "repetition": t.repetition,
             "seed": t.seed,
+            "ga_stream": stream_of_state(t.engine_state) if t.engine_state else None,
             "status": t.status,
             "attempts": t.attempt + 1,
             "generation_reached": t.generation,
@@ -203,6 +205,7 @@ def selection_rows(rec: Records) -> Iterator[Row]:
                 "shown_at": iso(p.shown_at),
                 "submitted_at": iso(sel.submitted_at),
                 "server_response_ms": sel.server_response_ms,
+                "load_ms": sel.load_ms,
                 "client_response_ms": sel.client_response_ms,
                 "step_key": sel.step_key,
                 **rec.trial_stamp(t),
@@ -220,6 +223,7 @@ def restart_rows(rec: Records) -> Iterator[Row]:
             "shown_at": iso(p.shown_at),
             "submitted_at": iso(r.submitted_at),
             "server_response_ms": r.server_response_ms,
+            "load_ms": r.load_ms,
             "client_response_ms": r.client_response_ms,
             "step_key": r.step_key,
             **rec.trial_stamp(t),
@@ -241,4 +245,23 @@ def rating_rows(rec: Records) -> Iterator[Row]:
             "client_response_ms": rt.client_response_ms,
             "step_key": rt.step_key,
             **rec.trial_stamp(t),
+        }
+
+
+def study_rows(studies: list[StudyRow]) -> Iterator[Row]:
+    """One row per study: its resolved config itself (``config_json``, canonical JSON: the
+    exact config its sessions ran with, and replay from exported files reads), not only its
+    hash; the model, the gene and weight column names (JSON lists)."""
+    for st in studies:
+        yield {
+            "study": st.name,
+            "config_json": st.config_json,
+            "model_name": st.model_name,
+            "gene_names": st.gene_names,
+            "weight_names": st.weight_names,
+            "created_at": iso(st.created_at),
+            "schema_version": SCHEMA_VERSION,
+            "package_version": st.package_version,
+            "model_hash": st.model_hash,
+            "study_config_hash": st.config_hash,
         }

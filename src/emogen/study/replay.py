@@ -59,28 +59,55 @@ class ReplayReport:
         }
 
 
-def _compare(where: str, stored: PopulationRow, engine: Engine) -> tuple[int, list[str]]:
+@dataclass(frozen=True)
+class StoredFaces:
+    """One stored population, as arrays: from the database or from exported tables.
+
+    ids, parents (n, 2), operators : (n,); genes : (n, n_genes); weights : (n, n_columns).
+    """
+
+    ids: np.ndarray
+    parents: np.ndarray
+    operators: list[str]
+    genes: np.ndarray
+    weights: np.ndarray
+
+    @classmethod
+    def of_row(cls, stored: PopulationRow) -> StoredFaces:
+        faces = stored.faces
+        return cls(
+            ids=np.array([f.face_id for f in faces], dtype=np.int64),
+            parents=np.array([(f.parent_a, f.parent_b) for f in faces], dtype=np.int64),
+            operators=[f.operator for f in faces],
+            genes=np.array([json.loads(f.genes) for f in faces], dtype=np.float64),
+            weights=np.array([json.loads(f.weights) for f in faces], dtype=np.float64),
+        )
+
+
+def compare_population(where: str, stored: StoredFaces, engine: Engine) -> tuple[int, list[str]]:
+    """Ask ``engine`` for its next population and compare it with ``stored``, face by face
+    (ids, parents, operators, genes and full weights, exactly): (faces, problems)."""
     pop = engine.ask()
-    faces = stored.faces
-    problems = []
-    if len(faces) != len(pop):
-        return 0, [f"{where}: stored {len(faces)} faces, replay made {len(pop)}"]
+    n = len(stored.ids)
+    if n != len(pop):
+        return 0, [f"{where}: stored {n} faces, replay made {len(pop)}"]
     weights = full_weights(pop)
-    for i, f in enumerate(faces):
+    problems = []
+    for i in range(n):
         what = []
-        if f.face_id != int(pop.ids[i]):
-            what.append(f"id {f.face_id} vs {int(pop.ids[i])}")
-        if (f.parent_a, f.parent_b) != tuple(int(x) for x in pop.parent_ids[i]):
+        if int(stored.ids[i]) != int(pop.ids[i]):
+            what.append(f"id {int(stored.ids[i])} vs {int(pop.ids[i])}")
+        if tuple(int(x) for x in stored.parents[i]) != tuple(int(x) for x in pop.parent_ids[i]):
             what.append("parents")
-        if f.operator != str(pop.operators[i]):
-            what.append(f"operator {f.operator} vs {pop.operators[i]}")
-        if not np.array_equal(np.array(json.loads(f.genes)), pop.genes[i]):
+        if stored.operators[i] != str(pop.operators[i]):
+            what.append(f"operator {stored.operators[i]} vs {pop.operators[i]}")
+        if not np.array_equal(stored.genes[i], pop.genes[i]):
             what.append("genes")
-        if not np.array_equal(np.array(json.loads(f.weights)), weights[i]):
+        if not np.array_equal(stored.weights[i], weights[i]):
             what.append("weights")
         if what:
             problems.append(f"{where}, position {i}: " + ", ".join(what))
-    return len(faces), problems
+    return n, problems
 
 
 def study_of_session(store: Store, session_id: int) -> StudyConfig:
@@ -155,7 +182,7 @@ def replay_session(
                             f"{engine.generation}"
                         )
                         break
-                    n, problems = _compare(where, p, engine)
+                    n, problems = compare_population(where, StoredFaces.of_row(p), engine)
                     report.populations += 1
                     report.faces += n
                     report.mismatches += problems

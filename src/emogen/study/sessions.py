@@ -21,7 +21,7 @@ from emogen.study.enrolment import PARTICIPANT_ID, checked_participant, create_s
 from emogen.study.errors import SessionNotFound
 from emogen.study.progress import participant_token
 from emogen.study.queries import current_face, session_by_token
-from emogen.study.steps import Payload, SessionSteps, request_hash
+from emogen.study.steps import Payload, SessionSteps, Timing, request_hash
 from emogen.study.storage import Store
 from emogen.study.trials import TrialEngines
 from emogen.study.view import Completion, SessionState, completion, session_state
@@ -39,6 +39,11 @@ __all__ = [
     "request_hash",
     "weight_names",
 ]
+
+
+def _load(load_ms: float | None) -> dict[str, float]:
+    """``load_ms`` in a step's request hash only when given (keys recorded before it match)."""
+    return {} if load_ms is None else {"load_ms": load_ms}
 
 
 class StudyService:
@@ -82,28 +87,30 @@ class StudyService:
 
     def select(
         self, token: str, key: str, *, trial: int, attempt: int, generation: int, elite: int,
-        others: list[int], response_ms: float | None = None,
+        others: list[int], response_ms: float | None = None, load_ms: float | None = None,
     ) -> SessionState:  # fmt: skip
-        """The participant's selection of the shown generation; the next one is stored."""
+        """The participant's selection of the shown generation; the next one is stored.
+        ``load_ms``: the page's time to load and draw the faces (model, textures), if it says."""
         payload: Payload = {"trial": trial, "attempt": attempt, "generation": generation, "elite": elite,
-                   "others": others, "response_ms": response_ms}  # fmt: skip
+                   "others": others, "response_ms": response_ms, **_load(load_ms)}  # fmt: skip
         return self.steps.run(
             token, "select", key, payload,
             lambda db, sess: self.steps.select(db, sess, key=key, trial=trial, attempt=attempt,
-                generation=generation, elite=elite, others=others, response_ms=response_ms),
+                generation=generation, elite=elite, others=others,
+                timing=Timing(response_ms, load_ms)),
         )  # fmt: skip
 
     def restart(
         self, token: str, key: str, *, trial: int, attempt: int, generation: int,
-        response_ms: float | None = None,
+        response_ms: float | None = None, load_ms: float | None = None,
     ) -> SessionState:  # fmt: skip
         """'Start again': a new attempt of the trial at generation 0 (reinitialised or kept)."""
         payload = {"trial": trial, "attempt": attempt, "generation": generation,
-                   "response_ms": response_ms}  # fmt: skip
+                   "response_ms": response_ms, **_load(load_ms)}  # fmt: skip
         return self.steps.run(
             token, "restart", key, payload,
             lambda db, sess: self.steps.restart(db, sess, key=key, trial=trial, attempt=attempt,
-                generation=generation, response_ms=response_ms),
+                generation=generation, timing=Timing(response_ms, load_ms)),
         )  # fmt: skip
 
     def rate(

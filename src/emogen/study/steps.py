@@ -15,6 +15,7 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from datetime import datetime
 
 from sqlalchemy.orm import Session
@@ -66,6 +67,22 @@ def elapsed_ms(later: datetime, earlier: datetime | None) -> float:
     return max(0.0, (later_utc - e).total_seconds() * 1000.0)
 
 
+@dataclass(frozen=True)
+class Timing:
+    """What the page reports of a step: ``response_ms`` (faces visible → answer) and
+    ``load_ms`` (population received → faces drawn: for generation 0 the page, model and
+    texture loading). The server's time excludes ``load_ms``: see :func:`server_ms`."""
+
+    response_ms: float | None = None
+    load_ms: float | None = None
+
+
+def server_ms(later: datetime, shown_at: datetime | None, load_ms: float | None) -> float:
+    """``server_response_ms``: from the population stored to the answer received, less the
+    page's reported loading time (so generation 0 does not count page and model loading)."""
+    return max(0.0, elapsed_ms(later, shown_at) - (load_ms or 0.0))
+
+
 class SessionSteps:
     """The transitions of a session: begin, select, restart, rate (each under a step key)."""
 
@@ -115,7 +132,7 @@ class SessionSteps:
 
     def select(
         self, db: Session, sess: SessionRow, *, key: str, trial: int, attempt: int,
-        generation: int, elite: int, others: list[int], response_ms: float | None,
+        generation: int, elite: int, others: list[int], timing: Timing,
     ) -> ShownPopulation | None:  # fmt: skip
         """The participant's selection of the shown generation; the next one is stored."""
         row, pop = self._shown(db, sess, trial, attempt, generation)
@@ -129,8 +146,9 @@ class SessionSteps:
                 elite_face_id=elite,
                 other_face_ids=dumps(list(others)),
                 submitted_at=now,
-                server_response_ms=elapsed_ms(now, pop.shown_at),
-                client_response_ms=response_ms,
+                server_response_ms=server_ms(now, pop.shown_at, timing.load_ms),
+                client_response_ms=timing.response_ms,
+                load_ms=timing.load_ms,
                 step_key=key,
             )
         )
@@ -146,7 +164,7 @@ class SessionSteps:
 
     def restart(
         self, db: Session, sess: SessionRow, *, key: str, trial: int, attempt: int,
-        generation: int, response_ms: float | None,
+        generation: int, timing: Timing,
     ) -> ShownPopulation:  # fmt: skip
         """'Start again': a new attempt of the trial at generation 0 (reinitialised or kept)."""
         if not self.ctx.config.allow_restart:
@@ -159,8 +177,9 @@ class SessionSteps:
                 population_id=pop.id,
                 trial_id=row.id,
                 submitted_at=now,
-                server_response_ms=elapsed_ms(now, pop.shown_at),
-                client_response_ms=response_ms,
+                server_response_ms=server_ms(now, pop.shown_at, timing.load_ms),
+                client_response_ms=timing.response_ms,
+                load_ms=timing.load_ms,
                 step_key=key,
             )
         )

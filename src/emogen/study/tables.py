@@ -22,7 +22,9 @@ from sqlalchemy import (
 )
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
-SCHEMA_VERSION = "emogen.study/1"
+#: 2: sessions.user_agent may be NULL (not collected), selections/restarts.load_ms, the
+#: export's ``study`` table. Records of schema 1 still open, export and replay.
+SCHEMA_VERSION = "emogen.study/2"
 
 
 def utcnow() -> datetime:
@@ -89,7 +91,8 @@ class SessionRow(Base):
     stage: Mapped[str] = mapped_column(String(16))
     current_trial: Mapped[int] = mapped_column(Integer)
     package_version: Mapped[str] = mapped_column(String(32))
-    user_agent: Mapped[str] = mapped_column(String(256))
+    #: NULL unless the study collects it (``collect_user_agent``).
+    user_agent: Mapped[str | None] = mapped_column(String(256), nullable=True)
     created_at: Mapped[datetime] = mapped_column(Stamp)
     consented_at: Mapped[datetime] = mapped_column(Stamp)
     started_at: Mapped[datetime | None] = mapped_column(Stamp, nullable=True)
@@ -180,6 +183,8 @@ class SelectionRow(Base):
     submitted_at: Mapped[datetime] = mapped_column(Stamp)
     server_response_ms: Mapped[float] = mapped_column(Float)
     client_response_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
+    #: The page's load time of the population (ms), if it reported it (schema 2).
+    load_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
     step_key: Mapped[str] = mapped_column(String(64))
 
 
@@ -194,6 +199,8 @@ class RestartRow(Base):
     submitted_at: Mapped[datetime] = mapped_column(Stamp)
     server_response_ms: Mapped[float] = mapped_column(Float)
     client_response_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
+    #: The page's load time of the population (ms), if it reported it (schema 2).
+    load_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
     step_key: Mapped[str] = mapped_column(String(64))
 
 

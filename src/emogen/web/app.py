@@ -27,10 +27,16 @@ from emogen.web.assets import ModelGLBs
 from emogen.web.errors import install_error_handlers
 from emogen.web.faces import FacePNGs
 from emogen.web.limits import BodyLimit, add_response_headers
+from emogen.web.ratelimit import RateLimit, TokenBuckets
 from emogen.web.schemas import MAX_BODY_BYTES
 
 HERE = Path(__file__).resolve().parent
 RESEARCHER_TOKEN_ENV = "EMOGEN_RESEARCHER_TOKEN"
+#: New sessions per client address: 20 at once, then 20 a minute (a lab behind one address
+#: still fits; a script making hundreds does not).
+SESSION_LIMIT = RateLimit(burst=20, per_minute=20)
+#: Wrong researcher tokens per client address: 10, then one every 6 s.
+RESEARCHER_FAILURE_LIMIT = RateLimit(burst=10, per_minute=10)
 
 
 def viewer_built() -> bool:
@@ -70,6 +76,9 @@ def create_app(
     *,
     model: FaceModel | None = None,
     researcher_token: str | None = None,
+    session_limit: RateLimit = SESSION_LIMIT,
+    researcher_failure_limit: RateLimit = RESEARCHER_FAILURE_LIMIT,
+    hsts: bool = False,
 ) -> FastAPI:
     """The study server for one study config.
 
@@ -77,6 +86,9 @@ def create_app(
       ``database_url``, then an SQLite file in the user data folder).
     model : the face model (default: the config's ``model``, then $EMOGEN_MODEL …).
     researcher_token : default $EMOGEN_RESEARCHER_TOKEN; without one the researcher API is off.
+    session_limit : new sessions per client address (429 beyond; ``RateLimit.parse("off")``).
+    researcher_failure_limit : wrong researcher tokens per client address (429 beyond).
+    hsts : send Strict-Transport-Security (only when the site is reached over HTTPS only).
     """
     from emogen.model import load_model
 
@@ -113,7 +125,9 @@ def create_app(
     app.state.glbs = ModelGLBs(model, identities=identities)
     # no thread or OpenGL context until the first PNG is asked for
     app.state.faces = FacePNGs(model, correct=config.correct, identities=identities)
-    add_response_headers(app)
+    app.state.session_buckets = TokenBuckets(session_limit)
+    app.state.researcher_failures = TokenBuckets(researcher_failure_limit)
+    add_response_headers(app, hsts=hsts)
     app.add_middleware(BodyLimit, max_bytes=MAX_BODY_BYTES)
     install_error_handlers(app)
     _routes(app, store, config)

@@ -12,6 +12,7 @@ from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse, Resp
 from emogen.study.errors import StudyError
 from emogen.study.sessions import StudyService
 from emogen.study.view import SessionState
+from emogen.web.ratelimit import client_key, too_many
 from emogen.web.schemas import (
     TOKEN_PATTERN,
     Begin,
@@ -96,10 +97,15 @@ def session_page(request: Request, link: str) -> Response:
     "/api/sessions",
     status_code=201,
     response_model=Created,
-    responses=error_responses(409, 413, 422, 503),
+    responses=error_responses(409, 413, 422, 429, 503),
 )
 def create_session(request: Request, body: NewSession) -> JSONResponse:
-    """Consent given: start a session (or resume this browser's session of the participant)."""
+    """Consent given: start a session (or resume this browser's session of the participant).
+
+    Limited per client address (429 with Retry-After beyond the server's session limit)."""
+    wait = request.app.state.session_buckets.take(client_key(request))
+    if wait > 0:
+        raise too_many(wait, "new sessions")
     token, state = _service(request).create_session(
         body.participant_id,
         resume_token=body.resume_token,
@@ -142,6 +148,7 @@ def select_faces(request: Request, token: Token, body: Selection) -> JSONRespons
         elite=body.elite,
         others=list(body.others),
         response_ms=body.response_ms,
+        load_ms=body.load_ms,
     )
     return _json(state)
 
@@ -156,6 +163,7 @@ def restart(request: Request, token: Token, body: Restart) -> JSONResponse:
         attempt=body.attempt,
         generation=body.generation,
         response_ms=body.response_ms,
+        load_ms=body.load_ms,
     )
     return _json(state)
 

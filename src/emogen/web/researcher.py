@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import secrets
+import hmac
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Path, Request
@@ -11,11 +11,16 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from pydantic import BaseModel, Field
 
 from emogen.study.errors import Forbidden
-from emogen.study.export import TABLES, export_tables, study_status
+from emogen.study.export import TABLES, csv_text, export_tables, study_status
 from emogen.study.progress import progress_as_shown
+from emogen.web.ratelimit import client_key, too_many
 from emogen.web.schemas import error_responses
 
 router = APIRouter()
+DISABLED = (
+    "the researcher API is disabled on this server: start it with EMOGEN_RESEARCHER_TOKEN set "
+    "(a long random secret) to use the dashboard"
+)
 _bearer = HTTPBearer(auto_error=False, description="EMOGEN_RESEARCHER_TOKEN")
 
 
@@ -23,13 +28,19 @@ def researcher(
     request: Request,
     credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
 ) -> None:
+    """The researcher token checked in constant time; wrong ones are limited per client address
+    (429 once the failure limit is spent, before the token is even compared). Never logged."""
     expected = request.app.state.researcher_token
     if not expected:
-        raise Forbidden(
-            "researcher endpoints are disabled: start the server with EMOGEN_RESEARCHER_TOKEN set"
-        )
+        raise Forbidden(DISABLED)
+    failures = request.app.state.researcher_failures
+    client = client_key(request)
+    wait = failures.wait(client)
+    if wait > 0:
+        raise too_many(wait, "wrong researcher tokens")
     given = credentials.credentials if credentials is not None else ""
-    if not secrets.compare_digest(given.encode(), expected.encode()):
+    if not hmac.compare_digest(given.encode(), expected.encode()):
+        failures.take(client)
         raise Forbidden("researcher endpoints need 'Authorization: Bearer <researcher token>'")
 
 
@@ -40,11 +51,17 @@ Researcher = Annotated[None, Depends(researcher)]
 def dashboard(request: Request) -> HTMLResponse:
     """The dashboard page (it asks for the token and reads the API)."""
     return request.app.state.templates.TemplateResponse(
-        request, "researcher.html", {"config": request.app.state.config, "viewer": False}
+        request,
+        "researcher.html",
+        {
+            "config": request.app.state.config,
+            "viewer": False,
+            "disabled": None if request.app.state.researcher_token else DISABLED,
+        },
     )
 
 
-@router.get("/api/researcher/status", responses=error_responses(403, 503))
+@router.get("/api/researcher/status", responses=error_responses(403, 429, 503))
 def status(request: Request, _auth: Researcher) -> dict[str, Any]:
     """Progress of every study in the database, and of this study's sessions."""
     store = request.app.state.store
@@ -68,7 +85,7 @@ class ResumeLink(BaseModel):
 @router.get(
     "/api/researcher/participants/{participant_id}/link",
     response_model=ResumeLink,
-    responses=error_responses(403, 404, 422, 503),
+    responses=error_responses(403, 404, 422, 429, 503),
 )
 def resume_link(
     request: Request,
@@ -86,7 +103,7 @@ def resume_link(
 
 @router.get(
     "/api/researcher/export/{table}.csv",
-    responses={200: {"content": {"text/csv": {}}}, **error_responses(403, 422, 503)},
+    responses={200: {"content": {"text/csv": {}}}, **error_responses(403, 422, 429, 503)},
     response_class=Response,
 )
 def export_csv(
@@ -98,7 +115,7 @@ def export_csv(
     service = request.app.state.service
     tables = export_tables(request.app.state.store, study=service.ctx.config.name)
     return Response(
-        tables[table].to_csv(index=False),
+        csv_text(tables[table]),
         media_type="text/csv",
         headers={"Content-Disposition": f'attachment; filename="{table}.csv"'},
     )

@@ -15,8 +15,14 @@ def run_server(
     model: Path | None = None,
     announce: bool = True,
     log_level: str = "warning",
+    session_limit: str | None = None,
+    hsts: bool = False,
 ) -> None:
-    """Load the study, open (and migrate) the database, serve until interrupted."""
+    """Load the study, open (and migrate) the database, serve until interrupted.
+
+    No access log: session links carry their secret token in the path. ``session_limit`` is a
+    :meth:`RateLimit.parse` text (default 20/min per client address); ``hsts`` sends HSTS.
+    """
     import uvicorn
 
     from emogen.study.config import load_study_config
@@ -25,7 +31,15 @@ def run_server(
     config = load_study_config(config_path)
     if model is not None:
         config = config.model_copy(update={"model": model})
-    app = create_app(config, database_url)
+    from emogen.errors import ConfigError
+    from emogen.web.app import SESSION_LIMIT
+    from emogen.web.ratelimit import RateLimit
+
+    try:
+        limit = SESSION_LIMIT if session_limit is None else RateLimit.parse(session_limit)
+    except ValueError as exc:
+        raise ConfigError(f"--session-limit: {exc}") from None
+    app = create_app(config, database_url, session_limit=limit, hsts=hsts)
     if announce:
         shown = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::") else host
         sys.stdout.write(

@@ -85,3 +85,11 @@ test("the select body names the generation shown", () => {
   });
   assert.throws(() => selectionBody(state({}), none, "k", 0), /best face/);
 });
+
+test("the select body carries the page's load time only when measured", () => {
+  const body = selectionBody(state({}), { elite: 4, others: [] }, "key-12345678", 850, 1234);
+  assert.equal(body.load_ms, 1234);
+  assert.equal(body.response_ms, 850);
+  const without = selectionBody(state({}), { elite: 4, others: [] }, "key-12345678", 850);
+  assert.equal("load_ms" in without, false);
+});

@@ -218,6 +218,8 @@ export interface paths {
         /**
          * Create Session
          * @description Consent given: start a session (or resume this browser's session of the participant).
+         *
+         *     Limited per client address (429 with Retry-After beyond the server's session limit).
          */
         post: operations["create_session_api_sessions_post"];
         delete?: never;
@@ -378,6 +380,8 @@ export interface components {
             generation: number;
             /** Key */
             key: string;
+            /** Load Ms */
+            load_ms?: number | null;
             /** Response Ms */
             response_ms?: number | null;
             /** Trial */
@@ -411,6 +415,8 @@ export interface components {
             generation: number;
             /** Key */
             key: string;
+            /** Load Ms */
+            load_ms?: number | null;
             /**
              * Others
              * @default []
@@ -561,6 +567,17 @@ export interface operations {
                     "application/json": components["schemas"]["InvalidRequest"];
                 };
             };
+            /** @description Too many requests from this address; wait Retry-After seconds. */
+            429: {
+                headers: {
+                    /** @description Seconds to wait before trying again. */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
             /** @description The server is busy or shutting down; try again in a moment. */
             503: {
                 headers: {
@@ -620,6 +637,17 @@ export interface operations {
                     "application/json": components["schemas"]["InvalidRequest"];
                 };
             };
+            /** @description Too many requests from this address; wait Retry-After seconds. */
+            429: {
+                headers: {
+                    /** @description Seconds to wait before trying again. */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
             /** @description The server is busy or shutting down; try again in a moment. */
             503: {
                 headers: {
@@ -654,6 +682,17 @@ export interface operations {
             /** @description Researcher endpoints without the right token (or disabled). */
             403: {
                 headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description Too many requests from this address; wait Retry-After seconds. */
+            429: {
+                headers: {
+                    /** @description Seconds to wait before trying again. */
+                    "Retry-After"?: number;
                     [name: string]: unknown;
                 };
                 content: {
@@ -1125,6 +1164,17 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["InvalidRequest"];
+                };
+            };
+            /** @description Too many requests from this address; wait Retry-After seconds. */
+            429: {
+                headers: {
+                    /** @description Seconds to wait before trying again. */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
                 };
             };
             /** @description The server is busy or shutting down; try again in a moment. */

@@ -109,9 +109,10 @@ export function restoreChoice(saved, ids) {
  * @param {Choice} choice
  * @param {string} key
  * @param {number} responseMs
+ * @param {number} [loadMs] the page's time from receiving this population to its faces drawn
  * @returns {SelectionBody}
  */
-export function selectionBody(state, choice, key, responseMs) {
+export function selectionBody(state, choice, key, responseMs, loadMs) {
   if (!state.trial || choice.elite === null) {
     throw new Error("a selection needs a trial and a best face");
   }
@@ -123,5 +124,6 @@ export function selectionBody(state, choice, key, responseMs) {
     elite: choice.elite,
     others: [...choice.others],
     response_ms: responseMs,
+    ...(loadMs === undefined ? {} : { load_ms: loadMs }),
   };
 }

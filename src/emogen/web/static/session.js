@@ -16,6 +16,10 @@ const ui = {
   state: null,
   display: null,
   shownAt: 0, // performance.now() when the current faces finished drawing
+  // performance.now() when the answer holding the current faces arrived; the first faces this
+  // page shows count from the page's start (0), so their load_ms includes page, model, textures
+  receivedAt: /** @type {number | null} */ (null),
+  loadMs: 0, // receivedAt → shownAt, reported with the select / restart step
   key: null, // idempotency key of the pending step
   elite: null, // face id
   others: [], // face ids, in the order chosen
@@ -284,6 +288,7 @@ async function showTrial(state) {
   );
   $("grid").setAttribute("aria-busy", "false");
   ui.shownAt = performance.now();
+  ui.loadMs = Math.max(0, Math.round(ui.shownAt - (ui.receivedAt ?? 0)));
   setReady(true);
   paintSelection();
 }
@@ -329,6 +334,8 @@ function showDone(state) {
 
 // ---- state machine ---------------------------------------------------------------------------
 async function render(state) {
+  // the first population this page draws counts from the page's start (receivedAt stays 0)
+  ui.receivedAt = ui.receivedAt === null ? 0 : performance.now();
   ui.state = state;
   renderProgress(state);
   const view = selection.viewOf(state);
@@ -437,13 +444,13 @@ $("begin").addEventListener("click", () => step("begin", { key: newKey() }));
 
 $("next").addEventListener("click", () => {
   if (ui.elite === null || ui.busy) return;
-  step("select", selection.selectionBody(ui.state, ui, ui.key, elapsed()));
+  step("select", selection.selectionBody(ui.state, ui, ui.key, elapsed(), ui.loadMs));
 });
 
 $("restart").addEventListener("click", () => {
   if (ui.busy) return;
   if (!confirm("Start this face again from a new set of faces?")) return;
-  step("restart", { key: ui.key, ...position(), response_ms: elapsed() });
+  step("restart", { key: ui.key, ...position(), response_ms: elapsed(), load_ms: ui.loadMs });
 });
 
 $("rating-scale").addEventListener("change", () => {
