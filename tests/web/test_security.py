@@ -16,6 +16,7 @@ import pandas as pd
 import pytest
 from fastapi.testclient import TestClient
 
+from emogen.errors import ConfigError
 from emogen.study.config import DEFAULT_CONSENT, StudyConfig, study_from_dict
 from emogen.study.design import balanced_latin_square, participant_slot, trial_order
 from emogen.study.export import export_tables, neutralise_formulas, write_export
@@ -300,7 +301,12 @@ def test_user_agent_is_not_stored_unless_the_study_collects_it(
     assert sessions["user_agent"].isna().all()
     on = {**SMALL_STUDY, "collect_user_agent": True}
     assert "user agent" in study_from_dict(on).consent
-    assert study_from_dict({**on, "consent": "Own text."}).consent == "Own text."
+    own = "Own text; your browser's User-Agent is recorded."
+    assert study_from_dict({**on, "consent": own}).consent == own
+    with pytest.raises(
+        ConfigError, match=r"consent text does not tell.*got consent = 'Own text\.'"
+    ):
+        study_from_dict({**on, "consent": "Own text."})  # collecting without saying so
     assert study_from_dict(SMALL_STUDY).consent == DEFAULT_CONSENT
     with TestClient(make_app(tmp_path, ict_model, "on", study=on)) as c:
         c.post("/api/sessions", json={"participant_id": "U-1"}, headers={"User-Agent": "Agent/1"})

@@ -55,6 +55,8 @@ DEFAULT_CONSENT_USER_AGENT = DEFAULT_CONSENT.replace(
     "your browser's identification string (its user agent: browser, version and operating "
     "system) is also recorded; no other personal data are collected.",
 )
+#: A consent text of a study collecting user agents must name it with one of these (any case).
+USER_AGENT_WORDS = ("user agent", "user-agent", "useragent")
 DEFAULT_INSTRUCTIONS = (
     "You will see ten faces at a time. Click the face that best shows the emotion you are asked "
     "for: it is marked with a star (★). Then click any other faces that are also acceptable: "
@@ -201,6 +203,14 @@ class StudyConfig(_Strict):
 
     @model_validator(mode="after")
     def _consistent(self) -> StudyConfig:
+        if self.collect_user_agent and not any(
+            word in self.consent.lower() for word in USER_AGENT_WORDS
+        ):
+            raise ValueError(
+                "collect_user_agent = true, but the study's own consent text does not tell "
+                "participants: name the browser's 'user agent' in it (or leave consent out for "
+                f"the default text that does); got consent = {self.consent[:80]!r}"
+            )
         if self.n_trials > 500:
             raise ValueError(
                 f"emotions × repetitions × identities must be at most 500 trials; "
