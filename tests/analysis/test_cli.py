@@ -21,16 +21,27 @@ def test_power_command(ict_dir: Path, tmp_path: Path) -> None:
         analysis_app,
         ["power", "--out", str(out), "--model", str(ict_dir), "--a", "mouthSmile=0.9",
          "--a", "cheekSquint=0.6", "--difference", "browInnerUp=0.8", "--generations", "3",
-         "--pool", "40", "--replicates", "40", "--permutations", "40", "--max-participants", "12"],
+         "--replicates", "40", "--permutations", "40", "--max-participants", "12"],
     )  # fmt: skip
     assert result.exit_code == 0, result.output
     summary = json.loads((out / "power.json").read_text())
     assert summary["n_required"] is not None and 4 <= summary["n_required"] <= 12
     assert summary["prototype_cd"] > 0.15
     curve = pd.read_csv(out / "power.csv")
-    assert list(curve.columns) == ["n", "power", "se", "fitted"]
+    assert list(curve.columns) == ["n", "power", "se", "fitted", "false_positive", "fp_se"]
     assert (out / "power.png").is_file()
     assert "participants per group reach power 0.8" in result.output
+    # spread and choice noise left out: both flagged as assumptions, in the output and the JSON
+    assert result.output.count("ASSUMPTION") >= 2 and len(summary["assumptions"]) == 2
+    assert "false positives" in result.output and summary["max_false_positive"] <= 0.2
+
+
+def test_power_command_refuses_a_difference_cd_cannot_see(ict_dir: Path, tmp_path: Path) -> None:
+    base = ["power", "--out", str(tmp_path), "--model", str(ict_dir), "--a", "mouthSmile=0.4",
+            "--b", "mouthSmile=0.8", "--participant-sd", "0", "--noise-temperature", "0"]  # fmt: skip
+    result = runner.invoke(analysis_app, base)
+    assert result.exit_code == 2 and "only in intensity" in result.output
+    assert "--statistic cd" in result.output and "--observer cd" in result.output
 
 
 def test_power_command_needs_one_group_b(ict_dir: Path, tmp_path: Path) -> None:

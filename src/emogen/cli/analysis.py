@@ -47,6 +47,15 @@ def analyse_command(
         ),
     ] = 2,
     alpha: Annotated[float, typer.Option("--alpha", help="Level of the GA-noise test.")] = 0.05,
+    choice_noise: Annotated[
+        float | None,
+        typer.Option(
+            "--choice-noise",
+            min=0.0,
+            help="Participants' choice noise T (softmax, CD units) in the GA-noise null "
+            "(default: a simulation's own T; for a study, an assumed and reported T = 0).",
+        ),
+    ] = None,
     seed: SeedOpt = 1,
     render: RenderOpt = True,
     model_path: ModelOpt = None,
@@ -69,7 +78,13 @@ def analyse_command(
         ga = load_study_config(config).ga
     model = load_model(model_path, rig=rig)
     options = AnalysisOptions(
-        render=render, noise_runs=noise_runs, seed=seed, gmm_dims=gmm_dims, alpha=alpha, ga=ga
+        render=render,
+        noise_runs=noise_runs,
+        seed=seed,
+        gmm_dims=gmm_dims,
+        alpha=alpha,
+        ga=ga,
+        choice_noise=choice_noise,
     )
     result = analyse(dataset, out, model=model, options=options)
     typer.echo(f"wrote {result.html} and {result.markdown}")

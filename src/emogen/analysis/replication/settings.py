@@ -16,7 +16,6 @@ class ReplicateSettings:
     seed: int = 1
     render: bool = True
     participant_noise: float = 0.05  # simulated participants' choice noise (softmax T, CD units)
-    power_pool: int = 400
     power_replicates: int = 300
     power_permutations: int = 300
     power_max_n: int = 120
@@ -27,7 +26,6 @@ class ReplicateSettings:
             "quick": True,
             "runs": 100,
             "participants": 60,
-            "power_pool": 150,
             "power_replicates": 100,
             "power_permutations": 100,
             "power_max_n": 60,
