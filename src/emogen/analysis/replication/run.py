@@ -6,7 +6,7 @@ from __future__ import annotations
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -29,6 +29,7 @@ from emogen.analysis.replication.geometry import FaceGeometry
 from emogen.analysis.replication.initialisation import initialisation
 from emogen.analysis.replication.settings import ReplicateSettings
 from emogen.analysis.replication.theoretical_metrics import targets_summary, theoretical_metrics
+from emogen.analysis.replication.verdicts import combine
 from emogen.analysis.replication.write_report import FaceFigures, write_closing, write_intro
 from emogen.analysis.report import Report
 
@@ -134,6 +135,10 @@ SECTIONS: list[tuple[str, Section]] = [
 ]
 
 
+#: sections run on the first seed only: no paper findings (targets), or our own tools
+SINGLE_SEED = ("targets", "analysis tools on simulated participants", "power analysis")
+
+
 def replicate(
     model: FaceModel,
     out: Path,
@@ -141,38 +146,81 @@ def replicate(
     *,
     only: list[str] | None = None,
     progress: Callable[[str], None] | None = None,
+    command: str | None = None,
 ) -> list[Finding]:
-    """Run the sections (``only``: names containing one of these words), write the report
-    to ``out`` and return the findings."""
+    """Run the sections (``only``: names containing one of these words) on every seed of
+    ``settings``, write the report (tables and figures of the first seed, every verdict
+    combined over the seeds) to ``out`` and return the combined findings."""
     from emogen import __version__
 
     s = settings or ReplicateSettings()
     title = "EmoGen: the paper's Section IV on our model" + (" (quick)" if s.quick else "")
     report = Report(title, Path(out))
-    findings: list[Finding] = []
     timings: dict[str, float] = {}
     start = time.perf_counter()
     glance_at = write_intro(report, model, s)
+    per_seed: list[list[Finding]] = []
     with tempfile.TemporaryDirectory(prefix="emogen-replicate-") as tmp:
-        bench = Bench(
-            ConditionRunner(model, s), FaceGeometry(model), FaceFigures(model, s.render), Path(tmp)
-        )
-        for name, section in SECTIONS:
-            if only and not any(w in name for w in only):
-                continue
-            t0 = time.perf_counter()
-            if progress:
-                progress(name)
-            findings += section(bench, report)
-            timings[name] = time.perf_counter() - t0
+        for k, seed in enumerate(s.seed_list):
+            si = replace(s, seed=seed, render=s.render and k == 0)
+            work = Path(tmp) / f"seed-{seed}"
+            work.mkdir()
+            bench = Bench(
+                ConditionRunner(model, si), FaceGeometry(model), FaceFigures(model, si.render), work
+            )
+            target = report if k == 0 else Report("scratch", work / "report")
+            found: list[Finding] = []
+            for name, section in SECTIONS:
+                if (only and not any(w in name for w in only)) or (k and name in SINGLE_SEED):
+                    continue
+                t0 = time.perf_counter()
+                if progress:
+                    progress(name + ("" if k == 0 else f" (seed {seed})"))
+                found += section(bench, target)
+                timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
+            per_seed.append(found)
+    combined = combine(per_seed)
     write_closing(
         report,
-        findings,
+        combined,
         timings,
         glance_at=glance_at,
         seconds=time.perf_counter() - start,
         version=__version__,
         settings=s,
+        provenance=provenance(model, s, command),
     )
     report.write()
-    return findings
+    return [c.as_finding() for c in combined]
+
+
+def provenance(model: FaceModel, s: ReplicateSettings, command: str | None) -> dict[str, str]:
+    """What reproduces the report: the git commit (and whether the tree was clean), the seeds,
+    the model hash and the exact command."""
+    import subprocess
+
+    here = Path(__file__).resolve().parent
+    try:
+        commit = subprocess.run(
+            ["git", "-C", str(here), "rev-parse", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        commit += " (uncommitted changes)" if dirty else ""
+    except (OSError, subprocess.CalledProcessError):
+        commit = "unknown (not a git checkout)"
+    quick = " --quick" if s.quick else ""
+    return {
+        "git commit": commit,
+        "seeds": ", ".join(str(x) for x in s.seed_list),
+        "model hash": model.model_hash,
+        "command": command
+        or f"emogen replicate{quick} --seed {s.seed} --seeds {s.seeds} --out DIR",
+    }

@@ -5,6 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+#: --quick's own first seed: its runs are not a prefix of the full run's (seed 1)
+QUICK_SEED = 101
+
 
 @dataclass(frozen=True)
 class ReplicateSettings:
@@ -14,6 +17,7 @@ class ReplicateSettings:
     runs: int = 500
     participants: int = 240
     seed: int = 1
+    seeds: int = 3  # independent seeds: seed, seed + 1, …; every verdict combines them
     render: bool = True
     participant_noise: float = 0.05  # simulated participants' choice noise (softmax T, CD units)
     power_replicates: int = 300
@@ -24,6 +28,7 @@ class ReplicateSettings:
     def quick_settings(cls, **kw: Any) -> ReplicateSettings:
         base = {
             "quick": True,
+            "seed": QUICK_SEED,
             "runs": 100,
             "participants": 60,
             "power_replicates": 100,
@@ -31,6 +36,10 @@ class ReplicateSettings:
             "power_max_n": 60,
         }
         return cls(**(base | kw))
+
+    @property
+    def seed_list(self) -> list[int]:
+        return [self.seed + k for k in range(self.seeds)]
 
     @classmethod
     def full_settings(cls, **kw: Any) -> ReplicateSettings:
