@@ -14,6 +14,7 @@ from emogen.analysis.replication import write_ga, write_metrics, write_tools
 from emogen.analysis.replication.analysis_tools import participant_tools, power_study
 from emogen.analysis.replication.bias_repeatability import bias_repeatability
 from emogen.analysis.replication.conditions import ConditionRunner
+from emogen.analysis.replication.correctives import correctives, write_correctives
 from emogen.analysis.replication.empirical_metrics import (
     TrainingSet,
     empirical_metrics,
@@ -116,6 +117,12 @@ def _tools(b: Bench, r: Report) -> list[Finding]:
     return res.findings
 
 
+def _correctives(b: Bench, r: Report) -> list[Finding]:
+    res = correctives(b.runner)
+    write_correctives(r, res)
+    return res.findings
+
+
 def _power(b: Bench, r: Report) -> list[Finding]:
     write_tools.write_power(r, power_study(b.runner), b.settings)
     return []
@@ -130,13 +137,19 @@ SECTIONS: list[tuple[str, Section]] = [
     ("activation ranges (Table IV)", _ranges),
     ("target complexity and GA noise (Table V, Fig. 18)", _complexity),
     ("selection pressure", _selection),
+    ("correctives (Section III-A)", _correctives),
     ("analysis tools on simulated participants", _tools),
     ("power analysis", _power),
 ]
 
 
 #: sections run on the first seed only: no paper findings (targets), or our own tools
-SINGLE_SEED = ("targets", "analysis tools on simulated participants", "power analysis")
+SINGLE_SEED = (
+    "targets",
+    "correctives (Section III-A)",
+    "analysis tools on simulated participants",
+    "power analysis",
+)
 
 
 def replicate(
