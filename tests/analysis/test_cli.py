@@ -110,9 +110,9 @@ def test_replicate_quick(ict_dir: Path, tmp_path: Path) -> None:
         assert s in sections, s
     verdicts = findings["verdict"].str.strip("*")
     assert verdicts.isin(["holds", "partly", "differs", "inconclusive"]).all()
-    # our own GA-noise check is reported apart, outside the tally
+    # our own checks (GA-noise test, correctives) are reported apart, outside the tally
     ours = pd.read_csv(out / "tables" / "our_checks.csv")
-    assert set(ours["section"]) == {"GA noise (Section IV-C)"}
+    assert set(ours["section"]) == {"GA noise (Section IV-C)", "Section III-A"}
     assert "GA noise (Section IV-C)" not in sections
     html = (out / "index.html").read_text()
     assert "9,592" in html and "simulated participants" in html

@@ -22,6 +22,7 @@ from emogen.analysis.replication.findings import (
     Finding,
     ci_text,
     cohen_d,
+    graded,
     mean_diff_ci,
     pm,
     sd_diff_ci,
@@ -130,6 +131,9 @@ def _control_experiment(
             d = getattr(space, "ed" if metric == "pca_ed" else "std_ed")(training, alpha)
             best = np.argsort(d)[:5]
             res[metric] = mean_cd(training[best], alpha)
+            if len(comps) == 2:  # which axis the matches follow: Δβ₁ − Δβ_low (target: 1, 1)
+                off = space.transform(training[best]) - beta_n
+                res[metric + " axis"] = float(off[:, comps[0]].mean() - off[:, comps[1]].mean())
         scores[name] = res
         rows.append(
             {
@@ -164,7 +168,22 @@ def _convergence(sims: dict[tuple[str, str], Condition]) -> pd.DataFrame:
 
 def _control_findings(scores: dict[str, dict[str, float]]) -> list[Finding]:
     vl, vh, vm = (scores[n] for n in ("β_l (low variance)", "β_h (high variance)", "β_m (mixed)"))
+    ax_ed, ax_std = vm["pca_ed axis"], vm["std_ed axis"]
+    axes = [ax_ed > 0, ax_std < 0]
     return [
+        Finding(
+            "Fig. 10",
+            "for a mixed target β_m, each metric follows one axis: ED(β) the high-variance "
+            "component, std_ED(β) the low-variance one",
+            "ED's matches along component 1, std_ED's along the low-variance component",
+            f"mean Δβ₁ − Δβ_low of the 5 matches: ED {ax_ed:+.2f}, std_ED {ax_std:+.2f} "
+            "(target: 1 and 1)",
+            graded(all(axes), any(axes)),
+            rule="order: ED's matches lean to component 1 (> 0) and std_ED's to the low one "
+            "(< 0); partly: one of the two",
+            value=ax_ed - ax_std,
+            value_label="ED − std_ED axis lean",
+        ),
         Finding(
             "Table II / Fig. 10",
             "std_ED(β) finds better matches for a low-variance target β_l",
