@@ -172,6 +172,7 @@ def replicate(
     timings: dict[str, float] = {}
     start = time.perf_counter()
     glance_at = write_intro(report, model, s)
+    prov = provenance(model, s, command)  # before anything is written into ``out``
     per_seed: list[list[Finding]] = []
     with tempfile.TemporaryDirectory(prefix="emogen-replicate-") as tmp:
         for k, seed in enumerate(s.seed_list):
@@ -201,7 +202,7 @@ def replicate(
         seconds=time.perf_counter() - start,
         version=__version__,
         settings=s,
-        provenance=provenance(model, s, command),
+        provenance=prov,
     )
     report.write()
     return [c.as_finding() for c in combined]

@@ -16,10 +16,16 @@ def write_participant_tools(r: Report, res: ParticipantTools, settings: Replicat
         f"The {settings.participants} simulated participants per emotion of the empirical-metrics "
         "section, final faces only. Each evolved their own target (core building blocks of the "
         "emotion, plus some optional ones), so a group's spread holds real between-participant "
-        "differences on top of GA noise: the spread test should find them. As a check of the "
-        f"test itself, {k} control groups of {n_control} runs toward target 1 (sparse) and {k} "
-        "toward target 2 (one shared target each, fresh seeds) should mostly not exceed the "
-        "noise: the share that does is the test's false-alarm rate (nominal 5%)."
+        "differences on top of GA noise and their own choice noise (T = "
+        f"{settings.participant_noise}). The null simulates the same choice noise, so the test "
+        "flags a group only where the participants' differences exceed what GA noise and "
+        "choice noise make around ONE shared target; small differences stay within it (a null "
+        "without the choice noise flagged every group, and one-target groups too). As a check "
+        f"of the test itself, {k} control groups of {n_control} runs toward target 1 (sparse) "
+        f"and {k} toward target 2 (one shared target each, the same choice noise, fresh seeds) "
+        "should mostly not exceed the noise: the share that does is the test's false-alarm "
+        "rate (nominal 5%; tests/analysis/test_noise_calibration.py measures it on 100 groups "
+        "per noise level)."
     )
     r.table(
         res.spread,
