@@ -21,14 +21,29 @@ if TYPE_CHECKING:
     from emogen.model.face import FaceModel
 
 
+def choice_noise(ds: Dataset, group: str, opts: AnalysisOptions) -> tuple[float, str]:
+    """The choice noise T the null simulates, and where it comes from: given
+    (``opts.choice_noise``), the simulation's own, or — for a study without one — an assumed 0.
+
+    The null must include the choosers' noise: with a noiseless null, a noisy chooser's spread
+    toward ONE shared target exceeds the GA noise and the test raises false alarms."""
+    if opts.choice_noise is not None:
+        return float(opts.choice_noise), "given"
+    if ds.kind == "simulation" and group in ds.configs:
+        return float(ds.configs[group].get("noise_temperature", 0.0) or 0.0), "the simulation's"
+    return 0.0, "ASSUMED (not given)"
+
+
 def noise_config(ds: Dataset, group: str, opts: AnalysisOptions) -> SimulationConfig:
-    """The data's GA settings for simulating GA noise (target filled in by the caller)."""
+    """The data's GA settings and choice noise for simulating GA noise (target filled in by
+    the caller)."""
+    temperature, _ = choice_noise(ds, group, opts)
     if ds.kind == "simulation" and group in ds.configs:
         cfg = dict(ds.configs[group])
         for k in ("target", "target_file", "target_row", "seed", "runs"):
             cfg.pop(k, None)
         cfg["metric"] = {"name": "cd"}
-        cfg["noise_temperature"] = 0.0
+        cfg["noise_temperature"] = temperature
         cfg["correct"] = False
         return SimulationConfig.model_validate(cfg | {"target": {"jawOpen": 1.0}})
     ga = opts.ga or GAConfig(
@@ -40,7 +55,12 @@ def noise_config(ds: Dataset, group: str, opts: AnalysisOptions) -> SimulationCo
     observed = list(ds.selections)[: ds.generations + 1]
     schedule = observed if len(observed) == ds.generations + 1 else list(PAPER_SELECTIONS)
     schedule = [min(max(int(s), ga.min_selections), ga.max_selections) for s in schedule]
-    return SimulationConfig(ga=ga, target={"jawOpen": 1.0}, selections=tuple(schedule))
+    return SimulationConfig(
+        ga=ga,
+        target={"jawOpen": 1.0},
+        selections=tuple(schedule),
+        noise_temperature=temperature,
+    )
 
 
 def noise_section(
@@ -84,11 +104,16 @@ def noise_section(
             label = PAPER_NOISE.label
         row = test.row()
         row["GA noise μ ± σ (to target)"] = label
+        t, source = choice_noise(ds, g, opts)
+        row["choice noise T"] = t
+        row["T source"] = source
         rows.append(row)
     report.paragraph(
         "Spread of a group = mean CD of its final faces to their mean (the proxy target). GA "
         "noise = the same statistic on random subsets of equal size from the final faces of "
-        "simulated runs with one consistent target and the data's GA settings. The latent target "
+        "simulated runs with one consistent target, the data's GA settings and the choosers' "
+        "choice noise T (a softmax chooser, CD units: the simulation's own, or given with "
+        "--choice-noise). The latent target "
         "is the least favourable of the sparse-to-dense candidates that reproduce the group's mean "
         "face (see emogen.analysis.noise); one-sided test at "
         f"α = {opts.alpha}. The paper's threshold for its model is {PAPER_NOISE.label} (CD to "
@@ -101,6 +126,7 @@ def noise_section(
             else ""
         )
     )
+    _assumption_note(report, rows)
     report.bullets([f"Skipped {n}" for n in notes])
     if rows:
         table = pd.DataFrame(rows)
@@ -115,4 +141,18 @@ def noise_section(
             pd.DataFrame(candidates),
             "spread_candidates",
             "Latent-target candidates per group (τ: weights below τ × max zeroed)",
+        )
+
+
+def _assumption_note(report: Report, rows: list[dict[str, object]]) -> None:
+    """Say loudly which groups' null assumed noiseless choosers."""
+    assumed = [str(r["group"]) for r in rows if str(r["T source"]).startswith("ASSUMED")]
+    if assumed:
+        report.paragraph(
+            "**Assumption: noiseless choosers (T = 0)** for "
+            + ", ".join(assumed)
+            + ". The choice noise of these participants is not known; T = 0 gives the "
+            "narrowest null (any real choice noise widens the spread of ONE shared target), so "
+            "'exceeds noise' here may be choice noise rather than different targets. Give the "
+            "participants' T with --choice-noise to test against it."
         )

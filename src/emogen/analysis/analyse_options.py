@@ -17,3 +17,6 @@ class AnalysisOptions:
     alpha: float = 0.05
     ga: GAConfig | None = None  # the study's GA settings (default: inferred from the data)
     render_size: int = 256
+    # the participants' choice noise T (softmax, CD units) the GA-noise null simulates; None:
+    # a simulation's own recorded T, and for a study an explicit, reported assumption of T = 0
+    choice_noise: float | None = None

@@ -118,3 +118,27 @@ def generation_summary(errors: np.ndarray) -> pd.DataFrame:
             }
         )
     return pd.DataFrame(rows)
+
+
+def kl_noise_floor(
+    sample: np.ndarray,
+    n: int,
+    *,
+    rng: np.random.Generator,
+    resamples: int = 200,
+    quantile: float = 0.95,
+    min_bandwidth: float = MIN_BANDWIDTH,
+) -> float:
+    """The KL divergence two samples of size ``n`` from ONE distribution reach by chance: the
+    ``quantile`` of KL(P̂₁ ‖ P̂₂) over ``resamples`` pairs drawn with replacement from
+    ``sample`` (1-D). A KL between generations below it is indistinguishable from no change."""
+    x = _clean(np.asarray(sample, dtype=np.float64), "sample")
+    kl = [
+        kl_divergence(
+            x[rng.integers(len(x), size=n)],
+            x[rng.integers(len(x), size=n)],
+            min_bandwidth=min_bandwidth,
+        )
+        for _ in range(resamples)
+    ]
+    return float(np.quantile(kl, quantile))

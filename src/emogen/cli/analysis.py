@@ -47,6 +47,15 @@ def analyse_command(
         ),
     ] = 2,
     alpha: Annotated[float, typer.Option("--alpha", help="Level of the GA-noise test.")] = 0.05,
+    choice_noise: Annotated[
+        float | None,
+        typer.Option(
+            "--choice-noise",
+            min=0.0,
+            help="Participants' choice noise T (softmax, CD units) in the GA-noise null "
+            "(default: a simulation's own T; for a study, an assumed and reported T = 0).",
+        ),
+    ] = None,
     seed: SeedOpt = 1,
     render: RenderOpt = True,
     model_path: ModelOpt = None,
@@ -69,7 +78,13 @@ def analyse_command(
         ga = load_study_config(config).ga
     model = load_model(model_path, rig=rig)
     options = AnalysisOptions(
-        render=render, noise_runs=noise_runs, seed=seed, gmm_dims=gmm_dims, alpha=alpha, ga=ga
+        render=render,
+        noise_runs=noise_runs,
+        seed=seed,
+        gmm_dims=gmm_dims,
+        alpha=alpha,
+        ga=ga,
+        choice_noise=choice_noise,
     )
     result = analyse(dataset, out, model=model, options=options)
     typer.echo(f"wrote {result.html} and {result.markdown}")
@@ -89,17 +104,28 @@ def replicate_command(
         list[str] | None,
         typer.Option("--only", help="Run only experiments whose name contains this; repeatable."),
     ] = None,
-    seed: SeedOpt = 1,
+    seed: Annotated[
+        int | None,
+        typer.Option("--seed", help="First seed (default 1; --quick: its own, 101)."),
+    ] = None,
+    seeds: Annotated[
+        int,
+        typer.Option("--seeds", min=1, help="Independent seeds every verdict combines."),
+    ] = 3,
     render: RenderOpt = True,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
 ) -> None:
     """Run the paper's Section IV experiments on our model and write the report, each finding
-    beside the paper's numbers with a one-line verdict (holds / partly / differs)."""
+    beside the paper's numbers with a verdict over several seeds (holds / partly / differs /
+    inconclusive)."""
     from emogen.analysis.replication import ReplicateSettings, replicate
+    from emogen.analysis.replication.findings import VERDICTS
     from emogen.model import load_model
 
-    extra: dict[str, object] = {"seed": seed, "render": render}
+    extra: dict[str, object] = {"seeds": seeds, "render": render}
+    if seed is not None:
+        extra["seed"] = seed
     if runs is not None:
         extra["runs"] = runs
     settings = (
@@ -113,14 +139,24 @@ def replicate_command(
     def progress(name: str) -> None:
         typer.echo(f"[{time.perf_counter() - start:6.1f} s] {name}", err=True)
 
-    findings = replicate(model, out, settings, only=only, progress=progress)
+    command = " ".join(
+        ["emogen replicate", *(["--quick"] if quick else [])]
+        + ([f"--runs {runs}"] if runs is not None else [])
+        + [f"--only '{w}'" for w in only or []]
+        + [f"--seed {settings.seed} --seeds {seeds}"]
+        + ([] if render else ["--no-render"])
+        + [f"--out {out}"]
+    )
+    findings = replicate(model, out, settings, only=only, progress=progress, command=command)
     for f in findings:
         typer.echo(f.line())
-    counts = {v: sum(f.verdict == v for f in findings) for v in ("holds", "partly", "differs")}
+    paper = [f for f in findings if f.paper_finding]
+    counts = {v: sum(f.verdict == v for f in paper) for v in VERDICTS}
     typer.echo(
-        f"{len(findings)} findings: {counts['holds']} hold, {counts['partly']} partly, "
-        f"{counts['differs']} differ ({time.perf_counter() - start:.0f} s); "
-        f"wrote {out / 'index.html'} and {out / 'README.md'}"
+        f"{len(paper)} paper findings: {counts['holds']} hold, {counts['partly']} partly, "
+        f"{counts['differs']} differ, {counts['inconclusive']} inconclusive "
+        f"({len(findings) - len(paper)} of ours reported apart; "
+        f"{time.perf_counter() - start:.0f} s); wrote {out / 'index.html'} and {out / 'README.md'}"
     )
 
 

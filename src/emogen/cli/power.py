@@ -35,19 +35,43 @@ PowerOpt = Annotated[float, typer.Option("--power", help="Wanted power.")]
 AlphaOpt = Annotated[float, typer.Option("--alpha", help="Significance level.")]
 TrialsOpt = Annotated[int, typer.Option("--trials", help="Faces per participant (averaged).")]
 ParticipantSdOpt = Annotated[
-    float,
+    float | None,
     typer.Option(
-        "--participant-sd", help="Participants' own spread per gene around the prototype."
+        "--participant-sd",
+        min=0.0,
+        help="Participants' own spread per gene around the prototype. Not given: 0, flagged as "
+        "an assumption (the most optimistic case).",
     ),
 ]
 NoiseOpt = Annotated[
-    float, typer.Option("--noise-temperature", help="Simulated choice noise T (CD units).")
+    float | None,
+    typer.Option(
+        "--noise-temperature",
+        min=0.0,
+        help="Participants' choice noise T (softmax, in the observer metric's units). Not "
+        "given: 0, flagged as an assumption (the most optimistic case).",
+    ),
+]
+StatisticOpt = Annotated[
+    str,
+    typer.Option(
+        "--statistic",
+        help="Group difference tested: cd (composition only; blind to intensity) or ed "
+        "(Euclidean distance of the mean faces; intensity-aware).",
+    ),
+]
+ObserverOpt = Annotated[
+    str,
+    typer.Option(
+        "--observer",
+        help="How simulated participants judge similarity: cd (blind to intensity), ed or "
+        "vertex_rms (intensity-aware).",
+    ),
 ]
 GenerationsOpt = Annotated[int, typer.Option("--generations", help="G of the study.")]
 MaxParticipantsOpt = Annotated[
     int, typer.Option("--max-participants", help="Largest n per group tried.")
 ]
-PoolOpt = Annotated[int, typer.Option("--pool", help="Simulated participants per group.")]
 ReplicatesOpt = Annotated[int, typer.Option("--replicates", help="Simulated experiments per n.")]
 PermutationsOpt = Annotated[int, typer.Option("--permutations", help="Permutations per test.")]
 
@@ -86,7 +110,9 @@ def _write(out: Path, res: PowerResult, power: float, alpha: float) -> None:
         "fit_logit_intercept_slope": res.fit,
         "power": power,
         "alpha": alpha,
+        "max_false_positive": res.max_false_positive,
         "effect_cd": res.effect_cd,
+        "effect_ed": res.effect_ed,
         **res.settings,
     }
     (out / "power.json").write_text(json.dumps(summary, indent=2) + "\n")
@@ -95,7 +121,8 @@ def _write(out: Path, res: PowerResult, power: float, alpha: float) -> None:
 def _print(res: PowerResult, power: float, alpha: float, max_participants: int) -> None:
     for row in res.curve.itertuples():
         typer.echo(
-            f"  n = {row.n:>4}: power {row.power:.2f} ± {row.se:.2f} (fitted {row.fitted:.2f})"
+            f"  n = {row.n:>4}: power {row.power:.2f} ± {row.se:.2f} (fitted {row.fitted:.2f}); "
+            f"false positives {row.false_positive:.3f} ± {row.fp_se:.3f}"
         )
     if res.n_required is None:
         typer.echo(f"power {power} not reached within {max_participants} participants per group")
@@ -104,6 +131,42 @@ def _print(res: PowerResult, power: float, alpha: float, max_participants: int) 
             f"{res.n_required} participants per group reach power {power} (α = {alpha}; fitted "
             f"curve; smallest simulated n at or above it: {res.n_observed})"
         )
+
+
+def assumptions(participant_sd: float | None, noise_temperature: float | None) -> list[str]:
+    """The design assumptions left at their most optimistic value, each said in words."""
+    said = []
+    if participant_sd is None:
+        said.append(
+            "participant spread assumed 0 (--participant-sd): every participant holds exactly "
+            "the group's prototype"
+        )
+    if noise_temperature is None:
+        said.append(
+            "choice noise assumed 0 (--noise-temperature): every participant always picks the "
+            "faces closest to their prototype"
+        )
+    return said
+
+
+def intensity_check(wa: np.ndarray, wb: np.ndarray, statistic: str, observer: str) -> None:
+    """Refuse a design that cannot see its own difference: prototypes that differ only in
+    intensity (CD 0) tested by CD, or evolved by a CD observer."""
+    import numpy as np
+
+    from emogen.errors import ConfigError
+    from emogen.metrics import cosine_distance
+
+    if float(cosine_distance(wa, wb)) < 1e-9 and float(np.linalg.norm(wa - wb)) > 1e-9:
+        blind = [
+            f"--{k} cd" for k, v in (("statistic", statistic), ("observer", observer)) if v == "cd"
+        ]
+        if blind:
+            raise ConfigError(
+                "the prototypes differ only in intensity (CD 0), which "
+                + " and ".join(blind)
+                + " cannot see: use --statistic ed with --observer ed or vertex_rms"
+            )
 
 
 @friendly_errors
@@ -115,11 +178,12 @@ def power_command(
     power: PowerOpt = 0.8,
     alpha: AlphaOpt = 0.05,
     trials: TrialsOpt = 1,
-    participant_sd: ParticipantSdOpt = 0.0,
-    noise_temperature: NoiseOpt = 0.0,
+    participant_sd: ParticipantSdOpt = None,
+    noise_temperature: NoiseOpt = None,
+    statistic: StatisticOpt = "cd",
+    observer: ObserverOpt = "cd",
     generations: GenerationsOpt = 10,
     max_participants: MaxParticipantsOpt = 200,
-    pool: PoolOpt = 500,
     replicates: ReplicatesOpt = 400,
     permutations: PermutationsOpt = 400,
     seed: SeedOpt = 1,
@@ -127,44 +191,62 @@ def power_command(
     rig: RigOpt = None,
 ) -> None:
     """How many participants per group tell two prototypes apart, given GA noise: a power
-    curve (OUT/power.csv, OUT/power.png) and the number (OUT/power.json)."""
-    from emogen.analysis.power import final_faces_pool, power_analysis
-    from emogen.config import GAConfig, SimulationConfig
+    curve with the test's false-positive rate at every n (OUT/power.csv, OUT/power.png) and the
+    number (OUT/power.json). Every simulated experiment draws fresh participants."""
+    import numpy as np
+
+    from emogen.analysis.power import STATISTICS, GroupSampler, power_analysis
+    from emogen.config import GAConfig, MetricConfig, SimulationConfig
+    from emogen.errors import ConfigError
     from emogen.metrics import cosine_distance
     from emogen.model import load_model
 
     check_group_b(b, difference)  # before loading the model
-    r = load_model(model_path, rig=rig).rig
-    wa, wb = prototypes(r, a, b, difference)
+    if statistic not in STATISTICS or observer not in ("cd", "ed", "vertex_rms"):
+        raise ConfigError(
+            f"--statistic must be cd or ed, --observer cd, ed or vertex_rms; got "
+            f"{statistic!r}, {observer!r}"
+        )
+    model = load_model(model_path, rig=rig)
+    wa, wb = prototypes(model.rig, a, b, difference)
+    intensity_check(wa, wb, statistic, observer)
+    said = assumptions(participant_sd, noise_temperature)
+    for line in said:
+        typer.echo(f"ASSUMPTION: {line}; the power found is an upper bound", err=True)
     cfg = SimulationConfig(
         ga=GAConfig(generations=generations),
         target={"jawOpen": 1.0},
-        noise_temperature=noise_temperature,
+        noise_temperature=noise_temperature or 0.0,
+        metric=MetricConfig.model_validate({"name": observer}),
     )
-    pools = [
-        final_faces_pool(cfg, r, w, pool=pool, seed=seed + k, participant_sd=participant_sd)
+    samplers = [
+        GroupSampler(cfg, model, w, seed + k, participant_sd or 0.0, trials)
         for k, w in enumerate((wa, wb))
     ]
     settings: dict[str, object] = {
         "prototype_cd": float(cosine_distance(wa, wb)),
-        "participant_sd": participant_sd,
-        "noise_temperature": noise_temperature,
+        "prototype_ed": float(np.linalg.norm(wa - wb)),
+        "participant_sd": participant_sd or 0.0,
+        "noise_temperature": noise_temperature or 0.0,
+        "observer": observer,
+        "trials": trials,
         "generations": generations,
-        "pool": pool,
         "seed": seed,
+        "assumptions": said,
     }
     res = power_analysis(
-        pools[0],
-        pools[1],
+        samplers[0],
+        samplers[1],
         target_power=power,
         alpha=alpha,
-        trials=trials,
         max_n=max_participants,
         replicates=replicates,
         permutations=permutations,
+        statistic=statistic,
         seed=seed,
         settings=settings,
     )
     _write(out, res, power, alpha)
     _print(res, power, alpha, max_participants)
+    typer.echo("".join(f"ASSUMPTION: {line}\n" for line in said), nl=False)
     typer.echo(f"wrote {out / 'power.csv'}, {out / 'power.png'}, {out / 'power.json'}")

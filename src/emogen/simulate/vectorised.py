@@ -41,10 +41,14 @@ def _initial(problem: Problem, seed: int) -> tuple[np.ndarray, np.ndarray, int]:
 
 
 def _measure(problem: Problem, shown: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(metric distances, CD errors) of faces (…, S) to the target."""
+    """(metric distances, CD errors) of faces (R, N, S) to the target: (S,), or (R, S) one
+    per run (simulated participants, each their own)."""
     flat = shown.reshape(-1, shown.shape[-1])
-    error = cosine_distance(flat, problem.target)
-    distance = error if problem.metric.name == "cd" else problem.metric(flat, problem.target)
+    target = problem.target
+    if target.ndim == 2:  # one target per run (R, S): repeat it for the run's faces
+        target = np.repeat(target, shown.shape[-2], axis=0)
+    error = cosine_distance(flat, target)
+    distance = error if problem.metric.name == "cd" else problem.metric(flat, target)
     return distance.reshape(shown.shape[:-1]), error.reshape(shown.shape[:-1])
 
 

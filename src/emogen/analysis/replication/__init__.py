@@ -3,8 +3,9 @@ the paper's.
 
 :func:`replicate` runs the sections and writes the report (``index.html``, ``README.md``,
 ``figures/``, ``tables/``) and returns the findings, one line each: what the paper found, its
-numbers, ours, and a verdict — **holds**, **partly** (some of it, or only qualitatively) or
-**differs**.
+numbers, ours, and a verdict by a written rule (:mod:`.verdicts`) — **holds**, **partly**
+(some of it, or only qualitatively), **differs** or **inconclusive** — combined over several
+independent seeds (a verdict that changes between seeds is inconclusive).
 
 Each section is an experiment taking typed inputs (a :class:`ConditionRunner` that simulates
 conditions, the training set, …) and returning a typed result (its tables, the data of its
@@ -13,14 +14,16 @@ figures, its findings); the report is written from those results:
 * :mod:`.theoretical_metrics`, :mod:`.empirical_metrics` — Section IV-B (Tables I–II);
 * :mod:`.initialisation`, :mod:`.bias_repeatability`, :mod:`.ga_settings` — Section IV-C
   (Tables III–V, Figs. 14–18, selection pressure);
+* :mod:`.correctives` — the simulations with Section III-A's correctives on;
 * :mod:`.analysis_tools` — our GA-noise test and separability on simulated participants, a
   power analysis;
 * :mod:`.write_report`, :mod:`.write_metrics`, :mod:`.write_ga`, :mod:`.write_tools` — the
   report; :mod:`.run` — the order of the sections.
 
-Every simulation uses the same seed (common random numbers: conditions differ only by their
-settings). ``quick`` uses 100 runs per condition and 60 simulated participants instead of 500
-and 240, and a lighter power analysis: a few minutes on two cores, for CI.
+Within one seed every simulation uses that seed (common random numbers: conditions differ
+only by their settings); the paper sections run on each of the settings' seeds, our own tools
+on the first. ``quick`` uses 100 runs per condition and 60 simulated participants instead of
+500 and 240, a lighter power analysis and its own seeds (101, …): a few minutes on two cores.
 """
 
 from emogen.analysis.replication.conditions import Condition, ConditionRunner, ConditionSpec

@@ -102,12 +102,6 @@ def _findings(shares: dict[Row, np.ndarray], biases: dict[Row, float]) -> list[F
     most = min(fixed_keys, key=lambda k: biases[k])
     first_fixed = shares[most][0]
     above_protocol = all(first_fixed > shares[k][0] for k in prot_keys)
-    fb = np.array([biases[k] for k in fixed_keys])
-    fs = np.array([shares[k][0] for k in fixed_keys])
-    order = np.argsort(fb)
-    matched = {k: float(np.interp(biases[k], fb[order], fs[order])) for k in prot_keys}
-    inside = all(fb.min() <= biases[k] <= fb.max() for k in prot_keys)
-    fewer = [shares[k][0] < matched[k] for k in prot_keys]
     a, b = shares[("fixed", 1, "target 1")], shares[("fixed", 3, "target 1")]
     tvd = 0.5 * float(np.abs(a - b).sum())
     return [
@@ -121,6 +115,9 @@ def _findings(shares: dict[Row, np.ndarray], biases: dict[Row, float]) -> list[F
             if fixed_avg < prot_avg
             else "our simulated participants build happy faces from the same "
             "building blocks that protocol initialisation draws its two happy faces from",
+            rule="order: the best fixed set's bias below protocol's (average target)",
+            value=prot_avg - fixed_avg,
+            value_label="bias protocol − fixed",
         ),
         Finding(
             "Table III",
@@ -130,21 +127,12 @@ def _findings(shares: dict[Row, np.ndarray], biases: dict[Row, float]) -> list[F
             + ", ".join(f"{shares[k][0]:.1f}%" for k in prot_keys)
             + ")",
             graded(first_fixed >= 50 and above_protocol, above_protocol),
+            rule="threshold: ≥ 50% in the first bin and above every protocol row; partly: the "
+            "latter",
+            value=float(first_fixed),
+            value_label="first-bin % at the highest fixed bias",
         ),
-        Finding(
-            "Table III",
-            "protocol repeatability is less sensitive to bias: fewer identical results at the "
-            "same bias",
-            "first bin: protocol 2.0% at bias 0.74, 6.6% at 0.55; fixed ≈ 14%, 37% there "
-            "(interpolated)",
-            "first bin: "
-            + "; ".join(
-                f"protocol {shares[k][0]:.1f}% at bias {biases[k]:.2f}, fixed ≈ {matched[k]:.1f}%"
-                for k in prot_keys
-            ),
-            graded(all(fewer), any(fewer)),
-            "" if inside else "fixed shares extrapolated flat beyond the fixed rows' bias range",
-        ),
+        _sensitivity(shares, biases),
         Finding(
             "Table III",
             "initial complexity does not change repeatability at similar bias",
@@ -152,5 +140,61 @@ def _findings(shares: dict[Row, np.ndarray], biases: dict[Row, float]) -> list[F
             f"bias {biases[('fixed', 1, 'target 1')]:.2f} and "
             f"{biases[('fixed', 3, 'target 1')]:.2f}: TVD {tvd:.1f} points",
             "holds" if tvd < 10 else "partly" if tvd < 20 else "differs",
+            rule="threshold: TVD < 10 points holds, < 20 partly",
+            value=tvd,
+            value_label="TVD, points",
         ),
+        _absolute(shares),
     ]
+
+
+def _sensitivity(shares: dict[Row, np.ndarray], biases: dict[Row, float]) -> Finding:
+    """Sensitivity to bias within ONE initialisation: the first bin's rise per unit of bias
+    lost, from target 1 to the average target (no interpolation across fixed sets)."""
+
+    def slope(init: str, option: int | None) -> float:
+        lo, hi = (init, option, "target 1"), (init, option, "average")
+        return float((shares[hi][0] - shares[lo][0]) / max(biases[lo] - biases[hi], 1e-9))
+
+    prot = slope("protocol", None)
+    fixed = {o: slope("fixed", o) for o in (1, 3)}
+    less = [prot < f for f in fixed.values()]
+    return Finding(
+        "Table III",
+        "protocol repeatability is less sensitive to bias: fewer identical results as bias grows",
+        "first bin per unit bias: protocol (2.0 → 6.6%) / 0.19 = 24; fixed set 1 (1.0 → 29.8%) "
+        "/ 0.43 = 67; set 3 (1.4 → 99%) / 0.49 = 199",
+        f"first-bin points per unit bias: protocol {prot:.0f}; fixed set 1 {fixed[1]:.0f}, "
+        f"set 3 {fixed[3]:.0f}",
+        graded(all(less), any(less)),
+        "each initialisation compared with itself (target 1 → average target); the earlier "
+        "reading interpolated across different fixed sets",
+        rule="order: protocol's slope below both fixed sets'; partly: below one",
+        value=prot,
+        value_label="protocol first-bin points per unit bias",
+    )
+
+
+def _absolute(shares: dict[Row, np.ndarray]) -> Finding:
+    """Table III's bins themselves, row by row (TVD from the paper's)."""
+    tvds = {
+        (init, option, t): 0.5 * float(np.abs(shares[(init, option, t)] - np.array(bins)).sum())
+        for init, option, t, _, bins in paper.TABLE_III
+    }
+    mean = float(np.mean(list(tvds.values())))
+    return Finding(
+        "Table III",
+        "the repeatability bins themselves (absolute shares per row)",
+        "six rows of bin shares",
+        "TVD from the paper's row: "
+        + ", ".join(
+            f"{i} {o or ''} {t}: {v:.0f}".replace("  ", " ") for (i, o, t), v in tvds.items()
+        )
+        + " points",
+        "holds" if mean < 10 else "partly" if mean < 20 else "differs",
+        "our model and targets differ from the paper's (different bias per row): absolute "
+        "shares are expected to move",
+        rule="threshold: mean TVD over the rows < 10 points holds, < 20 partly",
+        value=mean,
+        value_label="mean TVD, points",
+    )

@@ -71,6 +71,7 @@ class ConditionSpec:
     training: Path | None = None
     runs: int | None = None
     noise: float = 0.0
+    correct: bool = False
     training_weights: np.ndarray | None = field(default=None, compare=False)
 
     def key(self) -> tuple[object, ...]:
@@ -85,6 +86,7 @@ class ConditionSpec:
             None if self.training is None else str(self.training),
             self.runs,
             self.noise,
+            self.correct,
         )
 
 
@@ -133,6 +135,7 @@ class ConditionRunner:
                 "selections": spec.selections,
                 "metric": MetricConfig.model_validate(metric_cfg),
                 "noise_temperature": spec.noise,
+                "correct": spec.correct,
             }
         )
 

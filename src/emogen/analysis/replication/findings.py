@@ -7,24 +7,36 @@ from dataclasses import dataclass
 
 import numpy as np
 
-VERDICTS = ("holds", "partly", "differs")
+VERDICTS = ("holds", "partly", "differs", "inconclusive")
 
 
 @dataclass(frozen=True)
 class Finding:
     """What the paper found (``claim``, its numbers ``paper``), ours, and the verdict:
-    **holds**, **partly** (some of it, or only qualitatively) or **differs**."""
+    **holds**, **partly** (some of it, or only qualitatively), **differs** or
+    **inconclusive** (the evidence does not decide), by the named ``rule``
+    (:data:`~emogen.analysis.replication.verdicts.RULES`). ``value``: the effect size the
+    verdict rests on (``value_label`` says what it is), combined over seeds.
+    ``paper_finding=False``: our own proposal, reported apart from the tally."""
 
     section: str
     claim: str
     paper: str
     ours: str
-    verdict: str  # holds | partly | differs
+    verdict: str  # holds | partly | differs | inconclusive
     note: str = ""
+    rule: str = "order"
+    value: float | None = None
+    value_label: str = ""
+    paper_finding: bool = True
 
     def __post_init__(self) -> None:
         if self.verdict not in VERDICTS:
-            raise ValueError(f"verdict must be holds, partly or differs; got {self.verdict!r}")
+            raise ValueError(f"verdict must be one of {VERDICTS}; got {self.verdict!r}")
+
+    @property
+    def key(self) -> tuple[str, str]:
+        return (self.section, self.claim)
 
     def line(self) -> str:
         return f"[{self.verdict:^7}] {self.section}: {self.claim} — paper {self.paper}; ours {self.ours}"
@@ -51,3 +63,30 @@ def pm(mu: float | None, sd: float | None, digits: int = 3) -> str:
     if mu is None:
         return f"σ {sd:.{digits}f}"
     return f"{mu:.{digits}f} ± {sd:.{digits}f}" if sd is not None else f"{mu:.{digits}f}"
+
+
+def mean_diff_ci(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
+    """mean(a) − mean(b) and its 95% (Welch, normal) interval: (difference, lo, hi)."""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    d = float(a.mean() - b.mean())
+    se = float(np.sqrt(a.var(ddof=1) / len(a) + b.var(ddof=1) / len(b)))
+    return d, d - 1.96 * se, d + 1.96 * se
+
+
+def sd_diff_ci(
+    a: np.ndarray, b: np.ndarray, rng: np.random.Generator, resamples: int = 1000
+) -> tuple[float, float, float]:
+    """sd(a) − sd(b) and its 95% bootstrap interval: (difference, lo, hi)."""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    ia = rng.integers(len(a), size=(resamples, len(a)))
+    ib = rng.integers(len(b), size=(resamples, len(b)))
+    d = a[ia].std(axis=1, ddof=1) - b[ib].std(axis=1, ddof=1)
+    return (
+        float(a.std(ddof=1) - b.std(ddof=1)),
+        float(np.quantile(d, 0.025)),
+        float(np.quantile(d, 0.975)),
+    )
+
+
+def ci_text(d: float, lo: float, hi: float) -> str:
+    return f"{d:+.3f} (95% CI {lo:+.3f}…{hi:+.3f})"

@@ -30,6 +30,11 @@ class FaceGeometry:
             self._vertex_rms = VertexRMS(self.model)
         return float(self._vertex_rms(a, b))
 
+    def max_cm(self, a: np.ndarray, b: np.ndarray) -> float:
+        """The largest vertex distance between two faces, in cm (the paper's 'local error')."""
+        v = self.model.evaluate(np.stack([a, b]).astype(np.float32)).astype(np.float64)
+        return float(np.linalg.norm(v[0] - v[1], axis=-1).max())
+
     def intensity_fit(self, face: np.ndarray, target: np.ndarray) -> tuple[float, float]:
         """How well ``face`` lies on the target's intensity line, geometrically: the scale s*
         that best maps the target's vertex displacement (from the neutral) onto the face's, and

@@ -6,7 +6,7 @@ from __future__ import annotations
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -14,6 +14,7 @@ from emogen.analysis.replication import write_ga, write_metrics, write_tools
 from emogen.analysis.replication.analysis_tools import participant_tools, power_study
 from emogen.analysis.replication.bias_repeatability import bias_repeatability
 from emogen.analysis.replication.conditions import ConditionRunner
+from emogen.analysis.replication.correctives import correctives, write_correctives
 from emogen.analysis.replication.empirical_metrics import (
     TrainingSet,
     empirical_metrics,
@@ -29,6 +30,7 @@ from emogen.analysis.replication.geometry import FaceGeometry
 from emogen.analysis.replication.initialisation import initialisation
 from emogen.analysis.replication.settings import ReplicateSettings
 from emogen.analysis.replication.theoretical_metrics import targets_summary, theoretical_metrics
+from emogen.analysis.replication.verdicts import combine
 from emogen.analysis.replication.write_report import FaceFigures, write_closing, write_intro
 from emogen.analysis.report import Report
 
@@ -115,6 +117,12 @@ def _tools(b: Bench, r: Report) -> list[Finding]:
     return res.findings
 
 
+def _correctives(b: Bench, r: Report) -> list[Finding]:
+    res = correctives(b.runner)
+    write_correctives(r, res)
+    return res.findings
+
+
 def _power(b: Bench, r: Report) -> list[Finding]:
     write_tools.write_power(r, power_study(b.runner), b.settings)
     return []
@@ -129,9 +137,19 @@ SECTIONS: list[tuple[str, Section]] = [
     ("activation ranges (Table IV)", _ranges),
     ("target complexity and GA noise (Table V, Fig. 18)", _complexity),
     ("selection pressure", _selection),
+    ("correctives (Section III-A)", _correctives),
     ("analysis tools on simulated participants", _tools),
     ("power analysis", _power),
 ]
+
+
+#: sections run on the first seed only: no paper findings (targets), or our own tools
+SINGLE_SEED = (
+    "targets",
+    "correctives (Section III-A)",
+    "analysis tools on simulated participants",
+    "power analysis",
+)
 
 
 def replicate(
@@ -141,38 +159,82 @@ def replicate(
     *,
     only: list[str] | None = None,
     progress: Callable[[str], None] | None = None,
+    command: str | None = None,
 ) -> list[Finding]:
-    """Run the sections (``only``: names containing one of these words), write the report
-    to ``out`` and return the findings."""
+    """Run the sections (``only``: names containing one of these words) on every seed of
+    ``settings``, write the report (tables and figures of the first seed, every verdict
+    combined over the seeds) to ``out`` and return the combined findings."""
     from emogen import __version__
 
     s = settings or ReplicateSettings()
     title = "EmoGen: the paper's Section IV on our model" + (" (quick)" if s.quick else "")
     report = Report(title, Path(out))
-    findings: list[Finding] = []
     timings: dict[str, float] = {}
     start = time.perf_counter()
     glance_at = write_intro(report, model, s)
+    prov = provenance(model, s, command)  # before anything is written into ``out``
+    per_seed: list[list[Finding]] = []
     with tempfile.TemporaryDirectory(prefix="emogen-replicate-") as tmp:
-        bench = Bench(
-            ConditionRunner(model, s), FaceGeometry(model), FaceFigures(model, s.render), Path(tmp)
-        )
-        for name, section in SECTIONS:
-            if only and not any(w in name for w in only):
-                continue
-            t0 = time.perf_counter()
-            if progress:
-                progress(name)
-            findings += section(bench, report)
-            timings[name] = time.perf_counter() - t0
+        for k, seed in enumerate(s.seed_list):
+            si = replace(s, seed=seed, render=s.render and k == 0)
+            work = Path(tmp) / f"seed-{seed}"
+            work.mkdir()
+            bench = Bench(
+                ConditionRunner(model, si), FaceGeometry(model), FaceFigures(model, si.render), work
+            )
+            target = report if k == 0 else Report("scratch", work / "report")
+            found: list[Finding] = []
+            for name, section in SECTIONS:
+                if (only and not any(w in name for w in only)) or (k and name in SINGLE_SEED):
+                    continue
+                t0 = time.perf_counter()
+                if progress:
+                    progress(name + ("" if k == 0 else f" (seed {seed})"))
+                found += section(bench, target)
+                timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
+            per_seed.append(found)
+    combined = combine(per_seed)
     write_closing(
         report,
-        findings,
+        combined,
         timings,
         glance_at=glance_at,
         seconds=time.perf_counter() - start,
         version=__version__,
         settings=s,
+        provenance=prov,
     )
     report.write()
-    return findings
+    return [c.as_finding() for c in combined]
+
+
+def provenance(model: FaceModel, s: ReplicateSettings, command: str | None) -> dict[str, str]:
+    """What reproduces the report: the git commit (and whether the tree was clean), the seeds,
+    the model hash and the exact command."""
+    import subprocess
+
+    here = Path(__file__).resolve().parent
+    try:
+        commit = subprocess.run(
+            ["git", "-C", str(here), "rev-parse", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", str(here), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        commit += " (uncommitted changes)" if dirty else ""
+    except (OSError, subprocess.CalledProcessError):
+        commit = "unknown (not a git checkout)"
+    quick = " --quick" if s.quick else ""
+    return {
+        "git commit": commit,
+        "seeds": ", ".join(str(x) for x in s.seed_list),
+        "model hash": model.model_hash,
+        "command": command
+        or f"emogen replicate{quick} --seed {s.seed} --seeds {s.seeds} --out DIR",
+    }

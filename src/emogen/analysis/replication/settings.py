@@ -5,6 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+#: --quick's own first seed: its runs are not a prefix of the full run's (seed 1)
+QUICK_SEED = 101
+
 
 @dataclass(frozen=True)
 class ReplicateSettings:
@@ -14,9 +17,9 @@ class ReplicateSettings:
     runs: int = 500
     participants: int = 240
     seed: int = 1
+    seeds: int = 3  # independent seeds: seed, seed + 1, …; every verdict combines them
     render: bool = True
     participant_noise: float = 0.05  # simulated participants' choice noise (softmax T, CD units)
-    power_pool: int = 400
     power_replicates: int = 300
     power_permutations: int = 300
     power_max_n: int = 120
@@ -25,14 +28,18 @@ class ReplicateSettings:
     def quick_settings(cls, **kw: Any) -> ReplicateSettings:
         base = {
             "quick": True,
+            "seed": QUICK_SEED,
             "runs": 100,
             "participants": 60,
-            "power_pool": 150,
             "power_replicates": 100,
             "power_permutations": 100,
             "power_max_n": 60,
         }
         return cls(**(base | kw))
+
+    @property
+    def seed_list(self) -> list[int]:
+        return [self.seed + k for k in range(self.seeds)]
 
     @classmethod
     def full_settings(cls, **kw: Any) -> ReplicateSettings:

@@ -60,6 +60,14 @@ def write_theoretical(r: Report, res: TheoreticalMetrics, figures: FaceFigures) 
         "table_i_summary",
         "Share of samples in their own target's cluster, and final CD error (μ ± σ)",
     )
+    r.paragraph(
+        f"**Chance baseline:** the same GMM reading on ONE distribution (CD's target-2 final "
+        f"faces) split at random into three labelled groups scores {res.chance[0]:.1%} in 2 "
+        f"PCA components and {res.chance[1]:.1%} in 90% of the variance — an accuracy near "
+        "these says nothing about separability (a cluster-to-group assignment always finds "
+        "some agreement). The paper does not state its GMM's dimension; its Fig. 8 shows two "
+        "components: a Table I verdict that changes between the two readings is inconclusive."
+    )
     sims = res.conditions
     stats = figures.heatmaps(
         r,

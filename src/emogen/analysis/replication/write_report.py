@@ -10,8 +10,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from emogen.analysis.replication.findings import VERDICTS, Finding
+from emogen.analysis.replication.findings import VERDICTS
 from emogen.analysis.replication.settings import ReplicateSettings
+from emogen.analysis.replication.verdicts import Combined
 from emogen.analysis.report import Report
 
 if TYPE_CHECKING:
@@ -60,15 +61,26 @@ def write_intro(report: Report, model: FaceModel, s: ReplicateSettings) -> int:
         "The experiments of the paper's Section IV (Tables I–V, Figs. 6–18), run on our model "
         f"(`{model.name}`, model hash `{model.model_hash[:16]}…`, {model.n_shapes} shapes, "
         f"{len(model.rig.gene_names(True))} genes) with our GA, each finding printed beside the "
-        "paper's numbers with a verdict: **holds**, **partly** (in part, or only qualitatively) "
-        "or **differs**. The closing table lists them all."
+        "paper's numbers with a verdict by a written rule: **holds**, **partly** (in part, or "
+        "only qualitatively), **differs** or **inconclusive** (the evidence does not decide, or "
+        "the seeds disagree). The closing table lists them all with the rules."
     )
     report.bullets(
         [
             f"{s.runs} simulated runs per condition (the paper: 500), 10 generations, the paper's "
             "selection schedule (2, then 4 in generations 1–5, then 5), protocol initialisation "
             "with 3–8 active genes, a noiseless CD observer — unless a section says otherwise.",
-            f"One seed for every condition ({s.seed}): conditions differ only by their settings.",
+            f"{s.seeds} independent seeds ({', '.join(map(str, s.seed_list))}); within a seed every "
+            "condition uses the same seed (conditions differ only by their settings). Tables "
+            "and figures show the first seed; every verdict combines all seeds."
+            + (
+                " `--quick` has its own seeds: its runs are not a subset of the full run's."
+                if s.quick
+                else ""
+            ),
+            "Simulations run **uncorrected** (no Section III-A correctives): the paper's "
+            "Section IV simulations evolve core weights; `emogen simulate --correct` runs with "
+            "them.",
             "The paper's empirical metrics were trained on **9,592 faces made by 240 human "
             f"participants**; we have none. Ours are trained on {s.participants * 40:,} faces made by "
             f"{s.participants} **simulated participants** evolving the four emotions (happy, sad, "
@@ -83,45 +95,89 @@ def write_intro(report: Report, model: FaceModel, s: ReplicateSettings) -> int:
 
 def write_closing(
     report: Report,
-    findings: list[Finding],
+    combined: list[Combined],
     timings: dict[str, float],
     *,
     glance_at: int,
     seconds: float,
     version: str,
     settings: ReplicateSettings,
+    provenance: dict[str, str],
 ) -> None:
-    """The findings table (and its tally at ``glance_at``), the run's versions and timings."""
+    """The findings table (and its tally at ``glance_at``), the rules, our own checks apart,
+    the run's provenance and timings."""
+    paper = [c for c in combined if c.finding.paper_finding]
+    ours = [c for c in combined if not c.finding.paper_finding]
     report.heading("Findings: the paper beside ours")
-    counts = pd.Series([f.verdict for f in findings]).value_counts()
-    words = {"holds": "hold", "partly": "partly", "differs": "differ"}
+    counts = pd.Series([c.verdict for c in paper], dtype=object).value_counts()
+    words = {
+        "holds": "hold",
+        "partly": "partly",
+        "differs": "differ",
+        "inconclusive": "inconclusive",
+    }
     tally = ", ".join(f"{counts.get(v, 0)} {words[v]}" for v in VERDICTS)
-    report.paragraph(f"{len(findings)} findings: {tally}.")
-    glance = (
-        f"**At a glance:** {len(findings)} findings of the paper checked on our model: {tally}. "
-        "The closing table lists every one with the paper's numbers beside ours."
+    k = settings.seeds
+    report.paragraph(
+        f"{len(paper)} findings of the paper, each judged on {k} independent seed"
+        f"{'s' if k > 1 else ''} ({provenance['seeds']}) by its written rule: {tally}. A "
+        "finding whose verdict differs between seeds is **inconclusive**; 'effect over seeds' "
+        "is the mean of the finding's effect size over the seeds ± the half-width of its 95% "
+        f"t-interval ({k} seeds). Tables and figures above are the first seed's. Our own "
+        "checks (not paper findings) are listed apart and are not in the tally."
     )
-    report.insert_paragraph(glance_at, glance)
-    table = pd.DataFrame(
-        [
-            {
-                "section": f.section,
-                "paper finding": f.claim,
-                "paper": f.paper,
-                "ours": f.ours,
-                "verdict": f"**{f.verdict}**",
-                "note": f.note,
-            }
-            for f in findings
-        ]
+    report.insert_paragraph(
+        glance_at,
+        f"**At a glance:** {len(paper)} findings of the paper checked on our model over {k} "
+        f"seeds: {tally}. The closing table lists every one with the paper's numbers, ours, "
+        "the rule and the verdict; our own checks are reported apart.",
     )
-    report.table(table, "findings", "Every finding, with the paper's numbers and ours")
-    timing = pd.DataFrame({"experiment": list(timings), "seconds": list(timings.values())})
+    report.paragraph(
+        "**Multiple comparisons.** The table makes "
+        f"{len(combined)} comparisons. They are **exploratory**: the rules are descriptive "
+        "(orderings, thresholds, 95% intervals at the per-comparison level), no family-wise or "
+        "false-discovery correction is applied, and a single 'holds' or 'differs' should not be "
+        "read as a confirmed test result. The verdict over seeds guards against the largest "
+        "source of chance verdicts (one simulation seed)."
+    )
+    report.table(_rules_table(), "verdict_rules", "The verdict rules")
+    report.table(_rows(paper), "findings", "Every finding, with the paper's numbers and ours")
+    if ours:
+        report.heading("Our own checks (outside the tally)", level=3)
+        report.table(_rows(ours), "our_checks", "Checks of our tools, not paper findings")
     report.heading("Run", level=3)
-    quick = " --quick" if settings.quick else ""
     report.paragraph(
         f"EmoGen {version}, Python {platform.python_version()}, {platform.machine()}; "
-        f"{'quick' if settings.quick else 'full'} run in {seconds:.0f} s. Regenerate with "
-        f"`emogen replicate{quick} --out DIR`."
+        f"{'quick' if settings.quick else 'full'} run in {seconds:.0f} s. Every simulation "
+        "runs without the Section III-A correctives (uncorrected faces): the GA, the observers "
+        "and the metrics act on the core weights; the paper does not say whether its Section "
+        "IV simulations applied them."
     )
-    report.table(timing, "timings", "Seconds per experiment")
+    report.bullets([f"{key}: `{value}`" for key, value in provenance.items()])
+    timing = pd.DataFrame({"experiment": list(timings), "seconds": list(timings.values())})
+    report.table(timing, "timings", "Seconds per experiment (all seeds)")
+
+
+def _rules_table() -> pd.DataFrame:
+    from emogen.analysis.replication.verdicts import RULES
+
+    return pd.DataFrame({"rule": list(RULES), "what it says": list(RULES.values())})
+
+
+def _rows(combined: list[Combined]) -> pd.DataFrame:
+    return pd.DataFrame(
+        [
+            {
+                "section": c.finding.section,
+                "paper finding": c.finding.claim,
+                "paper": c.finding.paper,
+                "ours (first seed)": c.finding.ours,
+                "effect over seeds": c.effect,
+                "rule": c.finding.rule,
+                "per seed": " / ".join(c.seed_verdicts),
+                "verdict": f"**{c.verdict}**",
+                "note": c.finding.note,
+            }
+            for c in combined
+        ]
+    )

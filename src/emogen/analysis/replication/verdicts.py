@@ -1,0 +1,116 @@
+"""The verdict rules, written down once, and the combination of several seeds' findings.
+
+Every finding is judged on each seed by one of the :data:`RULES`; a finding's verdict over the
+seeds is the seeds' common verdict, or **inconclusive** when they disagree. Its effect size
+(``Finding.value``) is reported as the mean over the seeds with a 95% t-interval
+(mean ± t₀.₉₇₅,ₖ₋₁ · sd / √k over k seeds).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy import stats
+
+from emogen.analysis.replication.findings import Finding
+
+#: rule name → the rule in words (the report prints this table)
+RULES: dict[str, str] = {
+    "order": "orderings: **holds** when every ordering the paper states holds; **partly** when "
+    "some do (or only the first place); **differs** when none does",
+    "ci": "a difference with a direction: **holds** when the 95% CI of our difference lies on "
+    "the paper's side of 0; **inconclusive** when it includes 0; **differs** when it lies on "
+    "the other side",
+    "negligible": "no difference claimed: **holds** when |Cohen's d| < 0.2; **partly** when "
+    "< 0.5; **differs** otherwise",
+    "number": "a value the paper gives: **holds** when our μ is within 0.5 pooled σ of the "
+    "paper's (|Δμ| / σ < 0.5); **partly** within 1 σ; **differs** beyond",
+    "direction": "a qualitative claim: **partly** when our direction agrees (the paper's "
+    "qualitative magnitude — 'excellent', 'cannot match' — cannot be scored), **differs** "
+    "otherwise",
+    "threshold": "a stated level: **holds** at or past the level the claim names (given in the "
+    "claim); **partly** past its weaker level; **differs** otherwise",
+    "kl": "KL steps: a rise counts only where KL(P_g ‖ P_g−1) grows by more than the KL "
+    "noise floor (95th percentile of the KL of two same-size samples of one distribution); "
+    "**holds** when the paper's pattern of rises holds for both initialisations, **partly** "
+    "for one, **differs** for none",
+}
+
+
+def ci_verdict(lo: float, hi: float, paper_sign: int) -> str:
+    """Rule 'ci': the 95% CI (lo, hi) of our difference against the paper's sign (±1)."""
+    if lo <= 0 <= hi:
+        return "inconclusive"
+    return "holds" if (lo > 0) == (paper_sign > 0) else "differs"
+
+
+def number_verdict(mu: float, sd: float, paper_mu: float, paper_sd: float) -> tuple[str, float]:
+    """Rule 'number': (verdict, |Δμ| / pooled σ)."""
+    pooled = float(np.sqrt((sd**2 + paper_sd**2) / 2))
+    z = abs(mu - paper_mu) / pooled if pooled > 0 else float("inf")
+    return ("holds" if z < 0.5 else "partly" if z < 1 else "differs"), z
+
+
+def negligible_verdict(d: float) -> str:
+    """Rule 'negligible' on Cohen's d."""
+    return "holds" if abs(d) < 0.2 else "partly" if abs(d) < 0.5 else "differs"
+
+
+def mean_ci(values: list[float]) -> tuple[float, float]:
+    """(mean, 95% half-width) over seeds (t-interval; half-width NaN for one seed)."""
+    v = np.asarray([x for x in values if x is not None and np.isfinite(x)], dtype=np.float64)
+    if len(v) == 0:
+        return float("nan"), float("nan")
+    if len(v) == 1:
+        return float(v[0]), float("nan")
+    half = float(stats.t.ppf(0.975, len(v) - 1) * v.std(ddof=1) / np.sqrt(len(v)))
+    return float(v.mean()), half
+
+
+@dataclass(frozen=True)
+class Combined:
+    """A finding over seeds: the first seed's finding (its text), the verdict over seeds, each
+    seed's verdict and the effect's mean ± 95% CI half-width."""
+
+    finding: Finding
+    verdict: str
+    seed_verdicts: tuple[str, ...]
+    mean: float
+    half_width: float
+
+    @property
+    def effect(self) -> str:
+        f = self.finding
+        if f.value is None or not np.isfinite(self.mean):
+            return "–"
+        ci = "" if not np.isfinite(self.half_width) else f" ± {self.half_width:.3g}"
+        return f"{self.mean:.3g}{ci} ({f.value_label})"
+
+    def as_finding(self) -> Finding:
+        return replace(self.finding, verdict=self.verdict)
+
+
+def combine(per_seed: list[list[Finding]]) -> list[Combined]:
+    """Match the seeds' findings (same section and claim, in the first seed's order) and
+    combine them: the common verdict, or inconclusive when the seeds disagree."""
+    first = per_seed[0]
+    out = []
+    for f in first:
+        same = [next((g for g in fs if g.key == f.key), None) for fs in per_seed]
+        found = [g for g in same if g is not None]
+        verdicts = tuple(g.verdict for g in found)
+        verdict = verdicts[0] if len(set(verdicts)) == 1 else "inconclusive"
+        mean, half = mean_ci([g.value for g in found if g.value is not None])
+        out.append(Combined(f, verdict, verdicts, mean, half))
+    return out
+
+
+def parts_verdict(verdicts: list[str]) -> str:
+    """A claim of several parts: their common verdict; else **partly** when some part holds,
+    **differs** when some part differs, **inconclusive** otherwise."""
+    if len(set(verdicts)) == 1:
+        return verdicts[0]
+    return (
+        "partly" if "holds" in verdicts else "differs" if "differs" in verdicts else "inconclusive"
+    )

@@ -1,0 +1,80 @@
+"""The verdict rules and their combination over seeds, against plain formulas."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from emogen.analysis.replication.findings import Finding, mean_diff_ci
+from emogen.analysis.replication.verdicts import (
+    RULES,
+    ci_verdict,
+    combine,
+    mean_ci,
+    negligible_verdict,
+    number_verdict,
+    parts_verdict,
+)
+
+
+def f(verdict: str, value: float | None = None, claim: str = "c") -> Finding:
+    return Finding("S", claim, "p", "o", verdict, rule="order: x", value=value, value_label="v")
+
+
+def test_ci_rule() -> None:
+    assert ci_verdict(0.01, 0.2, +1) == "holds"
+    assert ci_verdict(-0.2, -0.01, +1) == "differs"
+    assert ci_verdict(-0.2, -0.01, -1) == "holds"
+    assert ci_verdict(-0.1, 0.1, +1) == "inconclusive"
+
+
+def test_number_rule_judges_the_table_v_threshold_as_different() -> None:
+    """Ours 0.106 ± 0.044 against the paper's 0.2 ± 0.065: |Δμ| / pooled σ = 1.7."""
+    verdict, z = number_verdict(0.106, 0.044, 0.2, 0.065)
+    pooled = np.sqrt((0.044**2 + 0.065**2) / 2)
+    assert z == pytest.approx(0.094 / pooled) and verdict == "differs"
+    assert number_verdict(0.21, 0.06, 0.2, 0.065)[0] == "holds"
+    assert number_verdict(0.25, 0.06, 0.2, 0.065)[0] == "partly"
+
+
+def test_negligible_and_parts() -> None:
+    assert [negligible_verdict(d) for d in (0.1, -0.3, 0.7)] == ["holds", "partly", "differs"]
+    assert parts_verdict(["holds", "holds"]) == "holds"
+    assert parts_verdict(["holds", "inconclusive"]) == "partly"
+    assert parts_verdict(["differs", "inconclusive"]) == "differs"
+    assert parts_verdict(["inconclusive", "inconclusive"]) == "inconclusive"
+
+
+def test_mean_ci_is_the_t_interval() -> None:
+    v = [0.2, 0.25, 0.31]
+    mean, half = mean_ci(v)
+    lo, hi = stats.t.interval(0.95, 2, loc=np.mean(v), scale=stats.sem(v))
+    assert mean == pytest.approx(np.mean(v)) and half == pytest.approx((hi - lo) / 2)
+    assert np.isnan(mean_ci([0.3])[1])
+
+
+def test_mean_diff_ci_is_welch_normal() -> None:
+    rng = np.random.default_rng(0)
+    a, b = rng.normal(1, 1, 200), rng.normal(0.8, 2, 300)
+    d, lo, hi = mean_diff_ci(a, b)
+    se = np.sqrt(a.var(ddof=1) / 200 + b.var(ddof=1) / 300)
+    assert d == pytest.approx(a.mean() - b.mean()) and hi - lo == pytest.approx(2 * 1.96 * se)
+
+
+def test_seeds_that_disagree_make_a_finding_inconclusive() -> None:
+    seeds = [
+        [f("holds", 0.3, "a"), f("holds", 1.0, "b"), f("partly", None, "mine")],
+        [f("holds", 0.2, "a"), f("differs", -1.0, "b")],
+        [f("holds", 0.25, "a"), f("holds", 2.0, "b")],
+    ]
+    a, b, mine = combine(seeds)
+    assert (a.verdict, a.seed_verdicts) == ("holds", ("holds",) * 3)
+    assert b.verdict == "inconclusive" and b.seed_verdicts == ("holds", "differs", "holds")
+    assert a.mean == pytest.approx(0.25) and "±" in a.effect
+    assert mine.verdict == "partly" and mine.effect == "–"  # one seed, no value
+    assert a.as_finding().verdict == "holds"
+
+
+def test_every_rule_a_finding_names_is_written_down() -> None:
+    assert set(RULES) >= {"order", "ci", "negligible", "number", "direction", "threshold", "kl"}
