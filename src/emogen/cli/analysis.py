@@ -14,7 +14,8 @@ from typing import Annotated
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, SeedOpt, friendly_errors
+from emogen.cli.options import ModelOpt, RigOpt, SeedOpt, at_least, friendly_errors
+from emogen.cli.outputs import ForceOpt, check_out_folder, output_folder
 from emogen.cli.power import power_command
 
 RenderOpt = Annotated[
@@ -38,7 +39,10 @@ def analyse_command(
         ),
     ] = None,
     noise_runs: Annotated[
-        int, typer.Option("--noise-runs", help="Simulated runs per group for the GA noise.")
+        int,
+        typer.Option(
+            "--noise-runs", callback=at_least(1), help="Simulated runs per group for the GA noise."
+        ),
     ] = 500,
     gmm_dims: Annotated[
         float,
@@ -51,6 +55,7 @@ def analyse_command(
     render: RenderOpt = True,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    force: ForceOpt = False,
 ) -> None:
     """Analyse a study export or simulation output: error distributions, KL per generation,
     bias and repeatability bins, PCA + GMM separability, GA-noise test, prototypes, renders.
@@ -62,6 +67,7 @@ def analyse_command(
     from emogen.model import load_model
 
     dataset = load_dataset(data)  # fails fast on a folder that is not data
+    check_out_folder(out, force=force)
     ga = None
     if config is not None:
         from emogen.study.config import load_study_config
@@ -71,8 +77,9 @@ def analyse_command(
     options = AnalysisOptions(
         render=render, noise_runs=noise_runs, seed=seed, gmm_dims=gmm_dims, alpha=alpha, ga=ga
     )
-    result = analyse(dataset, out, model=model, options=options)
-    typer.echo(f"wrote {result.html} and {result.markdown}")
+    with output_folder(out, force=force) as tmp:
+        analyse(dataset, tmp, model=model, options=options)
+    typer.echo(f"wrote {out / 'index.html'} and {out / 'README.md'}")
 
 
 @friendly_errors
@@ -93,6 +100,7 @@ def replicate_command(
     render: RenderOpt = True,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    force: ForceOpt = False,
 ) -> None:
     """Run the paper's Section IV experiments on our model and write the report, each finding
     beside the paper's numbers with a one-line verdict (holds / partly / differs)."""
@@ -107,13 +115,15 @@ def replicate_command(
         if quick
         else ReplicateSettings.full_settings(**extra)
     )
+    check_out_folder(out, force=force)
     model = load_model(model_path, rig=rig)
     start = time.perf_counter()
 
     def progress(name: str) -> None:
         typer.echo(f"[{time.perf_counter() - start:6.1f} s] {name}", err=True)
 
-    findings = replicate(model, out, settings, only=only, progress=progress)
+    with output_folder(out, force=force) as tmp:
+        findings = replicate(model, tmp, settings, only=only, progress=progress)
     for f in findings:
         typer.echo(f.line())
     counts = {v: sum(f.verdict == v for f in findings) for v in ("holds", "partly", "differs")}

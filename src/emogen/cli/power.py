@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from emogen.cli.options import ModelOpt, RigOpt, SeedOpt, friendly_errors, parse_named_weights
+from emogen.cli.outputs import ForceOpt, check_out_folder, output_folder
 
 if TYPE_CHECKING:
     import numpy as np
@@ -125,6 +126,7 @@ def power_command(
     seed: SeedOpt = 1,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    force: ForceOpt = False,
 ) -> None:
     """How many participants per group tell two prototypes apart, given GA noise: a power
     curve (OUT/power.csv, OUT/power.png) and the number (OUT/power.json)."""
@@ -134,6 +136,7 @@ def power_command(
     from emogen.model import load_model
 
     check_group_b(b, difference)  # before loading the model
+    check_out_folder(out, force=force)
     r = load_model(model_path, rig=rig).rig
     wa, wb = prototypes(r, a, b, difference)
     cfg = SimulationConfig(
@@ -165,6 +168,7 @@ def power_command(
         seed=seed,
         settings=settings,
     )
-    _write(out, res, power, alpha)
+    with output_folder(out, force=force) as tmp:
+        _write(tmp, res, power, alpha)
     _print(res, power, alpha, max_participants)
     typer.echo(f"wrote {out / 'power.csv'}, {out / 'power.png'}, {out / 'power.json'}")

@@ -9,12 +9,14 @@ emogen render heatmap --weight jawOpen=1 --reference-weight jawOpen=0.5 --out he
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, friendly_errors, parse_named_weights
+from emogen.cli.options import ModelOpt, RigOpt, at_least, friendly_errors, parse_named_weights
+from emogen.cli.outputs import ForceOpt, check_out_folder, output_folder
 from emogen.cli.render_setup import (
     BackgroundOpt,
     CorrectOpt,
@@ -33,6 +35,7 @@ from emogen.cli.render_setup import (
     look_record,
     make_renderer,
     output_paths,
+    png_file,
     render_appearance,
 )
 
@@ -73,6 +76,7 @@ def render(
     plain: PlainOpt = False,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    force: ForceOpt = False,
 ) -> None:
     """Render faces offscreen to PNG (512×512, frontal camera, the viewer's look) with an
     identity's shape and appearance."""
@@ -86,18 +90,24 @@ def render(
     model, name, ident = load_render_model(model_path, rig, identity)
     w, labels = faces_from_options(model, weight, weights_file)
     paths = output_paths(out, len(w), labels)
+    folder = paths[0].parent == out and "{" not in str(out)  # face_NNN.png in a folder
+    if folder:
+        check_out_folder(out, force=force)
     appearance = render_appearance(model, ident, plain)
     look = look_record(name, ident, appearance, framing)
     with make_renderer(
         model, size, background, fov, supersample, appearance=appearance, framing=framing
     ) as r:
-        images = r.render(w, gaze=gaze, correct=correct)
-        for i, path in enumerate(paths):
-            image = (
-                add_footer(images[i], background=r.look.background_srgb) if footer else images[i]
-            )
-            meta = image_metadata(model, w[i], label=labels[i], corrected=correct, **look)
-            save_png(path, image, meta)
+        images = list(r.render(w, gaze=gaze, correct=correct))
+        if footer:
+            images = [add_footer(im, background=r.look.background_srgb) for im in images]
+    metas = [
+        image_metadata(model, w[i], label=labels[i], corrected=correct, **look)
+        for i in range(len(paths))
+    ]
+    with output_folder(out, force=force) if folder else nullcontext(None) as tmp:
+        for path, image, meta in zip(paths, images, metas, strict=True):
+            save_png(path if tmp is None else tmp / path.name, image, meta)
     typer.echo(f"wrote {paths[0]}" if len(paths) == 1 else f"wrote {len(paths)} faces to {out}")
 
 
@@ -112,10 +122,14 @@ def sheet(
             "--face", help="One face as NAME=VALUE[,NAME=VALUE…] ('neutral' for none); repeatable."
         ),
     ] = None,
-    columns: Annotated[int, typer.Option("--columns", help="Faces per row.")] = 5,
+    columns: Annotated[
+        int, typer.Option("--columns", callback=at_least(1), help="Faces per row.")
+    ] = 5,
     labels: Annotated[bool, typer.Option("--labels/--no-labels", help="Label each face.")] = True,
     identity: IdentityOpt = None,
-    size: Annotated[int, typer.Option("--size", help="Side of each face in pixels.")] = 256,
+    size: Annotated[
+        int, typer.Option("--size", callback=at_least(1), help="Side of each face in pixels.")
+    ] = 256,
     background: BackgroundOpt = None,
     fov: FovOpt = None,
     supersample: SupersampleOpt = None,
@@ -153,7 +167,9 @@ def sheet(
         image = r.sheet(
             np.asarray(rows), names if labels else None, columns=columns, correct=correct
         )
-    save_png(out, image, image_metadata(model, None, faces=names, corrected=correct, **look))
+    save_png(
+        png_file(out), image, image_metadata(model, None, faces=names, corrected=correct, **look)
+    )
     typer.echo(f"wrote {out}: {len(rows)} faces")
 
 
@@ -216,7 +232,7 @@ def heatmap(
     with make_renderer(model, size, background, fov, supersample) as r:
         result = render_heatmap(r, faces[0], faces[1], vmax=vmax, cmap=cmap)
     save_png(
-        out,
+        png_file(out),
         result.image,
         image_metadata(
             model,

@@ -9,7 +9,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, friendly_errors, parse_named_weights
+from emogen.cli.options import ModelOpt, RigOpt, at_least, friendly_errors, parse_named_weights
+from emogen.cli.outputs import ForceOpt, check_out_folder, moved, output_folder
 
 if TYPE_CHECKING:
     from emogen.simulate.runner import SimulationResult
@@ -57,7 +58,9 @@ DaskOpt = Annotated[
 WorkersOpt = Annotated[
     int | None,
     typer.Option(
-        "--workers", help="Local worker processes (or LocalCluster workers with --dask local)."
+        "--workers",
+        callback=at_least(1),
+        help="Local worker processes (or LocalCluster workers with --dask local).",
     ),
 ]
 ProgressOpt = Annotated[
@@ -80,9 +83,16 @@ TargetFileOpt = Annotated[
     typer.Option("--target-file", help="Target from a face table (Parquet/CSV, shape columns)."),
 ]
 TargetRowOpt = Annotated[
-    int | None, typer.Option("--target-row", help="Row of --target-file (from 0).")
+    int | None,
+    typer.Option(
+        "--target-row",
+        callback=at_least(0),
+        help="Row of --target-file (0 = the first row after the header).",
+    ),
 ]
-RunsOpt = Annotated[int | None, typer.Option("--runs", help="Runs (default 500).")]
+RunsOpt = Annotated[
+    int | None, typer.Option("--runs", callback=at_least(1), help="Runs (default 500).")
+]
 SeedOpt = Annotated[int | None, typer.Option("--seed", help="Seed (default: fresh, recorded).")]
 InitOpt = Annotated[
     InitKind | None, typer.Option("--init", help="Initialisation (default protocol).")
@@ -91,7 +101,9 @@ InitRangeOpt = Annotated[
     str | None,
     typer.Option("--init-range", help="Active genes per protocol face, LO-HI (default 3-8)."),
 ]
-GenerationsOpt = Annotated[int | None, typer.Option("--generations", help="G (default 10).")]
+GenerationsOpt = Annotated[
+    int | None, typer.Option("--generations", callback=at_least(1), help="G (default 10).")
+]
 VariantOpt = Annotated[
     Variant | None, typer.Option("--variant", help="emogen (default) or classical.")
 ]
@@ -199,6 +211,7 @@ def simulate_command(
     config: ConfigOpt = None,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    force: ForceOpt = False,
 ) -> None:
     """Simulate studies: an observer selects faces by a metric toward a target.
 
@@ -232,6 +245,7 @@ def simulate_command(
         target_row=target_row,
     )
     cfg = validate_config(SimulationConfig, data, str(config) if config else "(command line)")
+    check_out_folder(out, force=force)  # before the work, not after it
     model = load_model(model_path, rig=rig)
     backend = make_backend(dask, workers or 1)
     try:
@@ -246,7 +260,8 @@ def simulate_command(
         )
     finally:
         backend.close()
-    paths = write_simulation(result, out)
+    with output_folder(out, force=force) as tmp:
+        paths = moved(write_simulation(result, tmp), tmp, out)
     _print_summary(result, cfg.runs, cfg.metric.name)
     typer.echo("wrote " + ", ".join(str(p) for p in paths))
 
