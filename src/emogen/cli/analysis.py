@@ -14,10 +14,26 @@ from typing import Annotated
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, SeedOpt, at_least, friendly_errors
+from emogen.cli.options import (
+    JsonOpt,
+    ModelOpt,
+    RigOpt,
+    SeedOpt,
+    at_least,
+    friendly_errors,
+    show_result,
+    stage_printer,
+)
 from emogen.cli.outputs import ForceOpt, check_out_folder, output_folder
 from emogen.cli.power import power_command
 
+ProgressOpt = Annotated[
+    bool | None,
+    typer.Option(
+        "--progress/--no-progress",
+        help="Show each stage on stderr (default: when stderr is a terminal).",
+    ),
+]
 RenderOpt = Annotated[
     bool, typer.Option("--render/--no-render", help="Render mean faces and heatmaps (OpenGL).")
 ]
@@ -56,6 +72,8 @@ def analyse_command(
     model_path: ModelOpt = None,
     rig: RigOpt = None,
     force: ForceOpt = False,
+    as_json: JsonOpt = False,
+    progress: ProgressOpt = None,
 ) -> None:
     """Analyse a study export or simulation output: error distributions, KL per generation,
     bias and repeatability bins, PCA + GMM separability, GA-noise test, prototypes, renders.
@@ -78,8 +96,16 @@ def analyse_command(
         render=render, noise_runs=noise_runs, seed=seed, gmm_dims=gmm_dims, alpha=alpha, ga=ga
     )
     with output_folder(out, force=force) as tmp:
-        analyse(dataset, tmp, model=model, options=options)
-    typer.echo(f"wrote {out / 'index.html'} and {out / 'README.md'}")
+        analyse(dataset, tmp, model=model, options=options, progress=stage_printer(progress))
+    show_result(
+        as_json,
+        {
+            "kind": dataset.kind,
+            "groups": list(dataset.groups),
+            "wrote": [str(out / "index.html"), str(out / "README.md"), str(out / "analysis.json")],
+        },
+        [f"wrote {out / 'index.html'} and {out / 'README.md'}"],
+    )
 
 
 @friendly_errors
@@ -101,6 +127,8 @@ def replicate_command(
     model_path: ModelOpt = None,
     rig: RigOpt = None,
     force: ForceOpt = False,
+    as_json: JsonOpt = False,
+    progress: ProgressOpt = None,
 ) -> None:
     """Run the paper's Section IV experiments on our model and write the report, each finding
     beside the paper's numbers with a one-line verdict (holds / partly / differs)."""
@@ -118,19 +146,25 @@ def replicate_command(
     check_out_folder(out, force=force)
     model = load_model(model_path, rig=rig)
     start = time.perf_counter()
-
-    def progress(name: str) -> None:
-        typer.echo(f"[{time.perf_counter() - start:6.1f} s] {name}", err=True)
-
+    show = stage_printer(progress)
     with output_folder(out, force=force) as tmp:
-        findings = replicate(model, tmp, settings, only=only, progress=progress)
-    for f in findings:
-        typer.echo(f.line())
+        findings = replicate(model, tmp, settings, only=only, progress=show or (lambda _n: None))
     counts = {v: sum(f.verdict == v for f in findings) for v in ("holds", "partly", "differs")}
-    typer.echo(
-        f"{len(findings)} findings: {counts['holds']} hold, {counts['partly']} partly, "
-        f"{counts['differs']} differ ({time.perf_counter() - start:.0f} s); "
-        f"wrote {out / 'index.html'} and {out / 'README.md'}"
+    wrote = [str(out / "index.html"), str(out / "README.md")]
+    show_result(
+        as_json,
+        {
+            "findings": [{"verdict": f.verdict, "line": f.line()} for f in findings],
+            "counts": counts,
+            "seconds": time.perf_counter() - start,
+            "wrote": wrote,
+        },
+        [
+            *(f.line() for f in findings),
+            f"{len(findings)} findings: {counts['holds']} hold, {counts['partly']} partly, "
+            f"{counts['differs']} differ ({time.perf_counter() - start:.0f} s); "
+            f"wrote {wrote[0]} and {wrote[1]}",
+        ],
     )
 
 

@@ -149,3 +149,40 @@ def parse_named_weights(items: list[str] | None, option: str = "--weight") -> di
 
 
 SeedOpt = Annotated[int, typer.Option("--seed", help="Seed of every simulation (recorded).")]
+JsonOpt = Annotated[
+    bool,
+    typer.Option("--json", help="Print the result as one JSON object on stdout (nothing else)."),
+]
+
+
+def stage_printer(enabled: bool | None = None) -> Callable[[str], None] | None:
+    """Progress of a long command, one line per stage with the elapsed time, on stderr — only
+    when stderr is a terminal (``enabled=None``), so pipes, logs and ``--json`` stay clean."""
+    import sys
+    import time
+
+    if enabled is None:
+        enabled = sys.stderr.isatty()
+    if not enabled:
+        return None
+    start = time.perf_counter()
+
+    def show(stage: str) -> None:
+        typer.secho(
+            f"[{time.perf_counter() - start:6.1f} s] {stage}",
+            err=True,
+            dim=use_colour(),
+        )
+
+    return show
+
+
+def show_result(as_json: bool, data: dict[str, Any], lines: list[str]) -> None:
+    """A command's result: one JSON object on stdout with ``--json``, else the text lines."""
+    if as_json:
+        import json
+
+        typer.echo(json.dumps(data, indent=2, default=str))
+        return
+    for line in lines:
+        typer.echo(line)

@@ -15,7 +15,15 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, at_least, friendly_errors, parse_named_weights
+from emogen.cli.options import (
+    JsonOpt,
+    ModelOpt,
+    RigOpt,
+    at_least,
+    friendly_errors,
+    parse_named_weights,
+    show_result,
+)
 from emogen.cli.outputs import ForceOpt, check_out_folder, output_folder
 from emogen.cli.render_setup import (
     BackgroundOpt,
@@ -77,6 +85,7 @@ def render(
     model_path: ModelOpt = None,
     rig: RigOpt = None,
     force: ForceOpt = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """Render faces offscreen to PNG (512×512, frontal camera, the viewer's look) with an
     identity's shape and appearance."""
@@ -108,7 +117,11 @@ def render(
     with output_folder(out, force=force) if folder else nullcontext(None) as tmp:
         for path, image, meta in zip(paths, images, metas, strict=True):
             save_png(path if tmp is None else tmp / path.name, image, meta)
-    typer.echo(f"wrote {paths[0]}" if len(paths) == 1 else f"wrote {len(paths)} faces to {out}")
+    show_result(
+        as_json,
+        {"wrote": [str(p) for p in paths], "labels": labels},
+        [f"wrote {paths[0]}" if len(paths) == 1 else f"wrote {len(paths)} faces to {out}"],
+    )
 
 
 @render_app.command("sheet")
@@ -138,6 +151,7 @@ def sheet(
     plain: PlainOpt = False,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """A contact sheet: faces in a grid with labels and the ICT-FaceKit notice."""
     import numpy as np
@@ -170,7 +184,7 @@ def sheet(
     save_png(
         png_file(out), image, image_metadata(model, None, faces=names, corrected=correct, **look)
     )
-    typer.echo(f"wrote {out}: {len(rows)} faces")
+    show_result(as_json, {"wrote": str(out), "faces": names}, [f"wrote {out}: {len(rows)} faces"])
 
 
 @render_app.command("heatmap")
@@ -199,6 +213,7 @@ def heatmap(
     supersample: SupersampleOpt = None,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Per-vertex distance between two faces as colour on the face, legend in cm (paper Fig. 9)."""
     import numpy as np
@@ -243,6 +258,12 @@ def heatmap(
             max_distance_cm=result.max_distance,
         ),
     )
-    typer.echo(
-        f"wrote {out}: largest distance {result.max_distance:.3f} cm, scale 0-{result.vmax:g} cm"
+    show_result(
+        as_json,
+        {
+            "wrote": str(out),
+            "max_distance_cm": float(result.max_distance),
+            "scale_max_cm": float(result.vmax),
+        },
+        [f"wrote {out}: largest distance {result.max_distance:.3f} cm, scale 0-{result.vmax:g} cm"],
     )

@@ -9,7 +9,15 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, at_least, friendly_errors, parse_named_weights
+from emogen.cli.options import (
+    JsonOpt,
+    ModelOpt,
+    RigOpt,
+    at_least,
+    friendly_errors,
+    parse_named_weights,
+    show_result,
+)
 from emogen.cli.outputs import ForceOpt, check_out_folder, moved, output_folder
 
 if TYPE_CHECKING:
@@ -174,17 +182,32 @@ def simulation_settings(
     return data
 
 
-def _print_summary(result: SimulationResult, runs: int, metric: str) -> None:
+def _summary(
+    result: SimulationResult, runs: int, metric: str, paths: list[Path]
+) -> tuple[dict[str, Any], list[str]]:
+    """The result as JSON and as text lines."""
     from emogen.simulate.runner import summary
 
     stats = summary(result.table)
     means, sds = stats["mean"].to_numpy(float), stats["std"].to_numpy(float)
-    typer.echo(
+    ends = sorted({0, len(means) - 1})
+    data = {
+        "runs": runs,
+        "seed": result.record["seed"],
+        "metric": metric,
+        "compute_seconds": result.record["compute_seconds"],
+        "elite_error": [
+            {"generation": g, "mean": float(means[g]), "sd": float(sds[g])} for g in ends
+        ],
+        "wrote": [str(p) for p in paths],
+    }
+    lines = [
         f"{runs} runs, seed {result.record['seed']}, metric {metric}, "
-        f"{result.record['compute_seconds']:.2f} s; elite CD error (mean ± sd):"
-    )
-    for g in sorted({0, len(means) - 1}):
-        typer.echo(f"  generation {g:>3}: {means[g]:.3f} ± {sds[g]:.3f}")
+        f"{result.record['compute_seconds']:.2f} s; elite CD error (mean ± sd):",
+        *(f"  generation {g:>3}: {means[g]:.3f} ± {sds[g]:.3f}" for g in ends),
+        "wrote " + ", ".join(str(p) for p in paths),
+    ]
+    return data, lines
 
 
 @friendly_errors
@@ -212,6 +235,7 @@ def simulate_command(
     model_path: ModelOpt = None,
     rig: RigOpt = None,
     force: ForceOpt = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """Simulate studies: an observer selects faces by a metric toward a target.
 
@@ -262,8 +286,7 @@ def simulate_command(
         backend.close()
     with output_folder(out, force=force) as tmp:
         paths = moved(write_simulation(result, tmp), tmp, out)
-    _print_summary(result, cfg.runs, cfg.metric.name)
-    typer.echo("wrote " + ", ".join(str(p) for p in paths))
+    show_result(as_json, *_summary(result, cfg.runs, cfg.metric.name, paths))
 
 
 @friendly_errors
@@ -276,6 +299,7 @@ def sweep_command(
     progress: ProgressOpt = None,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Run a grid of simulations (targets × metrics × init × schedules × GA variant).
 
@@ -300,13 +324,24 @@ def sweep_command(
             all_weights=all_weights,
             model_name=model.name,
             model_hash=model.model_hash,
+            legacy_model_hash=model.legacy_model_hash,
         )
     finally:
         backend.close()
-    typer.echo(
+    rows: list[Any] = list(result.summary.itertuples())
+    data = {
+        "cells": len(spec.cells),
+        "ran": result.ran,
+        "skipped": result.skipped,
+        "final_error": [
+            {"cell": r.cell, "mean": float(r.mu_final), "sd": float(r.sigma_final)} for r in rows
+        ],
+        "wrote": str(out / "summary.csv"),
+    }
+    lines = [
         f"{len(spec.cells)} cells: ran {len(result.ran)}, skipped {len(result.skipped)} "
-        f"(already done); elite CD error at the last generation (mean ± sd):"
-    )
-    for row in result.summary.itertuples():
-        typer.echo(f"  {row.cell:<48} {row.mu_final:.3f} ± {row.sigma_final:.3f}")
-    typer.echo(f"wrote {out / 'summary.csv'}")
+        f"(already done); elite CD error at the last generation (mean ± sd):",
+        *(f"  {r.cell:<48} {r.mu_final:.3f} ± {r.sigma_final:.3f}" for r in rows),
+        f"wrote {out / 'summary.csv'}",
+    ]
+    show_result(as_json, data, lines)

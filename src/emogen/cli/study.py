@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from emogen.cli.options import friendly_errors
+from emogen.cli.options import JsonOpt, friendly_errors, show_result
 from emogen.cli.outputs import ForceOpt, check_out_folder, moved, output_folder
 from emogen.errors import ConfigError
 
@@ -99,6 +99,7 @@ def export(
         Path | None, typer.Option("--config", help="Study TOML (for its database_url).")
     ] = None,
     force: ForceOpt = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """Tidy tables: sessions, trials, faces, selections, restarts, ratings (see docs/study.md)."""
     from emogen.study.export import export_tables, write_export
@@ -111,8 +112,11 @@ def export(
         store.dispose()
     with output_folder(out, force=force) as tmp:
         paths = moved(write_export(tables, tmp, fmt.value), tmp, out)
-    for path in paths:
-        typer.echo(f"wrote {path} ({len(tables[path.stem])} rows)")
+    show_result(
+        as_json,
+        {"wrote": [{"path": str(p), "rows": len(tables[p.stem])} for p in paths]},
+        [f"wrote {p} ({len(tables[p.stem])} rows)" for p in paths],
+    )
 
 
 BASE_URL_ENV = "EMOGEN_BASE_URL"
@@ -137,6 +141,7 @@ def resume_link(
     config: Annotated[
         Path | None, typer.Option("--config", help="Study TOML (for its database_url).")
     ] = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Print a participant's personal session link, to give back to them (exit 2 if none)."""
     import os
@@ -149,7 +154,8 @@ def resume_link(
     finally:
         store.dispose()
     base = base_url or os.environ.get(BASE_URL_ENV) or "http://127.0.0.1:8000"
-    typer.echo(session_link(base, token))
+    link = session_link(base, token)
+    show_result(as_json, {"participant_id": participant, "link": link}, [link])
 
 
 @friendly_errors
