@@ -160,6 +160,7 @@ def sheet(
     from emogen.render.images import save_png
     from emogen.render.weights import describe
 
+    png_file(out)  # before any work
     model, name, ident = load_render_model(model_path, rig, identity)
     rows: list[np.ndarray] = []
     names: list[str] = []
@@ -223,6 +224,7 @@ def heatmap(
     from emogen.render.images import save_png
     from emogen.render.weights import read_weights_csv
 
+    png_file(out)  # before any work
     model, name, _ = load_render_model(
         model_path, rig, identity
     )  # the heatmap colours the face: no skin
