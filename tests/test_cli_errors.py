@@ -19,6 +19,7 @@ from emogen.cli import app
 from emogen.cli.options import EXIT_DATA, EXIT_ENVIRONMENT, EXIT_USAGE, friendly_errors
 from emogen.cli.outputs import output_folder
 from emogen.errors import ConfigError, DataError, ModelFileError, ResourceError
+from emogen.render.errors import RenderError
 
 runner = CliRunner()
 
@@ -50,6 +51,7 @@ def test_every_command_goes_through_the_one_error_path() -> None:
         (DataError("table row 1"), EXIT_DATA),
         (ModelFileError("cut"), EXIT_DATA),
         (ResourceError("db down"), EXIT_ENVIRONMENT),
+        (RenderError("no OpenGL context could be made"), EXIT_ENVIRONMENT),
         (
             OSError(errno.ENOSPC, "No space left on device", "/full/disk/x.parquet"),
             EXIT_ENVIRONMENT,

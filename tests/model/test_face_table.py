@@ -148,6 +148,9 @@ def test_a_misspelt_shape_column_is_never_dropped(rig: Rig, tmp_path: Path, suff
     frame.to_csv(path, index=False) if suffix == ".csv" else frame.to_parquet(path)
     with pytest.raises(DataError, match=r"unknown column 'jawOpn': did you mean 'jawOpen'\?"):
         read_face_table(path, rig)
+    frame.rename(columns={"jawOpn": "jaw_open"}).to_csv(tmp_path / "sep.csv", index=False)
+    with pytest.raises(DataError, match=r"unknown column 'jaw_open': did you mean 'jawOpen'\?"):
+        read_face_table(tmp_path / "sep.csv", rig)
     frame.rename(columns={"jawOpn": "notes"}).to_csv(tmp_path / "ok.csv", index=False)
     assert read_face_table(tmp_path / "ok.csv", rig).weights[0, 1] == 0.2  # other columns: kept
 

@@ -84,8 +84,9 @@ def _fail(message: str, code: int = EXIT_USAGE) -> None:
 def exit_status(exc: BaseException) -> int:
     """The exit status of an error: 2 usage, 3 data, 4 environment (see docs/cli.md)."""
     from emogen.errors import DataError, ModelFileError, ModelNotFoundError, ResourceError
+    from emogen.render.errors import RenderError  # no OpenGL context, an image not written
 
-    if isinstance(exc, ResourceError | ModelNotFoundError):
+    if isinstance(exc, ResourceError | ModelNotFoundError | RenderError):
         return EXIT_ENVIRONMENT
     if isinstance(exc, DataError | ModelFileError):
         return EXIT_DATA

@@ -31,6 +31,7 @@ written (``'1.7'``, ``1.7``), never as numpy reprs.
 from __future__ import annotations
 
 import csv
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -248,9 +249,10 @@ def _check_other_column(
 
     known = [*rig.shape_names, *(g.name for g in rig.genes)]
     close = difflib.get_close_matches(name, known, n=1, cutoff=0.8)
-    if not close:  # case slips: 'JawOpen'
-        lower = {k.lower(): k for k in known}
-        close = [lower[name.lower()]] if name.lower() in lower else []
+    if not close:  # case and separator slips: 'JawOpen', 'jaw_open'
+        squash = {re.sub(r"[^a-z0-9]", "", k.lower()): k for k in known}
+        key = re.sub(r"[^a-z0-9]", "", name.lower())
+        close = [squash[key]] if key in squash else []
     if others == "ignore" and (not close or name in BOOKKEEPING):
         return
     hint = f"did you mean '{close[0]}'? " if close else ""
