@@ -15,7 +15,17 @@ import sys
 import time
 
 COMMANDS = (["--help"], ["simulate", "--help"], ["analyse", "--help"], ["render", "--help"])
-HEAVY = ("numba", "scipy", "sklearn", "matplotlib", "pandas", "sqlalchemy", "moderngl", "fastapi")
+HEAVY = (
+    "numpy",
+    "numba",
+    "scipy",
+    "sklearn",
+    "matplotlib",
+    "pandas",
+    "sqlalchemy",
+    "moderngl",
+    "fastapi",
+)
 
 
 def heavy_imports(args: list[str]) -> list[str]:

@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-HEAVY = ("numba", "scipy", "sklearn", "matplotlib", "pandas")
+HEAVY = ("numba", "scipy", "sklearn", "matplotlib", "pandas", "numpy", "sqlalchemy", "moderngl")
 
 
 def _imported(*args: str) -> set[str]:

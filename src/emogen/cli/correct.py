@@ -8,12 +8,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
 
 from emogen.cli.options import IdentityOpt, JsonOpt, ModelOpt, RigOpt, friendly_errors, show_result
 
 if TYPE_CHECKING:
+    import numpy as np
     import pandas as pd
 
     from emogen.model.face import FaceModel
@@ -44,6 +44,7 @@ def correct_csv(
     ``collision_iterations``. ``mesh`` (.npz): ``vertices`` (B, V, 3) float32 of the corrected
     faces, ``faces`` (triangles), and the names and weights above.
     """
+    import numpy as np
     import pandas as pd
 
     weights, _ = read_weights_csv(source, model)
