@@ -213,3 +213,12 @@ def test_zero_sizes_and_counts_are_usage_errors_naming_the_value(
     text = " ".join(re.sub("[│╭╮╰╯─]", " ", result.output).split())
     assert f"Invalid value for '{option}': must be at least 1; got 0" in text
     assert list(tmp_path.iterdir()) == []
+
+
+def test_serve_with_an_unreachable_postgresql_server_is_one_line(ict_dir: Path) -> None:
+    url = "postgresql://alice:s3cret@127.0.0.1:9/studies"
+    args = ["serve", "--database-url", url, "--port", "1", "--model", str(ict_dir)]
+    result = runner.invoke(app, args)
+    assert result.exit_code == EXIT_ENVIRONMENT, result.output
+    assert len(result.output.strip().splitlines()) == 1 and "s3cret" not in result.output
+    assert "cannot open the study database" in result.output
