@@ -11,7 +11,7 @@ export EMOGEN_MODEL
 OUT ?= out
 VIEWER := src/emogen/web/static/build/.built
 
-.PHONY: setup system test lint demo bench clean
+.PHONY: setup system test lint demo demo-analyse bench clean
 
 setup: system $(VENV)/.installed node_modules/.installed $(VIEWER)
 
@@ -49,7 +49,16 @@ demo: setup
 	$(BIN)/emogen model info | head -n 4
 	$(BIN)/emogen simulate --target jawOpen=0.8 --runs 500 --seed 1 --out $(OUT)/simulation
 	@echo "Starting the demo study (Ctrl-C stops it); open the URL it prints."
+	@echo "Afterwards, 'make demo-analyse' exports what was recorded and analyses it."
 	$(BIN)/emogen serve --database-url sqlite:///$(abspath $(OUT))/demo-study.sqlite
+
+# The step after the demo: export the demo study's records, analyse them and the simulation.
+demo-analyse: setup
+	$(BIN)/emogen study export --database-url sqlite:///$(abspath $(OUT))/demo-study.sqlite \
+		--out $(OUT)/demo-export --force
+	$(BIN)/emogen analyse $(OUT)/demo-export --out $(OUT)/demo-analysis --force
+	$(BIN)/emogen analyse $(OUT)/simulation --out $(OUT)/simulation-analysis --force --no-render
+	@echo "Open $(OUT)/demo-analysis/index.html and $(OUT)/simulation-analysis/index.html"
 
 bench: setup
 	$(BIN)/python benchmarks/run.py

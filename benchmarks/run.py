@@ -139,7 +139,7 @@ def main() -> None:
     parser.add_argument(
         "--only",
         nargs="*",
-        choices=["gltf", "render", "viewer", "appearance", "correct", "simulate", "study"],
+        choices=["cli", "gltf", "render", "viewer", "appearance", "correct", "simulate", "study"],
         help="run only these sections after the model benchmarks",
     )
     args = parser.parse_args()
@@ -177,6 +177,7 @@ def main() -> None:
 
     from benchmarks import (
         bench_appearance,
+        bench_cli,
         bench_correct,
         bench_gltf,
         bench_render,
@@ -186,6 +187,7 @@ def main() -> None:
     )
 
     sections = {
+        "cli": lambda: bench_cli.run(3 if args.quick else 5),
         "gltf": lambda: bench_gltf.run(model),
         "render": lambda: bench_render.run(model),
         "viewer": lambda: bench_viewer.run(model),

@@ -42,7 +42,7 @@ def test_no_model_anywhere_says_how_to_get_one(tmp_path: Path, monkeypatch) -> N
     monkeypatch.setenv("EMOGEN_CACHE_DIR", str(tmp_path))
     monkeypatch.delenv("EMOGEN_MODEL", raising=False)
     result = runner.invoke(app, ["model", "info"])
-    assert result.exit_code == 2
+    assert result.exit_code == 4  # an environment error (docs/cli.md)
     assert "emogen model fetch" in result.output and "EMOGEN_MODEL" in result.output
 
 
@@ -51,7 +51,7 @@ def test_env_var_is_used_and_checked(ict_dir: Path, monkeypatch, tmp_path: Path)
     assert runner.invoke(app, ["model", "info", "--json"]).exit_code == 0
     monkeypatch.setenv("EMOGEN_MODEL", str(tmp_path / "gone"))
     result = runner.invoke(app, ["model", "info"])
-    assert result.exit_code == 2 and "EMOGEN_MODEL points at" in result.output
+    assert result.exit_code == 4 and "EMOGEN_MODEL points at" in result.output
 
 
 def test_bad_weight_option_is_named(ict_dir: Path, tmp_path: Path) -> None:

@@ -1,4 +1,10 @@
-"""The exceptions EmoGen raises. Every message names the bad value and what was expected."""
+"""The exceptions EmoGen raises. Every message names the bad value and what was expected.
+
+The command line maps them to exit statuses (docs/cli.md): 2 a usage error (an option or a
+config value: :class:`ConfigError`, :class:`ShapeError`, :class:`SelectionError`), 3 a data error
+(an input file's content: :class:`DataError`, :class:`ModelFileError`), 4 an environment error
+(:class:`ResourceError`, :class:`ModelNotFoundError`, and the operating system's own errors).
+"""
 
 
 class EmoGenError(Exception):
@@ -23,3 +29,12 @@ class ShapeError(EmoGenError, ValueError):
 
 class SelectionError(EmoGenError, ValueError):
     """A participant's (or observer's) selection breaks the GA's rules."""
+
+
+class DataError(ConfigError):
+    """An input file's content is wrong: a face table, an export, recorded data (exit 3)."""
+
+
+class ResourceError(EmoGenError):
+    """The machine or a service stands in the way: a database that cannot be reached or does
+    not exist, a folder that cannot be written (exit 4)."""

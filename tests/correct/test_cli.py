@@ -48,8 +48,8 @@ def test_unknown_column_is_an_error_naming_it(ict_dir: Path, tmp_path: Path) -> 
     res = CliRunner().invoke(
         app, ["correct", str(src), "--out", str(tmp_path / "o.csv"), "--model", str(ict_dir)]
     )
-    assert res.exit_code == 2
-    assert "unknown column 'mouthSmiel'" in res.output
+    assert res.exit_code == 3  # a data error (docs/cli.md)
+    assert "unknown column 'mouthSmiel': did you mean 'mouthSmile'?" in res.output
 
 
 def test_out_of_range_weight_is_an_error_naming_the_cell(ict_dir: Path, tmp_path: Path) -> None:
@@ -58,5 +58,5 @@ def test_out_of_range_weight_is_an_error_naming_the_cell(ict_dir: Path, tmp_path
     res = CliRunner().invoke(
         app, ["correct", str(src), "--out", str(tmp_path / "o.csv"), "--model", str(ict_dir)]
     )
-    assert res.exit_code == 2
-    assert "column 'jawOpen' row 2" in res.output
+    assert res.exit_code == 3
+    assert "column 'jawOpen' row 2 (line 3): weight must be in [0, 1]; got '1.2'" in res.output

@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from emogen.errors import ConfigError, ShapeError
+from emogen.errors import ConfigError, DataError
 from emogen.model.face_table import read_face_table
 from emogen.model.rig import Rig
 from emogen.model.rig_build import build_rig
@@ -83,7 +83,7 @@ def test_weights_only_csv_with_labels_and_blank_cells(rig: Rig, tmp_path: Path) 
 def test_unknown_shape_column_is_named(rig: Rig, tmp_path: Path) -> None:
     path = tmp_path / "faces.csv"
     path.write_text("jawOpen,mouthSmiel\n0.5,0.2\n")
-    with pytest.raises(ShapeError, match=r"faces\.csv: unknown column 'mouthSmiel'.*jawOpen"):
+    with pytest.raises(DataError, match=r"faces\.csv: unknown column 'mouthSmiel'.*mouthSmile"):
         read_face_table(path, rig, others="error")
     path.write_text("run,score\n1,2\n")
     with pytest.raises(ConfigError, match="no column is a shape or gene name of rig 'tiny'"):
@@ -137,3 +137,38 @@ def test_missing_file_and_wrong_suffix(rig: Rig, tmp_path: Path) -> None:
         read_face_table(tmp_path / "nope.csv", rig, others="error")
     with pytest.raises(ConfigError, match=r"expected a \.parquet or \.csv file; got '\.txt'"):
         read_face_table(tmp_path / "faces.txt", rig)
+
+
+# ---- one set of rules for every reader ---------------------------------------------------
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_a_misspelt_shape_column_is_never_dropped(rig: Rig, tmp_path: Path, suffix: str) -> None:
+    # a simulation's faces table keeps its bookkeeping columns, but 'jawOpn' is a typo
+    frame = pd.DataFrame({"run": [0], "rank": [0], "jawOpn": [0.7], "mouthSmile": [0.2]})
+    path = tmp_path / f"faces{suffix}"
+    frame.to_csv(path, index=False) if suffix == ".csv" else frame.to_parquet(path)
+    with pytest.raises(DataError, match=r"unknown column 'jawOpn': did you mean 'jawOpen'\?"):
+        read_face_table(path, rig)
+    frame.rename(columns={"jawOpn": "jaw_open"}).to_csv(tmp_path / "sep.csv", index=False)
+    with pytest.raises(DataError, match=r"unknown column 'jaw_open': did you mean 'jawOpen'\?"):
+        read_face_table(tmp_path / "sep.csv", rig)
+    frame.rename(columns={"jawOpn": "notes"}).to_csv(tmp_path / "ok.csv", index=False)
+    assert read_face_table(tmp_path / "ok.csv", rig).weights[0, 1] == 0.2  # other columns: kept
+
+
+@pytest.mark.parametrize("others", ["ignore", "error"])
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_out_of_range_weights_are_errors_everywhere_in_one_format(
+    rig: Rig, tmp_path: Path, others: str, suffix: str
+) -> None:
+    if others == "error" and suffix == ".parquet":
+        pytest.skip("weights-only tables are CSV")
+    frame = pd.DataFrame({"jawOpen": [0.5, 0.25, 1.7]})
+    path = tmp_path / f"faces{suffix}"
+    frame.to_csv(path, index=False) if suffix == ".csv" else frame.to_parquet(path)
+    line = " (line 4)" if others == "error" else ""
+    with pytest.raises(DataError) as info:
+        read_face_table(path, rig, others=others)  # type: ignore[arg-type]
+    # row 3 = the third row after the header; the value as written, not np.float64(1.7)
+    expected = f"column 'jawOpen' row 3{line}: weight must be in [0, 1]; got "
+    assert expected in str(info.value) and "np." not in str(info.value)
+    assert str(info.value).endswith(("'1.7'", "1.7"))

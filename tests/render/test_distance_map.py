@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from emogen.errors import ConfigError, ShapeError
+from emogen.errors import ConfigError, DataError, ShapeError
 from emogen.render.distance_map import colour_lut, nice_ceiling, render_heatmap, vertex_distances
 from emogen.render.images import (
     add_footer,
@@ -111,7 +111,7 @@ def test_weights_csv(tmp_path: Path, ict_model) -> None:  # type: ignore[no-unty
     with pytest.raises(ConfigError, match=r"line 2.*\[0, 1\]"):
         read_weights_csv(csv, ict_model.rig)
     csv.write_text("jawOpen,bogus\n1,1\n")
-    with pytest.raises(ShapeError, match="bogus"):
+    with pytest.raises(DataError, match="unknown column 'bogus'"):
         read_weights_csv(csv, ict_model.rig)
     csv.write_text("jawOpen\n")
     with pytest.raises(ConfigError, match="no faces"):

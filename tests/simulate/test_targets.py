@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from emogen.config import MetricConfig, SimulationConfig, validate_config
-from emogen.errors import ConfigError
+from emogen.errors import ConfigError, DataError
 from emogen.simulate.targets import read_faces, resolve_target, weights_from_table
 
 
@@ -90,3 +90,18 @@ def test_config_errors(data, message) -> None:
 def test_metric_shorthand() -> None:
     cfg = validate_config(SimulationConfig, {"target": {"jawOpen": 1}, "metric": "ed"})
     assert cfg.metric == MetricConfig(name="ed")
+
+
+def test_a_misspelt_target_column_is_an_error_not_a_different_target(ict_model, tmp_path):  # type: ignore[no-untyped-def]
+    path = tmp_path / "target.csv"
+    path.write_text("jawOpn,mouthSmile_L,mouthSmile_R\n0.9,0.3,0.3\n")
+    with pytest.raises(DataError, match=r"target_file .*target\.csv: unknown column 'jawOpn': "):
+        resolve_target(SimulationConfig(target_file=path), ict_model.rig)
+    empty = tmp_path / "empty.csv"
+    empty.write_text("jawOpen,mouthSmile\n")
+    with pytest.raises(DataError, match=r"target_file .*empty\.csv has no rows"):
+        resolve_target(SimulationConfig(target_file=empty), ict_model.rig)
+    blank = tmp_path / "blank.csv"
+    blank.write_text("jawOpen,mouthSmile\n0.5,\n")
+    with pytest.raises(DataError, match=r"column 'mouthSmile' row 1: empty or missing weight"):
+        resolve_target(SimulationConfig(target_file=blank), ict_model.rig)

@@ -119,7 +119,7 @@ def test_cli_status_export_replay(service: StudyService, tmp_path: Path, ict_dir
     assert result.exit_code == 0, result.output
     assert (out / "selections.csv").is_file() and "faces.csv (60 rows)" in result.output
     result = runner.invoke(
-        study_app, ["export", "--database-url", url, "--study", "nope", "-o", str(out)]
+        study_app, ["export", "--database-url", url, "--study", "nope", "-o", str(tmp_path / "n")]
     )
     assert result.exit_code == 2 and "no study named 'nope'" in result.output
 

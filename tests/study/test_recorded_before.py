@@ -52,6 +52,8 @@ def test_recorded_study_replays_exactly(tmp_path: Path, ict_model) -> None:
             )
             assert report.mismatches == [], report.mismatches
             assert report.populations == populations and report.faces == 10 * populations
+            # recorded with the version-1 model hash: still this model (emogen.model.model_hash)
+            assert report.model_hash_matches and report.ok
     finally:
         store.dispose()
 

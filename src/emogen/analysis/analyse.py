@@ -23,6 +23,7 @@ Everything lands in ``OUT``: ``index.html`` and ``README.md``, ``figures/*.png``
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -59,19 +60,30 @@ def analyse(
     *,
     model: FaceModel | None = None,
     options: AnalysisOptions | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> AnalysisResult:
-    """Analyse ``data`` (a folder or a loaded :class:`Dataset`) into a report in ``out``."""
+    """Analyse ``data`` (a folder or a loaded :class:`Dataset`) into a report in ``out``.
+
+    progress : called with each section's name as it begins (the CLI shows it on a terminal).
+    """
     opts = options or AnalysisOptions()
+    step = progress or (lambda _name: None)
     ds = data if isinstance(data, Dataset) else load_dataset(Path(data))
     report = Report(f"EmoGen analysis: {ds.source.name}", Path(out))
     summary: dict[str, Any] = {"source": str(ds.source), "kind": ds.kind, "groups": list(ds.groups)}
+    step("overview and error distributions")
     _overview(ds, report, summary)
     _errors(ds, report, summary)
+    step("repeatability")
     _repeatability(ds, report, summary)
+    step("separability (PCA + GMM)")
     separability_section(ds, report, summary, opts)
+    step(f"GA noise ({opts.noise_runs} simulated runs per group)")
     noise_section(ds, report, summary, opts, model)
+    step("prototypes and renders")
     prototypes_section(ds, report, summary, opts, model)
     _ratings(ds, report, summary)
+    step("writing the report")
     if ds.has_weights:
         ds.elites.to_csv(report.out / "tables" / "elites.csv", index=False)
     (report.out / "analysis.json").write_text(json.dumps(summary, indent=2, default=_json) + "\n")

@@ -27,7 +27,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from emogen.errors import ConfigError
+from emogen.analysis.validate import check_simulation, check_study
+from emogen.errors import ConfigError, DataError
 from emogen.metrics import cosine_distance
 
 STUDY_TABLES = ("trials", "faces", "selections")
@@ -144,6 +145,7 @@ def _study_tables(
             raise ConfigError(f"{folder}/{name}: missing columns {missing} (see docs/study.md)")
     if trials is None or faces is None or selections is None:  # for the type checker
         raise ConfigError(f"{folder}: incomplete study export")
+    check_study(folder, {"trials": trials, "faces": faces, "selections": selections})
     return trials, faces, selections, ratings
 
 
@@ -269,6 +271,14 @@ def simulation_folders(folder: Path) -> list[Path]:
     return sorted(p for p in base.iterdir() if p.is_dir() and (p / "simulation.json").is_file())
 
 
+def _record(sim: Path) -> dict[str, Any]:
+    try:
+        record: dict[str, Any] = json.loads((sim / "simulation.json").read_text())
+    except ValueError as exc:
+        raise DataError(f"{sim / 'simulation.json'} is not valid JSON: {exc}") from None
+    return record
+
+
 def load_simulations(folder: Path, sims: list[Path]) -> Dataset:
     parts, bias_parts, targets, configs = [], [], {}, {}
     notes: list[str] = []
@@ -276,7 +286,7 @@ def load_simulations(folder: Path, sims: list[Path]) -> Dataset:
     generations = None
     for sim in sims:
         group = sim.name
-        record = json.loads((sim / "simulation.json").read_text())
+        record = _record(sim)
         table = _read(sim, "simulation")
         faces = _read(sim, "faces", required=False)
         if table is None:  # pragma: no cover - _read raises
@@ -290,9 +300,9 @@ def load_simulations(folder: Path, sims: list[Path]) -> Dataset:
         elites = table.rename(columns={"elite_error": "error"})[
             ["run", "generation", "error", "n_selected"]
         ].copy()
-        wcols: list[str] = []
+        wcols = [c for c in faces.columns if c not in SIM_FACE_COLUMNS] if faces is not None else []
+        check_simulation(sim, table, faces, wcols)
         if faces is not None:
-            wcols = [c for c in faces.columns if c not in SIM_FACE_COLUMNS]
             if wcols:
                 ew = faces.loc[faces["rank"] == 0, ["run", "generation", *wcols]]
                 elites = elites.merge(ew, on=["run", "generation"], how="left")

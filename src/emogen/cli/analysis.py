@@ -14,9 +14,26 @@ from typing import Annotated
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, SeedOpt, friendly_errors
+from emogen.cli.options import (
+    JsonOpt,
+    ModelOpt,
+    RigOpt,
+    SeedOpt,
+    at_least,
+    friendly_errors,
+    show_result,
+    stage_printer,
+)
+from emogen.cli.outputs import ForceOpt, check_out_folder, output_folder
 from emogen.cli.power import power_command
 
+ProgressOpt = Annotated[
+    bool | None,
+    typer.Option(
+        "--progress/--no-progress",
+        help="Show each stage on stderr (default: when stderr is a terminal).",
+    ),
+]
 RenderOpt = Annotated[
     bool, typer.Option("--render/--no-render", help="Render mean faces and heatmaps (OpenGL).")
 ]
@@ -38,7 +55,10 @@ def analyse_command(
         ),
     ] = None,
     noise_runs: Annotated[
-        int, typer.Option("--noise-runs", help="Simulated runs per group for the GA noise.")
+        int,
+        typer.Option(
+            "--noise-runs", callback=at_least(1), help="Simulated runs per group for the GA noise."
+        ),
     ] = 500,
     gmm_dims: Annotated[
         float,
@@ -60,6 +80,9 @@ def analyse_command(
     render: RenderOpt = True,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    force: ForceOpt = False,
+    as_json: JsonOpt = False,
+    progress: ProgressOpt = None,
 ) -> None:
     """Analyse a study export or simulation output: error distributions, KL per generation,
     bias and repeatability bins, PCA + GMM separability, GA-noise test, prototypes, renders.
@@ -71,6 +94,7 @@ def analyse_command(
     from emogen.model import load_model
 
     dataset = load_dataset(data)  # fails fast on a folder that is not data
+    check_out_folder(out, force=force)
     ga = None
     if config is not None:
         from emogen.study.config import load_study_config
@@ -86,8 +110,17 @@ def analyse_command(
         ga=ga,
         choice_noise=choice_noise,
     )
-    result = analyse(dataset, out, model=model, options=options)
-    typer.echo(f"wrote {result.html} and {result.markdown}")
+    with output_folder(out, force=force) as tmp:
+        analyse(dataset, tmp, model=model, options=options, progress=stage_printer(progress))
+    show_result(
+        as_json,
+        {
+            "kind": dataset.kind,
+            "groups": list(dataset.groups),
+            "wrote": [str(out / "index.html"), str(out / "README.md"), str(out / "analysis.json")],
+        },
+        [f"wrote {out / 'index.html'} and {out / 'README.md'}"],
+    )
 
 
 @friendly_errors
@@ -115,6 +148,9 @@ def replicate_command(
     render: RenderOpt = True,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    force: ForceOpt = False,
+    as_json: JsonOpt = False,
+    progress: ProgressOpt = None,
 ) -> None:
     """Run the paper's Section IV experiments on our model and write the report, each finding
     beside the paper's numbers with a verdict over several seeds (holds / partly / differs /
@@ -133,12 +169,10 @@ def replicate_command(
         if quick
         else ReplicateSettings.full_settings(**extra)
     )
+    check_out_folder(out, force=force)
     model = load_model(model_path, rig=rig)
     start = time.perf_counter()
-
-    def progress(name: str) -> None:
-        typer.echo(f"[{time.perf_counter() - start:6.1f} s] {name}", err=True)
-
+    show = stage_printer(progress)
     command = " ".join(
         ["emogen replicate", *(["--quick"] if quick else [])]
         + ([f"--runs {runs}"] if runs is not None else [])
@@ -147,16 +181,34 @@ def replicate_command(
         + ([] if render else ["--no-render"])
         + [f"--out {out}"]
     )
-    findings = replicate(model, out, settings, only=only, progress=progress, command=command)
-    for f in findings:
-        typer.echo(f.line())
+    with output_folder(out, force=force) as tmp:
+        findings = replicate(
+            model, tmp, settings, only=only, progress=show or (lambda _n: None), command=command
+        )
     paper = [f for f in findings if f.paper_finding]
     counts = {v: sum(f.verdict == v for f in paper) for v in VERDICTS}
-    typer.echo(
-        f"{len(paper)} paper findings: {counts['holds']} hold, {counts['partly']} partly, "
-        f"{counts['differs']} differ, {counts['inconclusive']} inconclusive "
-        f"({len(findings) - len(paper)} of ours reported apart; "
-        f"{time.perf_counter() - start:.0f} s); wrote {out / 'index.html'} and {out / 'README.md'}"
+    wrote = [str(out / "index.html"), str(out / "README.md")]
+    seconds = time.perf_counter() - start
+    show_result(
+        as_json,
+        {
+            "findings": [
+                {"verdict": f.verdict, "paper_finding": f.paper_finding, "line": f.line()}
+                for f in findings
+            ],
+            "counts": counts,
+            "ours_apart": len(findings) - len(paper),
+            "seconds": seconds,
+            "command": command,
+            "wrote": wrote,
+        },
+        [
+            *(f.line() for f in findings),
+            f"{len(paper)} paper findings: {counts['holds']} hold, {counts['partly']} partly, "
+            f"{counts['differs']} differ, {counts['inconclusive']} inconclusive "
+            f"({len(findings) - len(paper)} of ours reported apart; {seconds:.0f} s); "
+            f"wrote {wrote[0]} and {wrote[1]}",
+        ],
     )
 
 

@@ -8,12 +8,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
 
-from emogen.cli.options import IdentityOpt, ModelOpt, RigOpt, friendly_errors
+from emogen.cli.options import IdentityOpt, JsonOpt, ModelOpt, RigOpt, friendly_errors, show_result
 
 if TYPE_CHECKING:
+    import numpy as np
     import pandas as pd
 
     from emogen.model.face import FaceModel
@@ -44,6 +44,7 @@ def correct_csv(
     ``collision_iterations``. ``mesh`` (.npz): ``vertices`` (B, V, 3) float32 of the corrected
     faces, ``faces`` (triangles), and the names and weights above.
     """
+    import numpy as np
     import pandas as pd
 
     weights, _ = read_weights_csv(source, model)
@@ -83,6 +84,7 @@ def correct_command(
     model_path: ModelOpt = None,
     rig: RigOpt = None,
     identity: IdentityOpt = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Correct faces: companion caps, combinational and collision correctives (paper III-A).
 
@@ -93,8 +95,10 @@ def correct_command(
 
     model = load_model(model_path, identity, rig=rig)
     report = correct_csv(source, out, model, mesh)
-    typer.echo(
+    line = (
         f"{report['faces']} faces: {report['collided']} with a collision, "
         f"{report['remaining']} remaining after correction; wrote {out}"
         + (f" and {mesh}" if mesh else "")
     )
+    wrote = [str(out), *([str(mesh)] if mesh else [])]
+    show_result(as_json, {**report, "wrote": wrote}, [line])

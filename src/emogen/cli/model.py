@@ -10,7 +10,15 @@ from typing import Annotated, Any
 
 import typer
 
-from emogen.cli.options import IdentityOpt, ModelOpt, RigOpt, friendly_errors, parse_named_weights
+from emogen.cli.options import (
+    IdentityOpt,
+    JsonOpt,
+    ModelOpt,
+    RigOpt,
+    friendly_errors,
+    parse_named_weights,
+    show_result,
+)
 
 __all__ = ["model_app"]
 
@@ -21,15 +29,19 @@ model_app = typer.Typer(help="The face model: inspect, export, fetch.", no_args_
 @friendly_errors
 def model_info(
     path: Annotated[
-        Path | None, typer.Argument(help="Model folder or GLB (default: as --model).")
+        Path | None, typer.Argument(help="Model folder or GLB (the same as --model).")
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
     rig: RigOpt = None,
+    model_path: ModelOpt = None,
 ) -> None:
     """Shape names, genes, pairs, regions, vertex and face counts, and the model hash."""
+    from emogen.errors import ConfigError
     from emogen.model import load_model
 
-    model = load_model(path, rig=rig)
+    if path is not None and model_path is not None and path != model_path:
+        raise ConfigError(f"give the model once: PATH {path} or --model {model_path}")
+    model = load_model(path if path is not None else model_path, rig=rig)
     info = model.info()
     if as_json:
         typer.echo(json.dumps(info, indent=2))
@@ -84,6 +96,7 @@ def model_export(
     model_path: ModelOpt = None,
     rig: RigOpt = None,
     identity: IdentityOpt = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Export the model as a GLB with morph targets (for the browser), or one face as GLB/OBJ."""
     from emogen.errors import ConfigError
@@ -111,14 +124,14 @@ def model_export(
         from emogen.render.model_glb import export_model_glb
 
         report = export_model_glb(model, out)
-        typer.echo(f"wrote {out}: {report}")
+        show_result(as_json, {"wrote": str(out), "report": str(report)}, [f"wrote {out}: {report}"])
         return
     weights = model.rig.weights_from_names(named)
     if kind == "glb":
         gltf.export_face_glb(model, weights, out)
     else:
         gltf.export_face_obj(model, weights, out)
-    typer.echo(f"wrote {out}")
+    show_result(as_json, {"wrote": str(out)}, [f"wrote {out}"])
 
 
 @model_app.command("fetch")
@@ -134,12 +147,18 @@ def model_fetch(
         ),
     ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", help="No progress bar.")] = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """Download ICT-FaceKit (MIT) at the pinned commit, verify checksums, install it."""
     from emogen.model.io.fetch import fetch_model
 
     folder = fetch_model(dest, base_url=base_url, progress=not quiet and sys.stderr.isatty())
-    typer.echo(f"ICT-FaceKit installed in {folder}")
-    typer.echo(
-        "ICT-FaceKit © 2020 USC Institute for Creative Technologies, MIT licence (see LICENSE beside it)."
+    notice = (
+        "ICT-FaceKit © 2020 USC Institute for Creative Technologies, MIT licence (see LICENSE "
+        "beside it)."
+    )
+    show_result(
+        as_json,
+        {"folder": str(folder), "notice": notice},
+        [f"ICT-FaceKit installed in {folder}", notice],
     )

@@ -3,12 +3,22 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, SeedOpt, friendly_errors, parse_named_weights
+from emogen.cli.options import (
+    JsonOpt,
+    ModelOpt,
+    RigOpt,
+    SeedOpt,
+    friendly_errors,
+    parse_named_weights,
+    show_result,
+)
+from emogen.cli.outputs import ForceOpt, check_out_folder, output_folder
 
 if TYPE_CHECKING:
     import numpy as np
@@ -118,19 +128,23 @@ def _write(out: Path, res: PowerResult, power: float, alpha: float) -> None:
     (out / "power.json").write_text(json.dumps(summary, indent=2) + "\n")
 
 
-def _print(res: PowerResult, power: float, alpha: float, max_participants: int) -> None:
+def _lines(res: PowerResult, power: float, alpha: float, max_participants: int) -> list[str]:
+    lines = []
     for row in res.curve.itertuples():
-        typer.echo(
-            f"  n = {row.n:>4}: power {row.power:.2f} ± {row.se:.2f} (fitted {row.fitted:.2f}); "
+        fit = float(row.fitted)  # type: ignore[arg-type]
+        fitted = f"fitted {fit:.2f}" if math.isfinite(fit) else "no fit"
+        lines.append(
+            f"  n = {row.n:>4}: power {row.power:.2f} ± {row.se:.2f} ({fitted}); "
             f"false positives {row.false_positive:.3f} ± {row.fp_se:.3f}"
         )
     if res.n_required is None:
-        typer.echo(f"power {power} not reached within {max_participants} participants per group")
+        lines.append(f"power {power} not reached within {max_participants} participants per group")
     else:
-        typer.echo(
+        lines.append(
             f"{res.n_required} participants per group reach power {power} (α = {alpha}; fitted "
             f"curve; smallest simulated n at or above it: {res.n_observed})"
         )
+    return lines
 
 
 def assumptions(participant_sd: float | None, noise_temperature: float | None) -> list[str]:
@@ -189,6 +203,8 @@ def power_command(
     seed: SeedOpt = 1,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    force: ForceOpt = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """How many participants per group tell two prototypes apart, given GA noise: a power
     curve with the test's false-positive rate at every n (OUT/power.csv, OUT/power.png) and the
@@ -207,6 +223,7 @@ def power_command(
             f"--statistic must be cd or ed, --observer cd, ed or vertex_rms; got "
             f"{statistic!r}, {observer!r}"
         )
+    check_out_folder(out, force=force)
     model = load_model(model_path, rig=rig)
     wa, wb = prototypes(model.rig, a, b, difference)
     intensity_check(wa, wb, statistic, observer)
@@ -246,7 +263,25 @@ def power_command(
         seed=seed,
         settings=settings,
     )
-    _write(out, res, power, alpha)
-    _print(res, power, alpha, max_participants)
-    typer.echo("".join(f"ASSUMPTION: {line}\n" for line in said), nl=False)
-    typer.echo(f"wrote {out / 'power.csv'}, {out / 'power.png'}, {out / 'power.json'}")
+    with output_folder(out, force=force) as tmp:
+        _write(tmp, res, power, alpha)
+    wrote = [str(out / name) for name in ("power.csv", "power.png", "power.json")]
+    curve = res.curve.astype(object).where(res.curve.notna(), None)
+    show_result(
+        as_json,
+        {
+            "n_required": res.n_required,
+            "n_observed": res.n_observed,
+            "power": power,
+            "alpha": alpha,
+            "max_false_positive": res.max_false_positive,
+            "curve": curve.to_dict(orient="records"),
+            "assumptions": said,
+            "wrote": wrote,
+        },
+        [
+            *_lines(res, power, alpha, max_participants),
+            *(f"ASSUMPTION: {line}" for line in said),
+            f"wrote {', '.join(wrote)}",
+        ],
+    )

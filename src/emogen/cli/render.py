@@ -9,12 +9,22 @@ emogen render heatmap --weight jawOpen=1 --reference-weight jawOpen=0.5 --out he
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, friendly_errors, parse_named_weights
+from emogen.cli.options import (
+    JsonOpt,
+    ModelOpt,
+    RigOpt,
+    at_least,
+    friendly_errors,
+    parse_named_weights,
+    show_result,
+)
+from emogen.cli.outputs import ForceOpt, check_out_folder, output_folder
 from emogen.cli.render_setup import (
     BackgroundOpt,
     CorrectOpt,
@@ -33,6 +43,7 @@ from emogen.cli.render_setup import (
     look_record,
     make_renderer,
     output_paths,
+    png_file,
     render_appearance,
 )
 
@@ -73,6 +84,8 @@ def render(
     plain: PlainOpt = False,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    force: ForceOpt = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """Render faces offscreen to PNG (512×512, frontal camera, the viewer's look) with an
     identity's shape and appearance."""
@@ -86,19 +99,29 @@ def render(
     model, name, ident = load_render_model(model_path, rig, identity)
     w, labels = faces_from_options(model, weight, weights_file)
     paths = output_paths(out, len(w), labels)
+    folder = paths[0].parent == out and "{" not in str(out)  # face_NNN.png in a folder
+    if folder:
+        check_out_folder(out, force=force)
     appearance = render_appearance(model, ident, plain)
     look = look_record(name, ident, appearance, framing)
     with make_renderer(
         model, size, background, fov, supersample, appearance=appearance, framing=framing
     ) as r:
-        images = r.render(w, gaze=gaze, correct=correct)
-        for i, path in enumerate(paths):
-            image = (
-                add_footer(images[i], background=r.look.background_srgb) if footer else images[i]
-            )
-            meta = image_metadata(model, w[i], label=labels[i], corrected=correct, **look)
-            save_png(path, image, meta)
-    typer.echo(f"wrote {paths[0]}" if len(paths) == 1 else f"wrote {len(paths)} faces to {out}")
+        images = list(r.render(w, gaze=gaze, correct=correct))
+        if footer:
+            images = [add_footer(im, background=r.look.background_srgb) for im in images]
+    metas = [
+        image_metadata(model, w[i], label=labels[i], corrected=correct, **look)
+        for i in range(len(paths))
+    ]
+    with output_folder(out, force=force) if folder else nullcontext(None) as tmp:
+        for path, image, meta in zip(paths, images, metas, strict=True):
+            save_png(path if tmp is None else tmp / path.name, image, meta)
+    show_result(
+        as_json,
+        {"wrote": [str(p) for p in paths], "labels": labels},
+        [f"wrote {paths[0]}" if len(paths) == 1 else f"wrote {len(paths)} faces to {out}"],
+    )
 
 
 @render_app.command("sheet")
@@ -112,10 +135,14 @@ def sheet(
             "--face", help="One face as NAME=VALUE[,NAME=VALUE…] ('neutral' for none); repeatable."
         ),
     ] = None,
-    columns: Annotated[int, typer.Option("--columns", help="Faces per row.")] = 5,
+    columns: Annotated[
+        int, typer.Option("--columns", callback=at_least(1), help="Faces per row.")
+    ] = 5,
     labels: Annotated[bool, typer.Option("--labels/--no-labels", help="Label each face.")] = True,
     identity: IdentityOpt = None,
-    size: Annotated[int, typer.Option("--size", help="Side of each face in pixels.")] = 256,
+    size: Annotated[
+        int, typer.Option("--size", callback=at_least(1), help="Side of each face in pixels.")
+    ] = 256,
     background: BackgroundOpt = None,
     fov: FovOpt = None,
     supersample: SupersampleOpt = None,
@@ -124,6 +151,7 @@ def sheet(
     plain: PlainOpt = False,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """A contact sheet: faces in a grid with labels and the ICT-FaceKit notice."""
     import numpy as np
@@ -132,6 +160,7 @@ def sheet(
     from emogen.render.images import save_png
     from emogen.render.weights import describe
 
+    png_file(out)  # before any work
     model, name, ident = load_render_model(model_path, rig, identity)
     rows: list[np.ndarray] = []
     names: list[str] = []
@@ -153,8 +182,10 @@ def sheet(
         image = r.sheet(
             np.asarray(rows), names if labels else None, columns=columns, correct=correct
         )
-    save_png(out, image, image_metadata(model, None, faces=names, corrected=correct, **look))
-    typer.echo(f"wrote {out}: {len(rows)} faces")
+    save_png(
+        png_file(out), image, image_metadata(model, None, faces=names, corrected=correct, **look)
+    )
+    show_result(as_json, {"wrote": str(out), "faces": names}, [f"wrote {out}: {len(rows)} faces"])
 
 
 @render_app.command("heatmap")
@@ -183,6 +214,7 @@ def heatmap(
     supersample: SupersampleOpt = None,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Per-vertex distance between two faces as colour on the face, legend in cm (paper Fig. 9)."""
     import numpy as np
@@ -192,6 +224,7 @@ def heatmap(
     from emogen.render.images import save_png
     from emogen.render.weights import read_weights_csv
 
+    png_file(out)  # before any work
     model, name, _ = load_render_model(
         model_path, rig, identity
     )  # the heatmap colours the face: no skin
@@ -216,7 +249,7 @@ def heatmap(
     with make_renderer(model, size, background, fov, supersample) as r:
         result = render_heatmap(r, faces[0], faces[1], vmax=vmax, cmap=cmap)
     save_png(
-        out,
+        png_file(out),
         result.image,
         image_metadata(
             model,
@@ -227,6 +260,12 @@ def heatmap(
             max_distance_cm=result.max_distance,
         ),
     )
-    typer.echo(
-        f"wrote {out}: largest distance {result.max_distance:.3f} cm, scale 0-{result.vmax:g} cm"
+    show_result(
+        as_json,
+        {
+            "wrote": str(out),
+            "max_distance_cm": float(result.max_distance),
+            "scale_max_cm": float(result.vmax),
+        },
+        [f"wrote {out}: largest distance {result.max_distance:.3f} cm, scale 0-{result.vmax:g} cm"],
     )

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from emogen.cli.options import parse_named_weights
+from emogen.cli.options import at_least, parse_named_weights
 
 if TYPE_CHECKING:
     import numpy as np
@@ -31,7 +31,10 @@ WeightsFileOpt = Annotated[
         help="CSV: a header of shape/gene names (and optional 'label'), one face per row.",
     ),
 ]
-SizeOpt = Annotated[int | None, typer.Option("--size", help="Image side in pixels (default 512).")]
+SizeOpt = Annotated[
+    int | None,
+    typer.Option("--size", callback=at_least(1), help="Image side in pixels (default 512)."),
+]
 BackgroundOpt = Annotated[
     str | None,
     typer.Option("--background", help="#rrggbb, R,G,B or white/black/grey (default grey)."),
@@ -45,7 +48,11 @@ CorrectOpt = Annotated[
 ]
 SupersampleOpt = Annotated[
     int | None,
-    typer.Option("--supersample", help="Anti-aliasing: render N× larger, average (default 2)."),
+    typer.Option(
+        "--supersample",
+        callback=at_least(1),
+        help="Anti-aliasing: render N× larger, average (default 2).",
+    ),
 ]
 IdentityOpt = Annotated[
     str | None,
@@ -210,14 +217,32 @@ def look_record(
     return record
 
 
+def png_file(out: Path, option: str = "--out") -> Path:
+    """``out`` when it names a .png file; any other file suffix (``a.jpg``) is an error."""
+    from emogen.errors import ConfigError
+
+    if out.suffix.lower() != ".png":
+        raise ConfigError(
+            f"{option} {out}: EmoGen writes PNG images (lossless, with the face's weights and "
+            "model in their metadata); give a .png file name"
+        )
+    if out.is_dir():
+        raise ConfigError(f"{option} {out} is a folder; give a .png file name")
+    return out
+
+
 def output_paths(out: Path, n: int, labels: list[str]) -> list[Path]:
+    """Where the faces go: one .png, a ``{i}``/``{label}`` pattern, or face_NNN.png in a folder
+    (a name with another image suffix, like ``a.jpg``, is refused: it is not a folder)."""
+    from emogen.errors import ConfigError
+
+    if out.suffix.lower() in (".jpg", ".jpeg", ".webp", ".tif", ".tiff", ".bmp", ".gif"):
+        png_file(out)  # raises, naming it
     if n == 1 and out.suffix.lower() == ".png":
-        return [out]
+        return [png_file(out)]
     if "{" in str(out):
         return [Path(str(out).format(i=i, label=labels[i])) for i in range(n)]
     if out.suffix.lower() == ".png":
-        from emogen.errors import ConfigError
-
         raise ConfigError(
             f"--out {out} names one PNG but there are {n} faces: give a folder, or a pattern "
             "with {i} (e.g. faces/face_{i:03d}.png)"

@@ -39,10 +39,20 @@ def serve_command(
     ] = False,
 ) -> None:
     """Run a participant study: prints the URL to open; Ctrl-C stops it."""
-    from emogen.study.config import demo_study_path
+    from emogen.errors import ResourceError
+    from emogen.study.config import demo_study_path, load_study_config
+    from emogen.web.app import viewer_built
     from emogen.web.server import run_server
 
     path = config if config is not None else demo_study_path()
+    load_study_config(path)  # a bad config is named first
+    if not viewer_built():
+        raise ResourceError(
+            "the face viewer bundle (emogen/web/static/build/study-viewer.js) is missing, so "
+            "participants would see no faces: in a source checkout run `npm ci && npm run "
+            "build` (or `make setup`); a wheel built with `pip wheel .` or `python -m build` "
+            "carries it"
+        )
     run_server(
         path,
         host=host,

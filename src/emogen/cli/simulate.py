@@ -9,7 +9,16 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, friendly_errors, parse_named_weights
+from emogen.cli.options import (
+    JsonOpt,
+    ModelOpt,
+    RigOpt,
+    at_least,
+    friendly_errors,
+    parse_named_weights,
+    show_result,
+)
+from emogen.cli.outputs import ForceOpt, check_out_folder, moved, output_folder
 
 if TYPE_CHECKING:
     from emogen.simulate.runner import SimulationResult
@@ -57,7 +66,9 @@ DaskOpt = Annotated[
 WorkersOpt = Annotated[
     int | None,
     typer.Option(
-        "--workers", help="Local worker processes (or LocalCluster workers with --dask local)."
+        "--workers",
+        callback=at_least(1),
+        help="Local worker processes (or LocalCluster workers with --dask local).",
     ),
 ]
 ProgressOpt = Annotated[
@@ -80,9 +91,16 @@ TargetFileOpt = Annotated[
     typer.Option("--target-file", help="Target from a face table (Parquet/CSV, shape columns)."),
 ]
 TargetRowOpt = Annotated[
-    int | None, typer.Option("--target-row", help="Row of --target-file (from 0).")
+    int | None,
+    typer.Option(
+        "--target-row",
+        callback=at_least(0),
+        help="Row of --target-file (0 = the first row after the header).",
+    ),
 ]
-RunsOpt = Annotated[int | None, typer.Option("--runs", help="Runs (default 500).")]
+RunsOpt = Annotated[
+    int | None, typer.Option("--runs", callback=at_least(1), help="Runs (default 500).")
+]
 SeedOpt = Annotated[int | None, typer.Option("--seed", help="Seed (default: fresh, recorded).")]
 InitOpt = Annotated[
     InitKind | None, typer.Option("--init", help="Initialisation (default protocol).")
@@ -91,7 +109,9 @@ InitRangeOpt = Annotated[
     str | None,
     typer.Option("--init-range", help="Active genes per protocol face, LO-HI (default 3-8)."),
 ]
-GenerationsOpt = Annotated[int | None, typer.Option("--generations", help="G (default 10).")]
+GenerationsOpt = Annotated[
+    int | None, typer.Option("--generations", callback=at_least(1), help="G (default 10).")
+]
 VariantOpt = Annotated[
     Variant | None, typer.Option("--variant", help="emogen (default) or classical.")
 ]
@@ -162,17 +182,32 @@ def simulation_settings(
     return data
 
 
-def _print_summary(result: SimulationResult, runs: int, metric: str) -> None:
+def _summary(
+    result: SimulationResult, runs: int, metric: str, paths: list[Path]
+) -> tuple[dict[str, Any], list[str]]:
+    """The result as JSON and as text lines."""
     from emogen.simulate.runner import summary
 
     stats = summary(result.table)
     means, sds = stats["mean"].to_numpy(float), stats["std"].to_numpy(float)
-    typer.echo(
+    ends = sorted({0, len(means) - 1})
+    data = {
+        "runs": runs,
+        "seed": result.record["seed"],
+        "metric": metric,
+        "compute_seconds": result.record["compute_seconds"],
+        "elite_error": [
+            {"generation": g, "mean": float(means[g]), "sd": float(sds[g])} for g in ends
+        ],
+        "wrote": [str(p) for p in paths],
+    }
+    lines = [
         f"{runs} runs, seed {result.record['seed']}, metric {metric}, "
-        f"{result.record['compute_seconds']:.2f} s; elite CD error (mean ± sd):"
-    )
-    for g in sorted({0, len(means) - 1}):
-        typer.echo(f"  generation {g:>3}: {means[g]:.3f} ± {sds[g]:.3f}")
+        f"{result.record['compute_seconds']:.2f} s; elite CD error (mean ± sd):",
+        *(f"  generation {g:>3}: {means[g]:.3f} ± {sds[g]:.3f}" for g in ends),
+        "wrote " + ", ".join(str(p) for p in paths),
+    ]
+    return data, lines
 
 
 @friendly_errors
@@ -199,6 +234,8 @@ def simulate_command(
     config: ConfigOpt = None,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    force: ForceOpt = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """Simulate studies: an observer selects faces by a metric toward a target.
 
@@ -232,6 +269,7 @@ def simulate_command(
         target_row=target_row,
     )
     cfg = validate_config(SimulationConfig, data, str(config) if config else "(command line)")
+    check_out_folder(out, force=force)  # before the work, not after it
     model = load_model(model_path, rig=rig)
     backend = make_backend(dask, workers or 1)
     try:
@@ -246,9 +284,9 @@ def simulate_command(
         )
     finally:
         backend.close()
-    paths = write_simulation(result, out)
-    _print_summary(result, cfg.runs, cfg.metric.name)
-    typer.echo("wrote " + ", ".join(str(p) for p in paths))
+    with output_folder(out, force=force) as tmp:
+        paths = moved(write_simulation(result, tmp), tmp, out)
+    show_result(as_json, *_summary(result, cfg.runs, cfg.metric.name, paths))
 
 
 @friendly_errors
@@ -261,6 +299,7 @@ def sweep_command(
     progress: ProgressOpt = None,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Run a grid of simulations (targets × metrics × init × schedules × GA variant).
 
@@ -285,13 +324,24 @@ def sweep_command(
             all_weights=all_weights,
             model_name=model.name,
             model_hash=model.model_hash,
+            legacy_model_hash=model.legacy_model_hash,
         )
     finally:
         backend.close()
-    typer.echo(
+    rows: list[Any] = list(result.summary.itertuples())
+    data = {
+        "cells": len(spec.cells),
+        "ran": result.ran,
+        "skipped": result.skipped,
+        "final_error": [
+            {"cell": r.cell, "mean": float(r.mu_final), "sd": float(r.sigma_final)} for r in rows
+        ],
+        "wrote": str(out / "summary.csv"),
+    }
+    lines = [
         f"{len(spec.cells)} cells: ran {len(result.ran)}, skipped {len(result.skipped)} "
-        f"(already done); elite CD error at the last generation (mean ± sd):"
-    )
-    for row in result.summary.itertuples():
-        typer.echo(f"  {row.cell:<48} {row.mu_final:.3f} ± {row.sigma_final:.3f}")
-    typer.echo(f"wrote {out / 'summary.csv'}")
+        f"(already done); elite CD error at the last generation (mean ± sd):",
+        *(f"  {r.cell:<48} {r.mu_final:.3f} ± {r.sigma_final:.3f}" for r in rows),
+        f"wrote {out / 'summary.csv'}",
+    ]
+    show_result(as_json, data, lines)

@@ -13,7 +13,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from emogen.cli.options import friendly_errors
+from emogen.cli.options import JsonOpt, friendly_errors, show_result
+from emogen.cli.outputs import ForceOpt, check_out_folder, moved, output_folder
 from emogen.errors import ConfigError
 
 if TYPE_CHECKING:
@@ -37,11 +38,13 @@ class ExportFormat(StrEnum):
 
 
 def _store(database_url: str | None, config: Path | None = None) -> Store:
+    """The study database, for commands that only read it: never created (an SQLite path that
+    does not exist, or a server that cannot be reached, is one error naming it)."""
     from emogen.study.config import load_study_config
     from emogen.study.storage import Store, resolve_database_url
 
     config_url = load_study_config(config).database_url if config is not None else None
-    return Store(resolve_database_url(database_url, config_url))
+    return Store(resolve_database_url(database_url, config_url), create=False)
 
 
 @study_app.command("status")
@@ -95,16 +98,25 @@ def export(
     config: Annotated[
         Path | None, typer.Option("--config", help="Study TOML (for its database_url).")
     ] = None,
+    force: ForceOpt = False,
+    as_json: JsonOpt = False,
 ) -> None:
     """Tidy tables: sessions, trials, faces, selections, restarts, ratings (see docs/study.md)."""
     from emogen.study.export import export_tables, write_export
 
+    check_out_folder(out, force=force)
     store = _store(database_url, config)
-    tables = export_tables(store, study=study)
-    paths = write_export(tables, out, fmt.value)
-    for path in paths:
-        typer.echo(f"wrote {path} ({len(tables[path.stem])} rows)")
-    store.dispose()
+    try:
+        tables = export_tables(store, study=study)
+    finally:
+        store.dispose()
+    with output_folder(out, force=force) as tmp:
+        paths = moved(write_export(tables, tmp, fmt.value), tmp, out)
+    show_result(
+        as_json,
+        {"wrote": [{"path": str(p), "rows": len(tables[p.stem])} for p in paths]},
+        [f"wrote {p} ({len(tables[p.stem])} rows)" for p in paths],
+    )
 
 
 BASE_URL_ENV = "EMOGEN_BASE_URL"
@@ -129,6 +141,7 @@ def resume_link(
     config: Annotated[
         Path | None, typer.Option("--config", help="Study TOML (for its database_url).")
     ] = None,
+    as_json: JsonOpt = False,
 ) -> None:
     """Print a participant's personal session link, to give back to them (exit 2 if none)."""
     import os
@@ -141,7 +154,8 @@ def resume_link(
     finally:
         store.dispose()
     base = base_url or os.environ.get(BASE_URL_ENV) or "http://127.0.0.1:8000"
-    typer.echo(session_link(base, token))
+    link = session_link(base, token)
+    show_result(as_json, {"participant_id": participant, "link": link}, [link])
 
 
 @friendly_errors

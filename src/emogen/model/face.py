@@ -16,6 +16,7 @@ from emogen.errors import ConfigError, ShapeError
 from emogen.model.geometry import sphere_fit
 from emogen.model.io.ict import ModelArrays
 from emogen.model.io.obj import ObjTopology, triangulate
+from emogen.model.model_hash import stimulus_hash
 from emogen.model.regions import Region, ict_regions
 from emogen.model.rig import Rig
 
@@ -62,6 +63,13 @@ class FaceModel:
     source: str = ""
     #: (68,) int32 landmark vertex ids (ICT's ``vertex_indices.json``), empty when unknown
     landmarks: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
+    #: the version-1 hash (geometry only) that records made before version 2 carry
+    legacy_model_hash: str = ""
+
+    def hash_matches(self, recorded: str) -> bool:
+        """Whether a record's model hash is this model's: the current (version 2) hash, or
+        the version-1 hash older records carry (see :mod:`emogen.model.model_hash`)."""
+        return bool(recorded) and recorded in (self.model_hash, self.legacy_model_hash)
 
     # ---- sizes --------------------------------------------------------------------------
     @property
@@ -248,6 +256,7 @@ class FaceModel:
             "name": self.name,
             "source": self.source,
             "model_hash": self.model_hash,
+            "model_hash_v1": self.legacy_model_hash,
             "n_vertices": self.n_vertices,
             "n_polygons": len(self.polygons),
             "n_triangles": len(self.faces),
@@ -313,7 +322,8 @@ def from_arrays(
         materials=topo.materials,
         regions=regions,
         rig=rig,
-        model_hash=arrays.model_hash,
+        model_hash=stimulus_hash(arrays, rig, regions),
+        legacy_model_hash=arrays.model_hash,
         identity_names=tuple(arrays.identity_names),
         identity_deltas=None if ident is None else _readonly(ident),
         identity=np.zeros(0 if ident is None else len(ident)),

@@ -12,12 +12,26 @@ shares shapes with). What else a table may hold depends on where it comes from:
   unknown column is an error naming it, and only an empty cell is missing (``NA`` is not a
   number). Errors give the file line.
 
-Every error names the file, the column, the row and the bad value.
+One set of rules for every command that reads faces (``render --weights``, ``correct``,
+``simulate --target-file``, ``--training``, analysis inputs):
+
+* a column that is no shape or gene name is an error naming it and the closest known name when
+  the table holds weights only; in a table with bookkeeping columns (``others="ignore"``) a
+  column that looks like a misspelt shape or gene (``jawOpn``) is still an error, never
+  dropped quietly;
+* a weight must be a finite number in [0, 1]; an empty cell is an error (or no weight, where
+  ``blank="zero"``); a table without rows is an error.
+
+Every error is a :class:`~emogen.errors.DataError` in one format,
+``WHAT FILE: column 'NAME' row N (line L): PROBLEM``, where row 1 is the first row after the
+header (``(line L)``, the line in a CSV file, where it is known), and values are shown as
+written (``'1.7'``, ``1.7``), never as numpy reprs.
 """
 
 from __future__ import annotations
 
 import csv
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,7 +39,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from emogen.errors import ConfigError, ShapeError
+from emogen.errors import ConfigError, DataError
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -113,7 +127,7 @@ def read_face_table(
     others: Literal["ignore", "error"] = "ignore",
     label_columns: tuple[str, ...] = (),
     blank: Literal["error", "zero"] = "error",
-    unit_range: bool = False,
+    unit_range: bool = True,
 ) -> FaceTable:
     """The faces of a table (see the module docstring for ``others``).
 
@@ -135,7 +149,7 @@ def read_face_table(
         except Exception as exc:  # pandas raises many kinds for a bad expression
             raise ConfigError(f"query {query!r} on {path} failed: {exc}") from None
     if len(frame) == 0:
-        raise ConfigError(
+        raise DataError(
             f"{what} {path} has no rows{' matching ' + repr(query) if query else ''}: no faces "
             f"(expected a header row and one row per face)"
         )
@@ -159,7 +173,7 @@ def face_weights(
     others: Literal["ignore", "error"] = "ignore",
     label_columns: tuple[str, ...] = (),
     blank: Literal["error", "zero"] = "error",
-    unit_range: bool = False,
+    unit_range: bool = True,
     lines: list[int] | None = None,
 ) -> FaceTable:
     """Full weights (n_rows, n_shapes) from a table's shape- and gene-name columns.
@@ -176,14 +190,10 @@ def face_weights(
             used.append(c)
         elif name.lower() in labels:
             label_cols.append(c)
-        elif others == "error":
-            raise ShapeError(
-                f"{source}: unknown column '{name}'; columns must be shape or gene names of rig "
-                f"'{rig.name}'{' or ' + '/'.join(label_columns) if label_columns else ''}; "
-                f"shapes are: {', '.join(rig.shape_names)}"
-            )
+        else:
+            _check_other_column(name, rig, source, others, label_columns)
     if not used and others == "ignore":
-        raise ConfigError(
+        raise DataError(
             f"{source}: no column is a shape or gene name of rig '{rig.name}' (e.g. "
             f"{', '.join(rig.shape_names[:3])}); columns are: {', '.join(map(str, frame.columns))}"
         )
@@ -196,13 +206,13 @@ def face_weights(
         empty = np.isnan(v)
         if empty.any() and blank == "error":
             row = int(np.flatnonzero(empty)[0])
-            raise ConfigError(f"{source}: column '{name}' {rows[row]}: empty or missing weight")
+            raise DataError(f"{source}: column '{name}' {rows[row]}: empty or missing weight")
         if unit_range:
             bad = np.flatnonzero(~empty & ((v < 0) | (v > 1)))
             if len(bad):
-                raise ConfigError(
+                raise DataError(
                     f"{source}: column '{name}' {rows[bad[0]]}: weight must be in [0, 1]; "
-                    f"got {frame[c].iloc[bad[0]]!r}"
+                    f"got {_cell_text(frame[c].iloc[bad[0]])}"
                 )
         targets = genes[name] if name in genes else [shapes[name]]
         w[np.ix_(np.flatnonzero(~empty), np.asarray(targets, dtype=np.intp))] = v[~empty, None]
@@ -212,8 +222,50 @@ def face_weights(
     )
 
 
+def _cell_text(cell: object) -> str:
+    """A cell as the user wrote it: text quoted, numbers plain (no ``np.float64(…)``)."""
+    if isinstance(cell, str):
+        return repr(cell)
+    if isinstance(cell, np.generic):
+        cell = cell.item()
+    return repr(cell)
+
+
+#: Columns EmoGen itself writes beside weights (simulation faces, study exports): never taken
+#: for a misspelt shape name.
+BOOKKEEPING = frozenset(
+    {"run", "generation", "slot", "operator", "distance", "error", "rank", "run_seed", "seed",
+     "study", "session_id", "participant_id", "trial", "attempt", "face_id", "role", "emotion",
+     "identity", "label", "name"}
+)  # fmt: skip
+
+
+def _check_other_column(
+    name: str, rig: Rig, source: str, others: str, label_columns: tuple[str, ...]
+) -> None:
+    """A column that is no shape, gene or label: an error where the table holds weights only,
+    and wherever it looks like a misspelt shape or gene name (``jawOpn``)."""
+    import difflib
+
+    known = [*rig.shape_names, *(g.name for g in rig.genes)]
+    close = difflib.get_close_matches(name, known, n=1, cutoff=0.8)
+    if not close:  # case and separator slips: 'JawOpen', 'jaw_open'
+        squash = {re.sub(r"[^a-z0-9]", "", k.lower()): k for k in known}
+        key = re.sub(r"[^a-z0-9]", "", name.lower())
+        close = [squash[key]] if key in squash else []
+    if others == "ignore" and (not close or name in BOOKKEEPING):
+        return
+    hint = f"did you mean '{close[0]}'? " if close else ""
+    allowed = f" or {'/'.join(label_columns)}" if label_columns else ""
+    raise DataError(
+        f"{source}: unknown column '{name}': {hint}columns must be shape or gene names of rig "
+        f"'{rig.name}'{allowed}" + ("" if close else f"; shapes are: {', '.join(rig.shape_names)}")
+    )
+
+
 def _row_names(frame: pd.DataFrame, lines: list[int] | None) -> list[str]:
-    """How errors name each row: 1-based in the file (a query keeps the file's numbering)."""
+    """How errors name each row: row 1 is the first row after the header (a query keeps the
+    file's numbering); ``(line L)`` is its line in a CSV file, where known."""
     index = frame.index
     numbers = (
         [int(i) + 1 for i in index] if index.dtype.kind in "iu" else list(range(1, len(frame) + 1))
@@ -229,7 +281,7 @@ def _column_values(column: pd.Series, where: str, rows: list[str]) -> np.ndarray
         v = column.to_numpy(dtype=np.float64)
         bad = np.flatnonzero(np.isinf(v))
         if len(bad):
-            raise ConfigError(f"{where} {rows[bad[0]]}: {v[bad[0]]} is not a finite number")
+            raise DataError(f"{where} {rows[bad[0]]}: {float(v[bad[0]])} is not a finite number")
         return v
     v = np.full(len(column), np.nan)
     for i, cell in enumerate(column.tolist()):
@@ -240,9 +292,9 @@ def _column_values(column: pd.Series, where: str, rows: list[str]) -> np.ndarray
         try:
             v[i] = float(cell)
         except (TypeError, ValueError):
-            raise ConfigError(f"{where} {rows[i]}: {cell!r} is not a number") from None
+            raise DataError(f"{where} {rows[i]}: {_cell_text(cell)} is not a number") from None
         if not np.isfinite(v[i]):
-            raise ConfigError(f"{where} {rows[i]}: {cell!r} is not a finite number")
+            raise DataError(f"{where} {rows[i]}: {_cell_text(cell)} is not a finite number")
     return v
 
 

@@ -204,12 +204,12 @@ def cell_hash(cell: Cell, *, model_hash: str, all_weights: bool) -> str:
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
 
-def _done(folder: Path, digest: str) -> bool:
+def _done(folder: Path, *digests: str) -> bool:
     meta = folder / "simulation.json"
     if not (meta.is_file() and (folder / "simulation.parquet").is_file()):
         return False
     try:
-        return bool(json.loads(meta.read_text()).get("config_hash") == digest)
+        return json.loads(meta.read_text()).get("config_hash") in digests
     except (OSError, json.JSONDecodeError):
         return False
 
@@ -219,6 +219,21 @@ class SweepResult:
     summary: pd.DataFrame
     ran: list[str]
     skipped: list[str]
+
+
+def _pending(
+    sweep: Sweep, cells_dir: Path, model_hash: str, legacy_model_hash: str, all_weights: bool
+) -> tuple[dict[str, str], list[Cell]]:
+    """Each cell's hash, and the cells not yet done (under this hash or the legacy one)."""
+    hashes = {
+        c.name: cell_hash(c, model_hash=model_hash, all_weights=all_weights) for c in sweep.cells
+    }
+    old = {
+        c.name: cell_hash(c, model_hash=legacy_model_hash or model_hash, all_weights=all_weights)
+        for c in sweep.cells
+    }
+    pending = [c for c in sweep.cells if not _done(cells_dir / c.name, hashes[c.name], old[c.name])]
+    return hashes, pending
 
 
 def run_sweep(
@@ -231,16 +246,17 @@ def run_sweep(
     all_weights: bool = False,
     model_name: str = "",
     model_hash: str = "",
+    legacy_model_hash: str = "",
 ) -> SweepResult:
-    """Run every cell not already in ``out`` (same hash), writing each as it finishes."""
+    """Run every cell not already in ``out`` (same hash), writing each as it finishes.
+
+    legacy_model_hash : the model's version-1 hash, so cells written before the model hash
+    covered everything (:mod:`emogen.model.model_hash`) still count as done."""
     out = Path(out)
     cells_dir = out / "cells"
     cells_dir.mkdir(parents=True, exist_ok=True)
     backend = backend or LocalBackend()
-    hashes = {
-        c.name: cell_hash(c, model_hash=model_hash, all_weights=all_weights) for c in sweep.cells
-    }
-    pending = [c for c in sweep.cells if not _done(cells_dir / c.name, hashes[c.name])]
+    hashes, pending = _pending(sweep, cells_dir, model_hash, legacy_model_hash, all_weights)
     skipped = [c.name for c in sweep.cells if c not in pending]
     tasks, owner, problems = [], [], {}
     for c in pending:

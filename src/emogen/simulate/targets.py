@@ -17,8 +17,8 @@ import numpy as np
 import pandas as pd
 
 from emogen.config import SimulationConfig
-from emogen.errors import ConfigError
-from emogen.model.face_table import face_weights, read_face_table, read_table
+from emogen.errors import ConfigError, DataError
+from emogen.model.face_table import face_weights, read_face_table
 from emogen.model.rig import Rig
 
 
@@ -56,21 +56,25 @@ def resolve_target(config: SimulationConfig, rig: Rig) -> Target:
     path = config.target_file
     if path is None:  # the config's validator rules this out
         raise ConfigError("a simulation needs target or target_file")
-    table = read_table(path, what="target_file")
+    table = read_face_table(path, rig, what="target_file")  # the one face-table reader
+    n = len(table.weights)
     row = config.target_row
     if row is None:
-        if len(table) != 1:
+        if n != 1:
             raise ConfigError(
-                f"target_file {path} has {len(table)} rows: say which with target_row "
-                f"(0 to {len(table) - 1})"
+                f"target_file {path} has {n} rows: say which with target_row (0 to {n - 1}; "
+                "0 is the first row after the header)"
             )
         row = 0
-    if not 0 <= row < len(table):
-        raise ConfigError(f"target_row must be in [0, {len(table) - 1}] for {path}; got {row}")
-    w = weights_from_table(table.iloc[[row]], rig, f"target_file {path}")[0]
-    bad = [rig.shape_names[i] for i in np.flatnonzero((w < 0) | (w > 1))]
-    if bad:
-        raise ConfigError(f"target_file {path} row {row}: weights of {bad} must be in [0, 1]")
+    if not 0 <= row < n:
+        raise ConfigError(
+            f"target_row must be in [0, {n - 1}] for {path} (0 is the first row after the "
+            f"header); got {row}"
+        )
+    w = table.weights[row]
     if not np.any(w > 0):
-        raise ConfigError(f"target_file {path} row {row}: the target has no non-zero weight")
+        raise DataError(
+            f"target_file {path}: row {row + 1} (target_row {row}): the target has no non-zero "
+            "weight"
+        )
     return Target(w, {"kind": "file", "file": str(path), "row": row, "sha256": file_digest(path)})

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from sqlalchemy import select
 from sqlalchemy.exc import IntegrityError
@@ -13,6 +14,9 @@ from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
 from emogen.study.storage import Store
 from emogen.study.tables import StudyRow, dumps, utcnow
+
+if TYPE_CHECKING:
+    from emogen.model.face import FaceModel
 
 
 @dataclass(frozen=True)
@@ -28,6 +32,14 @@ class StudyContext:
     weight_names: tuple[str, ...]
 
 
+def accepted_hashes(model_hash: str, model: FaceModel | None) -> frozenset[str]:
+    """The recorded model hashes that mean this model: its hash and, for the loaded model, the
+    version-1 hash of records made before version 2 (:mod:`emogen.model.model_hash`)."""
+    if model is not None and model.model_hash == model_hash and model.legacy_model_hash:
+        return frozenset({model_hash, model.legacy_model_hash})
+    return frozenset({model_hash})
+
+
 def register_study(
     store: Store,
     config: StudyConfig,
@@ -36,8 +48,11 @@ def register_study(
     model_hash: str,
     gene_names: tuple[str, ...],
     weight_names: tuple[str, ...],
+    aliases: frozenset[str] = frozenset(),
 ) -> int:
-    """The id of the study row of this config (made if new); a different model is an error."""
+    """The id of the study row of this config (made if new); a different model is an error.
+
+    aliases : other hashes of the same model (the version-1 hash older studies recorded)."""
     chash = config.config_hash()
     for _ in range(2):
         try:
@@ -61,7 +76,7 @@ def register_study(
                     )
                     db.add(row)
                     db.flush()
-                elif row.model_hash != model_hash:
+                elif row.model_hash != model_hash and row.model_hash not in aliases:
                     raise ConfigError(
                         f"study '{config.name}' (config {chash[:12]}) was recorded with model "
                         f"{row.model_hash[:16]}…; this server loaded {model_hash[:16]}…: "

@@ -19,6 +19,7 @@ from emogen.errors import EmoGenError
 from emogen.ga.engine import Engine, stream_of_state
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
+from emogen.study.context import accepted_hashes
 from emogen.study.errors import SessionNotFound
 from emogen.study.weights import StudyCorrectors, full_weights
 
@@ -144,7 +145,9 @@ def replay_session(
         if study is None:  # pragma: no cover - foreign key
             raise SessionNotFound(f"session {session_id} has no study")
         config = StudyConfig.model_validate(json.loads(study.config_json))
-        report = ReplayReport(session_id, model_hash_matches=study.model_hash == model_hash)
+        report = ReplayReport(
+            session_id, model_hash_matches=study.model_hash in accepted_hashes(model_hash, model)
+        )
         correctors = StudyCorrectors(config, model)
         trials = db.scalars(
             select(TrialRow).where(TrialRow.session_id == sess.id).order_by(TrialRow.position)

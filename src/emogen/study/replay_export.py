@@ -20,6 +20,7 @@ from emogen.errors import ConfigError, EmoGenError
 from emogen.ga.engine import Engine
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
+from emogen.study.context import accepted_hashes
 from emogen.study.export import FORMULA_STARTS
 from emogen.study.replay import ReplayReport, StoredFaces, compare_population
 from emogen.study.weights import StudyCorrectors
@@ -118,7 +119,8 @@ def replay_exported(
         for sid in sorted(int(s) for s in mine["sessions"]["session_id"]):
             if session_ids is not None and sid not in session_ids:
                 continue
-            report = ReplayReport(sid, model_hash_matches=study["model_hash"] == model_hash)
+            matches = study["model_hash"] in accepted_hashes(model_hash, model)
+            report = ReplayReport(sid, model_hash_matches=matches)
             for row in trials[trials["session_id"] == sid].to_dict("records"):
                 trial = {str(k): v for k, v in row.items()}
                 _replay_trial(report, config, rig, correctors, trial, faces, sels, restarts)

@@ -16,7 +16,7 @@ import numpy as np
 from emogen.ga.engine import Engine
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig, check_identities
-from emogen.study.context import StudyContext, register_study
+from emogen.study.context import StudyContext, accepted_hashes, register_study
 from emogen.study.enrolment import PARTICIPANT_ID, checked_participant, create_session
 from emogen.study.errors import SessionNotFound
 from emogen.study.progress import participant_token
@@ -63,7 +63,8 @@ class StudyService:
         genes = tuple(rig.gene_names(config.ga.eye_motion))
         names = tuple(weight_names(probe, rig))
         study_id = register_study(store, config, model_name=model_name, model_hash=model_hash,
-                                  gene_names=genes, weight_names=names)  # fmt: skip
+                                  gene_names=genes, weight_names=names,
+                                  aliases=accepted_hashes(model_hash, model))  # fmt: skip
         self.ctx = StudyContext(config, rig, model_name, model_hash, study_id, genes, names)
         self.steps = SessionSteps(self.ctx, store, TrialEngines(self.ctx, self.correctors))
 

@@ -26,7 +26,7 @@ from sqlalchemy import create_engine, event, text
 from sqlalchemy.engine import Engine, make_url
 from sqlalchemy.orm import Session
 
-from emogen.errors import ConfigError
+from emogen.errors import ConfigError, ResourceError
 
 T = TypeVar("T")
 DATABASE_ENV = "EMOGEN_DATABASE_URL"
@@ -70,7 +70,9 @@ def _sqlite_begin(conn: Any) -> None:
     conn.exec_driver_sql(f"BEGIN {mode}".strip())
 
 
-def make_engine(url: str) -> Engine:
+def make_engine(url: str, *, create: bool = True) -> Engine:
+    """An engine for ``url``; ``create=False`` (read-only commands) refuses an SQLite file that
+    does not exist instead of creating it (and its folders)."""
     url = normalise_url(url)
     try:
         parsed = make_url(url)
@@ -80,6 +82,13 @@ def make_engine(url: str) -> Engine:
         db = parsed.database
         if not db or db == ":memory:":
             raise ConfigError("database URL must name an SQLite file (':memory:' is not durable)")
+        path = Path(db).expanduser()
+        if not create and (not path.is_file() or path.stat().st_size == 0):
+            what = "is an empty file, not a" if path.is_file() else "does not exist: no"
+            raise ResourceError(
+                f"{path} {what} study database: check --database-url (or ${DATABASE_ENV}, "
+                "the study config's database_url); `emogen serve` creates it"
+            )
         Path(db).expanduser().parent.mkdir(parents=True, exist_ok=True)
         engine = create_engine(
             parsed, connect_args={"timeout": 30, "check_same_thread": False}, pool_size=8
@@ -92,6 +101,13 @@ def make_engine(url: str) -> Engine:
             f"database URL must be sqlite:///FILE or postgresql://…; got {parsed.drivername}"
         )
     return create_engine(parsed, pool_size=10, max_overflow=20, pool_pre_ping=True)
+
+
+def _is_connection_error(exc: Exception) -> bool:
+    """A database error that says the database cannot be reached or opened (not a bad query)."""
+    from sqlalchemy.exc import InterfaceError, OperationalError
+
+    return isinstance(exc, OperationalError | InterfaceError)
 
 
 class _GroupCommit:
@@ -180,9 +196,10 @@ class _GroupCommit:
 class Store:
     """A database: migrated on open; ``read()``, ``write()`` and ``transact()`` transactions."""
 
-    def __init__(self, url: str, *, migrate: bool = True) -> None:
+    def __init__(self, url: str, *, migrate: bool = True, create: bool = True) -> None:
+        """``create=False``: open an existing database only (for commands that only read)."""
         self.url = normalise_url(url)
-        self.engine = make_engine(self.url)
+        self.engine = make_engine(self.url, create=create)
         self.is_sqlite = self.engine.dialect.name == "sqlite"
         self._write_engine = (
             self.engine.execution_options(sqlite_begin="IMMEDIATE")
@@ -195,9 +212,25 @@ class Store:
             self.migrate()
 
     def migrate(self) -> None:
+        from sqlalchemy.exc import DBAPIError
+
         from emogen.study.migrations import upgrade
 
-        upgrade(self._write_engine)
+        try:
+            upgrade(self._write_engine)
+        except DBAPIError as exc:
+            self.engine.dispose()
+            if not _is_connection_error(exc) and "not a database" not in str(exc.orig):
+                raise
+            first = str(exc.orig).strip().splitlines()[0] if exc.orig else type(exc).__name__
+            hint = (
+                "is it a study database, and may you read and write it and its folder?"
+                if self.is_sqlite
+                else "is the server running, and are the URL, user and password right?"
+            )
+            raise ResourceError(
+                f"cannot open the study database {self.describe()}: {first} ({hint})"
+            ) from None
 
     @contextmanager
     def read(self) -> Iterator[Session]:

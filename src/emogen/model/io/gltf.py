@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from emogen.errors import ModelFileError, ShapeError
+from emogen.errors import ResourceError, ShapeError
 from emogen.model.geometry import vertex_normals
 from emogen.model.io.glb import GlbBuilder
 from emogen.model.io.gltf_asset import (
@@ -128,4 +128,4 @@ def export_face_obj(
             materials=model.materials,
         )
     except OSError as exc:
-        raise ModelFileError(f"cannot write {path}: {exc.strerror}") from None
+        raise ResourceError(f"cannot write {path}: {exc.strerror}") from None

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from emogen.errors import ModelFileError
+from emogen.errors import ModelFileError, ResourceError
 from emogen.model.geometry import sphere_fit
 from emogen.model.io.glb import read_glb_json
 from emogen.model.io.gltf_layout import ExportLayout, contained_regions
@@ -147,4 +147,4 @@ def write_file(path: Path, data: bytes) -> None:
     try:
         Path(path).write_bytes(data)
     except OSError as exc:
-        raise ModelFileError(f"cannot write {path}: {exc.strerror}") from None
+        raise ResourceError(f"cannot write {path}: {exc.strerror}") from None

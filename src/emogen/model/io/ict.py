@@ -115,15 +115,53 @@ def model_content_hash(
     return h.hexdigest()
 
 
+#: Vertices of ICT-FaceKit's FaceXModel: a folder with this many is checked against the pinned
+#: manifest (``emogen/data/ict_manifest.json``) file by file.
+ICT_VERTICES = 26719
+ALLOW_MODIFIED_ENV = "EMOGEN_ALLOW_MODIFIED_MODEL"
+
+
+def check_pinned(folder: Path, digests: dict[str, tuple[int, str]]) -> None:
+    """Compare an ICT-FaceKit folder's files with the pinned manifest; name every difference.
+
+    digests : file name → (size, sha256) of the files read. A difference is an error unless
+    ``$EMOGEN_ALLOW_MODIFIED_MODEL`` is set (a model changed on purpose: its hash differs from
+    the pinned model's, so records tell the two apart).
+    """
+    import os
+
+    from emogen.model.io.manifest import load_manifest
+
+    manifest = load_manifest()
+    pinned = {Path(f.path).name: f for f in manifest.files if f.path.startswith("FaceXModel/")}
+    differ = []
+    for file_name, (size, sha) in sorted(digests.items()):
+        entry = pinned.get(file_name)
+        if entry is None or entry.sha256 == sha:
+            continue
+        what = f"{size} bytes, pinned {entry.size}" if size != entry.size else "content differs"
+        differ.append(f"{file_name} ({what})")
+    if differ and not os.environ.get(ALLOW_MODIFIED_ENV):
+        raise ModelFileError(
+            f"{folder} differs from the pinned ICT-FaceKit files (commit {manifest.commit[:8]}) "
+            f"in {len(differ)} file(s): {', '.join(differ[:5])}{' …' if len(differ) > 5 else ''}"
+            f"; a cut or partial download? Run `emogen model fetch` for the pinned files, or set "
+            f"{ALLOW_MODIFIED_ENV}=1 for a model you changed on purpose"
+        )
+
+
 def load_ict_folder(folder: Path, name: str = "ict-facekit") -> ModelArrays:
-    """Parse every OBJ of an ICT-FaceKit folder (the slow path the cache avoids)."""
+    """Parse every OBJ of an ICT-FaceKit folder (the slow path the cache avoids); a folder of
+    ICT-FaceKit's size is checked against the pinned manifest (:func:`check_pinned`)."""
     shapes, identities = source_files(folder)
     src = hashlib.sha256()
+    digests: dict[str, tuple[int, str]] = {}
 
     def read(stem: str) -> tuple[Path, bytes]:
         path = folder / f"{stem}.obj"
         text = read_bytes(path)
         src.update(path.name.encode() + b"\0" + text)
+        digests[path.name] = (len(text), hashlib.sha256(text).hexdigest())
         return path, text
 
     neutral_path, neutral_text = read(NEUTRAL_FILE[:-4])
@@ -145,6 +183,10 @@ def load_ict_folder(folder: Path, name: str = "ict-facekit") -> ModelArrays:
 
     deltas = deltas_of(shapes)
     identity_deltas = deltas_of(identities)
+    if n_vertices == ICT_VERTICES:
+        index = read_bytes(folder / INDEX_FILE)
+        digests[INDEX_FILE] = (len(index), hashlib.sha256(index).hexdigest())
+        check_pinned(folder, digests)
     neutral32 = neutral.astype(np.float32)
     return ModelArrays(
         name=name,

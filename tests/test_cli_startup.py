@@ -1,0 +1,37 @@
+"""`emogen --help` starts fast because it imports no heavy library: checked by what a fresh
+process imports (``-X importtime``), not by a timer (the time is in benchmarks/bench_cli.py)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("numba", "scipy", "sklearn", "matplotlib", "pandas", "numpy", "sqlalchemy", "moderngl")
+
+
+def _imported(*args: str) -> set[str]:
+    proc = subprocess.run(
+        [sys.executable, "-X", "importtime", *args],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return {line.rsplit("|", 1)[-1].strip() for line in proc.stderr.splitlines() if "|" in line}
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [["--help"], ["simulate", "--help"], ["analyse", "--help"], ["study", "export", "--help"]],
+)
+def test_help_imports_no_heavy_library(argv: list[str]) -> None:
+    names = _imported("-m", "emogen", *argv)
+    assert "emogen.cli.app" in names  # the measurement sees the CLI's own imports
+    assert [h for h in HEAVY if h in names] == []
+
+
+def test_importing_the_cli_app_imports_no_heavy_library() -> None:
+    code = f"import sys, emogen.cli.app; print(','.join(m for m in {HEAVY!r} if m in sys.modules))"
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert proc.stdout.strip() == ""
