@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from emogen import columns as tidy
 from emogen.errors import ConfigError
 from emogen.metrics import cosine_distance
 
@@ -88,7 +89,7 @@ def _read(folder: Path, name: str, required: bool = True) -> pd.DataFrame | None
         path = folder / f"{name}{suffix}"
         if path.is_file():
             try:
-                return pd.read_parquet(path) if suffix == ".parquet" else pd.read_csv(path)
+                return pd.read_parquet(path) if suffix == ".parquet" else tidy.read_csv(path)
             except (OSError, ValueError) as exc:
                 raise ConfigError(f"cannot read {path}: {exc}") from None
     if required:
@@ -269,6 +270,13 @@ def simulation_folders(folder: Path) -> list[Path]:
     return sorted(p for p in base.iterdir() if p.is_dir() and (p / "simulation.json").is_file())
 
 
+def _sim_weights(faces: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """A simulation's faces with its weight columns named by shape, and those names: they are
+    ``w_<shape>`` (``emogen.simulate/4``) or bare shape names (older outputs)."""
+    faces = faces.rename(columns=lambda c: str(c)[2:] if str(c).startswith("w_") else c)
+    return faces, [str(c) for c in faces.columns if c not in SIM_FACE_COLUMNS]
+
+
 def load_simulations(folder: Path, sims: list[Path]) -> Dataset:
     parts, bias_parts, targets, configs = [], [], {}, {}
     notes: list[str] = []
@@ -292,9 +300,10 @@ def load_simulations(folder: Path, sims: list[Path]) -> Dataset:
         ].copy()
         wcols: list[str] = []
         if faces is not None:
-            wcols = [c for c in faces.columns if c not in SIM_FACE_COLUMNS]
+            faces, wcols = _sim_weights(faces)
             if wcols:
-                ew = faces.loc[faces["rank"] == 0, ["run", "generation", *wcols]]
+                elite = faces["rank"].fillna(-1) == 0  # NA (schema 4) or −1: not selected
+                ew = faces.loc[elite, ["run", "generation", *wcols]]
                 elites = elites.merge(ew, on=["run", "generation"], how="left")
             first = faces[faces["generation"] == 0].groupby("run")["error"].min()
             bias_parts.append(

@@ -14,7 +14,7 @@ from typing import Annotated
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, SeedOpt, friendly_errors
+from emogen.cli.options import FigureFormatOpt, ModelOpt, RigOpt, SeedOpt, friendly_errors
 from emogen.cli.power import power_command
 
 RenderOpt = Annotated[
@@ -51,15 +51,19 @@ def analyse_command(
     render: RenderOpt = True,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    figure_format: FigureFormatOpt = None,
 ) -> None:
     """Analyse a study export or simulation output: error distributions, KL per generation,
     bias and repeatability bins, PCA + GMM separability, GA-noise test, prototypes, renders.
 
     Writes OUT/index.html and OUT/README.md with figures/ and tables/ (CSV), and analysis.json.
     """
+    from emogen.analysis import plots
     from emogen.analysis.analyse import AnalysisOptions, analyse
     from emogen.analysis.data import load_dataset
     from emogen.model import load_model
+
+    plots.check_formats(figure_format or ["png", "svg"])  # a bad --format before any work
 
     dataset = load_dataset(data)  # fails fast on a folder that is not data
     ga = None
@@ -71,7 +75,8 @@ def analyse_command(
     options = AnalysisOptions(
         render=render, noise_runs=noise_runs, seed=seed, gmm_dims=gmm_dims, alpha=alpha, ga=ga
     )
-    result = analyse(dataset, out, model=model, options=options)
+    with plots.formats(figure_format or ["png", "svg"]):
+        result = analyse(dataset, out, model=model, options=options)
     typer.echo(f"wrote {result.html} and {result.markdown}")
 
 
@@ -93,11 +98,15 @@ def replicate_command(
     render: RenderOpt = True,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    figure_format: FigureFormatOpt = None,
 ) -> None:
     """Run the paper's Section IV experiments on our model and write the report, each finding
     beside the paper's numbers with a one-line verdict (holds / partly / differs)."""
+    from emogen.analysis import plots
     from emogen.analysis.replication import ReplicateSettings, replicate
     from emogen.model import load_model
+
+    plots.check_formats(figure_format or ["png", "svg"])
 
     extra: dict[str, object] = {"seed": seed, "render": render}
     if runs is not None:
@@ -113,7 +122,8 @@ def replicate_command(
     def progress(name: str) -> None:
         typer.echo(f"[{time.perf_counter() - start:6.1f} s] {name}", err=True)
 
-    findings = replicate(model, out, settings, only=only, progress=progress)
+    with plots.formats(figure_format or ["png", "svg"]):
+        findings = replicate(model, out, settings, only=only, progress=progress)
     for f in findings:
         typer.echo(f.line())
     counts = {v: sum(f.verdict == v for f in findings) for v in ("holds", "partly", "differs")}

@@ -8,7 +8,14 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from emogen.cli.options import ModelOpt, RigOpt, SeedOpt, friendly_errors, parse_named_weights
+from emogen.cli.options import (
+    FigureFormatOpt,
+    ModelOpt,
+    RigOpt,
+    SeedOpt,
+    friendly_errors,
+    parse_named_weights,
+)
 
 if TYPE_CHECKING:
     import numpy as np
@@ -75,10 +82,11 @@ def prototypes(
 
 
 def _write(out: Path, res: PowerResult, power: float, alpha: float) -> None:
+    from emogen import columns as tidy
     from emogen.analysis import plots
 
     out.mkdir(parents=True, exist_ok=True)
-    res.curve.to_csv(out / "power.csv", index=False)
+    tidy.write_csv(res.curve, out / "power.csv")
     plots.power_curve(res.curve, out / "power.png", target=power, n_required=res.n_required)
     summary = {
         "n_required": res.n_required,
@@ -125,15 +133,18 @@ def power_command(
     seed: SeedOpt = 1,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
+    figure_format: FigureFormatOpt = None,
 ) -> None:
     """How many participants per group tell two prototypes apart, given GA noise: a power
     curve (OUT/power.csv, OUT/power.png) and the number (OUT/power.json)."""
+    from emogen.analysis import plots
     from emogen.analysis.power import final_faces_pool, power_analysis
     from emogen.config import GAConfig, SimulationConfig
     from emogen.metrics import cosine_distance
     from emogen.model import load_model
 
     check_group_b(b, difference)  # before loading the model
+    plots.check_formats(figure_format or ["png", "svg"])
     r = load_model(model_path, rig=rig).rig
     wa, wb = prototypes(r, a, b, difference)
     cfg = SimulationConfig(
@@ -165,6 +176,7 @@ def power_command(
         seed=seed,
         settings=settings,
     )
-    _write(out, res, power, alpha)
+    with plots.formats(figure_format or ["png", "svg"]):
+        _write(out, res, power, alpha)
     _print(res, power, alpha, max_participants)
     typer.echo(f"wrote {out / 'power.csv'}, {out / 'power.png'}, {out / 'power.json'}")
