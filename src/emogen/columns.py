@@ -259,9 +259,12 @@ def _prefixed(v: object) -> bool:
 
 
 def _guess(column: pd.Series) -> pd.Series:
-    """A column without a rule: numbers when every cell is one, else text."""
+    """A column without a rule: booleans or numbers when every cell is one, else text."""
     import pandas as pd
 
+    cells = set(column.dropna())
+    if cells and cells <= {"True", "False"}:
+        return column.map({"True": True, "False": False}).astype("boolean")
     try:
         return pd.to_numeric(column)
     except (TypeError, ValueError):

@@ -135,7 +135,9 @@ def test_bar_and_curve_figures_hold_for_2_to_12_groups(n: int, tmp_path: Path) -
         for ax in fig.axes:
             if ax.get_visible():
                 assert ax.get_xlabel() or ax.get_ylabel()
-                assert "[" in ax.get_xlabel() or "[" in ax.get_ylabel(), ax.get_xlabel()
+                # units on every quantity axis (a bar chart's group axis has names, no label)
+                assert "[" in ax.get_xlabel(), ax.get_xlabel()
+                assert not ax.get_ylabel() or "[" in ax.get_ylabel(), ax.get_ylabel()
 
 
 def test_every_figure_in_each_format_png_at_300_dpi(tmp_path: Path) -> None:
@@ -168,3 +170,18 @@ def test_magnitudes_use_perceptual_colour_maps(tmp_path: Path) -> None:
     assert lightness == sorted(lightness) and len(set(lightness)) == 4
     for name in ("jet", "turbo"):
         assert name not in plots.MAGNITUDE_MAPS
+
+
+def test_rendered_sheets_are_300_dpi_and_go_into_the_vector_formats(tmp_path: Path) -> None:
+    """Face sheets and heatmaps are renders (pixels): a 300-dpi PNG, and a PDF/SVG page
+    holding them at that resolution."""
+    image = np.zeros((60, 90, 3), np.uint8)
+    image[:, 45:] = 200
+    with plots.formats(["pdf", "svg"]):
+        png = plots.save_image(tmp_path / "sheet.png", image)
+    with Image.open(png) as im:
+        assert im.info["dpi"] == pytest.approx((300, 300), abs=0.01)
+        np.testing.assert_array_equal(np.asarray(im), image)
+    assert (tmp_path / "sheet.pdf").read_bytes().startswith(b"%PDF-")
+    root = ET.parse(tmp_path / "sheet.svg").getroot()
+    assert root.attrib["width"] == "21.6pt"  # 90 px at 300 dpi = 0.3 in

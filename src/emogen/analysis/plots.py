@@ -124,6 +124,27 @@ def _generation_axis(ax: Axes, last: int) -> None:
     ax.xaxis.set_major_locator(MaxNLocator(nbins=6, integer=True))
 
 
+def save_image(path: Path, image: np.ndarray) -> Path:
+    """A rendered image (a face sheet, heatmaps: (H, W, 3) uint8) as a PNG marked 300 dpi,
+    and in each vector format of :func:`formats` as a page holding it at 300 dpi (the faces
+    are pixels: a renderer's output has no vector form). Returns the PNG's path."""
+    from PIL import Image
+
+    path = Path(path).with_suffix(".png")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(np.ascontiguousarray(image)).save(path, format="PNG", dpi=(DPI, DPI))
+    vector = [f for f in _FORMATS.get() if f != "png"]
+    if vector:
+        from matplotlib.figure import Figure
+
+        h, w = image.shape[:2]
+        fig = Figure(figsize=(w / DPI, h / DPI), dpi=DPI)
+        fig.figimage(image, resize=False)
+        for fmt in vector:
+            fig.savefig(path.with_suffix(f".{fmt}"), dpi=DPI, format=fmt)
+    return path
+
+
 def _save(fig: Figure, path: Path) -> Path:
     """The figure at ``path`` (its suffix replaced by each format's); returns the PNG's path."""
     path = Path(path)
@@ -143,7 +164,7 @@ def _panels(n: int, most: int = 4) -> tuple[int, int]:
 
 
 def generation_distributions(
-    panels: dict[str, np.ndarray], path: Path, *, ylabel: str = "CD error", title: str = ""
+    panels: dict[str, np.ndarray], path: Path, *, ylabel: str = "elite error [CD]", title: str = ""
 ) -> Path:
     """Per-generation error distributions (violins, mean ± sd marked), one panel per entry of
     ``panels`` (label → errors (n_samples, G + 1)), like the paper's Figs. 11–18."""
@@ -293,7 +314,7 @@ def bins(table: pd.DataFrame, path: Path, *, title: str = "") -> Path:
 
 
 def final_distributions(
-    samples: dict[str, np.ndarray], path: Path, *, xlabel: str = "final CD error", title: str = ""
+    samples: dict[str, np.ndarray], path: Path, *, xlabel: str = "final error [CD]", title: str = ""
 ) -> Path:
     """Overlaid histograms of final errors, one per entry (Fig. 18 / Table V)."""
     fig = _figure(5.2 + 2.6 * -(-len(samples) // 12), 3.2)

@@ -96,7 +96,8 @@ def export(
         Path | None, typer.Option("--config", help="Study TOML (for its database_url).")
     ] = None,
 ) -> None:
-    """Tidy tables: sessions, trials, faces, selections, restarts, ratings (see docs/study.md)."""
+    """Tidy tables: sessions, trials, faces, selections, restarts, ratings, identities, study
+    (every column: docs/data.md; CSV seeds are text s<digits> so R keeps them exact)."""
     from emogen.study.export import export_tables, write_export
 
     store = _store(database_url, config)
