@@ -11,11 +11,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pyarrow.parquet as pq
+from typer.testing import CliRunner
 
 from emogen import __version__
 from emogen import columns as tidy
-from emogen.analysis.analyse import AnalysisOptions, analyse
 from emogen.analysis.data import load_dataset
+from emogen.cli.analysis import analysis_app
 from emogen.config import GAConfig, SimulationConfig
 from emogen.simulate.runner import RECORD_SCHEMA, run_simulation, write_simulation
 from emogen.simulate.sweep import Cell, Sweep, sweep_summary
@@ -98,12 +99,22 @@ def test_sweep_summary_is_typed_and_documented(ict_model, tmp_path: Path) -> Non
     assert not undocumented(list(summary.columns), "sweep: summary")
 
 
-def test_analysis_tables_are_long_with_identifier_headers(ict_model, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+def test_analysis_tables_are_long_with_identifier_headers(
+    ict_model, ict_dir: Path, tmp_path: Path
+) -> None:  # type: ignore[no-untyped-def]
     for target in ("jawOpen", "mouthSmile"):
         _simulate(ict_model.rig, tmp_path / "sims" / target, {target: 0.9})
-    res = analyse(tmp_path / "sims", tmp_path / "out", model=ict_model,
-                  options=AnalysisOptions(noise_runs=20, render=False))  # fmt: skip
-    assert res.html.is_file()
+    args = [str(tmp_path / "sims"), "--out", str(tmp_path / "out"), "--model", str(ict_dir),
+            "--no-render", "--noise-runs", "20"]  # fmt: skip
+    bad = CliRunner().invoke(analysis_app, ["analyse", *args, "--format", "jpeg"])
+    assert bad.exit_code != 0 and "--format must be one or more of png, svg, pdf" in bad.output
+    assert not (tmp_path / "out").exists()  # refused before any work
+    result = CliRunner().invoke(analysis_app, ["analyse", *args, "--format", "pdf"])
+    assert result.exit_code == 0, result.output
+    figures = {p.name for p in (tmp_path / "out" / "figures").iterdir()}
+    assert {"kl.png", "kl.pdf", "separability.png", "separability.pdf"} <= figures
+    assert not any(f.endswith(".svg") for f in figures)
+    assert (tmp_path / "out" / "index.html").is_file()
     tables = sorted((tmp_path / "out" / "tables").glob("*.csv"))
     names = {p.stem for p in tables}
     assert {"kl_by_generation", "repeatability", "confusion", "spread_test"} <= names
@@ -122,4 +133,4 @@ def test_analysis_tables_are_long_with_identifier_headers(ict_model, tmp_path: P
     spread = pd.read_csv(tmp_path / "out" / "tables" / "spread_test.csv")
     assert spread["ga_noise_sd_to_target"].dtype == "float64"
     # the report itself still shows rounded, formatted values
-    assert "±" in res.markdown.read_text()
+    assert "±" in (tmp_path / "out" / "README.md").read_text()
