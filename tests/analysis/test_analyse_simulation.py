@@ -65,7 +65,7 @@ def test_analyse_simulations_end_to_end(sims: Path, ict_model, tmp_path: Path) -
     # of this setting); what must not happen is a clear rejection of runs made to be consistent.
     spread = pd.read_csv(out / "tables" / "spread_test.csv")
     assert (spread["p"] > 0.01).all(), spread[["group", "p"]]
-    assert spread["exceeds noise"].tolist() == (spread["p"] < 0.05).tolist()
+    assert spread["exceeds_noise"].tolist() == (spread["p"] < 0.05).tolist()
     html = res.html.read_text()
     assert "Separability" in html and "figures/mean_face_heatmaps.png" in html
     assert "Separability" in res.markdown.read_text()

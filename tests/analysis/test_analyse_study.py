@@ -133,14 +133,14 @@ def test_analyse_a_study_export(export: Path, ict_dir: Path, tmp_path: Path) -> 
     happy = errors[errors["group"] == "happy"].set_index("generation")["mean"]
     assert happy.loc[3] < happy.loc[0]  # elites approach the group's mean face
     rep = pd.read_csv(out / "tables" / "repeatability.csv")
-    assert rep.filter(like="%").sum(axis=1).round(6).eq(100).all()
+    assert rep.filter(like="pct_pairs_cd_").sum(axis=1).round(6).eq(100).all()
     spread = pd.read_csv(out / "tables" / "spread_test.csv")
     assert set(spread["group"]) == {"happy", "sad"}
     ratings = pd.read_csv(out / "tables" / "ratings.csv")
     assert ratings["mean"].eq(5).all()
     assert (out / "figures" / "mean_face_heatmaps.png").is_file()
     # the study corrected its faces: correctives follow the shapes in the weights
-    assert any(c.startswith("corr_") for c in elites.columns)
+    assert any(c.startswith("w_corr_") for c in elites.columns)
     assert "correctives are left out" in (out / "README.md").read_text()
 
 

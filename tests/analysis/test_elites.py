@@ -31,7 +31,9 @@ def test_elites_match_the_faces_table(ict_model, config: SimulationConfig) -> No
         for g in range(4):
             row = table[(table["run"] == run) & (table["generation"] == g) & (table["rank"] == 0)]
             assert len(row) == 1
-            np.testing.assert_array_equal(e.weights[run, g], row[list(rig.shape_names)].iloc[0])
+            np.testing.assert_array_equal(
+                e.weights[run, g], row[[f"w_{s}" for s in rig.shape_names]].iloc[0]
+            )
             assert e.errors[run, g] == pytest.approx(float(row["error"].iloc[0]))
         first = table[(table["run"] == run) & (table["generation"] == 0)]
         assert e.best_initial[run] == pytest.approx(float(first["error"].min()))

@@ -50,18 +50,21 @@ def test_tick_values_are_round() -> None:
 def test_heatmap_colours_by_distance(small_renderer: Renderer, ict_model) -> None:  # type: ignore[no-untyped-def]
     w = np.stack([ict_model.rig.weights_from_names({"jawOpen": x}) for x in (1.0, 0.0)])
     a, b = ict_model.evaluate(w)
-    heat = render_heatmap(small_renderer, a, b, cmap="turbo")
+    heat = render_heatmap(small_renderer, a, b)  # viridis by default
     assert heat.max_distance == pytest.approx(vertex_distances(a, b).max(), rel=1e-6)
     assert heat.vmax >= heat.max_distance
     h, w_ = heat.image.shape[:2]
     assert h > 128 and w_ > 128  # face + legend + footer strip
-    # the forehead (distance 0) takes the colour map's bottom colour (turbo: dark blue/violet)
-    top = (colour_lut("turbo")[0] * 255).round()
+    # the forehead (distance 0) takes the colour map's bottom colour (viridis: dark violet)
+    top = (colour_lut("viridis")[0] * 255).round()
     face = heat.image[:128, :128].astype(int)
     forehead = face[25:35, 55:73].reshape(-1, 3).mean(0)
     assert forehead[2] > forehead[0] and np.abs(forehead - top).max() < 60
     with pytest.raises(ConfigError, match="colour map"):
         render_heatmap(small_renderer, a, b, cmap="no-such-map")
+    for rainbow in ("turbo", "jet", "rainbow_r"):  # not perceptual: refused for magnitudes
+        with pytest.raises(ConfigError, match=f"'{rainbow}' is not perceptually uniform"):
+            render_heatmap(small_renderer, a, b, cmap=rainbow)
     with pytest.raises(ConfigError, match="vmax"):
         render_heatmap(small_renderer, a, b, vmax=-1.0)
 

@@ -62,7 +62,7 @@ def test_corrected_simulation_is_the_same_in_a_process_pool_and_on_dask(ict_mode
     local = run_simulation(CORRECTED, ict_model, all_weights=True)
     shown = local.faces
     assert local.record["corrected"]
-    collision = [c for c in shown.columns if c.startswith("collision_")]
+    collision = [c for c in shown.columns if c.startswith("w_collision_")]
     assert len(collision) == 8 and (shown[collision].to_numpy() > 0).any(axis=1).mean() > 0.05
     pooled = run_simulation(CORRECTED, ict_model, backend=LocalBackend(2), all_weights=True)
     assert_same(local, pooled)

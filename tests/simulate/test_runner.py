@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 from typer.testing import CliRunner
 
+from emogen import columns as tidy
 from emogen.cli import app
 from emogen.config import GAConfig, InitConfig, SimulationConfig
 from emogen.rng import spawn_seeds
@@ -41,7 +42,7 @@ def test_table_and_record(ict_model, tmp_path: Path) -> None:
     assert np.all(np.diff(wide, axis=1) <= 1e-12)
     paths = write_simulation(result, tmp_path / "out")
     pd.testing.assert_frame_equal(pd.read_parquet(paths[0]), t)
-    pd.testing.assert_frame_equal(pd.read_csv(paths[1]), t)
+    pd.testing.assert_frame_equal(tidy.read_csv(paths[1]), t)
     assert json.loads(paths[2].read_text())["seed"] == 1
 
 
@@ -134,7 +135,10 @@ def test_faces_table_and_all_weights(ict_model, tmp_path: Path) -> None:
     faces = result.faces
     assert faces is not None and len(faces) == 3 * 11 * 10
     assert tuple(faces.columns[: len(FACE_COLUMNS)]) == FACE_COLUMNS
-    assert list(faces.columns[len(FACE_COLUMNS) :]) == list(ict_model.rig.shape_names)
+    # the weight columns are named as in study exports: w_<shape>
+    assert list(faces.columns[len(FACE_COLUMNS) :]) == [f"w_{s}" for s in ict_model.rig.shape_names]
+    # a face not selected has rank NA (never -1)
+    assert faces["rank"].isna().any() and not (faces["rank"] < 0).any()
     # one elite per run and generation, and it is the table's elite
     elites = faces[faces["rank"] == 0].reset_index(drop=True)
     assert len(elites) == 33
@@ -155,7 +159,7 @@ def test_faces_table_and_all_weights(ict_model, tmp_path: Path) -> None:
     nxt = SimulationConfig(target_file=tmp_path / "faces.parquet", target_row=int(last), runs=2)
     record = run_simulation(nxt, ict_model.rig).record
     assert record["target_source"]["row"] == last
-    weights = faces.loc[last, list(ict_model.rig.shape_names)].to_numpy(float)
+    weights = faces.loc[last, [f"w_{s}" for s in ict_model.rig.shape_names]].to_numpy(float)
     assert record["target_weights"] == {
         s: w for s, w in zip(ict_model.rig.shape_names, weights, strict=True) if w != 0
     }
@@ -189,7 +193,7 @@ def test_cli_simulate_metric_noise_weights_and_target_file(ict_dir: Path, tmp_pa
     assert record["config"]["metric"]["name"] == "ed"
     assert record["config"]["noise_temperature"] == 0.1
     faces = pd.read_parquet(out / "faces.parquet")
-    assert "jawOpen" in faces.columns and len(faces) == 3 * 11 * 10
+    assert "w_jawOpen" in faces.columns and len(faces) == 3 * 11 * 10
     result = runner.invoke(
         app,
         [
@@ -213,7 +217,7 @@ def test_cli_simulate_metric_noise_weights_and_target_file(ict_dir: Path, tmp_pa
     record = json.loads((tmp_path / "c" / "simulation.json").read_text())
     assert record["corrected"] and record["config"]["correct"]
     faces = pd.read_parquet(tmp_path / "c" / "faces.parquet")
-    assert "collision_lip_outer_left" in faces.columns  # the correctives' weights are shown
+    assert "w_collision_lip_outer_left" in faces.columns  # the correctives' weights are shown
     result = runner.invoke(
         app, [*base, "--target", "jawOpen=1", "--metric", "std_ed", "--out", str(tmp_path / "d")]
     )

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from emogen import columns as tidy
 from emogen.analysis import plots
 from emogen.analysis.analyse_faces import prototypes_section, separability_section
 from emogen.analysis.analyse_noise import noise_section
@@ -85,7 +86,10 @@ def analyse(
     _ratings(ds, report, summary)
     step("writing the report")
     if ds.has_weights:
-        ds.elites.to_csv(report.out / "tables" / "elites.csv", index=False)
+        tidy.write_csv(
+            ds.elites.rename(columns={c: f"w_{c}" for c in ds.columns}),
+            report.out / "tables" / "elites.csv",
+        )
     (report.out / "analysis.json").write_text(json.dumps(summary, indent=2, default=_json) + "\n")
     html_path, md_path = report.write()
     return AnalysisResult(report.out, html_path, md_path, summary)
@@ -167,6 +171,7 @@ def _errors(ds: Dataset, report: Report, summary: dict[str, Any]) -> None:
             "kl_by_generation",
             "KL divergence between consecutive generations [nats]",
             index=True,
+            data=pd.DataFrame(rows),
         )
         report.figure(
             plots.kl_curves(kls, report.figures / "kl.png"), "KL per generation (log scale)."
@@ -193,7 +198,16 @@ def _repeatability(ds: Dataset, report: Report, summary: dict[str, Any]) -> None
         "Bias: CD of the best generation-0 face to the (proxy) target — 1.0 means no bias. "
         "Bins: shares of all pairs of final faces by their CD (the paper's Table III)."
     )
-    report.table(table, "repeatability", "Target bias and inter-sample CD bins of the final faces")
+    data = table.rename(
+        columns={"bias mean": "bias_mean", "bias sd": "bias_sd", "final faces": "n_final_faces"}
+        | {f"{b} %": tidy.machine_name(f"pct pairs cd {b}") for b in BIN_LABELS}
+    )
+    report.table(
+        table,
+        "repeatability",
+        "Target bias and inter-sample CD bins of the final faces",
+        data=data,
+    )
     bins_only = table.set_index("group")[[f"{b} %" for b in BIN_LABELS]].dropna()
     if len(bins_only):
         bins_only.columns = list(BIN_LABELS)

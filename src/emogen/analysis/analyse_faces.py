@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from emogen import columns as tidy
 from emogen.analysis import plots
 from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.data import Dataset
@@ -56,8 +57,20 @@ def separability_section(
         f"cluster of their own group alone = **{sep.accuracy:.1%}**; adjusted Rand index "
         f"{sep.ari:.3f}; one cluster per group: {'yes' if sep.one_to_one else 'no'}."
     )
+    long = sep.confusion.to_numpy()
+    data = pd.DataFrame(
+        [
+            {"group": g, "cluster": str(c), "n_samples": int(long[i, j])}
+            for i, g in enumerate(sep.groups)
+            for j, c in enumerate(sep.confusion.columns)
+        ]
+    )
     report.table(
-        sep.confusion, "confusion", "GMM classification of each group's final faces", index=True
+        sep.confusion,
+        "confusion",
+        "GMM classification of each group's final faces",
+        index=True,
+        data=data,
     )
     if sep.cluster_of_target:
         corr = pd.DataFrame(
@@ -101,7 +114,10 @@ def prototypes_section(
     protos = participant_prototypes(ds.final, cols)
     means = group_means(protos, cols)
     if ds.kind == "study":
-        protos.to_csv(report.out / "tables" / "prototypes.csv", index=False)
+        tidy.write_csv(
+            protos.rename(columns={c: f"w_{c}" for c in cols}),
+            report.out / "tables" / "prototypes.csv",
+        )
         show = protos[["group", "participant", "n_trials"]].copy()
         show["largest weights"] = [top_weights(r, cols) for r in protos[cols].to_numpy()]
         report.table(
@@ -110,20 +126,10 @@ def prototypes_section(
             "Per-participant prototypes: mean final face per group "
             "(full weights in tables/prototypes.csv)",
         )
-    mean_rows: list[dict[str, object]] = [
-        {"group": g, "largest weights of the mean face": top_weights(m, cols, 8)}
-        for g, m in means.items()
-    ]
-    if ds.targets:
-        from emogen.metrics import cosine_distance
-
-        for r in mean_rows:
-            t = ds.targets[str(r["group"])]
-            r["CD(mean, target)"] = float(cosine_distance(means[str(r["group"])], t))
-            r["|mean| / |target|"] = float(
-                np.linalg.norm(means[str(r["group"])]) / np.linalg.norm(t)
-            )
-    report.table(pd.DataFrame(mean_rows), "group_means", "Group mean faces (mean of prototypes)")
+    mean_rows, data = _group_means_tables(ds, means, cols)
+    report.table(
+        pd.DataFrame(mean_rows), "group_means", "Group mean faces (mean of prototypes)", data=data
+    )
     summary["group_means"] = {g: m.tolist() for g, m in means.items()}
     if model is None or not opts.render:
         report.paragraph("Renders skipped (no face model, or --no-render).")
@@ -155,3 +161,35 @@ def prototypes_section(
     except EmoGenError as exc:
         log.warning("rendering failed: %s", exc)
         report.paragraph(f"Renders failed: {exc}")
+
+
+def _group_means_tables(
+    ds: Dataset, means: dict[str, np.ndarray], cols: list[str]
+) -> tuple[list[dict[str, object]], pd.DataFrame]:
+    """The group means for the report (largest weights; CD and norm ratio to the target) and
+    for machines (every weight ``w_<shape>``, full precision)."""
+    mean_rows: list[dict[str, object]] = [
+        {"group": g, "largest weights of the mean face": top_weights(m, cols, 8)}
+        for g, m in means.items()
+    ]
+    if ds.targets:
+        from emogen.metrics import cosine_distance
+
+        for r in mean_rows:
+            t = ds.targets[str(r["group"])]
+            r["CD(mean, target)"] = float(cosine_distance(means[str(r["group"])], t))
+            r["|mean| / |target|"] = float(
+                np.linalg.norm(means[str(r["group"])]) / np.linalg.norm(t)
+            )
+    data = pd.DataFrame(
+        [
+            {
+                "group": g,
+                **({"cd_mean_target": r["CD(mean, target)"],
+                    "norm_ratio_mean_target": r["|mean| / |target|"]} if ds.targets else {}),
+                **{f"w_{c}": float(v) for c, v in zip(cols, means[g], strict=True)},
+            }
+            for g, r in zip(means, mean_rows, strict=True)
+        ]
+    )  # fmt: skip
+    return mean_rows, data

@@ -75,8 +75,9 @@ def noise_section(
         report.paragraph("Skipped: needs face weights.")
         return
     rng = np.random.default_rng(opts.seed)
-    rows, notes = [], []
+    rows, notes, records = [], [], []
     candidates: list[dict[str, object]] = []
+    candidate_records: list[dict[str, object]] = []
     for g in ds.groups:
         fw = ds.final_weights(g)
         if len(fw) < 2:
@@ -95,20 +96,54 @@ def noise_section(
                 rng=rng,
             )
             candidates += [{"group": g, **c.row()} for c in cands]
+            candidate_records += [{"group": g, **c.record()} for c in cands]
             chosen = next(c for c in cands if c.test.p_value == test.p_value)
-            label = chosen.noise.label
+            label, noise = chosen.noise.label, chosen.noise
         else:
             test = spread_test(
                 fw, PAPER_NOISE, group=g, alpha=opts.alpha, draws=opts.noise_draws, rng=rng
             )
-            label = PAPER_NOISE.label
+            label, noise = PAPER_NOISE.label, PAPER_NOISE
         row = test.row()
         row["GA noise μ ± σ (to target)"] = label
         t, source = choice_noise(ds, g, opts)
         row["choice noise T"] = t
         row["T source"] = source
         rows.append(row)
-    report.paragraph(
+        records.append(
+            {
+                **test.record(),
+                "ga_noise_mean_to_target": noise.mean,
+                "ga_noise_sd_to_target": noise.sd,
+                "choice_noise_t": t,
+                "choice_noise_source": source,
+            }
+        )
+    report.paragraph(_method_text(ds, opts, model))
+    _assumption_note(report, rows)
+    report.bullets([f"Skipped {n}" for n in notes])
+    if rows:
+        table = pd.DataFrame(rows)
+        report.table(
+            table, "spread_test", "Group spread against GA noise", data=pd.DataFrame(records)
+        )
+        report.figure(
+            plots.spread(table, report.figures / "spread.png"),
+            "Mean proxy error of each group against GA noise at the same n.",
+        )
+        summary["spread_test"] = rows
+    if candidates:
+        report.table(
+            pd.DataFrame(candidates),
+            "spread_candidates",
+            "Latent-target candidates per group (τ: weights below τ × max zeroed)",
+            data=pd.DataFrame(candidate_records),
+        )
+
+
+def _method_text(ds: Dataset, opts: AnalysisOptions, model: FaceModel | None) -> str:
+    """The section's paragraph: what the test compares, and against what."""
+    return (
         "Spread of a group = mean CD of its final faces to their mean (the proxy target). GA "
         "noise = the same statistic on random subsets of equal size from the final faces of "
         "simulated runs with one consistent target, the data's GA settings and the choosers' "
@@ -126,22 +161,6 @@ def noise_section(
             else ""
         )
     )
-    _assumption_note(report, rows)
-    report.bullets([f"Skipped {n}" for n in notes])
-    if rows:
-        table = pd.DataFrame(rows)
-        report.table(table, "spread_test", "Group spread against GA noise")
-        report.figure(
-            plots.spread(table, report.figures / "spread.png"),
-            "Mean proxy error of each group against GA noise at the same n.",
-        )
-        summary["spread_test"] = rows
-    if candidates:
-        report.table(
-            pd.DataFrame(candidates),
-            "spread_candidates",
-            "Latent-target candidates per group (τ: weights below τ × max zeroed)",
-        )
 
 
 def _assumption_note(report: Report, rows: list[dict[str, object]]) -> None:

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from emogen import columns as tidy
 from emogen.analysis.validate import check_simulation, check_study
 from emogen.errors import ConfigError, DataError
 from emogen.metrics import cosine_distance
@@ -89,7 +90,7 @@ def _read(folder: Path, name: str, required: bool = True) -> pd.DataFrame | None
         path = folder / f"{name}{suffix}"
         if path.is_file():
             try:
-                return pd.read_parquet(path) if suffix == ".parquet" else pd.read_csv(path)
+                return pd.read_parquet(path) if suffix == ".parquet" else tidy.read_csv(path)
             except (OSError, ValueError) as exc:
                 raise ConfigError(f"cannot read {path}: {exc}") from None
     if required:
@@ -279,6 +280,13 @@ def _record(sim: Path) -> dict[str, Any]:
     return record
 
 
+def _sim_weights(faces: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """A simulation's faces with its weight columns named by shape, and those names: they are
+    ``w_<shape>`` (``emogen.simulate/4``) or bare shape names (older outputs)."""
+    faces = faces.rename(columns=lambda c: str(c)[2:] if str(c).startswith("w_") else c)
+    return faces, [str(c) for c in faces.columns if c not in SIM_FACE_COLUMNS]
+
+
 def load_simulations(folder: Path, sims: list[Path]) -> Dataset:
     parts, bias_parts, targets, configs = [], [], {}, {}
     notes: list[str] = []
@@ -300,11 +308,14 @@ def load_simulations(folder: Path, sims: list[Path]) -> Dataset:
         elites = table.rename(columns={"elite_error": "error"})[
             ["run", "generation", "error", "n_selected"]
         ].copy()
-        wcols = [c for c in faces.columns if c not in SIM_FACE_COLUMNS] if faces is not None else []
+        wcols: list[str] = []
+        if faces is not None:
+            faces, wcols = _sim_weights(faces)
         check_simulation(sim, table, faces, wcols)
         if faces is not None:
             if wcols:
-                ew = faces.loc[faces["rank"] == 0, ["run", "generation", *wcols]]
+                elite = faces["rank"].fillna(-1) == 0  # NA (schema 4) or −1: not selected
+                ew = faces.loc[elite, ["run", "generation", *wcols]]
                 elites = elites.merge(ew, on=["run", "generation"], how="left")
             first = faces[faces["generation"] == 0].groupby("run")["error"].min()
             bias_parts.append(

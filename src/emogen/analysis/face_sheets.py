@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from emogen.analysis import plots
 from emogen.errors import ShapeError
 
 if TYPE_CHECKING:
@@ -59,7 +60,7 @@ def heatmap_sheet(
     """Render the panels as one contact sheet (PNG at ``path``); returns per panel the RMS
     (eq. 13, all vertices) and the largest distance over the coloured parts (skin, mouth,
     teeth; cm) of the face to its reference, and the shared scale's top."""
-    from emogen.render import Renderer, contact_sheet, render_heatmap, save_png
+    from emogen.render import Renderer, contact_sheet, render_heatmap
     from emogen.render.distance_map import HEAT_PARTS, nice_ceiling, vertex_distances
 
     faces = model.evaluate(np.stack([p.face for p in panels]).astype(np.float32))
@@ -90,7 +91,7 @@ def heatmap_sheet(
             "scale_top_cm": top,
         }
     )
-    save_png(path, sheet)
+    plots.save_image(path, sheet)
     return stats
 
 
@@ -104,8 +105,8 @@ def face_sheet(
     columns: int = 4,
 ) -> Path:
     """A contact sheet of faces (prototypes, mean faces) with labels and the licence notice."""
-    from emogen.render import Renderer, save_png
+    from emogen.render import Renderer
 
     with Renderer(model, size=size) as r:
         sheet = r.sheet(np.asarray(weights, dtype=np.float32), labels, columns=columns)
-    return save_png(path, sheet)
+    return plots.save_image(path, sheet)

@@ -139,6 +139,20 @@ class SpreadTest:
             "exceeds noise": self.exceeds,
         }
 
+    def record(self) -> dict[str, object]:
+        """The row for machines (``tables/*.csv``): full precision, identifier names."""
+        return {
+            "group": self.group,
+            "n": self.n,
+            "mean_proxy_error": self.mean_error,
+            "sd_proxy_error": self.sd_error,
+            "noise_mean_same_n": self.noise_mean,
+            "noise_q95_same_n": self.noise_q95,
+            "p": self.p_value,
+            "method": self.method,
+            "exceeds_noise": self.exceeds,
+        }
+
 
 def spread_test(
     faces: np.ndarray,
@@ -219,6 +233,20 @@ class Candidate:
             "GA noise μ ± σ": self.noise.label,
             "null mean": round(self.test.noise_mean, 4),
             "p": float(f"{self.test.p_value:.3g}"),
+        }
+
+    def record(self) -> dict[str, object]:
+        """The row for machines (``tables/*.csv``): full precision, one value per cell."""
+        return {
+            "tau": self.threshold,
+            "active_weights": self.active,
+            "fit_cd": self.fit_cd,
+            "fit_q95": self.fit_q95,
+            "consistent": self.consistent,
+            "ga_noise_mean": self.noise.mean,
+            "ga_noise_sd": self.noise.sd,
+            "null_mean": self.test.noise_mean,
+            "p": self.test.p_value,
         }
 
 

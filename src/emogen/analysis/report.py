@@ -1,6 +1,7 @@
 """A small report writer: one structure, written as HTML (``index.html``) and Markdown
 (``README.md``), with figures under ``figures/`` and every table also as CSV under ``tables/``
-(for R users: ``read.csv("tables/<name>.csv")``).
+(for R users: ``read.csv("tables/<name>.csv")``): long format, one value per cell, identifier
+headers; display formatting (rounding, ``–``, pivots) only in the HTML and Markdown.
 
 Text may use two inline marks, rendered in both outputs: ``code`` in backticks and **bold**.
 """
@@ -14,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from emogen import columns as tidy
 
 CSS = """
 body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;max-width:1100px;margin:2em auto;
@@ -136,12 +139,21 @@ class Report:
             self.blocks.append(_Bullets(list(items)))
 
     def table(
-        self, df: pd.DataFrame, name: str | None = None, caption: str = "", *, index: bool = False
+        self,
+        df: pd.DataFrame,
+        name: str | None = None,
+        caption: str = "",
+        *,
+        index: bool = False,
+        data: pd.DataFrame | None = None,
     ) -> None:
-        """A table in the report; with ``name`` also ``tables/<name>.csv`` (full precision)."""
+        """A table in the report; with ``name`` also ``tables/<name>.csv``: ``data`` (else the
+        table) for machines, full precision, long format with identifier headers
+        (:func:`emogen.columns.machine_table`; ``index``: a matrix, written long)."""
         if name is not None:
             path = self.out / "tables" / f"{name}.csv"
-            df.to_csv(path, index=index)
+            machine = tidy.machine_table(df if data is None else data, index=index and data is None)
+            tidy.write_csv(machine, path)
             self.tables[name] = path
         shown = df.reset_index() if index else df
         self.blocks.append(_Table(shown, caption, name))

@@ -50,11 +50,14 @@ def check_nonempty(frame: pd.DataFrame, where: str, what: str) -> None:
         raise DataError(f"{where} has no rows: {what}")
 
 
-def check_whole(frame: pd.DataFrame, columns: Iterable[str], where: str) -> None:
-    """Key columns: present in every row, whole numbers."""
+def check_whole(
+    frame: pd.DataFrame, columns: Iterable[str], where: str, *, allow_empty: bool = False
+) -> None:
+    """Key columns: present in every row (unless ``allow_empty``), whole numbers."""
     for c in columns:
         v = _numbers(frame, c, where)
-        bad = np.flatnonzero(np.isnan(v) | (v != np.round(v)))
+        empty = np.isnan(v)
+        bad = np.flatnonzero((empty & (not allow_empty)) | (~empty & (v != np.round(v))))
         if len(bad):
             cell = frame[c].iloc[bad[0]]
             problem = "empty" if pd.isna(cell) else f"{_shown(cell)} is not a whole number"
@@ -131,6 +134,7 @@ def check_simulation(
     if faces is None:
         return
     where = f"{folder}/faces"
-    check_whole(faces, ("run", "generation", "rank"), where)
+    check_whole(faces, ("run", "generation"), where)
+    check_whole(faces, ("rank",), where, allow_empty=True)  # NA: not selected
     check_numbers(faces, ("error",), where, low=0.0, high=2.0, what="cosine distance")
     check_numbers(faces, weights, where, low=0.0, high=1.0, what="weight")

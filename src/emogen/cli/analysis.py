@@ -15,6 +15,7 @@ from typing import Annotated
 import typer
 
 from emogen.cli.options import (
+    FigureFormatOpt,
     JsonOpt,
     ModelOpt,
     RigOpt,
@@ -83,15 +84,19 @@ def analyse_command(
     force: ForceOpt = False,
     as_json: JsonOpt = False,
     progress: ProgressOpt = None,
+    figure_format: FigureFormatOpt = None,
 ) -> None:
     """Analyse a study export or simulation output: error distributions, KL per generation,
     bias and repeatability bins, PCA + GMM separability, GA-noise test, prototypes, renders.
 
     Writes OUT/index.html and OUT/README.md with figures/ and tables/ (CSV), and analysis.json.
     """
+    from emogen.analysis import plots
     from emogen.analysis.analyse import AnalysisOptions, analyse
     from emogen.analysis.data import load_dataset
     from emogen.model import load_model
+
+    plots.check_formats(figure_format or ["png", "svg"])  # a bad --format before any work
 
     dataset = load_dataset(data)  # fails fast on a folder that is not data
     check_out_folder(out, force=force)
@@ -110,7 +115,7 @@ def analyse_command(
         ga=ga,
         choice_noise=choice_noise,
     )
-    with output_folder(out, force=force) as tmp:
+    with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         analyse(dataset, tmp, model=model, options=options, progress=stage_printer(progress))
     show_result(
         as_json,
@@ -151,10 +156,12 @@ def replicate_command(
     force: ForceOpt = False,
     as_json: JsonOpt = False,
     progress: ProgressOpt = None,
+    figure_format: FigureFormatOpt = None,
 ) -> None:
     """Run the paper's Section IV experiments on our model and write the report, each finding
     beside the paper's numbers with a verdict over several seeds (holds / partly / differs /
     inconclusive)."""
+    from emogen.analysis import plots
     from emogen.analysis.replication import ReplicateSettings, replicate
     from emogen.analysis.replication.findings import VERDICTS
     from emogen.model import load_model
@@ -164,6 +171,7 @@ def replicate_command(
         extra["seed"] = seed
     if runs is not None:
         extra["runs"] = runs
+    plots.check_formats(figure_format or ["png", "svg"])  # a bad --format before any work
     settings = (
         ReplicateSettings.quick_settings(**extra)
         if quick
@@ -181,7 +189,7 @@ def replicate_command(
         + ([] if render else ["--no-render"])
         + [f"--out {out}"]
     )
-    with output_folder(out, force=force) as tmp:
+    with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         findings = replicate(
             model, tmp, settings, only=only, progress=show or (lambda _n: None), command=command
         )

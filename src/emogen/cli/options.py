@@ -24,6 +24,14 @@ ModelOpt = Annotated[
         help="ICT-FaceKit FaceXModel folder or GLB (default: $EMOGEN_MODEL, then the user cache).",
     ),
 ]
+FigureFormatOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--format",
+        help="Figure formats: png (300 dpi), svg, pdf; repeatable or comma-separated "
+        "(default png,svg; png is always written, the report shows it).",
+    ),
+]
 RigOpt = Annotated[
     Path | None, typer.Option("--rig", help="Rig TOML (default: the packaged ICT rig).")
 ]

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from emogen.cli.options import (
+    FigureFormatOpt,
     JsonOpt,
     ModelOpt,
     RigOpt,
@@ -109,10 +110,11 @@ def prototypes(
 
 
 def _write(out: Path, res: PowerResult, power: float, alpha: float) -> None:
+    from emogen import columns as tidy
     from emogen.analysis import plots
 
     out.mkdir(parents=True, exist_ok=True)
-    res.curve.to_csv(out / "power.csv", index=False)
+    tidy.write_csv(res.curve, out / "power.csv")
     plots.power_curve(res.curve, out / "power.png", target=power, n_required=res.n_required)
     summary = {
         "n_required": res.n_required,
@@ -205,12 +207,14 @@ def power_command(
     rig: RigOpt = None,
     force: ForceOpt = False,
     as_json: JsonOpt = False,
+    figure_format: FigureFormatOpt = None,
 ) -> None:
     """How many participants per group tell two prototypes apart, given GA noise: a power
     curve with the test's false-positive rate at every n (OUT/power.csv, OUT/power.png) and the
     number (OUT/power.json). Every simulated experiment draws fresh participants."""
     import numpy as np
 
+    from emogen.analysis import plots
     from emogen.analysis.power import STATISTICS, GroupSampler, power_analysis
     from emogen.config import GAConfig, MetricConfig, SimulationConfig
     from emogen.errors import ConfigError
@@ -223,6 +227,7 @@ def power_command(
             f"--statistic must be cd or ed, --observer cd, ed or vertex_rms; got "
             f"{statistic!r}, {observer!r}"
         )
+    plots.check_formats(figure_format or ["png", "svg"])  # a bad --format before any work
     check_out_folder(out, force=force)
     model = load_model(model_path, rig=rig)
     wa, wb = prototypes(model.rig, a, b, difference)
@@ -263,7 +268,7 @@ def power_command(
         seed=seed,
         settings=settings,
     )
-    with output_folder(out, force=force) as tmp:
+    with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         _write(tmp, res, power, alpha)
     wrote = [str(out / name) for name in ("power.csv", "power.png", "power.json")]
     curve = res.curve.astype(object).where(res.curve.notna(), None)

@@ -206,7 +206,9 @@ def heatmap(
     vmax: Annotated[
         float | None, typer.Option("--max-cm", help="Top of the colour scale, cm (default: auto).")
     ] = None,
-    cmap: Annotated[str, typer.Option("--cmap", help="matplotlib colour map.")] = "turbo",
+    cmap: Annotated[
+        str, typer.Option("--cmap", help="Perceptual colour map: viridis, cividis, magma, …")
+    ] = "viridis",
     identity: IdentityOpt = None,
     size: SizeOpt = None,
     background: BackgroundOpt = None,

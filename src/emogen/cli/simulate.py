@@ -241,7 +241,8 @@ def simulate_command(
 
     Writes simulation.parquet and simulation.csv (one row per run and generation: run,
     generation, elite_error, elite_distance, n_selected, run_seed), faces.parquet and faces.csv
-    (one row per shown face) and simulation.json (resolved config, seeds, record).
+    (one row per shown face; weights w_<shape>) and simulation.json (resolved config, seeds,
+    record; also in the Parquet files' metadata). Columns: docs/data.md.
     """
     from emogen.config import SimulationConfig, read_toml, validate_config
     from emogen.model import load_model

@@ -101,7 +101,8 @@ def export(
     force: ForceOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
-    """Tidy tables: sessions, trials, faces, selections, restarts, ratings (see docs/study.md)."""
+    """Tidy tables: sessions, trials, faces, selections, restarts, ratings, identities, study
+    (every column: docs/data.md; CSV seeds are text s<digits> so R keeps them exact)."""
     from emogen.study.export import export_tables, write_export
 
     check_out_folder(out, force=force)

@@ -1,8 +1,8 @@
 """Tables of faces: one row per face, one column per shape or gene name.
 
 A face table is a CSV or Parquet file whose columns are shape names (``jawOpen``,
-``mouthSmile_L``, …) or gene names (``mouthSmile``: both shapes of the pair); shapes without a
-column are 0, and columns are written in order (a later column overwrites an earlier one it
+``mouthSmile_L``, …; or ``w_jawOpen``, as simulation faces and study exports name them) or gene
+names (``mouthSmile``: both shapes of the pair); shapes without a column are 0, and columns are written in order (a later column overwrites an earlier one it
 shares shapes with). What else a table may hold depends on where it comes from:
 
 * ``others="ignore"``: other columns (``run``, ``generation``, ``participant``, …) are kept for
@@ -185,7 +185,7 @@ def face_weights(
     labels = {c.lower() for c in label_columns}
     used, label_cols = [], []
     for c in frame.columns:
-        name = str(c).strip()
+        name = _shape_name(str(c).strip(), shapes)
         if name in shapes or name in genes:
             used.append(c)
         elif name.lower() in labels:
@@ -201,7 +201,7 @@ def face_weights(
     w = np.zeros((len(frame), len(rig.shape_names)))
     values = np.empty((len(frame), len(used)))
     for j, c in enumerate(used):
-        name = str(c).strip()
+        name = _shape_name(str(c).strip(), shapes)
         v = _column_values(frame[c], f"{source}: column '{name}'", rows)
         empty = np.isnan(v)
         if empty.any() and blank == "error":
@@ -218,8 +218,15 @@ def face_weights(
         w[np.ix_(np.flatnonzero(~empty), np.asarray(targets, dtype=np.intp))] = v[~empty, None]
         values[:, j] = v
     return FaceTable(
-        w, frame, tuple(str(c).strip() for c in used), values, _labels(frame, label_cols)
-    )
+        w, frame, tuple(_shape_name(str(c).strip(), shapes) for c in used), values,
+        _labels(frame, label_cols),
+    )  # fmt: skip
+
+
+def _shape_name(name: str, shapes: dict[str, int]) -> str:
+    """A column's shape name: ``w_<shape>`` (the weight columns of simulation faces and study
+    exports) is the shape."""
+    return name[2:] if name.startswith("w_") and name[2:] in shapes else name
 
 
 def _cell_text(cell: object) -> str:

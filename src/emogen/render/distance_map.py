@@ -1,7 +1,7 @@
 """Error heatmaps: per-vertex distance between two faces as colour on the face, with a legend in cm.
 
 Like the paper's Fig. 9: the face is drawn with the same camera and light as any stimulus, its
-skin coloured by how far each vertex lies from the reference face (default colour map ``turbo``,
+skin coloured by how far each vertex lies from the reference face (default colour map ``viridis``, perceptually uniform and colour-blind-safe,
 blue = 0, red = ``vmax``).
 """
 
@@ -30,15 +30,27 @@ def vertex_distances(faces: np.ndarray, reference: np.ndarray) -> np.ndarray:
     return np.asarray(np.linalg.norm(a - b, axis=-1))
 
 
-def colour_lut(cmap: str = "turbo") -> np.ndarray:
-    """(256, 3) sRGB in [0, 1] of a matplotlib colour map."""
+#: Perceptually uniform maps for magnitudes, and the rainbow maps refused for them.
+PERCEPTUAL_MAPS = ("viridis", "cividis", "magma", "inferno", "plasma")
+RAINBOW_MAPS = ("jet", "turbo", "rainbow", "gist_rainbow", "hsv", "nipy_spectral", "gist_ncar")
+
+
+def colour_lut(cmap: str = "viridis") -> np.ndarray:
+    """(256, 3) sRGB in [0, 1] of a matplotlib colour map. Distances are magnitudes: maps
+    that are not perceptually ordered (jet, turbo, rainbow, …) mislead and fail colour-blind
+    readers, and are refused."""
     import matplotlib
 
+    if cmap.lower().removesuffix("_r") in RAINBOW_MAPS:
+        raise ConfigError(
+            f"colour map {cmap!r} is not perceptually uniform (it invents edges and fails "
+            f"colour-blind readers); use one of {', '.join(PERCEPTUAL_MAPS)}"
+        )
     try:
         cm = matplotlib.colormaps[cmap]
     except KeyError:
         raise ConfigError(
-            f"unknown colour map {cmap!r}; try turbo, viridis, inferno, jet, magma"
+            f"unknown colour map {cmap!r}; try {', '.join(PERCEPTUAL_MAPS)}"
         ) from None
     return np.asarray(cm(np.linspace(0.0, 1.0, 256))[:, :3])
 
@@ -68,7 +80,7 @@ def render_heatmap(
     reference: np.ndarray,
     *,
     vmax: float | None = None,
-    cmap: str = "turbo",
+    cmap: str = "viridis",
     footer: str | None = None,
 ) -> Heatmap:
     """Draw ``face (V, 3)`` coloured by its distance to ``reference (V, 3)``, with a legend.

@@ -8,11 +8,13 @@ across runs, :mod:`emogen.simulate.vectorised`). It returns two tidy tables:
   elite to the target, the paper's convergence measure), ``elite_distance`` (the selection
   metric's distance of the elite), ``n_selected``, ``run_seed``;
 * ``faces`` — one row per shown face: ``run, generation, slot, operator, distance, error,
-  rank`` (0 elite, 1… other selections in choice order, −1 not selected), and with
-  ``all_weights`` one column per shape holding the shown full weights (so the table is itself
-  a face table for targets and training sets);
+  rank`` (0 elite, 1… other selections in choice order, NA not selected), and with
+  ``all_weights`` one column ``w_<shape>`` per shape holding the shown full weights (named as
+  in study exports; the table is itself a face table for targets and training sets);
 
-and a record (schema, package version, model, resolved config, seeds, target, metric).
+and a record (schema, package version, model, resolved config, seeds, target, metric),
+written as ``simulation.json`` and into every Parquet file's metadata. Column types and the CSV
+form (seeds as ``s<digits>``) follow :mod:`emogen.columns`; every column is in docs/data.md.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from emogen import columns as tidy
 from emogen.config import SimulationConfig
 from emogen.ga.draws import CURRENT_STREAM
 from emogen.ga.init import read_fixed_sets
@@ -43,7 +46,9 @@ if TYPE_CHECKING:
     from emogen.model.face import FaceModel
 
 #: ``/3``: the record names the GA stream (``ga_stream``, :mod:`emogen.ga.draws`) its runs drew.
-RECORD_SCHEMA = "emogen.simulate/3"
+#: ``/4``: faces' weight columns are ``w_<shape>`` (as study exports), ``rank`` NA (not −1) for
+#: a face not selected, the record in every Parquet file's metadata. ``/3`` outputs still read.
+RECORD_SCHEMA = "emogen.simulate/4"
 COLUMNS = ("run", "generation", "elite_error", "elite_distance", "n_selected", "run_seed")
 FACE_COLUMNS = ("run", "generation", "slot", "operator", "distance", "error", "rank")
 
@@ -217,14 +222,16 @@ def tables(problem: Problem, a: RunArrays) -> tuple[pd.DataFrame, pd.DataFrame]:
             "operator": pd.Categorical(a.operators.reshape(-1)),
             "distance": a.distance.reshape(-1),
             "error": a.error.reshape(-1),
-            "rank": a.rank.reshape(-1).astype(np.int64),
+            "rank": pd.array(a.rank.reshape(-1), dtype="Int64"),
         }
     )
+    faces.loc[faces["rank"] < 0, "rank"] = pd.NA
+    faces["operator"] = faces["operator"].astype("string")
     if a.weights is not None:
         w = a.weights.reshape(-1, a.weights.shape[-1])
-        weights = pd.DataFrame(w, columns=list(problem.columns))
+        weights = pd.DataFrame(w, columns=[f"w_{c}" for c in problem.columns])
         faces = pd.concat([faces, weights], axis=1)
-    return table, faces
+    return tidy.typed(table), tidy.typed(faces)
 
 
 def simulate_run(
@@ -248,19 +255,16 @@ def write_simulation(result: SimulationResult, out: Path, *, csv: bool = True) -
     ``faces.parquet`` (+ ``.csv``) in ``out``."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    paths = [out / "simulation.parquet"]
-    result.table.to_parquet(paths[0], index=False)
+    record = {**result.record, "git_commit": tidy.git_commit()}
+    paths = [tidy.write_parquet(result.table, out / "simulation.parquet", record)]
     if csv:
-        paths.append(out / "simulation.csv")
-        result.table.to_csv(paths[-1], index=False)
+        paths.append(tidy.write_csv(result.table, out / "simulation.csv"))
     paths.append(out / "simulation.json")
-    paths[-1].write_text(json.dumps(result.record, indent=2) + "\n")
+    paths[-1].write_text(json.dumps(record, indent=2) + "\n")
     if result.faces is not None:
-        paths.append(out / "faces.parquet")
-        result.faces.to_parquet(paths[-1], index=False)
+        paths.append(tidy.write_parquet(result.faces, out / "faces.parquet", record))
         if csv:
-            paths.append(out / "faces.csv")
-            result.faces.to_csv(paths[-1], index=False)
+            paths.append(tidy.write_csv(result.faces, out / "faces.csv"))
     return paths
 
 

@@ -51,6 +51,7 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field
 
+from emogen import columns as tidy
 from emogen.config import (
     PAPER_SELECTIONS,
     MetricName,
@@ -295,23 +296,16 @@ def run_sweep(
                 shutil.rmtree(cells_dir / name, ignore_errors=True)
                 tmp.rename(cells_dir / name)
     summary = sweep_summary(sweep, cells_dir)
-    summary.to_parquet(out / "summary.parquet", index=False)
-    summary.to_csv(out / "summary.csv", index=False)
-    (out / "sweep.json").write_text(
-        json.dumps(
-            {
-                "schema": SWEEP_SCHEMA,
-                "source": sweep.source,
-                "spec": sweep.spec,
-                "model": {"name": model_name, "hash": model_hash},
-                "cells": [
-                    {"name": c.name, **c.labels, "config_hash": hashes[c.name]} for c in sweep.cells
-                ],
-            },
-            indent=2,
-        )
-        + "\n"
-    )
+    record = {
+        "schema": SWEEP_SCHEMA,
+        "source": sweep.source,
+        "spec": sweep.spec,
+        "model": {"name": model_name, "hash": model_hash},
+        "cells": [{"name": c.name, **c.labels, "config_hash": hashes[c.name]} for c in sweep.cells],
+    }
+    tidy.write_parquet(summary, out / "summary.parquet", record)
+    tidy.write_csv(summary, out / "summary.csv")
+    (out / "sweep.json").write_text(json.dumps(record, indent=2) + "\n")
     return SweepResult(summary, [c.name for c in pending], skipped)
 
 

@@ -9,6 +9,10 @@ Tables (one row per …): ``sessions`` (session), ``trials`` (trial of a session
 ``identity``), and ``study`` (study: its resolved config itself as ``config_json``, the model,
 gene and weight column names). Every row carries ``schema_version``, ``package_version`` (the version that
 recorded the session; for ``identities``, the study), ``model_hash`` and ``study_config_hash``.
+A session's trial order is the ``trials`` table (``trial``: position, ``condition``).
+
+Column types, the CSV form (seeds as ``s<digits>``, ISO 8601 times) and the provenance in every
+Parquet file's metadata follow :mod:`emogen.columns`; every column is in docs/data.md.
 """
 
 from __future__ import annotations
@@ -20,11 +24,13 @@ from typing import Any
 import pandas as pd
 from sqlalchemy import func, select
 
+from emogen import columns as tidy
 from emogen.appearance.identities import Identity
 from emogen.appearance.params import GENERATOR_VERSION, Appearance
 from emogen.errors import ConfigError
 from emogen.study.config import StudyConfig
 from emogen.study.export_rows import (
+    TABLE_COLUMNS,
     face_rows,
     iso,
     load_records,
@@ -156,7 +162,15 @@ def export_tables(
     for sid in sorted(shown):
         rows["identities"].extend(identity_rows(studies[sid]))
     rows["study"] = list(study_rows([studies[sid] for sid in sorted(shown)]))
-    return {name: _frame(name, rows[name]) for name in TABLES}
+    names = [json.loads(studies[sid].gene_names) for sid in sorted(shown)]
+    weights = [json.loads(studies[sid].weight_names) for sid in sorted(shown)]
+    extra = {
+        "faces": [
+            *dict.fromkeys(f"g_{n}" for ns in names for n in ns),
+            *dict.fromkeys(f"w_{n}" for ns in weights for n in ns),
+        ]
+    }
+    return {name: _frame(name, rows[name], extra.get(name, [])) for name in TABLES}
 
 
 def identity_rows(study: StudyRow) -> list[dict[str, Any]]:
@@ -193,29 +207,27 @@ def identities_from_table(table: pd.DataFrame) -> dict[tuple[str, str], Identity
             if isinstance(coeffs, str) and coeffs
             else str(row["shape"])
         )
-        appearance = Appearance(**{k: row[k] for k in Appearance.model_fields})
+        values: dict[str, Any] = {
+            k: tidy.seed_value(row[k]) if tidy.kind(k) == "seed" else row[k]
+            for k in Appearance.model_fields
+        }
+        appearance = Appearance(**values)
         out[(str(row["study"]), str(row["identity"]))] = Identity(
             shape=shape, appearance=appearance
         )
     return out
 
 
-_EMPTY_COLUMNS = {
-    "sessions": ["study", "session_id", "participant_id"],
-    "trials": ["study", "session_id", "participant_id", "trial"],
-    "faces": ["study", "session_id", "participant_id", "trial", "attempt", "generation"],
-    "selections": ["study", "session_id", "participant_id", "trial", "attempt", "generation"],
-    "restarts": ["study", "session_id", "participant_id", "trial", "attempt", "generation"],
-    "ratings": ["study", "session_id", "participant_id", "trial"],
-    "identities": ["study", "identity", "shape", "shape_coefficients"],
-    "study": ["study", "config_json", "model_name", "gene_names", "weight_names", "created_at"],
-}
+def _frame(name: str, rows: list[dict[str, Any]], extra: list[str]) -> pd.DataFrame:
+    """A table typed by :func:`emogen.columns.typed`; empty, it has all its columns."""
+    columns = [*TABLE_COLUMNS[name], *extra, *STAMPS]
+    if name == "identities":
+        columns[4:4] = [*Appearance().record(), "appearance_generator"]
+    dtypes = {k: _APPEARANCE_DTYPES[type(v)] for k, v in Appearance().record().items()}
+    return tidy.frame(rows, columns, dtypes if name == "identities" else None)
 
 
-def _frame(name: str, rows: list[dict[str, Any]]) -> pd.DataFrame:
-    if not rows:
-        return pd.DataFrame(columns=[*_EMPTY_COLUMNS[name], *STAMPS])
-    return pd.DataFrame(rows)
+_APPEARANCE_DTYPES = {float: "float64", int: "Int64", str: "string", bool: "boolean"}
 
 
 #: A text cell starting with one of these is a formula to a spreadsheet (CSV injection).
@@ -240,7 +252,30 @@ def neutralise_formulas(df: pd.DataFrame) -> pd.DataFrame:
 
 def csv_text(df: pd.DataFrame) -> str:
     """One export table as CSV text, formulas neutralised (:func:`neutralise_formulas`)."""
-    return str(neutralise_formulas(df).to_csv(index=False))
+    return tidy.csv_text(neutralise_formulas(df))
+
+
+def export_provenance(tables: dict[str, pd.DataFrame]) -> dict[str, Any]:
+    """What every exported Parquet file records of its making (its schema metadata): the
+    schema, the exporting package version and, per study, its resolved config, seed, model and
+    config hashes and the package version that recorded it."""
+    from emogen import __version__
+
+    studies = []
+    study = tables.get("study")
+    for row in [] if study is None else study.to_dict("records"):
+        config = json.loads(str(row["config_json"]))
+        studies.append(
+            {
+                "study": row["study"],
+                "model_hash": row["model_hash"],
+                "study_config_hash": row["study_config_hash"],
+                "package_version": row["package_version"],
+                "seed": config.get("seed"),
+                "config": config,
+            }
+        )
+    return {"schema": SCHEMA_VERSION, "package_version": __version__, "studies": studies}
 
 
 def write_export(tables: dict[str, pd.DataFrame], out: Path, fmt: str = "parquet") -> list[Path]:
@@ -251,10 +286,11 @@ def write_export(tables: dict[str, pd.DataFrame], out: Path, fmt: str = "parquet
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
+    meta = export_provenance(tables)
     for name, df in tables.items():
         path = out / f"{name}.{fmt}"
         if fmt == "parquet":
-            df.to_parquet(path, index=False)
+            tidy.write_parquet(df, path, {**meta, "table": name})
         else:
             path.write_text(csv_text(df), encoding="utf-8")
         paths.append(path)

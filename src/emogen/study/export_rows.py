@@ -31,6 +31,30 @@ from emogen.study.tables import (
 
 Row = dict[str, Any]
 
+#: Each table's columns (``faces`` adds ``g_<gene>`` and ``w_<weight>`` columns, ``identities``
+#: the appearance parameters; every table ends with the record stamp).
+TABLE_COLUMNS = {
+    "sessions": ["study", "session_id", "participant_id", "participant_source", "session_number",
+                 "seed", "order_kind", "order_row", "stage", "n_trials", "user_agent",
+                 "created_at", "consented_at", "started_at", "completed_at"],
+    "trials": ["study", "session_id", "participant_id", "trial", "condition", "emotion",
+               "identity", "repetition", "seed", "ga_stream", "status", "attempts",
+               "generation_reached", "final_face_id", "started_at", "finished_at"],
+    "faces": ["study", "session_id", "participant_id", "trial", "attempt", "generation",
+              "position", "face_id", "parent_a", "parent_b", "operator", "shown_at"],
+    "selections": ["study", "session_id", "participant_id", "trial", "attempt", "generation",
+                   "face_id", "role", "rank", "n_selected", "shown_at", "submitted_at",
+                   "server_response_ms", "load_ms", "client_response_ms", "step_key"],
+    "restarts": ["study", "session_id", "participant_id", "trial", "attempt", "generation",
+                 "shown_at", "submitted_at", "server_response_ms", "load_ms",
+                 "client_response_ms", "step_key"],
+    "ratings": ["study", "session_id", "participant_id", "trial", "emotion", "identity",
+                "face_id", "value", "points", "submitted_at", "server_response_ms",
+                "client_response_ms", "step_key"],
+    "identities": ["study", "identity", "shape", "shape_coefficients"],
+    "study": ["study", "config_json", "model_name", "gene_names", "weight_names", "created_at"],
+}  # fmt: skip
+
 
 def iso(t: datetime | None) -> str | None:
     u = as_utc(t)
@@ -128,8 +152,7 @@ def session_rows(rec: Records) -> Iterator[Row]:
             "session_number": s.number,
             "seed": s.seed,
             "order_kind": s.order_kind,
-            "order_row": s.order_row,
-            "trial_order": s.trial_order,
+            "order_row": None if s.order_row < 0 else s.order_row,
             "stage": s.stage,
             "n_trials": len(json.loads(s.trial_order)),
             "user_agent": s.user_agent,
@@ -174,8 +197,8 @@ def face_rows(rec: Records) -> Iterator[Row]:
             "generation": p.generation,
             "position": f.position,
             "face_id": f.face_id,
-            "parent_a": f.parent_a,
-            "parent_b": f.parent_b,
+            "parent_a": None if f.parent_a < 0 else f.parent_a,
+            "parent_b": None if f.parent_b < 0 else f.parent_b,
             "operator": f.operator,
             "shown_at": iso(p.shown_at),
         }

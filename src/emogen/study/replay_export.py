@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from emogen import columns as tidy
 from emogen.errors import ConfigError, EmoGenError
 from emogen.ga.engine import Engine
 from emogen.model.rig import Rig
@@ -48,8 +49,7 @@ def read_exported(folder: Path) -> dict[str, pd.DataFrame]:
         if pq.is_file():
             out[name] = pd.read_parquet(pq)
         elif csv.is_file():
-            df = pd.read_csv(csv, keep_default_na=False,
-                             na_values=[""])  # fmt: skip
+            df = tidy.read_csv(csv)
             for col in df.columns:
                 if df[col].dtype == object or pd.api.types.is_string_dtype(df[col].dtype):
                     df[col] = df[col].map(_restore_text)
@@ -77,7 +77,7 @@ def _populations(faces: pd.DataFrame, genes: list[str], weights: list[str]) -> d
     for key, group in faces.sort_values([*cols, "position"]).groupby(cols, sort=True):
         out[_key(key)] = StoredFaces(
             ids=group["face_id"].to_numpy(np.int64),
-            parents=group[["parent_a", "parent_b"]].to_numpy(np.int64),
+            parents=group[["parent_a", "parent_b"]].fillna(-1).to_numpy(np.int64),
             operators=[str(o) for o in group["operator"]],
             genes=group[[f"g_{n}" for n in genes]].to_numpy(np.float64),
             weights=group[[f"w_{n}" for n in weights]].to_numpy(np.float64),

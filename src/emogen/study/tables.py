@@ -24,7 +24,12 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
 #: 2: sessions.user_agent may be NULL (not collected), selections/restarts.load_ms, the
 #: export's ``study`` table. Records of schema 1 still open, export and replay.
-SCHEMA_VERSION = "emogen.study/2"
+#: 3 (exports only, the database is unchanged): typed columns (UTC timestamps in Parquet,
+#: seeds ``s<digits>`` in CSV, NA not −1 for ``order_row``/``parent_a``/``parent_b``),
+#: ``sessions.trial_order`` dropped (the ``trials`` table holds the order), provenance in
+#: every Parquet file's metadata (:mod:`emogen.columns`). Exports of schema 2 still analyse
+#: and replay.
+SCHEMA_VERSION = "emogen.study/3"
 
 
 def utcnow() -> datetime:
