@@ -2,7 +2,7 @@
 simulation and sweep outputs and analysis tables (the data dictionary is docs/data.md).
 
 * **Types** by column name (:func:`kind`): integers are nullable 64-bit (missing is NA, never
-  −1); seeds (``seed``, ``run_seed``, ``*_seed``) are 64-bit integers, exact in Parquet;
+  −1); seeds (``seed``, ``run_seed``) are 64-bit integers, exact in Parquet;
   ``*_at`` columns are timestamps in UTC; ``g_*`` (genes) and ``w_*`` (weights) are floats.
   :func:`typed` gives a table these types (and, for an empty table, the columns it would have),
   so an empty table has the same schema as a full one.
@@ -60,7 +60,7 @@ _STR = frozenset({
 
 def kind(column: str) -> Kind | None:
     """The type rule of a column name (None: no rule, the data's own type)."""
-    if column in _SEED or column.endswith("_seed"):
+    if column in _SEED:  # by name only: a report's "per seed" column is text
         return "seed"
     if column.endswith("_at"):
         return "time"

@@ -90,7 +90,12 @@ def _read(folder: Path, name: str, required: bool = True) -> pd.DataFrame | None
         path = folder / f"{name}{suffix}"
         if path.is_file():
             try:
-                return pd.read_parquet(path) if suffix == ".parquet" else tidy.read_csv(path)
+                if suffix == ".parquet":
+                    return pd.read_parquet(path)
+                try:
+                    return tidy.read_csv(path)
+                except ConfigError:  # a cell that does not fit its column's type:
+                    return pd.read_csv(path)  # the checks name it, with its row
             except (OSError, ValueError) as exc:
                 raise ConfigError(f"cannot read {path}: {exc}") from None
     if required:
@@ -287,6 +292,17 @@ def _sim_weights(faces: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
     return faces, [str(c) for c in faces.columns if c not in SIM_FACE_COLUMNS]
 
 
+def _with_elite_weights(
+    elites: pd.DataFrame, faces: pd.DataFrame, wcols: list[str]
+) -> pd.DataFrame:
+    """Each generation's elite row with the elite's weights (from the faces table)."""
+    if not wcols:
+        return elites
+    elite = faces["rank"].fillna(-1) == 0  # NA (schema 4) or −1: not selected
+    ew = faces.loc[elite, ["run", "generation", *wcols]]
+    return elites.merge(ew, on=["run", "generation"], how="left")
+
+
 def load_simulations(folder: Path, sims: list[Path]) -> Dataset:
     parts, bias_parts, targets, configs = [], [], {}, {}
     notes: list[str] = []
@@ -313,20 +329,12 @@ def load_simulations(folder: Path, sims: list[Path]) -> Dataset:
             faces, wcols = _sim_weights(faces)
         check_simulation(sim, table, faces, wcols)
         if faces is not None:
-            if wcols:
-                elite = faces["rank"].fillna(-1) == 0  # NA (schema 4) or −1: not selected
-                ew = faces.loc[elite, ["run", "generation", *wcols]]
-                elites = elites.merge(ew, on=["run", "generation"], how="left")
+            elites = _with_elite_weights(elites, faces, wcols)
             first = faces[faces["generation"] == 0].groupby("run")["error"].min()
             bias_parts.append(
-                pd.DataFrame(
-                    {
-                        "group": group,
-                        "sample": first.index.astype(str),
-                        "best_initial_error": first.to_numpy(),
-                    }
-                )
-            )
+                pd.DataFrame({"group": group, "sample": first.index.astype(str),
+                              "best_initial_error": first.to_numpy()})
+            )  # fmt: skip
         if not wcols:
             notes.append(f"{group}: no face weights recorded (simulate with --all-weights)")
         these = tuple(wcols)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -33,6 +33,15 @@ ProgressOpt = Annotated[
     typer.Option(
         "--progress/--no-progress",
         help="Show each stage on stderr (default: when stderr is a terminal).",
+    ),
+]
+ChoiceNoiseOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--choice-noise",
+        min=0.0,
+        help="Participants' choice noise T (softmax, CD units) in the GA-noise null "
+        "(default: a simulation's own T; for a study, an assumed and reported T = 0).",
     ),
 ]
 RenderOpt = Annotated[
@@ -68,15 +77,7 @@ def analyse_command(
         ),
     ] = 2,
     alpha: Annotated[float, typer.Option("--alpha", help="Level of the GA-noise test.")] = 0.05,
-    choice_noise: Annotated[
-        float | None,
-        typer.Option(
-            "--choice-noise",
-            min=0.0,
-            help="Participants' choice noise T (softmax, CD units) in the GA-noise null "
-            "(default: a simulation's own T; for a study, an assumed and reported T = 0).",
-        ),
-    ] = None,
+    choice_noise: ChoiceNoiseOpt = None,
     seed: SeedOpt = 1,
     render: RenderOpt = True,
     model_path: ModelOpt = None,
@@ -117,14 +118,11 @@ def analyse_command(
     )
     with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         analyse(dataset, tmp, model=model, options=options, progress=stage_printer(progress))
+    wrote = [str(out / "index.html"), str(out / "README.md"), str(out / "analysis.json")]
     show_result(
         as_json,
-        {
-            "kind": dataset.kind,
-            "groups": list(dataset.groups),
-            "wrote": [str(out / "index.html"), str(out / "README.md"), str(out / "analysis.json")],
-        },
-        [f"wrote {out / 'index.html'} and {out / 'README.md'}"],
+        {"kind": dataset.kind, "groups": list(dataset.groups), "wrote": wrote},
+        [f"wrote {wrote[0]} and {wrote[1]}"],
     )
 
 
@@ -163,7 +161,6 @@ def replicate_command(
     inconclusive)."""
     from emogen.analysis import plots
     from emogen.analysis.replication import ReplicateSettings, replicate
-    from emogen.analysis.replication.findings import VERDICTS
     from emogen.model import load_model
 
     extra: dict[str, object] = {"seeds": seeds, "render": render}
@@ -181,22 +178,43 @@ def replicate_command(
     model = load_model(model_path, rig=rig)
     start = time.perf_counter()
     show = stage_printer(progress)
-    command = " ".join(
-        ["emogen replicate", *(["--quick"] if quick else [])]
-        + ([f"--runs {runs}"] if runs is not None else [])
-        + [f"--only '{w}'" for w in only or []]
-        + [f"--seed {settings.seed} --seeds {seeds}"]
-        + ([] if render else ["--no-render"])
-        + [f"--out {out}"]
-    )
+    command = _replicate_line(quick, runs, only, settings.seed, seeds, render, out)
     with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         findings = replicate(
             model, tmp, settings, only=only, progress=show or (lambda _n: None), command=command
         )
+    _show_findings(as_json, findings, time.perf_counter() - start, command, out)
+
+
+def _replicate_line(
+    quick: bool,
+    runs: int | None,
+    only: list[str] | None,
+    seed: int,
+    seeds: int,
+    render: bool,
+    out: Path,
+) -> str:
+    """The command that reproduces this report exactly (recorded in it)."""
+    return " ".join(
+        ["emogen replicate", *(["--quick"] if quick else [])]
+        + ([f"--runs {runs}"] if runs is not None else [])
+        + [f"--only '{w}'" for w in only or []]
+        + [f"--seed {seed} --seeds {seeds}"]
+        + ([] if render else ["--no-render"])
+        + [f"--out {out}"]
+    )
+
+
+def _show_findings(
+    as_json: bool, findings: list[Any], seconds: float, command: str, out: Path
+) -> None:
+    """Every finding's line and the tally of the paper's findings (ours counted apart)."""
+    from emogen.analysis.replication.findings import VERDICTS
+
     paper = [f for f in findings if f.paper_finding]
     counts = {v: sum(f.verdict == v for f in paper) for v in VERDICTS}
     wrote = [str(out / "index.html"), str(out / "README.md")]
-    seconds = time.perf_counter() - start
     show_result(
         as_json,
         {

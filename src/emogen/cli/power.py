@@ -87,6 +87,18 @@ ReplicatesOpt = Annotated[int, typer.Option("--replicates", help="Simulated expe
 PermutationsOpt = Annotated[int, typer.Option("--permutations", help="Permutations per test.")]
 
 
+def check_choices(statistic: str, observer: str) -> None:
+    """``--statistic`` and ``--observer`` name a known statistic and observer metric."""
+    from emogen.analysis.power import STATISTICS
+    from emogen.errors import ConfigError
+
+    if statistic not in STATISTICS or observer not in ("cd", "ed", "vertex_rms"):
+        raise ConfigError(
+            f"--statistic must be cd or ed, --observer cd, ed or vertex_rms; got "
+            f"{statistic!r}, {observer!r}"
+        )
+
+
 def check_group_b(b: list[str] | None, difference: list[str] | None) -> None:
     """Group B is given one way: its prototype (``--b``) or its difference from A."""
     from emogen.errors import ConfigError
@@ -215,18 +227,13 @@ def power_command(
     import numpy as np
 
     from emogen.analysis import plots
-    from emogen.analysis.power import STATISTICS, GroupSampler, power_analysis
+    from emogen.analysis.power import GroupSampler, power_analysis
     from emogen.config import GAConfig, MetricConfig, SimulationConfig
-    from emogen.errors import ConfigError
     from emogen.metrics import cosine_distance
     from emogen.model import load_model
 
     check_group_b(b, difference)  # before loading the model
-    if statistic not in STATISTICS or observer not in ("cd", "ed", "vertex_rms"):
-        raise ConfigError(
-            f"--statistic must be cd or ed, --observer cd, ed or vertex_rms; got "
-            f"{statistic!r}, {observer!r}"
-        )
+    check_choices(statistic, observer)
     plots.check_formats(figure_format or ["png", "svg"])  # a bad --format before any work
     check_out_folder(out, force=force)
     model = load_model(model_path, rig=rig)
@@ -270,6 +277,19 @@ def power_command(
     )
     with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         _write(tmp, res, power, alpha)
+    _show(as_json, out, res, power, alpha, max_participants, said)
+
+
+def _show(
+    as_json: bool,
+    out: Path,
+    res: PowerResult,
+    power: float,
+    alpha: float,
+    max_participants: int,
+    said: list[str],
+) -> None:
+    """The result: the curve and the number (text, or one JSON object with ``--json``)."""
     wrote = [str(out / name) for name in ("power.csv", "power.png", "power.json")]
     curve = res.curve.astype(object).where(res.curve.notna(), None)
     show_result(

@@ -50,6 +50,8 @@ from emogen.cli.render_setup import (
 if TYPE_CHECKING:
     import numpy as np
 
+    from emogen.model.rig import Rig
+
 
 PngOutOpt = Annotated[Path, typer.Option("--out", "-o", help="PNG file.")]
 
@@ -188,6 +190,32 @@ def sheet(
     show_result(as_json, {"wrote": str(out), "faces": names}, [f"wrote {out}: {len(rows)} faces"])
 
 
+def _heatmap_pair(
+    rig: Rig, weight: list[str] | None, reference: list[str] | None, weights_file: Path | None
+) -> np.ndarray:
+    """The face and its reference, (2, shapes): from ``--weights`` or the named weights."""
+    import numpy as np
+
+    from emogen.errors import ConfigError
+    from emogen.render.weights import read_weights_csv
+
+    if weights_file is not None:
+        if weight or reference:
+            raise ConfigError("give either --weights FILE.csv or --weight/--reference-weight")
+        w, _ = read_weights_csv(weights_file, rig)
+        if len(w) != 2:
+            raise ConfigError(
+                f"--weights {weights_file}: a heatmap needs 2 rows (face, reference); got {len(w)}"
+            )
+        return w
+    return np.stack(
+        [
+            rig.weights_from_names(parse_named_weights(weight)),
+            rig.weights_from_names(parse_named_weights(reference, "--reference-weight")),
+        ]
+    )
+
+
 @render_app.command("heatmap")
 @friendly_errors
 def heatmap(
@@ -221,32 +249,13 @@ def heatmap(
     """Per-vertex distance between two faces as colour on the face, legend in cm (paper Fig. 9)."""
     import numpy as np
 
-    from emogen.errors import ConfigError
     from emogen.render.distance_map import render_heatmap
     from emogen.render.images import save_png
-    from emogen.render.weights import read_weights_csv
 
     png_file(out)  # before any work
-    model, name, _ = load_render_model(
-        model_path, rig, identity
-    )  # the heatmap colours the face: no skin
-    if weights_file is not None:
-        if weight or reference_weight:
-            raise ConfigError("give either --weights FILE.csv or --weight/--reference-weight")
-        w, _ = read_weights_csv(weights_file, model.rig)
-        if len(w) != 2:
-            raise ConfigError(
-                f"--weights {weights_file}: a heatmap needs 2 rows (face, reference); got {len(w)}"
-            )
-    else:
-        w = np.stack(
-            [
-                model.rig.weights_from_names(parse_named_weights(weight)),
-                model.rig.weights_from_names(
-                    parse_named_weights(reference_weight, "--reference-weight")
-                ),
-            ]
-        )
+    # the heatmap colours the face: no skin
+    model, name, _ = load_render_model(model_path, rig, identity)
+    w = _heatmap_pair(model.rig, weight, reference_weight, weights_file)
     faces = model.evaluate(w.astype(np.float32))
     with make_renderer(model, size, background, fov, supersample) as r:
         result = render_heatmap(r, faces[0], faces[1], vmax=vmax, cmap=cmap)

@@ -2,8 +2,8 @@
 
 A face table is a CSV or Parquet file whose columns are shape names (``jawOpen``,
 ``mouthSmile_L``, …; or ``w_jawOpen``, as simulation faces and study exports name them) or gene
-names (``mouthSmile``: both shapes of the pair); shapes without a column are 0, and columns are written in order (a later column overwrites an earlier one it
-shares shapes with). What else a table may hold depends on where it comes from:
+names (``mouthSmile``: both shapes of the pair); shapes without a column are 0, and columns are
+written in order (a later column overwrites an earlier one it shares shapes with). What else a table may hold depends on where it comes from:
 
 * ``others="ignore"``: other columns (``run``, ``generation``, ``participant``, …) are kept for
   a ``query`` and otherwise ignored — the faces table of a simulation is one. Read with pandas

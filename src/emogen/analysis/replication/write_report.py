@@ -141,10 +141,20 @@ def write_closing(
         "source of chance verdicts (one simulation seed)."
     )
     report.table(_rules_table(), "verdict_rules", "The verdict rules")
-    report.table(_rows(paper), "findings", "Every finding, with the paper's numbers and ours")
+    report.table(
+        _rows(paper),
+        "findings",
+        "Every finding, with the paper's numbers and ours",
+        data=_records(paper),
+    )
     if ours:
         report.heading("Our own checks (outside the tally)", level=3)
-        report.table(_rows(ours), "our_checks", "Checks of our tools, not paper findings")
+        report.table(
+            _rows(ours),
+            "our_checks",
+            "Checks of our tools, not paper findings",
+            data=_records(ours),
+        )
     report.heading("Run", level=3)
     report.paragraph(
         f"EmoGen {version}, Python {platform.python_version()}, {platform.machine()}; "
@@ -162,6 +172,31 @@ def _rules_table() -> pd.DataFrame:
     from emogen.analysis.replication.verdicts import RULES
 
     return pd.DataFrame({"rule": list(RULES), "what it says": list(RULES.values())})
+
+
+def _records(combined: list[Combined]) -> pd.DataFrame:
+    """The findings for machines: the effect as numbers (mean over seeds, 95% CI half-width,
+    what it measures) and each seed's verdict in its own column (``verdict_seed_<k>``)."""
+    rows = []
+    for c in combined:
+        f = c.finding
+        has = f.value is not None and bool(np.isfinite(c.mean))
+        row: dict[str, object] = {
+            "section": f.section,
+            "paper_finding": f.claim,
+            "paper": f.paper,
+            "ours_first_seed": f.ours,
+            "effect_mean": c.mean if has else None,
+            "effect_ci_half_width": c.half_width if has and np.isfinite(c.half_width) else None,
+            "effect_measure": f.value_label if has else None,
+            "rule": f.rule,
+            "verdict": c.verdict,
+            "n_seeds": len(c.seed_verdicts),
+            "note": f.note,
+        }
+        row.update({f"verdict_seed_{k + 1}": v for k, v in enumerate(c.seed_verdicts)})
+        rows.append(row)
+    return pd.DataFrame(rows)
 
 
 def _rows(combined: list[Combined]) -> pd.DataFrame:
