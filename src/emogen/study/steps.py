@@ -18,6 +18,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from datetime import datetime
 
+from sqlalchemy import insert
 from sqlalchemy.orm import Session
 
 from emogen.errors import SelectionError
@@ -41,12 +42,16 @@ from emogen.study.tables import (
     StepRow,
     TrialRow,
     as_utc,
+    core_table,
     dumps,
     utcnow,
 )
 from emogen.study.trials import TrialEngines, store_population
 from emogen.study.view import SessionState, ShownPopulation, session_state
 
+#: Plain inserts of the rows a step writes and never reads back (no ORM unit of work).
+_INSERT_STEP = insert(core_table(StepRow))
+_INSERT_SELECTION = insert(core_table(SelectionRow))
 #: What a step's request held (hashed to tell a replayed key from a reused one).
 Payload = Mapping[str, int | float | list[int] | None]
 #: A step's work on the locked session; returns the population it has just shown, if any.
@@ -112,9 +117,11 @@ class SessionSteps:
                 return state
             shown = action(db, sess)
             now = utcnow()
-            db.add(
-                StepRow(session_id=sess.id, key=key, kind=kind, request_hash=digest, created_at=now)
-            )
+            db.execute(
+                _INSERT_STEP,
+                {"session_id": sess.id, "key": key, "kind": kind, "request_hash": digest,
+                 "created_at": now},
+            )  # fmt: skip
             sess.updated_at = now
             db.flush()
             return session_state(db, config, sess, shown)
@@ -139,18 +146,19 @@ class SessionSteps:
         engine = self.engines.restore(row)
         engine.tell(elite, others)
         now = utcnow()
-        db.add(
-            SelectionRow(
-                population_id=pop.id,
-                trial_id=row.id,
-                elite_face_id=elite,
-                other_face_ids=dumps(list(others)),
-                submitted_at=now,
-                server_response_ms=server_ms(now, pop.shown_at, timing.load_ms),
-                client_response_ms=timing.response_ms,
-                load_ms=timing.load_ms,
-                step_key=key,
-            )
+        db.execute(
+            _INSERT_SELECTION,
+            {
+                "population_id": pop.id,
+                "trial_id": row.id,
+                "elite_face_id": elite,
+                "other_face_ids": dumps(list(others)),
+                "submitted_at": now,
+                "server_response_ms": server_ms(now, pop.shown_at, timing.load_ms),
+                "client_response_ms": timing.response_ms,
+                "load_ms": timing.load_ms,
+                "step_key": key,
+            },
         )
         shown = None
         if engine.done:
