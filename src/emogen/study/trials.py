@@ -36,9 +36,11 @@ class TrialEngines:
 
     def restore(self, row: TrialRow) -> Engine:
         """The trial's engine, restored from its stored state."""
-        return Engine.from_json(
-            row.engine_state or "", self.ctx.rig, corrector=self.correctors(row.identity)
-        )
+        return self.restore_state(row.engine_state or "", row.identity)
+
+    def restore_state(self, state: str, identity: str) -> Engine:
+        """An engine of the study's trial of ``identity`` restored from a stored state."""
+        return Engine.from_json(state, self.ctx.rig, corrector=self.correctors(identity))
 
     def start(self, db: Session, sess: SessionRow, position: int) -> ShownPopulation:
         """Start the session's trial at ``position``: its generation 0 is made and stored."""
