@@ -95,16 +95,41 @@ def export(
     config: Annotated[
         Path | None, typer.Option("--config", help="Study TOML (for its database_url).")
     ] = None,
+    since: Annotated[
+        str | None,
+        typer.Option(
+            "--since",
+            help="Incremental: only the sessions completed from this time (ISO 8601, e.g. the "
+            "'until' the previous incremental export printed) to a minute ago; see "
+            "docs/study.md.",
+        ),
+    ] = None,
+    table: Annotated[
+        list[str] | None,
+        typer.Option("--table", help="Only this table (repeat for more; default: all)."),
+    ] = None,
 ) -> None:
-    """Tidy tables: sessions, trials, faces, selections, restarts, ratings (see docs/study.md)."""
-    from emogen.study.export import export_tables, write_export
+    """Tidy tables: sessions, trials, faces, selections, restarts, ratings (see docs/study.md).
 
+    Written a few sessions at a time, in bounded memory whatever the study's size."""
+    from emogen.study.export import TABLES
+    from emogen.study.export_stream import export_study, parse_since
+
+    start = None if since is None else parse_since(since)
     store = _store(database_url, config)
-    tables = export_tables(store, study=study)
-    paths = write_export(tables, out, fmt.value)
-    for path in paths:
-        typer.echo(f"wrote {path} ({len(tables[path.stem])} rows)")
-    store.dispose()
+    try:
+        result = export_study(store, out, fmt.value, study=study, since=start,
+                              tables=tuple(table) if table else TABLES)  # fmt: skip
+    finally:
+        store.dispose()
+    for path in result.paths:
+        typer.echo(f"wrote {path} ({result.rows[path.stem]} rows)")
+    if result.until is not None:
+        typer.echo(
+            f"sessions completed from {result.since.isoformat() if result.since else ''} to "
+            f"{result.until.isoformat()} ({out / 'export.json'}); next incremental export: "
+            f"--since {result.until.isoformat()}"
+        )
 
 
 BASE_URL_ENV = "EMOGEN_BASE_URL"
