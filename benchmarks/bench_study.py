@@ -77,10 +77,11 @@ class ServerProcess:
     processes; ``kill()`` sends SIGKILL to the server and its workers (its process group)."""
 
     def __init__(
-        self, config: Path, database_url: str, model: Path, log: Path, workers: int = 1
-    ) -> None:
+        self, config: Path, database_url: str, model: Path, log: Path, workers: int = 1,
+        extra: tuple[str, ...] = (),
+    ) -> None:  # fmt: skip
         self.config, self.database_url, self.model, self.log = config, database_url, model, log
-        self.workers = workers
+        self.workers, self.extra = workers, extra
         self.port = free_port()
         self.proc: subprocess.Popen[bytes] | None = None
 
@@ -95,7 +96,7 @@ class ServerProcess:
                 [
                     sys.executable, "-m", "emogen", "serve", str(self.config),
                     "--port", str(self.port), "--database-url", self.database_url,
-                    "--model", str(self.model), "--workers", str(self.workers),
+                    "--model", str(self.model), "--workers", str(self.workers), *self.extra,
                 ],
                 stdout=log,
                 stderr=subprocess.STDOUT,

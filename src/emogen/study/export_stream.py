@@ -6,8 +6,8 @@ chunk are built by the same row functions as :func:`~emogen.study.export.export_
 DataFrame, typed by :func:`typed_chunk` (the one place a table's column types are set) and
 spilled to a temporary Arrow file. Then each table is written from its chunks in order, every
 chunk cast to the table's one schema (the union of the chunks' columns and types, as one
-DataFrame of all the rows would have had), as Parquet (one row group per chunk) or CSV (formulas
-neutralised). Memory holds one chunk, whatever the study's size.
+DataFrame of all the rows would have had), as Parquet (row groups of a few chunks) or CSV
+(formulas neutralised). Memory holds a chunk or a row group, whatever the study's size.
 
 Incremental exports (``since``): a session is exported once it is *completed*, whole — its
 session row, trials, faces, selections, restarts and ratings; nothing of it changes after
@@ -62,7 +62,9 @@ from emogen.study.tables import FaceRow, PopulationRow, SessionRow, StudyRow, Tr
 #: How long before an incremental export's start its cut-off lies (see the module docstring).
 SETTLE = timedelta(seconds=60)
 #: Rows of the faces table per chunk (the largest table; the others follow its sessions).
-CHUNK_FACES = 4000
+CHUNK_FACES = 500
+#: Rows of a Parquet row group (several chunks).
+ROW_GROUP_ROWS = 8192
 
 _ROWS: dict[str, Callable[[Records], Iterator[dict[str, Any]]]] = {
     "sessions": session_rows,
@@ -189,12 +191,28 @@ class _Spill:
         return schema, tables()
 
 
+def _row_groups(tables: Iterator[pa.Table]) -> Iterator[pa.Table]:
+    """The chunks gathered into row groups of about :data:`ROW_GROUP_ROWS` rows (a Parquet
+    file's footer holds every row group's column metadata: many small groups would make it,
+    and the writer's memory, grow with the study)."""
+    buffer: list[pa.Table] = []
+    rows = 0
+    for table in tables:
+        buffer.append(table)
+        rows += table.num_rows
+        if rows >= ROW_GROUP_ROWS:
+            yield pa.concat_tables(buffer)
+            buffer, rows = [], 0
+    if buffer:
+        yield pa.concat_tables(buffer)
+
+
 def _write(spill: _Spill, name: str, path: Path, fmt: str) -> None:
     schema, tables = spill.chunks(name)
     if fmt == "parquet":
         with pq.ParquetWriter(str(path), schema) as writer:
-            for table in tables:
-                writer.write_table(table)
+            for group in _row_groups(tables):
+                writer.write_table(group)
         return
     with open(path, "w", encoding="utf-8", newline="") as out:
         for i, table in enumerate(tables):
