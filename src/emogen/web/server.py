@@ -24,6 +24,8 @@ if TYPE_CHECKING:
 
 #: How the worker processes get their options (JSON; set by :func:`run_server`).
 WORKER_OPTIONS_ENV = "EMOGEN_SERVE_WORKER_OPTIONS"
+#: Idle keep-alive connections are closed after this many seconds (nginx's default).
+KEEP_ALIVE_S = 75
 
 
 def default_workers() -> int:
@@ -112,6 +114,9 @@ def run_server(
         "log_level": log_level,
         "access_log": False,
         "timeout_graceful_shutdown": 3,
+        # participants pause 1–20 s between steps: a 5 s keep-alive (uvicorn's default) closes
+        # most connections between steps, and a step sent as the server closes it fails
+        "timeout_keep_alive": KEEP_ALIVE_S,
     }
     if n_workers == 1:
         uvicorn.run(app, **common)
