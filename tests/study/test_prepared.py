@@ -113,3 +113,30 @@ def test_nothing_is_prepared_for_a_step_that_does_not_fit(service: StudyService)
     assert service.steps.prepare_select("no-such-token-at-all", **args, elite=elite,
                                         others=others) is None  # fmt: skip
     assert service.steps.prepare_select(token, **args, elite=elite, others=others) is not None
+
+
+def test_a_face_shown_again_is_not_corrected_again(ict_model: Any) -> None:
+    """The remembering corrector answers exactly what the model's corrector answers for the
+    whole batch, and corrects only the faces it has not corrected before (the kept elite)."""
+    from emogen.config import GAConfig
+    from emogen.study.weights import RememberingCorrector
+
+    base = correctives_of(ict_model)
+    rows: list[int] = []
+
+    def counting(w: np.ndarray) -> tuple[tuple[str, ...], np.ndarray]:
+        rows.append(len(w))
+        return base(w)
+
+    remembering = RememberingCorrector(counting, size=15)
+    engine = Engine(GAConfig(), ict_model.rig, 21)
+    for g in range(4):
+        pop = engine.ask()
+        names, values = remembering(pop.weights)
+        ref_names, ref_values = base(pop.weights)  # the whole batch at once, independently
+        assert names == ref_names
+        np.testing.assert_array_equal(values, ref_values)
+        engine.tell(int(pop.ids[g]), [int(pop.ids[g + 1])])
+    # generation 0: 10 faces; then the elite (slot 1) is remembered: 9 (or fewer) new ones
+    assert rows[0] == 10 and all(n <= 9 for n in rows[1:])
+    assert len(remembering._rows) <= 15  # bounded
