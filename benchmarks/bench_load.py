@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import json
 import os
 import random
@@ -121,7 +122,11 @@ async def participant(client: httpx.AsyncClient, i: int, run: Run, cfg: argparse
         run.completed += 1
 
 
-async def exporter(client: httpx.AsyncClient, run: Run, stop: asyncio.Event) -> None:
+async def exporter(client: httpx.AsyncClient, run: Run, stop: asyncio.Event, wait: float) -> None:
+    """Downloads faces.csv, then waits as long as it took, and again (steps both with and
+    without an export running), from ``wait`` seconds in (once everyone has arrived)."""
+    with contextlib.suppress(TimeoutError):
+        await asyncio.wait_for(stop.wait(), wait)
     while not stop.is_set():
         t0 = time.monotonic()
         try:
@@ -132,7 +137,8 @@ async def exporter(client: httpx.AsyncClient, run: Run, stop: asyncio.Event) -> 
         except httpx.HTTPError as exc:
             run.errors.append(f"faces.csv: {type(exc).__name__}")
         run.exports.append((t0, time.monotonic()))
-        await asyncio.sleep(1.0)
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(stop.wait(), time.monotonic() - t0)
 
 
 async def drive(url: str, n: int, cfg: argparse.Namespace) -> Run:
@@ -142,7 +148,8 @@ async def drive(url: str, n: int, cfg: argparse.Namespace) -> Run:
     deadline = time.monotonic() + cfg.max_seconds
     async with httpx.AsyncClient(base_url=url, timeout=60.0, limits=limits) as client:
         stop = asyncio.Event()
-        export = asyncio.create_task(exporter(client, run, stop)) if cfg.export_during else None
+        export = (asyncio.create_task(exporter(client, run, stop, cfg.ramp + 5))
+                  if cfg.export_during else None)  # fmt: skip
         await asyncio.wait_for(
             asyncio.gather(*(participant(client, i, run, cfg, deadline, nonce) for i in range(n))),
             timeout=cfg.max_seconds + 120,
