@@ -73,10 +73,15 @@ def write_study_toml(data: dict[str, Any], path: Path) -> Path:
 
 
 class ServerProcess:
-    """``emogen serve`` (``python -m emogen serve``) on 127.0.0.1; ``kill()`` sends SIGKILL."""
+    """``emogen serve`` (``python -m emogen serve``) on 127.0.0.1 with ``workers`` worker
+    processes; ``kill()`` sends SIGKILL to the server and its workers (its process group)."""
 
-    def __init__(self, config: Path, database_url: str, model: Path, log: Path) -> None:
+    def __init__(
+        self, config: Path, database_url: str, model: Path, log: Path, workers: int = 1,
+        extra: tuple[str, ...] = (),
+    ) -> None:  # fmt: skip
         self.config, self.database_url, self.model, self.log = config, database_url, model, log
+        self.workers, self.extra = workers, extra
         self.port = free_port()
         self.proc: subprocess.Popen[bytes] | None = None
 
@@ -84,18 +89,19 @@ class ServerProcess:
     def url(self) -> str:
         return f"http://127.0.0.1:{self.port}"
 
-    def start(self, timeout: float = 60.0) -> ServerProcess:
+    def start(self, timeout: float = 120.0) -> ServerProcess:
         env = {**os.environ, "EMOGEN_RESEARCHER_TOKEN": "bench-token"}
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(
                 [
                     sys.executable, "-m", "emogen", "serve", str(self.config),
                     "--port", str(self.port), "--database-url", self.database_url,
-                    "--model", str(self.model),
+                    "--model", str(self.model), "--workers", str(self.workers), *self.extra,
                 ],
                 stdout=log,
                 stderr=subprocess.STDOUT,
                 env=env,
+                start_new_session=True,  # its own process group: kill() reaches the workers
             )  # fmt: skip
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
@@ -104,7 +110,10 @@ class ServerProcess:
                     f"server exited with {self.proc.returncode}: {self.log.read_text()}"
                 )
             try:
-                if httpx.get(f"{self.url}/healthz", timeout=1.0).status_code == 200:
+                if (
+                    httpx.get(f"{self.url}/healthz", timeout=1.0).status_code == 200
+                    and self.ready_workers() >= self.workers
+                ):
                     return self
             except httpx.HTTPError:
                 pass
@@ -112,9 +121,36 @@ class ServerProcess:
         self.stop()
         raise RuntimeError(f"server did not start in {timeout} s: {self.log.read_text()}")
 
+    def pids(self) -> list[int]:
+        """The server's process and its worker processes."""
+        if self.proc is None:
+            return []
+        out = [self.proc.pid]
+        for stat in Path("/proc").glob("[0-9]*/stat"):
+            try:
+                fields = stat.read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == self.proc.pid:  # its parent is the server
+                out.append(int(stat.parent.name))
+        return out
+
+    def ready_workers(self) -> int:
+        """Worker processes waiting for requests in their event loop (1 without workers)."""
+        if self.workers == 1:
+            return 1
+        ready = 0
+        for pid in self.pids()[1:]:
+            try:
+                ready += "epoll" in Path(f"/proc/{pid}/wchan").read_text()
+            except OSError:
+                continue
+        return ready
+
     def kill(self) -> None:
+        """SIGKILL to the server and every worker at once (as a crash or the OOM killer would)."""
         if self.proc is not None and self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGKILL)
+            os.killpg(self.proc.pid, signal.SIGKILL)
             self.proc.wait(10)
 
     def stop(self) -> None:

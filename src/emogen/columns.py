@@ -172,17 +172,46 @@ def _arrow_type(column: str, dtype: Any) -> pa.DataType:
     return pa.string()
 
 
+def arrow_schema(df: pd.DataFrame) -> pa.Schema:
+    """The Arrow schema of a typed table (:func:`typed`): each column's rule's type."""
+    import pyarrow as pa
+
+    return pa.schema([pa.field(str(c), _arrow_type(str(c), df[c].dtype)) for c in df.columns])
+
+
+def provenance_metadata(provenance: Mapping[str, Any] | None) -> dict[bytes, bytes]:
+    """The schema metadata entry that carries the provenance (and the git commit)."""
+    return {
+        METADATA_KEY: json.dumps(
+            {**(provenance or {}), "git_commit": git_commit()}, sort_keys=True, default=str
+        ).encode()
+    }
+
+
+def pandas_types(t: pa.DataType) -> Any:
+    """``types_mapper`` for ``pyarrow.Table.to_pandas``: Arrow columns back as the typed
+    tables' pandas types (nullable integers stay exact, text stays text)."""
+    import pandas as pd
+    import pyarrow as pa
+
+    if pa.types.is_integer(t):
+        return pd.Int64Dtype()
+    if pa.types.is_string(t) or pa.types.is_large_string(t):
+        return pd.StringDtype()
+    if pa.types.is_boolean(t):
+        return pd.BooleanDtype()
+    return None
+
+
 def arrow_table(df: pd.DataFrame, provenance: Mapping[str, Any] | None = None) -> pa.Table:
     """A typed table (:func:`typed`) as Arrow, with an explicit schema and the provenance."""
     import pyarrow as pa
 
     df = typed(df)
-    schema = pa.schema([pa.field(str(c), _arrow_type(str(c), df[c].dtype)) for c in df.columns])
+    schema = arrow_schema(df)
     table = pa.Table.from_pandas(df, schema=schema, preserve_index=False)
     meta = dict(table.schema.metadata or {})
-    meta[METADATA_KEY] = json.dumps(
-        {**(provenance or {}), "git_commit": git_commit()}, sort_keys=True, default=str
-    ).encode()
+    meta.update(provenance_metadata(provenance))
     return table.replace_schema_metadata(meta)
 
 

@@ -3,7 +3,9 @@
 
 The participant resumes at the same generation with the same faces; a request in flight at the
 kill, retried with its idempotency key, is done exactly once; the export then holds each
-generation once and replay regenerates every face.
+generation once and replay regenerates every face. With one worker process and with two (the
+server and its workers killed at once); with two, the same step sent many times at once is
+stored once, whichever worker takes it.
 """
 
 from __future__ import annotations
@@ -34,11 +36,13 @@ def post(url: str, path: str, body: dict[str, Any]) -> dict[str, Any]:
     return r.json()  # type: ignore[no-any-return]
 
 
+@pytest.mark.parametrize("workers", [1, 2])
 def test_sigkill_mid_session_loses_and_duplicates_nothing(
-    db_url: str, tmp_path: Path, ict_dir: Path, ict_model
+    db_url: str, tmp_path: Path, ict_dir: Path, ict_model, workers: int
 ) -> None:
     config = write_study_toml(SMALL_STUDY, tmp_path / "study.toml")
-    server = ServerProcess(config, db_url, ict_dir, tmp_path / "server.log").start()
+    server = ServerProcess(config, db_url, ict_dir, tmp_path / "server.log", workers).start()
+    assert server.ready_workers() == workers
     try:
         created = post(server.url, "/api/sessions", {"participant_id": "K-1"})
         token = created["token"]
@@ -95,3 +99,41 @@ def test_sigkill_mid_session_loses_and_duplicates_nothing(
     report = replay_session(store, 1, ict_model.rig, ict_model.model_hash, model=ict_model)
     assert report.ok, report.mismatches
     store.dispose()
+
+
+def test_the_same_step_sent_at_once_to_two_workers_is_stored_once(
+    db_url: str, tmp_path: Path, ict_dir: Path
+) -> None:
+    config = write_study_toml(SMALL_STUDY, tmp_path / "study.toml")
+    server = ServerProcess(config, db_url, ict_dir, tmp_path / "server.log", workers=2).start()
+    try:
+        assert server.ready_workers() == 2
+        token = post(server.url, "/api/sessions", {"participant_id": "K-2"})["token"]
+        state = post(server.url, f"/api/s/{token}/begin", {"key": new_key()})
+        elite, others = choose(state)
+        body = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
+        barrier = threading.Barrier(8)
+        answers: list[dict[str, Any]] = []
+
+        def send() -> None:
+            with httpx.Client(timeout=60) as client:  # a connection of its own
+                barrier.wait()
+                r = client.post(f"{server.url}/api/s/{token}/select", json=body)
+                answers.append({"status": r.status_code, **r.json()})
+
+        threads = [threading.Thread(target=send) for _ in range(8)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(120)
+    finally:
+        server.stop()
+    assert [a["status"] for a in answers] == [200] * 8
+    assert sorted(a.get("replayed", False) for a in answers) == [False] + [True] * 7
+    assert len({str(a["population"]) for a in answers}) == 1
+    store = Store(db_url)
+    tables = export_tables(store)
+    store.dispose()
+    assert len(tables["selections"].query("role == 'elite'")) == 1
+    per_generation = tables["faces"].groupby("generation").size()
+    assert per_generation.to_dict() == {0: 10, 1: 10}

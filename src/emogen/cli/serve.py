@@ -37,6 +37,14 @@ def serve_command(
         bool,
         typer.Option("--hsts", help="Send Strict-Transport-Security (only behind HTTPS)."),
     ] = False,
+    workers: Annotated[
+        int | None,
+        typer.Option(
+            "--workers",
+            help="Worker processes (default: the number of cores). More than one on SQLite "
+            "share one writer at a time; see docs/study.md for when to move to PostgreSQL.",
+        ),
+    ] = None,
 ) -> None:
     """Run a participant study: prints the URL to open; Ctrl-C stops it."""
     from emogen.errors import ResourceError
@@ -61,4 +69,5 @@ def serve_command(
         model=model,
         session_limit=session_limit,
         hsts=hsts,
+        workers=workers,
     )

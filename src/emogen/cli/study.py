@@ -98,25 +98,57 @@ def export(
     config: Annotated[
         Path | None, typer.Option("--config", help="Study TOML (for its database_url).")
     ] = None,
+    since: Annotated[
+        str | None,
+        typer.Option(
+            "--since",
+            help="Incremental: only the sessions completed from this time (ISO 8601, e.g. the "
+            "'until' the previous incremental export printed) to a minute ago; see "
+            "docs/study.md.",
+        ),
+    ] = None,
+    table: Annotated[
+        list[str] | None,
+        typer.Option("--table", help="Only this table (repeat for more; default: all)."),
+    ] = None,
     force: ForceOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Tidy tables: sessions, trials, faces, selections, restarts, ratings, identities, study
-    (every column: docs/data.md; CSV seeds are text s<digits> so R keeps them exact)."""
-    from emogen.study.export import export_tables, write_export
+    (every column: docs/data.md; CSV seeds are text s<digits> so R keeps them exact).
 
+    Written a few sessions at a time, in bounded memory whatever the study's size."""
+    from emogen.study.export import TABLES
+    from emogen.study.export_stream import export_study, parse_since
+
+    start = None if since is None else parse_since(since)
+    unknown = [t for t in table or [] if t not in TABLES]
+    if unknown:
+        raise ConfigError(f"--table must be one of {', '.join(TABLES)}; got {unknown[0]!r}")
     check_out_folder(out, force=force)
     store = _store(database_url, config)
     try:
-        tables = export_tables(store, study=study)
+        with output_folder(out, force=force) as tmp:
+            result = export_study(store, tmp, fmt.value, study=study, since=start,
+                                  tables=tuple(table) if table else TABLES)  # fmt: skip
     finally:
         store.dispose()
-    with output_folder(out, force=force) as tmp:
-        paths = moved(write_export(tables, tmp, fmt.value), tmp, out)
+    paths = moved(result.paths, tmp, out)
+    lines = [f"wrote {p} ({result.rows[p.stem]} rows)" for p in paths]
+    window: dict[str, str | None] = {"since": None, "until": None}
+    if result.until is not None:
+        window = {
+            "since": result.since.isoformat() if result.since else None,
+            "until": result.until.isoformat(),
+        }
+        lines.append(
+            f"sessions completed from {window['since'] or ''} to {window['until']} "
+            f"({out / 'export.json'}); next incremental export: --since {window['until']}"
+        )
     show_result(
         as_json,
-        {"wrote": [{"path": str(p), "rows": len(tables[p.stem])} for p in paths]},
-        [f"wrote {p} ({len(tables[p.stem])} rows)" for p in paths],
+        {"wrote": [{"path": str(p), "rows": result.rows[p.stem]} for p in paths], **window},
+        lines,
     )
 
 

@@ -60,7 +60,9 @@ class Engine:
 
     With a ``corrector`` (:func:`correctives_of`), every population is corrected before it is
     shown and carries its corrective weights beside the core weights (deterministic: no rng,
-    so replays stay exact).
+    so replays stay exact). Correction is done when a population is first asked for
+    (:meth:`ask`, :attr:`result`), never for one only told about: an engine restored from its
+    state (:meth:`from_json`) to take a selection corrects only the population it then shows.
 
     ``Engine(config, rig, seed)`` makes generation 0 at once. Generations are numbered
     g = 0 … G (``config.generations``); a selection is told in every one of them, and the elite
@@ -78,7 +80,7 @@ class Engine:
         stream: int = CURRENT_STREAM,
     ) -> None:
         self._setup(config, rig, seed, corrector, stream)
-        self._population = self._initialise()
+        self._show(self._initialise())
 
     def _setup(
         self,
@@ -122,6 +124,8 @@ class Engine:
         self._initial: tuple[np.ndarray, np.ndarray] | None = None
         self.fixed_options: list[int] = []
         self._result: Population | None = None
+        self._population: Population  # uncorrected: genes, ids, parents, operators
+        self._corrected_population: Population | None = None  # made on the first ask()
 
     # ---- the loop ------------------------------------------------------------------------
     @property
@@ -137,6 +141,8 @@ class Engine:
                 f"no result yet: the run is at generation {self.generation} of "
                 f"{self.config.generations}"
             )
+        if self.corrector is not None and self._result.correctives is None:
+            self._result = self._corrected(self._result)  # a face's correction is its own
         return self._result
 
     @property
@@ -146,19 +152,30 @@ class Engine:
 
     def ask(self) -> Population:
         """The population to show now."""
+        self._check_running()
+        if self._corrected_population is None:
+            self._corrected_population = self._corrected(self._population)
+        return self._corrected_population
+
+    def _check_running(self) -> None:
         if self.done:
             raise SelectionError(
                 f"the run finished after generation {self.config.generations}; read .result "
                 "or reset()"
             )
-        return self._population
+
+    def _show(self, population: Population) -> None:
+        """The population to show next (uncorrected; :meth:`ask` corrects it once)."""
+        self._population = population
+        self._corrected_population = None
 
     def tell(self, elite: int | Sequence[int], others: Iterable[int] = ()) -> None:
         """The selection of the shown population: one elite id and the other selected ids.
 
         For the classical variant ``others`` is a fitness ranking (best first).
         """
-        pop = self.ask()
+        self._check_running()
+        pop = self._population  # the selection needs genes and ids only, not correctives
         cfg = self.config
         e, o = select(
             pop.ids,
@@ -176,7 +193,8 @@ class Engine:
             }
         )
         if self.generation >= cfg.generations:
-            self._result = pop.row(e)
+            shown = self._corrected_population
+            self._result = (shown if shown is not None else pop).row(e)
             return
         g = self.generation
         draws = generation_draws(
@@ -200,15 +218,15 @@ class Engine:
         parents = off.parents[0]
         parent_ids = np.where(parents >= 0, pop.ids[np.maximum(parents, 0)], -1)
         self.generation = g + 1
-        self._population = self._make_population(off.genes[0], parent_ids, off.operators)
+        self._show(self._make_population(off.genes[0], parent_ids, off.operators))
 
     def reset(self) -> Population:
         """Start a new trial at generation 0 (``init.on_reset``: reinitialise or keep)."""
         self.trial += 1
         self.generation = 0
         self._result = None
-        self._population = self._initialise()
-        return self._population
+        self._show(self._initialise())
+        return self.ask()
 
     # ---- internals -----------------------------------------------------------------------
     def _initialise(self) -> Population:
@@ -232,16 +250,14 @@ class Engine:
         ids = np.arange(self._next_id, self._next_id + n, dtype=np.int64)
         self._next_id += n
         genes = np.asarray(genes, dtype=np.float64)
-        return self._corrected(
-            Population(
-                genes=readonly(genes),
-                weights=readonly(self.rig.expand(genes, self.config.eye_motion)),
-                ids=readonly(ids),
-                parent_ids=readonly(np.asarray(parent_ids, dtype=np.int64)),
-                operators=readonly(np.asarray(operators, dtype=str)),
-                generation=self.generation,
-                trial=self.trial,
-            )
+        return Population(
+            genes=readonly(genes),
+            weights=readonly(self.rig.expand(genes, self.config.eye_motion)),
+            ids=readonly(ids),
+            parent_ids=readonly(np.asarray(parent_ids, dtype=np.int64)),
+            operators=readonly(np.asarray(operators, dtype=str)),
+            generation=self.generation,
+            trial=self.trial,
         )
 
     def _corrected(self, population: Population) -> Population:
@@ -308,22 +324,20 @@ class Engine:
                 readonly(np.array(data["initial"]["genes"], dtype=np.float64)),
                 readonly(np.array(data["initial"]["labels"], dtype=str)),
             )
-        self._population = self._population_from(data["population"])
+        self._show(self._population_from(data["population"]))
         self._result = None if data["result"] is None else self._population_from(data["result"])
         return self
 
     def _population_from(self, d: dict[str, Any]) -> Population:
         genes = np.array(d["genes"], dtype=np.float64).reshape(-1, len(self.gene_names))
-        return self._corrected(
-            Population(
-                genes=readonly(genes),
-                weights=readonly(self.rig.expand(genes, self.config.eye_motion)),
-                ids=readonly(np.array(d["ids"], dtype=np.int64)),
-                parent_ids=readonly(np.array(d["parent_ids"], dtype=np.int64).reshape(-1, 2)),
-                operators=readonly(np.array(d["operators"], dtype=str)),
-                generation=int(d["generation"]),
-                trial=int(d["trial"]),
-            )
+        return Population(
+            genes=readonly(genes),
+            weights=readonly(self.rig.expand(genes, self.config.eye_motion)),
+            ids=readonly(np.array(d["ids"], dtype=np.int64)),
+            parent_ids=readonly(np.array(d["parent_ids"], dtype=np.int64).reshape(-1, 2)),
+            operators=readonly(np.array(d["operators"], dtype=str)),
+            generation=int(d["generation"]),
+            trial=int(d["trial"]),
         )
 
     def save(self, path: Path) -> None:

@@ -162,15 +162,21 @@ def export_tables(
     for sid in sorted(shown):
         rows["identities"].extend(identity_rows(studies[sid]))
     rows["study"] = list(study_rows([studies[sid] for sid in sorted(shown)]))
-    names = [json.loads(studies[sid].gene_names) for sid in sorted(shown)]
-    weights = [json.loads(studies[sid].weight_names) for sid in sorted(shown)]
-    extra = {
+    extra = table_extras([studies[sid] for sid in sorted(shown)])
+    return {name: _frame(name, rows[name], extra.get(name, [])) for name in TABLES}
+
+
+def table_extras(studies: list[StudyRow]) -> dict[str, list[str]]:
+    """The columns a table has beyond its fixed ones, for these studies: the faces table's
+    ``g_<gene>`` and ``w_<weight>`` columns (present even when no face has been shown)."""
+    names = [json.loads(s.gene_names) for s in studies]
+    weights = [json.loads(s.weight_names) for s in studies]
+    return {
         "faces": [
             *dict.fromkeys(f"g_{n}" for ns in names for n in ns),
             *dict.fromkeys(f"w_{n}" for ns in weights for n in ns),
         ]
     }
-    return {name: _frame(name, rows[name], extra.get(name, [])) for name in TABLES}
 
 
 def identity_rows(study: StudyRow) -> list[dict[str, Any]]:

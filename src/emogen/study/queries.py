@@ -1,11 +1,15 @@
-"""Reads of the study database the steps and the view need; each takes an open session."""
+"""Reads of the study database the steps and the view need; each takes an open session.
+
+The statements a participant's step runs are built once (with bound parameters), not per call:
+building a SQLAlchemy expression costs more CPU than the indexed lookup it describes.
+"""
 
 from __future__ import annotations
 
 import json
 from datetime import datetime
 
-from sqlalchemy import func, select
+from sqlalchemy import bindparam, func, select
 from sqlalchemy.orm import Session, selectinload
 
 from emogen.study.errors import SessionNotFound, StepConflict
@@ -19,13 +23,25 @@ from emogen.study.tables import (
     TrialRow,
 )
 
+_BY_TOKEN = select(SessionRow).where(SessionRow.token == bindparam("token"))
+_BY_TOKEN_LOCKED = _BY_TOKEN.with_for_update()
+_TRIAL_AT = select(TrialRow).where(
+    TrialRow.session_id == bindparam("session_id"), TrialRow.position == bindparam("position")
+)
+_POPULATION_AT = select(PopulationRow).where(
+    PopulationRow.trial_id == bindparam("trial_id"),
+    PopulationRow.attempt == bindparam("attempt"),
+    PopulationRow.generation == bindparam("generation"),
+)
+_POPULATION_AT_WITH_FACES = _POPULATION_AT.options(selectinload(PopulationRow.faces))
+_STEP_WITH_KEY = select(StepRow).where(
+    StepRow.session_id == bindparam("session_id"), StepRow.key == bindparam("key")
+)
+
 
 def session_by_token(db: Session, token: str, study_id: int, *, lock: bool = False) -> SessionRow:
     """The session of this token in this study (locked for update if asked)."""
-    query = select(SessionRow).where(SessionRow.token == token)
-    if lock:
-        query = query.with_for_update()
-    sess = db.scalar(query)
+    sess = db.scalar(_BY_TOKEN_LOCKED if lock else _BY_TOKEN, {"token": token})
     if sess is None:
         raise SessionNotFound("no session with this link; check the address")
     if sess.study_id != study_id:
@@ -62,23 +78,15 @@ def n_trials(sess: SessionRow) -> int:
 
 
 def trial_at(db: Session, session_id: int, position: int) -> TrialRow | None:
-    return db.scalar(
-        select(TrialRow).where(TrialRow.session_id == session_id, TrialRow.position == position)
-    )
+    return db.scalar(_TRIAL_AT, {"session_id": session_id, "position": position})
 
 
 def population_at(
     db: Session, trial_id: int, attempt: int, generation: int, *, with_faces: bool = False
 ) -> PopulationRow | None:
     """The stored population of a trial's attempt and generation (its faces loaded if asked)."""
-    query = select(PopulationRow).where(
-        PopulationRow.trial_id == trial_id,
-        PopulationRow.attempt == attempt,
-        PopulationRow.generation == generation,
-    )
-    if with_faces:
-        query = query.options(selectinload(PopulationRow.faces))
-    return db.scalar(query)
+    query = _POPULATION_AT_WITH_FACES if with_faces else _POPULATION_AT
+    return db.scalar(query, {"trial_id": trial_id, "attempt": attempt, "generation": generation})
 
 
 def final_face(db: Session, trial: TrialRow) -> FaceRow | None:
@@ -104,7 +112,7 @@ def last_selection_time(db: Session, trial_id: int) -> datetime | None:
 
 
 def step_with_key(db: Session, session_id: int, key: str) -> StepRow | None:
-    return db.scalar(select(StepRow).where(StepRow.session_id == session_id, StepRow.key == key))
+    return db.scalar(_STEP_WITH_KEY, {"session_id": session_id, "key": key})
 
 
 def current_face(db: Session, sess: SessionRow, face_id: int) -> tuple[str, str] | None:

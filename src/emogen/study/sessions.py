@@ -94,11 +94,13 @@ class StudyService:
         ``load_ms``: the page's time to load and draw the faces (model, textures), if it says."""
         payload: Payload = {"trial": trial, "attempt": attempt, "generation": generation, "elite": elite,
                    "others": others, "response_ms": response_ms, **_load(load_ms)}  # fmt: skip
+        prepared = self.steps.prepare_select(token, trial=trial, attempt=attempt,
+            generation=generation, elite=elite, others=others)  # fmt: skip
         return self.steps.run(
             token, "select", key, payload,
             lambda db, sess: self.steps.select(db, sess, key=key, trial=trial, attempt=attempt,
                 generation=generation, elite=elite, others=others,
-                timing=Timing(response_ms, load_ms)),
+                timing=Timing(response_ms, load_ms), prepared=prepared),
         )  # fmt: skip
 
     def restart(

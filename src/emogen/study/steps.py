@@ -18,9 +18,11 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from datetime import datetime
 
+from sqlalchemy import bindparam, insert, select
 from sqlalchemy.orm import Session
 
-from emogen.errors import SelectionError
+from emogen.errors import EmoGenError, SelectionError
+from emogen.ga.engine import Engine
 from emogen.study.context import StudyContext
 from emogen.study.errors import SessionNotFound, StepConflict
 from emogen.study.queries import (
@@ -41,12 +43,35 @@ from emogen.study.tables import (
     StepRow,
     TrialRow,
     as_utc,
+    core_table,
     dumps,
     utcnow,
 )
 from emogen.study.trials import TrialEngines, store_population
 from emogen.study.view import SessionState, ShownPopulation, session_state
 
+#: Plain inserts of the rows a step writes and never reads back (no ORM unit of work).
+_INSERT_STEP = insert(core_table(StepRow))
+_INSERT_SELECTION = insert(core_table(SelectionRow))
+#: The session's current trial if it shows a population: engine state, identity, position,
+#: attempt, generation (read without a lock to prepare a selection).
+_ACTIVE_TRIAL = (
+    select(
+        TrialRow.engine_state,
+        TrialRow.identity,
+        TrialRow.position,
+        TrialRow.attempt,
+        TrialRow.generation,
+    )
+    .join(SessionRow, TrialRow.session_id == SessionRow.id)
+    .where(
+        SessionRow.token == bindparam("token"),
+        SessionRow.study_id == bindparam("study_id"),
+        SessionRow.stage == "trial",
+        TrialRow.position == SessionRow.current_trial,
+        TrialRow.status == "active",
+    )
+)
 #: What a step's request held (hashed to tell a replayed key from a reused one).
 Payload = Mapping[str, int | float | list[int] | None]
 #: A step's work on the locked session; returns the population it has just shown, if any.
@@ -65,6 +90,15 @@ def elapsed_ms(later: datetime, earlier: datetime | None) -> float:
     if e is None or later_utc is None:
         return 0.0
     return max(0.0, (later_utc - e).total_seconds() * 1000.0)
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """A selection's GA work done outside the transaction: the engine state it started from,
+    and the engine told the selection (its next population made and corrected)."""
+
+    engine_state: str
+    engine: Engine
 
 
 @dataclass(frozen=True)
@@ -112,9 +146,11 @@ class SessionSteps:
                 return state
             shown = action(db, sess)
             now = utcnow()
-            db.add(
-                StepRow(session_id=sess.id, key=key, kind=kind, request_hash=digest, created_at=now)
-            )
+            db.execute(
+                _INSERT_STEP,
+                {"session_id": sess.id, "key": key, "kind": kind, "request_hash": digest,
+                 "created_at": now},
+            )  # fmt: skip
             sess.updated_at = now
             db.flush()
             return session_state(db, config, sess, shown)
@@ -130,27 +166,67 @@ class SessionSteps:
         sess.started_at = utcnow()
         return self.engines.start(db, sess, 0)
 
+    def prepare_select(
+        self, token: str, *, trial: int, attempt: int, generation: int, elite: int,
+        others: list[int],
+    ) -> Prepared | None:  # fmt: skip
+        """A selection's GA work (the engine restored, told, the next generation made and
+        corrected) done before its write transaction, so that no lock is held meanwhile and
+        steps of other sessions (other workers, other threads) proceed in parallel.
+
+        The transaction uses it only if the trial's stored engine state is still the one it
+        was computed from (the engine is deterministic: the same state and selection make the
+        same generation); otherwise, and for anything unexpected here (another trial or
+        generation shown, a selection the engine refuses), it does the work itself and answers
+        as it always did. Returns None when there is nothing to prepare.
+        """
+        with self.store.read() as db:
+            found = db.execute(
+                _ACTIVE_TRIAL, {"token": token, "study_id": self.ctx.study_id}
+            ).first()
+        if found is None:
+            return None
+        state, identity, position, row_attempt, row_generation = found
+        if (position, row_attempt, row_generation) != (trial, attempt, generation) or not state:
+            return None
+        try:
+            engine = self.engines.restore_state(state, identity)
+            engine.tell(elite, others)
+            if engine.done:
+                engine.result  # noqa: B018 - corrected here, not under the lock
+            else:
+                engine.ask()
+        except EmoGenError:
+            return None
+        return Prepared(state, engine)
+
     def select(
         self, db: Session, sess: SessionRow, *, key: str, trial: int, attempt: int,
         generation: int, elite: int, others: list[int], timing: Timing,
+        prepared: Prepared | None = None,
     ) -> ShownPopulation | None:  # fmt: skip
-        """The participant's selection of the shown generation; the next one is stored."""
+        """The participant's selection of the shown generation; the next one is stored
+        (``prepared``: the GA's work done beforehand, see :meth:`prepare_select`)."""
         row, pop = self._shown(db, sess, trial, attempt, generation)
-        engine = self.engines.restore(row)
-        engine.tell(elite, others)
+        if prepared is not None and prepared.engine_state == row.engine_state:
+            engine = prepared.engine  # computed from this very state, outside the lock
+        else:
+            engine = self.engines.restore(row)
+            engine.tell(elite, others)
         now = utcnow()
-        db.add(
-            SelectionRow(
-                population_id=pop.id,
-                trial_id=row.id,
-                elite_face_id=elite,
-                other_face_ids=dumps(list(others)),
-                submitted_at=now,
-                server_response_ms=server_ms(now, pop.shown_at, timing.load_ms),
-                client_response_ms=timing.response_ms,
-                load_ms=timing.load_ms,
-                step_key=key,
-            )
+        db.execute(
+            _INSERT_SELECTION,
+            {
+                "population_id": pop.id,
+                "trial_id": row.id,
+                "elite_face_id": elite,
+                "other_face_ids": dumps(list(others)),
+                "submitted_at": now,
+                "server_response_ms": server_ms(now, pop.shown_at, timing.load_ms),
+                "client_response_ms": timing.response_ms,
+                "load_ms": timing.load_ms,
+                "step_key": key,
+            },
         )
         shown = None
         if engine.done:

@@ -7,12 +7,15 @@ tests always see the current schema.
 
 Durability: SQLite runs in WAL mode with ``synchronous=FULL`` and foreign keys on; every step is
 one transaction, committed before the server answers. Writes are serialised per session: on
-SQLite by ``BEGIN IMMEDIATE`` (and an in-process lock, so concurrent requests queue instead of
-polling), on PostgreSQL by ``SELECT … FOR UPDATE`` on the session row.
+SQLite by ``BEGIN IMMEDIATE`` (and, so that concurrent requests queue instead of polling the
+database's busy lock, an in-process lock and an exclusive ``flock`` on ``<database>.writer-lock``
+shared by every process of the server), on PostgreSQL by ``SELECT … FOR UPDATE`` on the session
+row.
 """
 
 from __future__ import annotations
 
+import fcntl
 import os
 import queue
 import threading
@@ -110,6 +113,11 @@ def _is_connection_error(exc: Exception) -> bool:
     return isinstance(exc, OperationalError | InterfaceError)
 
 
+def _writer_lock_path(engine: Engine) -> str:
+    """``<database file>.writer-lock``: the lock file the writers of one SQLite file share."""
+    return f"{engine.url.database}.writer-lock"
+
+
 class _GroupCommit:
     """SQLite group commit: one writer thread runs queued write jobs, many per transaction.
 
@@ -168,7 +176,7 @@ class _GroupCommit:
         outcomes: list[tuple[Future[Any], Any, BaseException | None]] = []
         try:
             with (
-                self.store._lock or threading.Lock(),
+                self.store._writer(),
                 Session(self.store._write_engine, expire_on_commit=False) as session,
                 session.begin(),
             ):
@@ -207,6 +215,7 @@ class Store:
             else self.engine
         )
         self._lock = threading.Lock() if self.is_sqlite else None
+        self._lock_path = _writer_lock_path(self.engine) if self.is_sqlite else None
         self._group = _GroupCommit(self) if self.is_sqlite else None
         if migrate:
             self.migrate()
@@ -233,6 +242,22 @@ class Store:
             ) from None
 
     @contextmanager
+    def _writer(self) -> Iterator[None]:
+        """SQLite: this process's lock, then the lock every process of the server shares (a
+        blocking ``flock``: a waiting writer is woken when the lock is free, where SQLite's
+        own busy handler would sleep and poll)."""
+        if self._lock is None or self._lock_path is None:
+            yield
+            return
+        with self._lock:
+            fd = os.open(self._lock_path, os.O_RDWR | os.O_CREAT, 0o600)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX)
+                yield
+            finally:
+                os.close(fd)  # releases the flock
+
+    @contextmanager
     def read(self) -> Iterator[Session]:
         with Session(self.engine, expire_on_commit=False) as session, session.begin():
             yield session
@@ -242,7 +267,7 @@ class Store:
         """One transaction, committed on exit (rolled back on an exception)."""
         if self._lock is not None:
             with (
-                self._lock,
+                self._writer(),
                 Session(self._write_engine, expire_on_commit=False) as session,
                 session.begin(),
             ):

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import json
 from datetime import UTC, datetime
-from typing import Any
+from typing import Any, cast
 
 from sqlalchemy import (
     BigInteger,
@@ -17,6 +17,7 @@ from sqlalchemy import (
     ForeignKey,
     Integer,
     String,
+    Table,
     Text,
     UniqueConstraint,
 )
@@ -49,6 +50,11 @@ def dumps(value: Any) -> str:
 
 class Base(DeclarativeBase):
     pass
+
+
+def core_table(row: type[Base]) -> Table:
+    """The Core table of a row class, for plain inserts (no ORM unit of work)."""
+    return cast(Table, row.__table__)
 
 
 Stamp = DateTime(timezone=True)

@@ -10,9 +10,21 @@ from emogen.ga.engine import Engine, Population
 from emogen.study.context import StudyContext
 from emogen.study.errors import SessionNotFound
 from emogen.study.queries import trial_at
-from emogen.study.tables import FaceRow, PopulationRow, SessionRow, TrialRow, dumps, utcnow
+from emogen.study.tables import (
+    FaceRow,
+    PopulationRow,
+    SessionRow,
+    TrialRow,
+    core_table,
+    dumps,
+    utcnow,
+)
 from emogen.study.view import FaceView, ShownPopulation
 from emogen.study.weights import StudyCorrectors, full_weights
+
+_POPULATIONS = core_table(PopulationRow)
+_INSERT_POPULATION = insert(_POPULATIONS).returning(_POPULATIONS.c.id)
+_INSERT_FACES = insert(core_table(FaceRow))
 
 
 class TrialEngines:
@@ -24,9 +36,11 @@ class TrialEngines:
 
     def restore(self, row: TrialRow) -> Engine:
         """The trial's engine, restored from its stored state."""
-        return Engine.from_json(
-            row.engine_state or "", self.ctx.rig, corrector=self.correctors(row.identity)
-        )
+        return self.restore_state(row.engine_state or "", row.identity)
+
+    def restore_state(self, state: str, identity: str) -> Engine:
+        """An engine of the study's trial of ``identity`` restored from a stored state."""
+        return Engine.from_json(state, self.ctx.rig, corrector=self.correctors(identity))
 
     def start(self, db: Session, sess: SessionRow, position: int) -> ShownPopulation:
         """Start the session's trial at ``position``: its generation 0 is made and stored."""
@@ -49,31 +63,39 @@ class TrialEngines:
 
 
 def store_population(db: Session, trial: TrialRow, population: Population) -> ShownPopulation:
-    """Store a population about to be shown; returns it as the view shows it."""
-    pop = PopulationRow(
-        trial_id=trial.id,
-        attempt=population.trial,
-        generation=population.generation,
-        shown_at=utcnow(),
-    )
-    db.add(pop)
-    db.flush()
+    """Store a population about to be shown; returns it as the view shows it.
+
+    Plain inserts (the population's id returned by the insert), not ORM objects: nothing reads
+    these rows back in the step, and the ORM's unit of work would cost more than the inserts."""
+    pop_id = db.execute(
+        _INSERT_POPULATION,
+        {
+            "trial_id": trial.id,
+            "attempt": population.trial,
+            "generation": population.generation,
+            "shown_at": utcnow(),
+        },
+    ).scalar_one()
     weights: list[list[float]] = full_weights(population).tolist()
+    genes: list[list[float]] = population.genes.tolist()
+    ids = population.ids.tolist()
+    parents = population.parent_ids.tolist()
+    operators = population.operators.tolist()
     db.execute(
-        insert(FaceRow),
+        _INSERT_FACES,
         [
             {
-                "population_id": pop.id,
+                "population_id": pop_id,
                 "position": i,
-                "face_id": int(population.ids[i]),
-                "parent_a": int(population.parent_ids[i, 0]),
-                "parent_b": int(population.parent_ids[i, 1]),
-                "operator": str(population.operators[i]),
-                "genes": dumps(population.genes[i].tolist()),
+                "face_id": ids[i],
+                "parent_a": parents[i][0],
+                "parent_b": parents[i][1],
+                "operator": operators[i],
+                "genes": dumps(genes[i]),
                 "weights": dumps(weights[i]),
             }
             for i in range(len(population))
         ],
     )
-    faces = [FaceView(id=int(i), weights=w) for i, w in zip(population.ids, weights, strict=True)]
-    return ShownPopulation(trial.id, population.trial, population.generation, faces)
+    faces = [FaceView(id=i, weights=w) for i, w in zip(ids, weights, strict=True)]
+    return ShownPopulation(trial.id, population.trial, population.generation, faces, trial)

@@ -8,7 +8,7 @@ population passes it in (:class:`ShownPopulation`) so it is not read back from t
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal, NotRequired
 from urllib.parse import quote
 
@@ -107,6 +107,8 @@ class ShownPopulation:
     attempt: int
     generation: int
     faces: list[FaceView]
+    #: the trial's row, as the step left it (the view then reads it without a query)
+    trial: TrialRow | None = field(default=None, compare=False)
 
 
 def completion(config: StudyConfig, participant_id: str) -> Completion:
@@ -150,6 +152,15 @@ def _rating(db: Session, config: StudyConfig, row: TrialRow) -> RatingView:
     }
 
 
+def _current_trial(db: Session, sess: SessionRow, shown: ShownPopulation | None) -> TrialRow | None:
+    """The session's current trial: the one a step has just shown a population of (no query),
+    or the one read."""
+    row = None if shown is None else shown.trial
+    if row is not None and row.session_id == sess.id and row.position == sess.current_trial:
+        return row
+    return trial_at(db, sess.id, sess.current_trial)
+
+
 def session_state(
     db: Session, config: StudyConfig, sess: SessionRow, shown: ShownPopulation | None = None
 ) -> SessionState:
@@ -183,7 +194,7 @@ def session_state(
         state["progress"]["trial"] = trials - 1
         state["progress"]["generation"] = generations
         return state
-    row = trial_at(db, sess.id, sess.current_trial) if stage == "trial" else None
+    row = _current_trial(db, sess, shown) if stage == "trial" else None
     if row is None:
         return state
     status: TrialStatus = row.status  # type: ignore[assignment]  # a stored TrialStatus

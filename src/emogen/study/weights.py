@@ -5,6 +5,8 @@ Also the per-identity correctors a study's engines use (:class:`StudyCorrectors`
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -56,10 +58,52 @@ def weight_names(population: Population, rig: Rig) -> list[str]:
     return list(rig.shape_names) + ([] if extra is None else extra[0])
 
 
+class RememberingCorrector:
+    """A corrector that remembers the correctives of the last ``size`` faces it corrected.
+
+    A face's correction depends on that face alone, bit for bit (not on its batch: see
+    docs/study.md, ``correct``), so a face shown again — the elite a participant selected is
+    slot 1 of the next generation, a ``kept`` face too — takes its remembered correctives
+    instead of being corrected again. Safe to share between threads.
+    """
+
+    def __init__(self, corrector: Corrector, size: int = 4096) -> None:
+        self.corrector = corrector
+        self.size = size
+        self._rows: OrderedDict[bytes, Floats] = OrderedDict()
+        self._names: tuple[str, ...] | None = None
+        self._lock = threading.Lock()
+
+    def __call__(self, weights: np.ndarray) -> tuple[tuple[str, ...], Floats]:
+        w = np.ascontiguousarray(weights, dtype=np.float64)
+        keys = [row.tobytes() for row in w]
+        with self._lock:
+            known = {i: self._rows[k] for i, k in enumerate(keys) if k in self._rows}
+            for i in known:
+                self._rows.move_to_end(keys[i])
+            names = self._names
+        todo = [i for i in range(len(w)) if i not in known]
+        if names is None or todo:
+            names, values = self.corrector(w[todo])
+            names = tuple(names)
+            values = np.asarray(values, dtype=np.float64).reshape(len(todo), len(names))
+            with self._lock:
+                self._names = names
+                for j, i in enumerate(todo):
+                    known[i] = self._rows[keys[i]] = values[j].copy()
+                while len(self._rows) > self.size:
+                    self._rows.popitem(last=False)
+        out = np.empty((len(w), len(names)))
+        for i, row in known.items():
+            out[i] = row
+        return names, out
+
+
 class StudyCorrectors:
     """One corrector per identity shape (``correctives_of`` the model with the shape of the
-    study's identity of that name; identities that share a shape share it), made on first use;
-    none when the study does not correct faces."""
+    study's identity of that name; identities that share a shape share it), made on first use
+    and remembering the faces it corrected (:class:`RememberingCorrector`); none when the study
+    does not correct faces."""
 
     def __init__(self, config: StudyConfig, model: FaceModel | None) -> None:
         if config.correct and model is None:
@@ -77,5 +121,5 @@ class StudyCorrectors:
         shape = self.config.identity_of(identity).shape
         if shape not in self._made:
             m = self.model if shape == "generic" else self.model.with_identity(shape)
-            self._made[shape] = correctives_of(m)
+            self._made[shape] = RememberingCorrector(correctives_of(m))
         return self._made[shape]

@@ -8,6 +8,7 @@ The core (``emogen.study``) never imports FastAPI; this layer maps its errors to
 
 from __future__ import annotations
 
+import asyncio
 import os
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -127,6 +128,7 @@ def create_app(
     app.state.faces = FacePNGs(model, correct=config.correct, identities=identities)
     app.state.session_buckets = TokenBuckets(session_limit)
     app.state.researcher_failures = TokenBuckets(researcher_failure_limit)
+    app.state.export_lock = asyncio.Lock()  # one dashboard export at a time
     add_response_headers(app, hsts=hsts)
     app.add_middleware(BodyLimit, max_bytes=MAX_BODY_BYTES)
     install_error_handlers(app)

@@ -5,14 +5,16 @@ from __future__ import annotations
 import hmac
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, Path, Request
+from fastapi import APIRouter, Depends, Path, Query, Request
 from fastapi.responses import HTMLResponse, Response
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from pydantic import BaseModel, Field
 
 from emogen.study.errors import Forbidden
-from emogen.study.export import TABLES, csv_text, export_tables, study_status
+from emogen.study.export import TABLES, study_status
+from emogen.study.export_stream import parse_since
 from emogen.study.progress import progress_as_shown
+from emogen.web.exports import export_table_file
 from emogen.web.ratelimit import client_key, too_many
 from emogen.web.schemas import error_responses
 
@@ -106,16 +108,24 @@ def resume_link(
     responses={200: {"content": {"text/csv": {}}}, **error_responses(403, 422, 429, 503)},
     response_class=Response,
 )
-def export_csv(
+async def export_csv(
     request: Request,
     _auth: Researcher,
     table: Annotated[str, Path(pattern="^(" + "|".join(TABLES) + ")$")],
+    since: Annotated[
+        str | None,
+        Query(
+            max_length=64,
+            description="Incremental: only the sessions completed from this ISO 8601 time to "
+            "a minute ago (see docs/study.md).",
+        ),
+    ] = None,
 ) -> Response:
-    """One export table of this study as CSV."""
-    service = request.app.state.service
-    tables = export_tables(request.app.state.store, study=service.ctx.config.name)
-    return Response(
-        csv_text(tables[table]),
-        media_type="text/csv",
-        headers={"Content-Disposition": f'attachment; filename="{table}.csv"'},
+    """One export table of this study as CSV, written by a separate low-priority process in
+    bounded memory (participants' requests go first) and streamed."""
+    if since is not None:
+        parse_since(since)  # a bad time is a 422 naming it, before any work
+    state = request.app.state
+    return await export_table_file(
+        state.export_lock, state.store.url, state.service.ctx.config.name, table, since
     )

@@ -1,9 +1,76 @@
-"""Run the study server: ``emogen serve STUDY.toml --port 8000`` calls :func:`run_server`."""
+"""Run the study server: ``emogen serve STUDY.toml --port 8000`` calls :func:`run_server`.
+
+One worker process (``workers=1``) serves the app in this process. More (``--workers N``, the
+default being the number of cores) run uvicorn's worker processes, each with its own app, model
+and database connections, sharing the listening socket; the study is checked (model, database,
+migration, the study's row) once here before they start, so a broken config fails at once
+instead of in every worker. A worker dies with the process that started it (``SIGKILL``ed
+with it on Linux), so a killed server leaves no worker holding its port.
+"""
 
 from __future__ import annotations
 
+import json
+import os
+import signal
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from emogen.errors import ConfigError
+
+if TYPE_CHECKING:
+    from fastapi import FastAPI
+
+#: How the worker processes get their options (JSON; set by :func:`run_server`).
+WORKER_OPTIONS_ENV = "EMOGEN_SERVE_WORKER_OPTIONS"
+#: Idle keep-alive connections are closed after this many seconds (nginx's default).
+KEEP_ALIVE_S = 75
+
+
+def default_workers() -> int:
+    """The number of cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def _app(options: dict[str, Any]) -> FastAPI:
+    from emogen.study.config import load_study_config
+    from emogen.web.app import SESSION_LIMIT, create_app
+    from emogen.web.ratelimit import RateLimit
+
+    config = load_study_config(Path(options["config"]))
+    if options.get("model") is not None:
+        config = config.model_copy(update={"model": Path(options["model"])})
+    try:
+        text = options.get("session_limit")
+        limit = SESSION_LIMIT if text is None else RateLimit.parse(text)
+    except ValueError as exc:
+        raise ConfigError(f"--session-limit: {exc}") from None
+    return create_app(
+        config, options.get("database_url"), session_limit=limit, hsts=bool(options.get("hsts"))
+    )
+
+
+def _die_with_parent(parent: int) -> None:
+    """Linux: this process gets SIGKILL when the process that started it dies."""
+    if sys.platform != "linux":  # pragma: no cover
+        return
+    import ctypes
+
+    pr_set_pdeathsig = 1
+    ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, int(signal.SIGKILL))
+    if os.getppid() != parent:  # the parent died before the line above
+        os._exit(1)
+
+
+def worker_app() -> FastAPI:
+    """The app of one worker process (uvicorn's app factory; options from the environment)."""
+    options = json.loads(os.environ[WORKER_OPTIONS_ENV])
+    _die_with_parent(int(options["parent"]))
+    return _app(options)
 
 
 def run_server(
@@ -17,45 +84,58 @@ def run_server(
     log_level: str = "warning",
     session_limit: str | None = None,
     hsts: bool = False,
+    workers: int | None = None,
 ) -> None:
     """Load the study, open (and migrate) the database, serve until interrupted.
 
     No access log: session links carry their secret token in the path. ``session_limit`` is a
-    :meth:`RateLimit.parse` text (default 20/min per client address); ``hsts`` sends HSTS.
+    :meth:`RateLimit.parse` text (default 20/min per client address; counted per worker
+    process); ``hsts`` sends HSTS; ``workers``: worker processes (default: the cores).
     """
     import uvicorn
 
-    from emogen.study.config import load_study_config
-    from emogen.web.app import create_app
-
-    config = load_study_config(config_path)
-    if model is not None:
-        config = config.model_copy(update={"model": model})
-    from emogen.errors import ConfigError
-    from emogen.web.app import SESSION_LIMIT
-    from emogen.web.ratelimit import RateLimit
-
-    try:
-        limit = SESSION_LIMIT if session_limit is None else RateLimit.parse(session_limit)
-    except ValueError as exc:
-        raise ConfigError(f"--session-limit: {exc}") from None
-    app = create_app(config, database_url, session_limit=limit, hsts=hsts)
+    n_workers = default_workers() if workers is None else workers
+    if n_workers < 1:
+        raise ConfigError(f"--workers must be at least 1; got {n_workers}")
+    options = {
+        "config": str(Path(config_path).resolve()),
+        "model": None if model is None else str(Path(model).resolve()),
+        "database_url": database_url,
+        "session_limit": session_limit,
+        "hsts": hsts,
+        "parent": os.getpid(),
+    }
+    app = _app(options)  # the whole study checked here, once
     if announce:
-        shown = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::") else host
-        sys.stdout.write(
-            f"EmoGen study '{config.name}' ({config.n_trials} trials), data in "
-            f"{app.state.store.describe()}\n"
-            f"  participants open:    http://{shown}:{port}/?{config.participant_param}=PARTICIPANT_ID\n"
-            f"  researcher dashboard: http://{shown}:{port}/researcher"
-            f"{'' if app.state.researcher_token else '  (set EMOGEN_RESEARCHER_TOKEN to enable)'}\n"
-            "  stop with Ctrl-C\n"
-        )
-        sys.stdout.flush()
-    uvicorn.run(
-        app,
-        host=host,
-        port=port,
-        log_level=log_level,
-        access_log=False,
-        timeout_graceful_shutdown=3,
+        _announce(app, host, port, n_workers)
+    common: dict[str, Any] = {
+        "host": host,
+        "port": port,
+        "log_level": log_level,
+        "access_log": False,
+        "timeout_graceful_shutdown": 3,
+        # participants pause 1–20 s between steps: a 5 s keep-alive (uvicorn's default) closes
+        # most connections between steps, and a step sent as the server closes it fails
+        "timeout_keep_alive": KEEP_ALIVE_S,
+    }
+    if n_workers == 1:
+        uvicorn.run(app, **common)
+        return
+    app.state.store.dispose()
+    del app
+    os.environ[WORKER_OPTIONS_ENV] = json.dumps(options)
+    uvicorn.run("emogen.web.server:worker_app", factory=True, workers=n_workers, **common)
+
+
+def _announce(app: FastAPI, host: str, port: int, workers: int) -> None:
+    config = app.state.config
+    shown = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::") else host
+    sys.stdout.write(
+        f"EmoGen study '{config.name}' ({config.n_trials} trials), data in "
+        f"{app.state.store.describe()}, {workers} worker process{'es' if workers > 1 else ''}\n"
+        f"  participants open:    http://{shown}:{port}/?{config.participant_param}=PARTICIPANT_ID\n"
+        f"  researcher dashboard: http://{shown}:{port}/researcher"
+        f"{'' if app.state.researcher_token else '  (set EMOGEN_RESEARCHER_TOKEN to enable)'}\n"
+        "  stop with Ctrl-C\n"
     )
+    sys.stdout.flush()

@@ -34,7 +34,8 @@ export interface paths {
         };
         /**
          * Export Csv
-         * @description One export table of this study as CSV.
+         * @description One export table of this study as CSV, written by a separate low-priority process in
+         *     bounded memory (participants' requests go first) and streamed.
          */
         get: operations["export_csv_api_researcher_export__table__csv_get"];
         put?: never;
@@ -531,7 +532,10 @@ export interface operations {
     };
     export_csv_api_researcher_export__table__csv_get: {
         parameters: {
-            query?: never;
+            query?: {
+                /** @description Incremental: only the sessions completed from this ISO 8601 time to a minute ago (see docs/study.md). */
+                since?: string | null;
+            };
             header?: never;
             path: {
                 table: string;

@@ -1,0 +1,65 @@
+"""Dashboard downloads: an export table written by a separate, lower-priority process.
+
+``emogen study export`` runs as a child process (``nice`` 10) into a temporary folder and the
+file is then streamed to the researcher: the export's memory is bounded (a few sessions at a
+time) and never the server's, its CPU time goes to participants' steps first, and it holds no
+lock of this process (the GIL included), so participants' requests are not stalled while it
+runs. One export at a time per worker process; the database URL reaches the child through its
+environment, never its command line.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+from starlette.background import BackgroundTask
+from starlette.responses import FileResponse
+
+from emogen.study.errors import StudyError
+from emogen.study.storage import DATABASE_ENV
+
+#: The child: lower priority, then ``python -m emogen`` with the given arguments.
+_CHILD = (
+    "import os, runpy, sys; os.nice(10); sys.argv = ['emogen', *sys.argv[1:]]; "
+    "runpy.run_module('emogen', run_name='__main__')"
+)
+
+
+class ExportFailed(StudyError):
+    status = 503
+
+
+async def export_table_file(
+    lock: asyncio.Lock, database_url: str, study: str, table: str, since: str | None
+) -> FileResponse:
+    """``table`` of ``study`` as a CSV download (``since``: an incremental export's start)."""
+    folder = Path(tempfile.mkdtemp(prefix="emogen-download-"))
+    args = ["study", "export", "--format", "csv", "--table", table, "--study", study,
+            "--out", str(folder)]  # fmt: skip
+    if since is not None:
+        args += ["--since", since]
+    env = {**os.environ, DATABASE_ENV: database_url}
+    try:
+        async with lock:
+            child = await asyncio.create_subprocess_exec(
+                sys.executable, "-c", _CHILD, *args, env=env,
+                stdout=asyncio.subprocess.DEVNULL, stderr=asyncio.subprocess.PIPE,
+            )  # fmt: skip
+            _, err = await child.communicate()
+        if child.returncode != 0:
+            lines = err.decode(errors="replace").strip().splitlines() or ["no message"]
+            raise ExportFailed(f"the export of {table} failed: {lines[-1]}")
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
+    return FileResponse(
+        folder / f"{table}.csv",
+        media_type="text/csv",
+        filename=f"{table}.csv",
+        background=BackgroundTask(shutil.rmtree, folder, ignore_errors=True),
+    )

@@ -1,0 +1,142 @@
+"""A selection's GA work is done before its write transaction, and used only if still valid.
+
+The stored generation must be the one a plain engine makes from the recorded seed and
+selections (an independent :class:`Engine` driven here), whichever path made it.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import numpy as np
+import pytest
+from sqlalchemy import select
+
+from emogen.ga.engine import Engine, correctives_of
+from emogen.study.sessions import StudyService
+from emogen.study.steps import Prepared, Timing
+from emogen.study.tables import FaceRow, PopulationRow, TrialRow
+from tests.study.drive import choose, new_key, step_args
+
+
+def stored_weights(service: StudyService, generation: int) -> np.ndarray:
+    with service.store.read() as db:
+        rows = db.scalars(
+            select(FaceRow)
+            .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
+            .where(PopulationRow.generation == generation, PopulationRow.attempt == 0)
+            .order_by(FaceRow.position)
+        ).all()
+        return np.array([json.loads(r.weights) for r in rows])
+
+
+def reference_weights(service: StudyService, ict_model: Any, selections: list[dict]) -> np.ndarray:
+    """The generation a fresh engine makes from the first trial's seed and these selections."""
+    with service.store.read() as db:
+        trial = db.scalars(select(TrialRow).where(TrialRow.position == 0)).one()
+        seed, identity = trial.seed, trial.identity
+    engine = Engine(
+        service.ctx.config.ga_for(identity),
+        ict_model.rig,
+        seed,
+        corrector=correctives_of(ict_model),
+    )
+    for s in selections:
+        engine.tell(s["elite"], s["others"])
+    pop = engine.ask()
+    return np.hstack([pop.weights, pop.correctives])
+
+
+def test_a_prepared_selection_is_used_without_restoring_the_engine(
+    service: StudyService, ict_model: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    token, _ = service.create_session("PREP-1")
+    state = service.begin(token, new_key())
+    elite, others = choose(state)
+    restored_in_transaction: list[int] = []
+    engines = service.steps.engines
+    original = engines.restore
+    monkeypatch.setattr(
+        engines, "restore", lambda row: restored_in_transaction.append(1) or original(row)
+    )
+    state = service.select(token, new_key(), **step_args(state), elite=elite, others=others)
+    assert restored_in_transaction == []  # the transaction used the prepared engine
+    assert state["progress"]["generation"] == 1
+    expected = reference_weights(service, ict_model, [{"elite": elite, "others": others}])
+    np.testing.assert_array_equal(stored_weights(service, 1), expected)
+    shown = np.array([f["weights"] for f in state["population"]["faces"]])
+    np.testing.assert_array_equal(shown, expected)
+
+
+def test_a_stale_preparation_is_not_used(service: StudyService, ict_model: Any) -> None:
+    """Prepared from another state (the trial moved on meanwhile): the transaction does the
+    work itself, and what it stores is the right generation, not the prepared one."""
+    token, _ = service.create_session("PREP-2")
+    state = service.begin(token, new_key())
+    elite, others = choose(state)
+    args = step_args(state)
+    with service.store.read() as db:
+        trial = db.scalars(select(TrialRow).where(TrialRow.position == 0)).one()
+        real_state = trial.engine_state
+    wrong = Engine.from_json(real_state, ict_model.rig, corrector=correctives_of(ict_model))
+    wrong.tell(others[0], [elite])  # another selection: a different next generation
+    stale = Prepared("a state the trial is not in", wrong)
+    key = new_key()
+    result = service.steps.run(
+        token, "select", key,
+        {"trial": args["trial"], "attempt": args["attempt"], "generation": args["generation"],
+         "elite": elite, "others": others, "response_ms": None},
+        lambda db, sess: service.steps.select(db, sess, key=key, **args, elite=elite,
+            others=others, timing=Timing(), prepared=stale),
+    )  # fmt: skip
+    expected = reference_weights(service, ict_model, [{"elite": elite, "others": others}])
+    np.testing.assert_array_equal(stored_weights(service, 1), expected)
+    shown = np.array([f["weights"] for f in result["population"]["faces"]])
+    np.testing.assert_array_equal(shown, expected)
+    wrong_weights = np.hstack([wrong.ask().weights, wrong.ask().correctives])
+    assert not np.array_equal(wrong_weights, expected)  # the test would see the stale one
+
+
+def test_nothing_is_prepared_for_a_step_that_does_not_fit(service: StudyService) -> None:
+    token, _ = service.create_session("PREP-3")
+    assert (
+        service.steps.prepare_select(token, trial=0, attempt=0, generation=0, elite=0, others=[])
+        is None
+    )  # fmt: skip  (instructions)
+    state = service.begin(token, new_key())
+    elite, others = choose(state)
+    args = step_args(state)
+    assert service.steps.prepare_select(token, **{**args, "generation": 3}, elite=elite,
+                                        others=others) is None  # fmt: skip
+    assert service.steps.prepare_select(token, **args, elite=10_000, others=[]) is None
+    assert service.steps.prepare_select("no-such-token-at-all", **args, elite=elite,
+                                        others=others) is None  # fmt: skip
+    assert service.steps.prepare_select(token, **args, elite=elite, others=others) is not None
+
+
+def test_a_face_shown_again_is_not_corrected_again(ict_model: Any) -> None:
+    """The remembering corrector answers exactly what the model's corrector answers for the
+    whole batch, and corrects only the faces it has not corrected before (the kept elite)."""
+    from emogen.config import GAConfig
+    from emogen.study.weights import RememberingCorrector
+
+    base = correctives_of(ict_model)
+    rows: list[int] = []
+
+    def counting(w: np.ndarray) -> tuple[tuple[str, ...], np.ndarray]:
+        rows.append(len(w))
+        return base(w)
+
+    remembering = RememberingCorrector(counting, size=15)
+    engine = Engine(GAConfig(), ict_model.rig, 21)
+    for g in range(4):
+        pop = engine.ask()
+        names, values = remembering(pop.weights)
+        ref_names, ref_values = base(pop.weights)  # the whole batch at once, independently
+        assert names == ref_names
+        np.testing.assert_array_equal(values, ref_values)
+        engine.tell(int(pop.ids[g]), [int(pop.ids[g + 1])])
+    # generation 0: 10 faces; then the elite (slot 1) is remembered: 9 (or fewer) new ones
+    assert rows[0] == 10 and all(n <= 9 for n in rows[1:])
+    assert len(remembering._rows) <= 15  # bounded
