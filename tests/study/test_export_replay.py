@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pandas as pd
@@ -155,6 +157,26 @@ def test_migrations_are_idempotent_and_match_the_models(db_url: str) -> None:
         assert conn.exec_driver_sql("PRAGMA foreign_keys").scalar() == 1
         assert conn.exec_driver_sql("PRAGMA synchronous").scalar() == 2  # FULL
     store.dispose()
+
+
+def test_head_is_alembics_head_and_a_current_database_opens_without_alembic(
+    tmp_path: Path,
+) -> None:
+    from alembic.script import ScriptDirectory
+
+    from emogen.study.migrations import HEAD, alembic_config
+
+    assert ScriptDirectory.from_config(alembic_config()).get_current_head() == HEAD
+    url = f"sqlite:///{tmp_path / 'study.sqlite'}"
+    code = (
+        "import sys; from emogen.study.storage import Store; Store(sys.argv[1]).dispose(); "
+        "print(any(m.split('.')[0] == 'alembic' for m in sys.modules))"
+    )
+    run = [sys.executable, "-c", code, url]
+    new = subprocess.run(run, capture_output=True, text=True, check=True)
+    assert new.stdout.strip() == "True"  # a new database is migrated by Alembic
+    again = subprocess.run(run, capture_output=True, text=True, check=True)
+    assert again.stdout.strip() == "False"  # at HEAD: opened without it
 
 
 def test_serve_command_reports_a_bad_config(tmp_path: Path) -> None:

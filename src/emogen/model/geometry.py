@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-from scipy import sparse
+
+if TYPE_CHECKING:
+    from scipy import sparse
 
 __all__ = ["sphere_fit", "triangle_incidence", "vertex_normals"]
 
@@ -15,6 +19,8 @@ def triangle_incidence(
     triangles: np.ndarray, n_vertices: int, dtype: type = np.float64
 ) -> sparse.csr_matrix:
     """(n_vertices, n_triangles) 0/1 matrix: row v marks the triangles that use vertex v."""
+    from scipy import sparse  # here: importing this module (every study command) stays light
+
     tri = np.asarray(triangles, dtype=np.int64)
     rows = tri.reshape(-1)
     cols = np.repeat(np.arange(len(tri)), 3)

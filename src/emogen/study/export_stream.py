@@ -67,8 +67,10 @@ from emogen.study.tables import FaceRow, PopulationRow, SessionRow, StudyRow, Tr
 SETTLE = timedelta(seconds=60)
 #: Rows of the faces table per chunk (the largest table; the others follow its sessions).
 CHUNK_FACES = 500
-#: Rows of a Parquet row group (several chunks).
+#: A Parquet row group: several chunks, up to this many rows or this many bytes in memory
+#: (the faces table is wide: ~100 columns).
 ROW_GROUP_ROWS = 8192
+ROW_GROUP_BYTES = 4 << 20
 
 _ROWS: dict[str, Callable[[Records], Iterator[dict[str, Any]]]] = {
     "sessions": session_rows,
@@ -192,17 +194,19 @@ class _Spill:
 
 
 def _row_groups(tables: Iterator[pa.Table]) -> Iterator[pa.Table]:
-    """The chunks gathered into row groups of about :data:`ROW_GROUP_ROWS` rows (a Parquet
-    file's footer holds every row group's column metadata: many small groups would make it,
-    and the writer's memory, grow with the study)."""
+    """The chunks gathered into row groups of about :data:`ROW_GROUP_ROWS` rows or
+    :data:`ROW_GROUP_BYTES` (a Parquet file's footer holds every row group's column metadata:
+    many small groups would make it, and the writer's memory, grow with the study; large ones
+    hold more rows in memory at once)."""
     buffer: list[pa.Table] = []
-    rows = 0
+    rows = size = 0
     for table in tables:
         buffer.append(table)
         rows += table.num_rows
-        if rows >= ROW_GROUP_ROWS:
+        size += table.nbytes
+        if rows >= ROW_GROUP_ROWS or size >= ROW_GROUP_BYTES:
             yield pa.concat_tables(buffer)
-            buffer, rows = [], 0
+            buffer, rows, size = [], 0, 0
     if buffer:
         yield pa.concat_tables(buffer)
 
