@@ -1,8 +1,9 @@
 """Dashboard downloads: an export table written by a separate, lower-priority process.
 
-``emogen study export`` runs as a child process (``nice`` 10) into a temporary folder and the
-file is then streamed to the researcher: the export's memory is bounded (a few sessions at a
-time) and never the server's, its CPU time goes to participants' steps first, and it holds no
+``emogen study export`` runs as a child process at idle priority (Linux ``SCHED_IDLE``: it gets
+a core only when no participant request wants one; elsewhere ``nice`` 19) into a temporary
+folder and the file is then streamed to the researcher: the export's memory is bounded (a few
+sessions at a time) and never the server's, its CPU time goes to participants' steps first, and it holds no
 lock of this process (the GIL included), so participants' requests are not stalled while it
 runs. One export at a time per worker process; the database URL reaches the child through its
 environment, never its command line.
@@ -23,10 +24,16 @@ from starlette.responses import FileResponse
 from emogen.study.errors import StudyError
 from emogen.study.storage import DATABASE_ENV
 
-#: The child: lower priority, then ``python -m emogen`` with the given arguments.
+#: The child: idle priority (or the lowest nice), then ``python -m emogen`` with the given
+#: arguments.
 _CHILD = (
-    "import os, runpy, sys; os.nice(10); sys.argv = ['emogen', *sys.argv[1:]]; "
-    "runpy.run_module('emogen', run_name='__main__')"
+    "import os, runpy, sys\n"
+    "try:\n"
+    "    os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))\n"
+    "except (AttributeError, OSError):\n"
+    "    os.nice(19)\n"
+    "sys.argv = ['emogen', *sys.argv[1:]]\n"
+    "runpy.run_module('emogen', run_name='__main__')\n"
 )
 
 
