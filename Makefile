@@ -47,7 +47,7 @@ demo: setup
 	@if [ -z "$$EMOGEN_MODEL" ] && [ ! -d "$$($(BIN)/python -c 'from emogen.model.io.fetch import default_model_dir; print(default_model_dir())')/FaceXModel" ]; then \
 		$(BIN)/emogen model fetch; fi
 	$(BIN)/emogen model info | head -n 4
-	$(BIN)/emogen simulate --target jawOpen=0.8 --runs 500 --seed 1 --out $(OUT)/simulation
+	$(BIN)/emogen simulate --target jawOpen=0.8 --runs 500 --seed 1 --out $(OUT)/simulation --force
 	@echo "Starting the demo study (Ctrl-C stops it); open the URL it prints."
 	@echo "Afterwards, 'make demo-analyse' exports what was recorded and analyses it."
 	$(BIN)/emogen serve --database-url sqlite:///$(abspath $(OUT))/demo-study.sqlite
