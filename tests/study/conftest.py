@@ -8,6 +8,7 @@ from typing import Any
 import pytest
 
 from emogen.study.config import StudyConfig, study_from_dict
+from tests.study.drive import study_service
 from tests.study_fixtures import db_url, pg_cluster  # noqa: F401
 
 SMALL_STUDY: dict[str, Any] = {
@@ -26,17 +27,9 @@ def small_study() -> StudyConfig:
 
 @pytest.fixture
 def service(db_url: str, small_study: StudyConfig, ict_model):  # type: ignore[no-untyped-def]
-    from emogen.study.sessions import StudyService
     from emogen.study.storage import Store
 
     store = Store(db_url)
-    svc = StudyService(
-        small_study,
-        store,
-        ict_model.rig,
-        model_name=ict_model.name,
-        model_hash=ict_model.model_hash,
-        model=ict_model,
-    )
+    svc = study_service(small_study, store, ict_model)
     yield svc
     store.dispose()

@@ -68,3 +68,11 @@ def service_caller(service: Any, token: str) -> Callable[[str, dict[str, Any]], 
         return service.restart(token, key, **body)  # type: ignore[no-any-return]
 
     return call
+
+
+def study_service(config: Any, store: Any, model: Any) -> Any:
+    """The study service for ``config`` on ``store``, with the model's correctives (as serve)."""
+    from emogen.study.sessions import StudyService
+
+    return StudyService(config, store, model.rig, model_name=model.name,
+                        model_hash=model.model_hash, model=model)  # fmt: skip

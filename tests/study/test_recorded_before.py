@@ -12,10 +12,9 @@ from sqlalchemy import select
 from emogen.ga.engine import stream_of_state
 from emogen.study.config import StudyConfig
 from emogen.study.replay import replay_session
-from emogen.study.sessions import StudyService
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, StudyRow, TrialRow
-from tests.study.drive import run_to_end, service_caller
+from tests.study.drive import run_to_end, service_caller, study_service
 
 RECORDED = Path(__file__).parents[1] / "data" / "study_stream1.sqlite"
 OLD_2 = "_6O84B37ReuaCQMLGuN28Qw1lBIuGAFL"  # OLD-2's link: stopped in generation 3 of trial 1
@@ -64,14 +63,7 @@ def test_a_session_recorded_mid_trial_continues_and_replays(tmp_path: Path, ict_
         with store.read() as db:
             study = db.scalars(select(StudyRow)).one()
             config = StudyConfig.model_validate(json.loads(study.config_json))
-        service = StudyService(
-            config,
-            store,
-            ict_model.rig,
-            model_name=ict_model.name,
-            model_hash=ict_model.model_hash,
-            model=ict_model,
-        )
+        service = study_service(config, store, ict_model)
         state = service.state(OLD_2)
         assert state["progress"]["generation"] == 3
         assert run_to_end(state, service_caller(service, OLD_2))["stage"] == "done"

@@ -18,23 +18,13 @@ from emogen.study.errors import StepConflict
 from emogen.study.sessions import StudyService
 from emogen.study.storage import Store
 from emogen.study.tables import PopulationRow, SelectionRow, StepRow
-from tests.study.drive import choose, new_key, step_args
+from tests.study.drive import choose, new_key, step_args, study_service
 
 
 @pytest.fixture
 def workers(db_url: str, small_study: StudyConfig, ict_model: Any) -> Iterator[list[StudyService]]:
     stores = [Store(db_url) for _ in range(2)]
-    yield [
-        StudyService(
-            small_study,
-            store,
-            ict_model.rig,
-            model_name=ict_model.name,
-            model_hash=ict_model.model_hash,
-            model=ict_model,
-        )
-        for store in stores
-    ]
+    yield [study_service(small_study, store, ict_model) for store in stores]
     for store in stores:
         store.dispose()
 

@@ -30,16 +30,11 @@ from emogen.appearance.params import GENERATOR_VERSION, Appearance
 from emogen.errors import ConfigError
 from emogen.study.config import StudyConfig
 from emogen.study.export_rows import (
+    SESSION_TABLE_ROWS,
     TABLE_COLUMNS,
-    face_rows,
     iso,
     load_records,
-    rating_rows,
-    restart_rows,
-    selection_rows,
-    session_rows,
     study_rows,
-    trial_rows,
 )
 from emogen.study.storage import Store
 from emogen.study.tables import (
@@ -150,14 +145,9 @@ def export_tables(
                 raise ConfigError(f"no study named '{study}' in {store.describe()}")
         rec = load_records(db, studies, session_ids)
     rows: dict[str, list[dict[str, Any]]] = {
-        "sessions": list(session_rows(rec)),
-        "trials": list(trial_rows(rec)),
-        "faces": list(face_rows(rec)),
-        "selections": list(selection_rows(rec)),
-        "restarts": list(restart_rows(rec)),
-        "ratings": list(rating_rows(rec)),
-        "identities": [],
+        name: list(make(rec)) for name, make in SESSION_TABLE_ROWS.items()
     }
+    rows["identities"] = []
     shown = {s.study_id for s in rec.sessions} if session_ids is not None else set(studies)
     for sid in sorted(shown):
         rows["identities"].extend(identity_rows(studies[sid]))

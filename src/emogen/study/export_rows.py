@@ -7,7 +7,7 @@ each ``*_rows`` function turns them into the tidy rows of one table (see :mod:`e
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Any
@@ -288,3 +288,14 @@ def study_rows(studies: list[StudyRow]) -> Iterator[Row]:
             "model_hash": st.model_hash,
             "study_config_hash": st.config_hash,
         }
+
+
+#: The per-session tables and the function that makes each one's rows from the records.
+SESSION_TABLE_ROWS: dict[str, Callable[[Records], Iterator[Row]]] = {
+    "sessions": session_rows,
+    "trials": trial_rows,
+    "faces": face_rows,
+    "selections": selection_rows,
+    "restarts": restart_rows,
+    "ratings": rating_rows,
+}

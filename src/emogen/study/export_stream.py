@@ -27,7 +27,7 @@ from __future__ import annotations
 import json
 import shutil
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
@@ -48,18 +48,7 @@ from emogen.study.export import (
     neutralise_formulas,
     table_extras,
 )
-from emogen.study.export_rows import (
-    Records,
-    face_rows,
-    iso,
-    load_records,
-    rating_rows,
-    restart_rows,
-    selection_rows,
-    session_rows,
-    study_rows,
-    trial_rows,
-)
+from emogen.study.export_rows import SESSION_TABLE_ROWS, iso, load_records, study_rows
 from emogen.study.storage import Store
 from emogen.study.tables import FaceRow, PopulationRow, SessionRow, StudyRow, TrialRow, as_utc
 
@@ -71,15 +60,6 @@ CHUNK_FACES = 500
 #: (the faces table is wide: ~100 columns).
 ROW_GROUP_ROWS = 8192
 ROW_GROUP_BYTES = 4 << 20
-
-_ROWS: dict[str, Callable[[Records], Iterator[dict[str, Any]]]] = {
-    "sessions": session_rows,
-    "trials": trial_rows,
-    "faces": face_rows,
-    "selections": selection_rows,
-    "restarts": restart_rows,
-    "ratings": rating_rows,
-}
 
 
 def parse_since(text: str) -> datetime:
@@ -285,12 +265,12 @@ def _spill_sessions(
     tables: tuple[str, ...], extras: dict[str, list[str]],
 ) -> None:  # fmt: skip
     """Every chunk's rows of the per-session tables, read and spilled one chunk at a time."""
-    per_session = [name for name in tables if name in _ROWS]
+    per_session = [name for name in tables if name in SESSION_TABLE_ROWS]
     for name in per_session:
         spill.add(name, _frame(name, [], extras.get(name, [])))
     for ids in chunks:
         with store.read() as db:
             rec = load_records(db, studies, ids)
         for name in per_session:
-            spill.add(name, _frame(name, list(_ROWS[name](rec)), extras.get(name, [])))
+            spill.add(name, _frame(name, list(SESSION_TABLE_ROWS[name](rec)), extras.get(name, [])))
         del rec
