@@ -20,7 +20,14 @@ import numpy as np
 from numba import njit
 
 from emogen.correct.lips import UPPER_FRONT_TEETH, MouthGeometry
-from emogen.correct.raycast import bin_triangles, gather_triangles, grow, hit_buffers, probe
+from emogen.correct.raycast import (
+    bin_triangles,
+    cell_hits,
+    cell_of,
+    gather_triangles,
+    grow,
+    hit_buffers,
+)
 
 LIP, TEETH = 0, 1
 TYPES = ("lip", "teeth")
@@ -238,7 +245,7 @@ class Detection:
         return self.within.sum(1) > 0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _summarise(
     n: int, hit_t: np.ndarray, hit_facing: np.ndarray, negative: float
 ) -> tuple[float, float, float, float, int, int]:  # pragma: no cover - compiled
@@ -331,9 +338,13 @@ def _detect_faces(
             q = n_q
             n_q += 1
             q_anchor[q] = n
-            q_point[q] = p
-            h = probe(tri, Y, grid_y, p, 1, b_tri, b_t, b_facing, b_u, b_v)
-            dp, fp, dm, fm, ex, rank = _summarise(h, b_t, b_facing, 1.0)
+            for d in range(3):
+                q_point[q, d] = p[d]
+            dp, fp, dm, fm, ex, rank = np.inf, 0.0, np.inf, 0.0, -1, 0  # no hit
+            key = cell_of(grid_y, Y, p, 1)
+            if key >= 0:
+                h = cell_hits(tri, Y, grid_y, key, p, b_tri, b_t, b_facing, b_u, b_v)
+                dp, fp, dm, fm, ex, rank = _summarise(h, b_t, b_facing, 1.0)
             q_near[q, 0], q_near[q, 1], q_near[q, 2], q_near[q, 3] = dp, fp, dm, fm
             q_near[q, 4], q_near[q, 5], q_near[q, 6], q_near[q, 7] = np.inf, 0.0, np.inf, 0.0
             q_exit[q, 0] = -1.0
@@ -351,8 +362,13 @@ def _detect_faces(
             kind = anchor_kind[q_anchor[q]]
             if q_candidate[q] or kind == TEETH:
                 need = -1 if kind == TEETH else 2
-                h = probe(tri, Z, grid_z, q_point[q], need, b_tri, b_t, b_facing, b_u, b_v)
-                dp, fp, dm, fm, ex, rank = _summarise(h, b_t, b_facing, -1.0)
+                for d in range(3):
+                    p[d] = q_point[q, d]
+                dp, fp, dm, fm, ex, rank = np.inf, 0.0, np.inf, 0.0, -1, 0  # no hit
+                key = cell_of(grid_z, Z, p, need)
+                if key >= 0:
+                    h = cell_hits(tri, Z, grid_z, key, p, b_tri, b_t, b_facing, b_u, b_v)
+                    dp, fp, dm, fm, ex, rank = _summarise(h, b_t, b_facing, -1.0)
                 q_near[q, 4], q_near[q, 5], q_near[q, 6], q_near[q, 7] = dp, fp, dm, fm
                 if kind == TEETH:
                     q_exit[q, 0] = -1.0

@@ -117,40 +117,28 @@ def bin_triangles(
     return org_a, org_c, inv, n_a, n_c, start, members, span_lo, span_hi
 
 
-@njit(cache=True, nogil=True)
-def probe(
-    tri: np.ndarray,
-    axis: int,
+@njit(cache=True, nogil=True, inline="always")
+def cell_of(
     grid: tuple[float, float, float, int, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    axis: int,
     point: np.ndarray,
     need: int,
-    hit_tri: np.ndarray,
-    hit_t: np.ndarray,
-    hit_facing: np.ndarray,
-    hit_u: np.ndarray,
-    hit_v: np.ndarray,
 ) -> int:  # pragma: no cover - compiled
-    """The crossings of the line along ``axis`` through ``point`` (3,) with one face's binned
-    triangles, written to the ``hit_*`` buffers (at least the largest cell's size); returns
-    their number (0 when the point's cell is empty, outside the grid, or its span cannot give
-    what ``need`` asks for: 0, surfaces on both sides of the point; +1, some on its + side; −1,
-    some on its − side; 2, some on either side; ``NO_FILTER``, every hit).
-
-    Hits are (triangle, t = hit coordinate − point coordinate along the axis, facing = the
-    triangle normal's component along the axis × twice its area — its sign says whether a ray
-    going +axis enters (< 0) or leaves (> 0) the surface's inside — and the barycentric weights
-    u, v of the triangle's 2nd and 3rd corners), in increasing triangle order."""
+    """The grid cell of the line along ``axis`` through ``point``, or −1 when :func:`probe`
+    would find nothing there: outside the grid, an empty cell, or a cell whose span along the
+    axis cannot give what ``need`` asks for (see :func:`probe`). Cheap: most anchors stop here,
+    so the detector calls it before :func:`cell_hits` (inlined, no call per anchor)."""
     a = (axis + 1) % 3
     c = (axis + 2) % 3
-    org_a, org_c, inv, n_a, n_c, start, members, span_lo, span_hi = grid
-    pa, pc, pk = point[a], point[c], point[axis]
-    fa = np.floor((pa - org_a) * inv)
-    fc = np.floor((pc - org_c) * inv)
+    org_a, org_c, inv, n_a, n_c, start, _members, span_lo, span_hi = grid
+    pk = point[axis]
+    fa = np.floor((point[a] - org_a) * inv)
+    fc = np.floor((point[c] - org_c) * inv)
     if not (fa >= 0 and fa < n_a and fc >= 0 and fc < n_c):
-        return 0
+        return -1
     key = int(fa) * n_c + int(fc)
     if start[key] == start[key + 1]:
-        return 0
+        return -1
     if need != NO_FILTER:
         above = pk < span_hi[key]
         below = pk > span_lo[key]
@@ -163,7 +151,29 @@ def probe(
         else:
             ok = above or below
         if not ok:
-            return 0
+            return -1
+    return key
+
+
+@njit(cache=True, nogil=True, inline="always")
+def cell_hits(
+    tri: np.ndarray,
+    axis: int,
+    grid: tuple[float, float, float, int, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    key: int,
+    point: np.ndarray,
+    hit_tri: np.ndarray,
+    hit_t: np.ndarray,
+    hit_facing: np.ndarray,
+    hit_u: np.ndarray,
+    hit_v: np.ndarray,
+) -> int:  # pragma: no cover - compiled
+    """The crossings of the line along ``axis`` through ``point`` with the triangles of grid
+    cell ``key`` (from :func:`cell_of`), written to the ``hit_*`` buffers; their number."""
+    a = (axis + 1) % 3
+    c = (axis + 2) % 3
+    start, members = grid[5], grid[6]
+    pa, pc, pk = point[a], point[c], point[axis]
     n = 0
     for m in range(start[key], start[key + 1]):
         t = members[m]
@@ -190,3 +200,32 @@ def probe(
         hit_v[n] = v
         n += 1
     return n
+
+
+@njit(cache=True, nogil=True, inline="always")
+def probe(
+    tri: np.ndarray,
+    axis: int,
+    grid: tuple[float, float, float, int, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    point: np.ndarray,
+    need: int,
+    hit_tri: np.ndarray,
+    hit_t: np.ndarray,
+    hit_facing: np.ndarray,
+    hit_u: np.ndarray,
+    hit_v: np.ndarray,
+) -> int:  # pragma: no cover - compiled
+    """The crossings of the line along ``axis`` through ``point`` (3,) with one face's binned
+    triangles, written to the ``hit_*`` buffers (at least the largest cell's size); returns
+    their number (0 when the point's cell is empty, outside the grid, or its span cannot give
+    what ``need`` asks for: 0, surfaces on both sides of the point; +1, some on its + side; −1,
+    some on its − side; 2, some on either side; ``NO_FILTER``, every hit).
+
+    Hits are (triangle, t = hit coordinate − point coordinate along the axis, facing = the
+    triangle normal's component along the axis × twice its area — its sign says whether a ray
+    going +axis enters (< 0) or leaves (> 0) the surface's inside — and the barycentric weights
+    u, v of the triangle's 2nd and 3rd corners), in increasing triangle order."""
+    key = cell_of(grid, axis, point, need)
+    if key < 0:
+        return 0
+    return cell_hits(tri, axis, grid, key, point, hit_tri, hit_t, hit_facing, hit_u, hit_v)

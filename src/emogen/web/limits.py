@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Awaitable, Callable
 
-from fastapi import FastAPI, Request, Response
+from fastapi import FastAPI
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 
@@ -91,21 +90,43 @@ SECURITY_HEADERS = {
 HSTS = "max-age=31536000; includeSubDomains"
 
 
-def add_response_headers(app: FastAPI, *, hsts: bool = False) -> None:
-    """Server-Timing, CSP, no framing, nosniff, no referrer (session tokens are in URLs) on
-    every answer; API answers are not cached; HSTS when ``hsts`` (behind TLS only)."""
+class ResponseHeaders:
+    """ASGI middleware: Server-Timing, CSP, no framing, nosniff, no referrer (session tokens
+    are in URLs) on every answer; API answers are not cached; HSTS when ``hsts`` (behind TLS
+    only). Plain ASGI, not ``@app.middleware("http")``: that wraps every response in a
+    stream of its own, which costs the study step a share of its CPU (docs/study.md)."""
 
-    @app.middleware("http")
-    async def headers(
-        request: Request, call_next: Callable[[Request], Awaitable[Response]]
-    ) -> Response:
-        t0 = time.perf_counter()
-        response = await call_next(request)
-        ms = (time.perf_counter() - t0) * 1000
-        response.headers["Server-Timing"] = f"app;dur={ms:.2f}"
-        response.headers.update(SECURITY_HEADERS)
+    def __init__(self, app: ASGIApp, hsts: bool = False) -> None:
+        self.app = app
+        fixed = dict(SECURITY_HEADERS)
         if hsts:
-            response.headers["Strict-Transport-Security"] = HSTS
-        if request.url.path.startswith("/api/"):
-            response.headers["Cache-Control"] = "no-store"
-        return response
+            fixed["Strict-Transport-Security"] = HSTS
+        self.fixed = [(k.lower().encode("latin-1"), v.encode("latin-1")) for k, v in fixed.items()]
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        t0 = time.perf_counter()
+        api = scope["path"].startswith("/api/")
+
+        async def send_with_headers(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                ms = (time.perf_counter() - t0) * 1000
+                ours = {k for k, _ in self.fixed} | {b"server-timing"}
+                if api:
+                    ours.add(b"cache-control")
+                headers = [(k, v) for k, v in message.get("headers", []) if k.lower() not in ours]
+                headers += self.fixed
+                headers.append((b"server-timing", f"app;dur={ms:.2f}".encode("latin-1")))
+                if api:
+                    headers.append((b"cache-control", b"no-store"))
+                message = {**message, "headers": headers}
+            await send(message)
+
+        await self.app(scope, receive, send_with_headers)
+
+
+def add_response_headers(app: FastAPI, *, hsts: bool = False) -> None:
+    """Adds :class:`ResponseHeaders` to ``app``."""
+    app.add_middleware(ResponseHeaders, hsts=hsts)
