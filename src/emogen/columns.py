@@ -40,6 +40,7 @@ METADATA_KEY = b"emogen"
 
 _INT = frozenset({
     "session_id", "session_number", "order_row", "trial", "condition", "repetition", "ga_stream",
+    "collision_solver",
     "attempts", "generation_reached", "final_face_id", "attempt", "generation", "position",
     "face_id", "parent_a", "parent_b", "rank", "n_selected", "n_trials", "value", "points",
     "run", "slot", "appearance_generator", "cell_runs", "n_samples", "n_groups", "sample_size",

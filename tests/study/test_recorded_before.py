@@ -1,5 +1,6 @@
-"""A study recorded before the GA was written once over runs (engine stream 1) still replays,
-and a session left in the middle then continues, with the stream it was drawn with."""
+"""A study recorded before the GA was written once over runs (engine stream 1) and before the
+eq. 5 solvers were numbered (collision solver 1) still replays, and a session left in the middle
+then continues with the stream and the solver it was drawn and corrected with."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from pathlib import Path
 from sqlalchemy import select
 
 from emogen.ga.engine import stream_of_state
+from emogen.ga.state import collision_solver_of_state
 from emogen.study.config import StudyConfig
 from emogen.study.replay import replay_session
 from emogen.study.storage import Store
@@ -39,12 +41,30 @@ def _streams(store: Store, session_id: int) -> list[int]:
         return [stream_of_state(r.engine_state) for r in rows]
 
 
+def _solvers(store: Store, session_id: int) -> list[int | None]:
+    """The collision solver each trial's stored state records (None: not recorded)."""
+    with store.read() as db:
+        rows = db.scalars(
+            select(TrialRow).where(TrialRow.session_id == session_id).order_by(TrialRow.position)
+        )
+        return [json.loads(r.engine_state).get("collision_solver") for r in rows]
+
+
+def _state(store: Store, session_id: int) -> str:
+    with store.read() as db:
+        return db.scalars(
+            select(TrialRow.engine_state).where(TrialRow.session_id == session_id)
+        ).first()
+
+
 def test_recorded_study_replays_exactly(tmp_path: Path, ict_model) -> None:
     store = _open(tmp_path)
     try:
         ids = _sessions(store)
         assert set(ids) == {"OLD-1", "OLD-2"}
         assert _streams(store, ids["OLD-1"]) == [1, 1]
+        assert _solvers(store, ids["OLD-1"]) == [None, None]  # recorded before: solver 1
+        assert collision_solver_of_state(_state(store, ids["OLD-1"])) == 1
         for participant, populations in (("OLD-1", 13), ("OLD-2", 4)):
             report = replay_session(
                 store, ids[participant], ict_model.rig, ict_model.model_hash, model=ict_model
@@ -70,6 +90,8 @@ def test_a_session_recorded_mid_trial_continues_and_replays(tmp_path: Path, ict_
         old_2 = _sessions(store)["OLD-2"]
         # trial 1 goes on with the stream it began with; trial 2 began after the upgrade
         assert _streams(store, old_2) == [1, 2]
+        # and with the collision solver it was corrected with (2: the current one)
+        assert _solvers(store, old_2) == [1, 2]
         report = replay_session(store, old_2, ict_model.rig, ict_model.model_hash, model=ict_model)
         assert report.mismatches == [], report.mismatches
         assert report.populations == 10

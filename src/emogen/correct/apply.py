@@ -16,7 +16,7 @@ import numpy as np
 from emogen.correct.blend import blend
 from emogen.correct.combinational import activations
 from emogen.correct.correctives import Correctives, correctives_for
-from emogen.correct.solve import MAX_ITERATIONS, solve_collisions
+from emogen.correct.solve import CURRENT_SOLVER, MAX_ITERATIONS, solve_collisions
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
@@ -135,8 +135,10 @@ class Corrector:
         *,
         collisions: bool = True,
         max_iterations: int = MAX_ITERATIONS,
+        solver: int = CURRENT_SOLVER,
     ) -> CorrectionResult:
-        """Correct faces: weights (B, S) in [0, 1] → :class:`CorrectionResult`."""
+        """Correct faces: weights (B, S) in [0, 1] → :class:`CorrectionResult` (``solver``:
+        the eq. 5 block solver, :data:`emogen.correct.solve.SOLVERS`)."""
         c = self.correctives
         core = np.array(weights, dtype=np.float64)
         eff = self.effective_weights(core)
@@ -159,6 +161,7 @@ class Corrector:
                     self._collision_local,
                     c.layout,
                     max_iterations=max_iterations,
+                    solver=solver,
                 )
                 col[rows], before[rows], after[rows] = (
                     sol.weights,

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from emogen.correct.apply import CorrectionResult, Corrector
+from emogen.correct.solve import CURRENT_SOLVER
 from emogen.errors import ShapeError
 
 if TYPE_CHECKING:
@@ -55,7 +56,7 @@ def model_correctives(model: FaceModel) -> Correctives:
 
 
 def correct_faces(
-    model: FaceModel, weights: np.ndarray, *, collisions: bool = True
+    model: FaceModel, weights: np.ndarray, *, collisions: bool = True, solver: int = CURRENT_SOLVER
 ) -> CorrectionResult:
     """Correct faces of ``model``: weights (n_faces, n_shapes) in [0, 1] → the correction.
 
@@ -64,12 +65,13 @@ def correct_faces(
     collision correctives are solved (eq. 5) until no lip or teeth collision remains. The
     result keeps the core weights, the effective weights and every corrective weight
     separately, and says what remains uncorrected. A face without collision gets collision
-    weights of exactly zero.
+    weights of exactly zero. ``solver``: the eq. 5 block solver
+    (:data:`emogen.correct.solve.SOLVERS`; a recorded study trial says which it used).
     """
     w = model.check_weights(weights, np.float64)
     if np.any((w < 0) | (w > 1)):
         raise ShapeError("weights must lie in [0, 1] to be corrected")
-    return corrector_for(model).correct(w, collisions=collisions)
+    return corrector_for(model).correct(w, collisions=collisions, solver=solver)
 
 
 def corrected_vertices(

@@ -43,16 +43,27 @@ __all__ = [
 Corrector = Callable[[np.ndarray], tuple[tuple[str, ...], np.ndarray]]
 
 
-def correctives_of(model: Any) -> Corrector:
+class ModelCorrector:
     """A corrector from a face model: :func:`emogen.correct.correct_faces` (combinational +
-    collision correctives)."""
-    from emogen.correct.faces import correct_faces
+    collision correctives) with eq. 5 block solver ``solver`` (recorded in the engine's state
+    as ``collision_solver``, so that a recorded trial is corrected again as it was)."""
 
-    def correct(weights: np.ndarray) -> tuple[tuple[str, ...], np.ndarray]:
-        result = correct_faces(model, weights)
+    def __init__(self, model: Any, solver: int | None = None) -> None:
+        from emogen.correct.solve import CURRENT_SOLVER, check_solver
+
+        self.model = model
+        self.solver = check_solver(CURRENT_SOLVER if solver is None else solver)
+
+    def __call__(self, weights: np.ndarray) -> tuple[tuple[str, ...], np.ndarray]:
+        from emogen.correct.faces import correct_faces
+
+        result = correct_faces(self.model, weights, solver=self.solver)
         return tuple(result.corrective_names), np.asarray(result.correctives, dtype=np.float64)
 
-    return correct
+
+def correctives_of(model: Any, solver: int | None = None) -> Corrector:
+    """A :class:`ModelCorrector` of ``model`` (``solver``: default the current one)."""
+    return ModelCorrector(model, solver)
 
 
 class Engine:
@@ -280,6 +291,7 @@ class Engine:
         return {
             "schema": STATE_SCHEMA,
             "stream": self.stream,
+            "collision_solver": getattr(self.corrector, "solver", None),
             "emogen_version": __version__,
             "config": self.config.model_dump(mode="json"),
             "rig": {"name": self.rig.name, "genes": list(self.gene_names)},

@@ -39,6 +39,27 @@ def state_stream(data: dict[str, Any]) -> int:
     return legacy if legacy is not None else check_stream(data.get("stream"))
 
 
+def collision_solver_of_state(state: str | dict[str, Any] | None) -> int:
+    """The eq. 5 solver (:data:`emogen.correct.solve.SOLVERS`) a corrected trial's state was
+    recorded with: its ``collision_solver``, or 1 for a state recorded before solvers were
+    numbered (they all used solver 1). ``None`` (nothing recorded yet) gives the current one."""
+    from emogen.correct.solve import CURRENT_SOLVER, check_solver
+
+    if state is None or state == "":
+        return CURRENT_SOLVER
+    try:
+        data = json.loads(state) if isinstance(state, str) else dict(state)
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"engine state is not valid JSON: {exc}") from None
+    recorded = data.get("collision_solver", 1)
+    if recorded is None:  # recorded by an engine without a corrector
+        return CURRENT_SOLVER
+    try:
+        return check_solver(recorded)
+    except ValueError as exc:
+        raise ConfigError(f"engine state: {exc}") from None
+
+
 def read_state_header(data: dict[str, Any]) -> tuple[GAConfig, int, int]:
     """(config, seed, stream) of a stored state, checked."""
     stream = state_stream(data)

@@ -15,7 +15,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from emogen.ga.state import stream_of_state
+from emogen.ga.state import collision_solver_of_state, stream_of_state
 from emogen.study.tables import (
     SCHEMA_VERSION,
     FaceRow,
@@ -38,7 +38,7 @@ TABLE_COLUMNS = {
                  "seed", "order_kind", "order_row", "stage", "n_trials", "user_agent",
                  "created_at", "consented_at", "started_at", "completed_at"],
     "trials": ["study", "session_id", "participant_id", "trial", "condition", "emotion",
-               "identity", "repetition", "seed", "ga_stream", "status", "attempts",
+               "identity", "repetition", "seed", "ga_stream", "collision_solver", "status", "attempts",
                "generation_reached", "final_face_id", "started_at", "finished_at"],
     "faces": ["study", "session_id", "participant_id", "trial", "attempt", "generation",
               "position", "face_id", "parent_a", "parent_b", "operator", "shown_at"],
@@ -76,6 +76,7 @@ class Records:
     by_session: dict[int, SessionRow] = field(init=False)
     by_trial: dict[int, TrialRow] = field(init=False)
     by_population: dict[int, PopulationRow] = field(init=False)
+    _corrects: dict[int, bool] = field(init=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         self.by_session = {s.id: s for s in self.sessions}
@@ -101,6 +102,13 @@ class Records:
             "participant_id": s.participant_id,
             "trial": trial.position,
         }
+
+    def corrects(self, trial: TrialRow) -> bool:
+        """Whether the trial's study corrects its faces (``correct`` in its config)."""
+        st = self.studies[self.by_session[trial.session_id].study_id]
+        if st.id not in self._corrects:
+            self._corrects[st.id] = bool(json.loads(st.config_json).get("correct", True))
+        return self._corrects[st.id]
 
     def trial_stamp(self, trial: TrialRow) -> Row:
         return self.stamp(self.by_session[trial.session_id])
@@ -174,6 +182,11 @@ def trial_rows(rec: Records) -> Iterator[Row]:
             "repetition": t.repetition,
             "seed": t.seed,
             "ga_stream": stream_of_state(t.engine_state) if t.engine_state else None,
+            "collision_solver": (
+                collision_solver_of_state(t.engine_state)
+                if t.engine_state and rec.corrects(t)
+                else None
+            ),
             "status": t.status,
             "attempts": t.attempt + 1,
             "generation_reached": t.generation,

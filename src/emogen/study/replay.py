@@ -17,6 +17,7 @@ from sqlalchemy.orm import selectinload
 
 from emogen.errors import EmoGenError
 from emogen.ga.engine import Engine, stream_of_state
+from emogen.ga.state import collision_solver_of_state
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
 from emogen.study.context import accepted_hashes
@@ -174,7 +175,9 @@ def replay_session(
                     config.ga_for(trial.identity),
                     rig,
                     trial.seed,
-                    corrector=correctors(trial.identity),
+                    corrector=correctors(
+                        trial.identity, collision_solver_of_state(trial.engine_state)
+                    ),
                     stream=stream_of_state(trial.engine_state),  # as it was drawn
                 )
                 for p in pops:

@@ -138,9 +138,12 @@ def _replay_trial(report: ReplayReport, config: StudyConfig, rig: Rig,
     if not keys:
         return
     stream = trial.get("ga_stream")
+    solver = trial.get("collision_solver")  # NA or absent (before schema /4): solver 1
     try:
         engine = Engine(config.ga_for(str(trial["identity"])), rig, int(trial["seed"]),
-                        corrector=correctors(str(trial["identity"])),
+                        corrector=correctors(str(trial["identity"]),
+                                             1 if solver is None or pd.isna(solver)
+                                             else int(solver)),
                         **({} if pd.isna(stream) else {"stream": int(stream)}))  # fmt: skip
         for key in keys:
             where = f"session {sid} trial {pos + 1} attempt {key[2] + 1} generation {key[3]}"

@@ -18,8 +18,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from datetime import datetime
 
-from sqlalchemy import bindparam, insert, select
+from sqlalchemy import bindparam, insert, select, update
 from sqlalchemy.orm import Session
+from sqlalchemy.orm.attributes import set_committed_value
 
 from emogen.errors import EmoGenError, SelectionError
 from emogen.ga.engine import Engine
@@ -53,6 +54,21 @@ from emogen.study.view import SessionState, ShownPopulation, session_state
 #: Plain inserts of the rows a step writes and never reads back (no ORM unit of work).
 _INSERT_STEP = insert(core_table(StepRow))
 _INSERT_SELECTION = insert(core_table(SelectionRow))
+_SESSIONS = core_table(SessionRow)
+_TOUCH_SESSION = (
+    update(_SESSIONS).where(_SESSIONS.c.id == bindparam("sid")).values(updated_at=bindparam("at"))
+)
+
+
+def _update_row(db: Session, row: SessionRow | TrialRow, values: dict[str, object]) -> None:
+    """UPDATE one row's columns by a plain statement and set them on its loaded object as
+    committed: the ORM's unit of work (a flush) costs the study step more than the update."""
+    table = core_table(type(row))
+    db.execute(update(table).where(table.c.id == row.id).values(**values))
+    for name, value in values.items():
+        set_committed_value(row, name, value)
+
+
 #: The session's current trial if it shows a population: engine state, identity, position,
 #: attempt, generation (read without a lock to prepare a selection).
 _ACTIVE_TRIAL = (
@@ -151,8 +167,9 @@ class SessionSteps:
                 {"session_id": sess.id, "key": key, "kind": kind, "request_hash": digest,
                  "created_at": now},
             )  # fmt: skip
-            sess.updated_at = now
-            db.flush()
+            db.flush()  # what the step changed through the ORM (nothing for a selection)
+            db.execute(_TOUCH_SESSION, {"sid": sess.id, "at": now})
+            set_committed_value(sess, "updated_at", now)
             return session_state(db, config, sess, shown)
 
         return self.store.transact(work)
@@ -229,13 +246,13 @@ class SessionSteps:
             },
         )
         shown = None
+        values: dict[str, object] = {}
         if engine.done:
-            row.status = "rating"
-            row.final_face_id = int(engine.result.ids[0])
+            values = {"status": "rating", "final_face_id": int(engine.result.ids[0])}
         else:
             shown = store_population(db, row, engine.ask())
-        row.generation = engine.generation
-        row.engine_state = engine.to_json()
+        values.update(generation=engine.generation, engine_state=engine.to_json())
+        _update_row(db, row, values)
         return shown
 
     def restart(

@@ -121,7 +121,7 @@ def _writer_lock_path(engine: Engine) -> str:
 class _GroupCommit:
     """SQLite group commit: one writer thread runs queued write jobs, many per transaction.
 
-    Each job runs in its own SAVEPOINT (a failing job is rolled back alone and its caller gets
+    Each job of a batch runs in its own SAVEPOINT (a failing job is rolled back alone and its caller gets
     the exception); one COMMIT — one fsync — then makes the whole batch durable, and only then
     are the callers answered. Under load this shares the fsync among concurrent steps; alone, a
     job is a transaction of its own as before.
@@ -173,6 +173,21 @@ class _GroupCommit:
             self._execute(batch)
 
     def _execute(self, batch: list[tuple[Callable[[Session], Any], Future[Any]]]) -> None:
+        if len(batch) == 1:  # alone: its own transaction, no savepoint needed
+            fn, future = batch[0]
+            try:
+                with (
+                    self.store._writer(),
+                    Session(self.store._write_engine, expire_on_commit=False) as session,
+                    session.begin(),
+                ):
+                    result = fn(session)
+                    session.flush()
+            except Exception as exc:  # rolled back: the caller gets it
+                future.set_exception(exc)
+            else:
+                future.set_result(result)
+            return
         outcomes: list[tuple[Future[Any], Any, BaseException | None]] = []
         try:
             with (

@@ -30,7 +30,7 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 #: ``sessions.trial_order`` dropped (the ``trials`` table holds the order), provenance in
 #: every Parquet file's metadata (:mod:`emogen.columns`). Exports of schema 2 still analyse
 #: and replay.
-SCHEMA_VERSION = "emogen.study/3"
+SCHEMA_VERSION = "emogen.study/4"
 
 
 def utcnow() -> datetime:

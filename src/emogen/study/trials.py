@@ -3,10 +3,14 @@ population it makes stored (genes, full weights, ids, parents, operators) before
 
 from __future__ import annotations
 
+import json
+
 from sqlalchemy import insert
 from sqlalchemy.orm import Session
 
+from emogen.errors import ConfigError
 from emogen.ga.engine import Engine, Population
+from emogen.ga.state import collision_solver_of_state
 from emogen.study.context import StudyContext
 from emogen.study.errors import SessionNotFound
 from emogen.study.queries import trial_at
@@ -39,8 +43,14 @@ class TrialEngines:
         return self.restore_state(row.engine_state or "", row.identity)
 
     def restore_state(self, state: str, identity: str) -> Engine:
-        """An engine of the study's trial of ``identity`` restored from a stored state."""
-        return Engine.from_json(state, self.ctx.rig, corrector=self.correctors(identity))
+        """An engine of the study's trial of ``identity`` restored from a stored state, with
+        the collision solver the state was recorded with (a trial is corrected one way)."""
+        try:
+            data = json.loads(state)
+        except json.JSONDecodeError as exc:
+            raise ConfigError(f"engine state is not valid JSON: {exc}") from None
+        corrector = self.correctors(identity, collision_solver_of_state(data))
+        return Engine.from_json(data, self.ctx.rig, corrector=corrector)
 
     def start(self, db: Session, sess: SessionRow, position: int) -> ShownPopulation:
         """Start the session's trial at ``position``: its generation 0 is made and stored."""

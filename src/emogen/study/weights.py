@@ -69,6 +69,8 @@ class RememberingCorrector:
 
     def __init__(self, corrector: Corrector, size: int = 4096) -> None:
         self.corrector = corrector
+        #: the collision solver of the corrector it wraps (recorded in engine states)
+        self.solver: int | None = getattr(corrector, "solver", None)
         self.size = size
         self._rows: OrderedDict[bytes, Floats] = OrderedDict()
         self._names: tuple[str, ...] | None = None
@@ -100,10 +102,11 @@ class RememberingCorrector:
 
 
 class StudyCorrectors:
-    """One corrector per identity shape (``correctives_of`` the model with the shape of the
-    study's identity of that name; identities that share a shape share it), made on first use
-    and remembering the faces it corrected (:class:`RememberingCorrector`); none when the study
-    does not correct faces."""
+    """One corrector per identity shape and collision solver (``correctives_of`` the model with
+    the shape of the study's identity of that name; identities that share a shape share it),
+    made on first use and remembering the faces it corrected (:class:`RememberingCorrector`);
+    none when the study does not correct faces. ``solver``: the eq. 5 block solver a trial was
+    recorded with (:func:`emogen.ga.state.collision_solver_of_state`; default the current)."""
 
     def __init__(self, config: StudyConfig, model: FaceModel | None) -> None:
         if config.correct and model is None:
@@ -113,13 +116,23 @@ class StudyCorrectors:
             )
         self.config = config
         self.model = model if config.correct else None
-        self._made: dict[str | tuple[float, ...], Corrector] = {}
+        self._models: dict[str | tuple[float, ...], FaceModel] = {}
+        self._made: dict[tuple[str | tuple[float, ...], int], Corrector] = {}
 
-    def __call__(self, identity: str) -> Corrector | None:
+    def __call__(self, identity: str, solver: int | None = None) -> Corrector | None:
         if self.model is None:
             return None
+        if solver is None:
+            from emogen.correct.solve import CURRENT_SOLVER
+
+            solver = CURRENT_SOLVER
         shape = self.config.identity_of(identity).shape
-        if shape not in self._made:
-            m = self.model if shape == "generic" else self.model.with_identity(shape)
-            self._made[shape] = RememberingCorrector(correctives_of(m))
-        return self._made[shape]
+        if (shape, solver) not in self._made:
+            if shape not in self._models:
+                self._models[shape] = (
+                    self.model if shape == "generic" else self.model.with_identity(shape)
+                )
+            self._made[(shape, solver)] = RememberingCorrector(
+                correctives_of(self._models[shape], solver)
+            )
+        return self._made[(shape, solver)]
