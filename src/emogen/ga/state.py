@@ -15,6 +15,14 @@ STATE_SCHEMA = "emogen.ga.engine/2"
 STATE_SCHEMAS = {"emogen.ga.engine/1": 1, STATE_SCHEMA: None}
 
 
+def state_data(state: str | dict[str, Any]) -> dict[str, Any]:
+    """A stored engine state as a dict (JSON text parsed; a bad text is a ConfigError)."""
+    try:
+        return json.loads(state) if isinstance(state, str) else dict(state)
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"engine state is not valid JSON: {exc}") from None
+
+
 def stream_of_state(state: str | dict[str, Any] | None) -> int:
     """The GA stream an engine state was recorded with (1 for ``emogen.ga.engine/1`` states).
 
@@ -22,10 +30,7 @@ def stream_of_state(state: str | dict[str, Any] | None) -> int:
     """
     if state is None or state == "":
         return CURRENT_STREAM
-    try:
-        data = json.loads(state) if isinstance(state, str) else dict(state)
-    except json.JSONDecodeError as exc:
-        raise ConfigError(f"engine state is not valid JSON: {exc}") from None
+    data = state_data(state)
     return state_stream(data)
 
 
@@ -47,10 +52,7 @@ def collision_solver_of_state(state: str | dict[str, Any] | None) -> int:
 
     if state is None or state == "":
         return CURRENT_SOLVER
-    try:
-        data = json.loads(state) if isinstance(state, str) else dict(state)
-    except json.JSONDecodeError as exc:
-        raise ConfigError(f"engine state is not valid JSON: {exc}") from None
+    data = state_data(state)
     recorded = data.get("collision_solver", 1)
     if recorded is None:  # recorded by an engine without a corrector
         return CURRENT_SOLVER

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 from datetime import datetime
+from typing import NamedTuple
 
 from sqlalchemy import bindparam, func, select
 from sqlalchemy.orm import Session, selectinload
@@ -34,8 +35,13 @@ _POPULATION_AT = select(PopulationRow).where(
     PopulationRow.generation == bindparam("generation"),
 )
 _POPULATION_AT_WITH_FACES = _POPULATION_AT.options(selectinload(PopulationRow.faces))
-_STEP_WITH_KEY = select(StepRow).where(
+_STEP_WITH_KEY = select(StepRow.kind, StepRow.request_hash).where(
     StepRow.session_id == bindparam("session_id"), StepRow.key == bindparam("key")
+)
+_SHOWN = select(PopulationRow.id, PopulationRow.shown_at).where(
+    PopulationRow.trial_id == bindparam("trial_id"),
+    PopulationRow.attempt == bindparam("attempt"),
+    PopulationRow.generation == bindparam("generation"),
 )
 
 
@@ -111,8 +117,33 @@ def last_selection_time(db: Session, trial_id: int) -> datetime | None:
     )
 
 
-def step_with_key(db: Session, session_id: int, key: str) -> StepRow | None:
-    return db.scalar(_STEP_WITH_KEY, {"session_id": session_id, "key": key})
+class StepTaken(NamedTuple):
+    """A step already taken: its kind and the hash of its request (idempotency)."""
+
+    kind: str
+    request_hash: str
+
+
+class ShownAt(NamedTuple):
+    """A stored population: its id and when it was shown."""
+
+    id: int
+    shown_at: datetime
+
+
+def step_with_key(db: Session, session_id: int, key: str) -> StepTaken | None:
+    """The session's step with this key, if it was taken (a plain row, no ORM object: every
+    step asks)."""
+    found = db.execute(_STEP_WITH_KEY, {"session_id": session_id, "key": key}).first()
+    return None if found is None else StepTaken(found[0], found[1])
+
+
+def shown_population(db: Session, trial_id: int, attempt: int, generation: int) -> ShownAt | None:
+    """A trial's stored population: its id and when it was shown (a plain row)."""
+    found = db.execute(
+        _SHOWN, {"trial_id": trial_id, "attempt": attempt, "generation": generation}
+    ).first()
+    return None if found is None else ShownAt(found[0], found[1])
 
 
 def current_face(db: Session, sess: SessionRow, face_id: int) -> tuple[str, str] | None:

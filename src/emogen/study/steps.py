@@ -18,7 +18,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from datetime import datetime
 
-from sqlalchemy import bindparam, insert, select, update
+from sqlalchemy import Update, bindparam, insert, select, update
 from sqlalchemy.orm import Session
 from sqlalchemy.orm.attributes import set_committed_value
 
@@ -27,16 +27,16 @@ from emogen.ga.engine import Engine
 from emogen.study.context import StudyContext
 from emogen.study.errors import SessionNotFound, StepConflict
 from emogen.study.queries import (
+    ShownAt,
     last_selection_time,
     n_trials,
-    population_at,
     session_by_token,
+    shown_population,
     step_with_key,
     trial_at,
 )
 from emogen.study.storage import Store
 from emogen.study.tables import (
-    PopulationRow,
     RatingRow,
     RestartRow,
     SelectionRow,
@@ -60,11 +60,23 @@ _TOUCH_SESSION = (
 )
 
 
-def _update_row(db: Session, row: SessionRow | TrialRow, values: dict[str, object]) -> None:
-    """UPDATE one row's columns by a plain statement and set them on its loaded object as
+_TRIALS = core_table(TrialRow)
+_ADVANCE_TRIAL: dict[tuple[str, ...], Update] = {
+    names: update(_TRIALS)
+    .where(_TRIALS.c.id == bindparam("trial_id"))
+    .values({name: bindparam(f"new_{name}") for name in names})
+    for names in (
+        ("generation", "engine_state"),
+        ("status", "final_face_id", "generation", "engine_state"),
+    )
+}
+
+
+def _advance_trial(db: Session, row: TrialRow, values: dict[str, object]) -> None:
+    """UPDATE the trial's columns by a prepared statement and set them on its loaded object as
     committed: the ORM's unit of work (a flush) costs the study step more than the update."""
-    table = core_table(type(row))
-    db.execute(update(table).where(table.c.id == row.id).values(**values))
+    params = {f"new_{name}": value for name, value in values.items()}
+    db.execute(_ADVANCE_TRIAL[tuple(values)], {"trial_id": row.id, **params})
     for name, value in values.items():
         set_committed_value(row, name, value)
 
@@ -197,8 +209,8 @@ class SessionSteps:
         generation shown, a selection the engine refuses), it does the work itself and answers
         as it always did. Returns None when there is nothing to prepare.
         """
-        with self.store.read() as db:
-            found = db.execute(
+        with self.store.engine.connect() as conn:  # one plain read, no ORM session
+            found = conn.execute(
                 _ACTIVE_TRIAL, {"token": token, "study_id": self.ctx.study_id}
             ).first()
         if found is None:
@@ -252,7 +264,7 @@ class SessionSteps:
         else:
             shown = store_population(db, row, engine.ask())
         values.update(generation=engine.generation, engine_state=engine.to_json())
-        _update_row(db, row, values)
+        _advance_trial(db, row, values)
         return shown
 
     def restart(
@@ -337,7 +349,7 @@ class SessionSteps:
 
     def _shown(
         self, db: Session, sess: SessionRow, trial: int, attempt: int, generation: int
-    ) -> tuple[TrialRow, PopulationRow]:
+    ) -> tuple[TrialRow, ShownAt]:
         row = self._current_trial(db, sess, trial)
         if row.status != "active":
             raise StepConflict(
@@ -350,7 +362,7 @@ class SessionSteps:
                 f"{trial + 1}, but generation {row.generation} (attempt {row.attempt + 1}) is "
                 "shown now; reload the page"
             )
-        pop = population_at(db, row.id, attempt, generation)
+        pop = shown_population(db, row.id, attempt, generation)
         if pop is None:  # pragma: no cover - stored with the engine state
             raise StepConflict("the shown generation was not stored; reload the page")
         return row, pop

@@ -3,14 +3,12 @@ population it makes stored (genes, full weights, ids, parents, operators) before
 
 from __future__ import annotations
 
-import json
-
+import numpy as np
 from sqlalchemy import insert
 from sqlalchemy.orm import Session
 
-from emogen.errors import ConfigError
 from emogen.ga.engine import Engine, Population
-from emogen.ga.state import collision_solver_of_state
+from emogen.ga.state import collision_solver_of_state, state_data
 from emogen.study.context import StudyContext
 from emogen.study.errors import SessionNotFound
 from emogen.study.queries import trial_at
@@ -20,7 +18,7 @@ from emogen.study.tables import (
     SessionRow,
     TrialRow,
     core_table,
-    dumps,
+    numbers_json,
     utcnow,
 )
 from emogen.study.view import FaceView, ShownPopulation
@@ -45,10 +43,7 @@ class TrialEngines:
     def restore_state(self, state: str, identity: str) -> Engine:
         """An engine of the study's trial of ``identity`` restored from a stored state, with
         the collision solver the state was recorded with (a trial is corrected one way)."""
-        try:
-            data = json.loads(state)
-        except json.JSONDecodeError as exc:
-            raise ConfigError(f"engine state is not valid JSON: {exc}") from None
+        data = state_data(state)
         corrector = self.correctors(identity, collision_solver_of_state(data))
         return Engine.from_json(data, self.ctx.rig, corrector=corrector)
 
@@ -86,7 +81,10 @@ def store_population(db: Session, trial: TrialRow, population: Population) -> Sh
             "shown_at": utcnow(),
         },
     ).scalar_one()
-    weights: list[list[float]] = full_weights(population).tolist()
+    full = full_weights(population)
+    if not (np.isfinite(full).all() and np.isfinite(population.genes).all()):
+        raise ValueError("a population to store has non-finite genes or weights")
+    weights: list[list[float]] = full.tolist()
     genes: list[list[float]] = population.genes.tolist()
     ids = population.ids.tolist()
     parents = population.parent_ids.tolist()
@@ -101,8 +99,8 @@ def store_population(db: Session, trial: TrialRow, population: Population) -> Sh
                 "parent_a": parents[i][0],
                 "parent_b": parents[i][1],
                 "operator": operators[i],
-                "genes": dumps(genes[i]),
-                "weights": dumps(weights[i]),
+                "genes": numbers_json(genes[i]),
+                "weights": numbers_json(weights[i]),
             }
             for i in range(len(population))
         ],

@@ -1,0 +1,218 @@
+"""Server CPU of one study step (a selection of a corrected ten-face generation).
+
+``python benchmarks/bench_step.py [--participants 8] [--no-http]`` runs participants one at a
+time through the bench study (two trials, G = 5, corrected faces, three faces chosen per
+generation) and prints the CPU time of every selection, p50/p95/mean:
+
+* **over HTTP** — the real server (``emogen serve``, one worker, SQLite in a temporary folder);
+  a selection's CPU is the server process's CPU (every thread: the request's, the event loop's
+  and the database writer's) read from ``/proc/<pid>/task/*/schedstat`` (nanoseconds) before
+  and after the request. One request at a time, so nothing else runs in the server meanwhile;
+* **in process** — the study service itself (no HTTP), with the process's CPU per selection and
+  where it goes: the GA work and correction done before the write transaction
+  (``prepare``: of which ``correct``, and of that ``detect`` — the ray casting — and ``eq5``
+  — the solves) and the write transaction on the database writer thread (``writer``).
+
+Machine: BLAS on one thread (as the server runs). Linux only (``/proc``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import sys
+import tempfile
+import time
+from collections import defaultdict
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import httpx
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(REPO), str(REPO / "src")]
+
+from benchmarks.bench_study import (  # noqa: E402
+    BENCH_STUDY,
+    ServerProcess,
+    model_path,
+    write_study_toml,
+)
+
+
+def _server_cpu_ns(pids: list[int]) -> int:
+    """CPU nanoseconds of every thread of these processes (``schedstat``: exact, not ticks)."""
+    total = 0
+    for pid in pids:
+        for task in Path(f"/proc/{pid}/task").iterdir():
+            try:
+                total += int((task / "schedstat").read_text().split()[0])
+            except (OSError, ValueError, IndexError):
+                continue
+    return total
+
+
+def _selection(state: Any, rng: random.Random) -> dict[str, Any]:
+    ids = [f["id"] for f in state["population"]["faces"]]
+    chosen = rng.sample(ids, 3)
+    return {
+        "trial": state["progress"]["trial"],
+        "attempt": state["trial"]["attempt"],
+        "generation": state["progress"]["generation"],
+        "elite": chosen[0],
+        "others": chosen[1:],
+        "response_ms": 1000.0,
+    }
+
+
+def over_http(participants: int) -> np.ndarray:
+    """Server CPU (ms) of each selection over HTTP, one request at a time."""
+    with tempfile.TemporaryDirectory(prefix="emogen-step-") as tmp:
+        folder = Path(tmp)
+        config = write_study_toml(BENCH_STUDY, folder / "bench.toml")
+        url = f"sqlite:///{folder / 'bench.sqlite'}"
+        server = ServerProcess(config, url, model_path(), folder / "server.log").start()
+        rng, out, n = random.Random(0), [], 0
+        try:
+            pids = server.pids()
+            with httpx.Client(base_url=server.url, timeout=30.0) as client:
+
+                def post(path: str, body: dict[str, Any]) -> dict[str, Any]:
+                    r = client.post(path, json=body)
+                    r.raise_for_status()
+                    return r.json()  # type: ignore[no-any-return]
+
+                for p in range(participants + 1):  # the first one warms the server up
+                    token = post("/api/sessions", {"participant_id": f"step-{p}"})["token"]
+                    state = post(f"/api/s/{token}/begin", {"key": f"begin-{p:06d}"})
+                    while state["stage"] != "done":
+                        n += 1
+                        key = f"step-{n:06d}"
+                        if state["trial"]["status"] != "active":
+                            body = {"key": key, "trial": state["progress"]["trial"], "value": 4}
+                            state = post(f"/api/s/{token}/rating", body)
+                            continue
+                        body = {"key": key, **_selection(state, rng)}
+                        t0 = _server_cpu_ns(pids)
+                        state = post(f"/api/s/{token}/select", body)
+                        if p:
+                            out.append((_server_cpu_ns(pids) - t0) / 1e6)
+        finally:
+            server.stop()
+    return np.array(out)
+
+
+def _timed(acc: dict[str, float], phase: dict[str, bool], label: str) -> Callable[[Any], Any]:
+    """Adds the calling thread's CPU in ``fn`` to ``acc[label]`` when the call began during a
+    counted selection (``phase["on"]``, read at entry: the writer thread's job for a selection
+    starts while the selection waits for it, and may end after the selection has returned)."""
+
+    def wrap(fn: Any) -> Any:
+        def timed(*args: Any, **kwargs: Any) -> Any:
+            counted = phase["on"]
+            t0 = time.thread_time()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                if counted:
+                    acc[label] += time.thread_time() - t0
+
+        return timed
+
+    return wrap
+
+
+def in_process(participants: int) -> tuple[np.ndarray, dict[str, float]]:
+    """Process CPU (ms) of each selection of the study service, and the mean ms per part."""
+    import emogen.correct.apply as apply
+    import emogen.correct.solve as solve
+    from emogen.model import load_model
+    from emogen.study import steps, storage
+    from emogen.study.config import load_study_config
+    from emogen.study.sessions import StudyService
+    from emogen.study.storage import Store
+
+    acc: dict[str, float] = defaultdict(float)
+    phase = {"on": False}
+    patches = [
+        (steps.SessionSteps, "prepare_select", "prepare"),
+        (apply.Corrector, "correct", "correct"),
+        (solve, "detect", "detect"),
+        (solve, "solve_eq5", "eq5"),
+        (storage._GroupCommit, "_execute", "writer"),
+    ]
+    saved = [(owner, name, getattr(owner, name)) for owner, name, _ in patches]
+    for owner, name, label in patches:
+        setattr(owner, name, _timed(acc, phase, label)(getattr(owner, name)))
+    times: list[float] = []
+    try:
+        with tempfile.TemporaryDirectory(prefix="emogen-step-") as tmp:
+            folder = Path(tmp)
+            config = load_study_config(write_study_toml(BENCH_STUDY, folder / "bench.toml"))
+            model = load_model(model_path(), rig=config.rig)
+            store = Store(f"sqlite:///{folder / 'bench.sqlite'}")
+            service = StudyService(
+                config, store, model.rig, model_name=model.name, model_hash=model.model_hash,
+                model=model,
+            )  # fmt: skip
+            rng, n = random.Random(0), 0
+            for p in range(participants + 1):
+                token, _ = service.create_session(f"step-{p}")
+                state = service.begin(token, f"begin-{p:06d}")
+                while state["stage"] != "done":
+                    n += 1
+                    key = f"step-{n:06d}"
+                    if state["trial"]["status"] != "active":
+                        state = service.rate(token, key, trial=state["progress"]["trial"], value=4)
+                        continue
+                    s = _selection(state, rng)
+                    phase["on"] = p > 0  # the first participant warms up, not counted
+                    t0 = time.process_time()
+                    state = service.select(
+                        token, key, trial=s["trial"], attempt=s["attempt"],
+                        generation=s["generation"], elite=s["elite"], others=s["others"],
+                        response_ms=1000.0, load_ms=5.0,
+                    )  # fmt: skip
+                    phase["on"] = False
+                    if p:
+                        times.append((time.process_time() - t0) * 1000)
+            store.dispose()
+    finally:
+        for owner, name, fn in saved:
+            setattr(owner, name, fn)
+    return np.array(times), {k: 1000 * v / max(len(times), 1) for k, v in acc.items()}
+
+
+def _line(label: str, ms: np.ndarray) -> str:
+    return (
+        f"{label:<12} {len(ms):>4} selections  p50 {np.median(ms):5.1f} ms  "
+        f"p95 {np.percentile(ms, 95):5.1f} ms  mean {ms.mean():5.1f} ms"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--participants", type=int, default=8)
+    parser.add_argument("--no-http", action="store_true", help="in process only")
+    args = parser.parse_args()
+    if args.participants < 1:
+        parser.error(f"--participants must be at least 1; got {args.participants}")
+    print(f"study step CPU: {os.cpu_count()} cores, bench study {BENCH_STUDY['ga']}, corrected")
+    if not args.no_http:
+        print(_line("over HTTP", over_http(args.participants)))
+    ms, parts = in_process(args.participants)
+    print(_line("in process", ms))
+    print(
+        "  per selection: "
+        + ", ".join(f"{k} {v:.2f} ms" for k, v in sorted(parts.items(), key=lambda kv: -kv[1]))
+    )
+
+
+if __name__ == "__main__":
+    main()
