@@ -42,6 +42,7 @@ from benchmarks.bench_study import (  # noqa: E402
     BENCH_STUDY,
     ServerProcess,
     model_path,
+    selection_body,
     write_study_toml,
 )
 
@@ -59,16 +60,8 @@ def _server_cpu_ns(pids: list[int]) -> int:
 
 
 def _selection(state: Any, rng: random.Random) -> dict[str, Any]:
-    ids = [f["id"] for f in state["population"]["faces"]]
-    chosen = rng.sample(ids, 3)
-    return {
-        "trial": state["progress"]["trial"],
-        "attempt": state["trial"]["attempt"],
-        "generation": state["progress"]["generation"],
-        "elite": chosen[0],
-        "others": chosen[1:],
-        "response_ms": 1000.0,
-    }
+    """Three of the shown faces, at random (the first the elite)."""
+    return selection_body(state, rng.sample([f["id"] for f in state["population"]["faces"]], 3))
 
 
 def over_http(participants: int) -> np.ndarray:

@@ -163,6 +163,18 @@ class ServerProcess:
 
 
 # ---- one simulated participant -------------------------------------------------------------
+def selection_body(state: dict[str, Any], chosen: list[int]) -> dict[str, Any]:
+    """The page's selection request for the shown generation: ``chosen[0]`` the elite."""
+    return {
+        "trial": state["progress"]["trial"],
+        "attempt": state["trial"]["attempt"],
+        "generation": state["progress"]["generation"],
+        "elite": chosen[0],
+        "others": chosen[1:],
+        "response_ms": 1000.0,
+    }
+
+
 class Stats:
     def __init__(self) -> None:
         self.server_ms: list[float] = []
@@ -225,17 +237,7 @@ async def participant(
         if state["trial"]["status"] == "active":
             ids = [f["id"] for f in state["population"]["faces"]]
             chosen = rng.sample(ids, rng.randint(1, 4))
-            state = await post(
-                f"/api/s/{token}/select",
-                {
-                    "trial": state["progress"]["trial"],
-                    "attempt": state["trial"]["attempt"],
-                    "generation": state["progress"]["generation"],
-                    "elite": chosen[0],
-                    "others": chosen[1:],
-                    "response_ms": 1000.0,
-                },
-            )
+            state = await post(f"/api/s/{token}/select", selection_body(state, chosen))
         else:
             state = await post(
                 f"/api/s/{token}/rating",

@@ -14,14 +14,14 @@ so the *negative ray* from an anchor points up (lip) or inward (teeth).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
 
 from emogen.correct.lips import UPPER_FRONT_TEETH, MouthGeometry
 from emogen.correct.raycast import (
-    bin_triangles,
+    bin_triangles_in,
     cell_hits,
     cell_of,
     gather_triangles,
@@ -32,7 +32,7 @@ from emogen.correct.raycast import (
 LIP, TEETH = 0, 1
 TYPES = ("lip", "teeth")
 ZONES = ("outer_left", "inner_left", "inner_right", "outer_right")
-Y, Z = 1, 2
+X, Y, Z = 0, 1, 2
 # Per type: the constraint axis and the sign of the negative ray along it.
 AXIS = {LIP: Y, TEETH: Z}
 NEGATIVE = {LIP: +1.0, TEETH: -1.0}
@@ -116,6 +116,13 @@ class CollisionLayout:
     anchor_bary: tuple[np.ndarray, np.ndarray]
     anchor_triangle: tuple[np.ndarray, np.ndarray]
     cell: float
+    #: both types' anchors together, as the compiled detector takes them (made once)
+    anchor_table: tuple[np.ndarray, np.ndarray, np.ndarray] = field(
+        init=False, repr=False, compare=False
+    )
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "anchor_table", _anchor_table(self))
 
 
 def _anchors(
@@ -309,12 +316,14 @@ def _detect_faces(
         verts = local[b]
         lo = np.full(3, np.inf)
         hi = np.full(3, -np.inf)
-        for v in lower_vertices:
+        finite = True
+        for v in lower_vertices:  # the lower lip's triangles' corners, each once
             for d in range(3):
                 lo[d] = min(lo[d], verts[v, d])
                 hi[d] = max(hi[d], verts[v, d])
+                finite = finite and np.isfinite(verts[v, d])
         gather_triangles(verts, lower, tri)
-        grid_y = bin_triangles(tri, Y, cell)
+        grid_y = bin_triangles_in(tri, Y, cell, lo[Z], lo[X], hi[Z], hi[X], finite)
         n_q = 0
         busy = False
         for n in range(n_anc):
@@ -356,7 +365,7 @@ def _detect_faces(
             busy = busy or q_candidate[q]
         if not busy:
             continue
-        grid_z = bin_triangles(tri, Z, cell)
+        grid_z = bin_triangles_in(tri, Z, cell, lo[X], lo[Y], hi[X], hi[Y], finite)
         count_lip, count_teeth = 0, 0
         for q in range(n_q):
             kind = anchor_kind[q_anchor[q]]
@@ -444,7 +453,7 @@ def detect(local: np.ndarray, layout: CollisionLayout, *, margin: float = 0.0) -
         local,
         layout.lower,
         layout.lower_vertices,
-        *_anchor_table(layout),
+        *layout.anchor_table,
         layout.cell,
         CONTACT_TOLERANCE,
     )

@@ -75,6 +75,26 @@ def bin_triangles(
             top_c = max(top_c, tri[t, k, c])
             for d in range(3):
                 finite = finite and np.isfinite(tri[t, k, d])
+    return bin_triangles_in(tri, axis, cell, org_a, org_c, top_a, top_c, finite)
+
+
+@njit(cache=True, nogil=True)
+def bin_triangles_in(
+    tri: np.ndarray,
+    axis: int,
+    cell: float,
+    org_a: float,
+    org_c: float,
+    top_a: float,
+    top_c: float,
+    finite: bool,
+) -> tuple[float, float, float, int, int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`bin_triangles` with the triangles' extent in the plane already known (the
+    smallest and largest corner coordinates along axis + 1 and axis + 2, and whether every
+    corner is finite — the detector has them from the lower lip's vertices); compiled."""
+    a = (axis + 1) % 3
+    c = (axis + 2) % 3
+    n_tris = tri.shape[0]
     if not (finite and n_tris > 0):
         empty = np.zeros(1, dtype=np.int64)
         return 0.0, 0.0, 1.0, 0, 0, empty, empty, np.zeros(0), np.zeros(0)
