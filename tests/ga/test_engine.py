@@ -139,7 +139,7 @@ def test_json_round_trip_is_exact(ict_model) -> None:
     state = json.loads(text)
     assert (
         state["seed"] == 2**62 + 12345
-        and state["schema"] == "emogen.ga.engine/2"
+        and state["schema"] == "emogen.ga.engine/3"
         and state["stream"] == 2
     )
     assert state["config"]["init"]["activation_range"] == [2, 9]
@@ -270,3 +270,20 @@ def test_every_face_is_symmetric_and_in_range(
         assert np.all((pop.genes >= 0) & (pop.genes <= 1))
         assert np.all((pop.genes[pop.operators == "random"] > 0).sum(1) <= 6)
         engine.tell(*choose(pop, rng))
+
+
+def test_an_engine_state_names_its_collision_solver(ict_model) -> None:
+    """``collision_solver`` of a stored state: recorded (2 now), 1 for a state recorded before
+    solvers were numbered, and an unknown number is an error naming it (not a silent fallback)."""
+    from emogen.ga.engine import correctives_of
+    from emogen.ga.state import collision_solver_of_state
+
+    engine = Engine(GAConfig(), ict_model.rig, 5, corrector=correctives_of(ict_model))
+    engine.ask()
+    state = json.loads(engine.to_json())
+    assert state["collision_solver"] == 2 and collision_solver_of_state(state) == 2
+    assert collision_solver_of_state({**state, "collision_solver": 1}) == 1
+    legacy = {k: v for k, v in state.items() if k != "collision_solver"}
+    assert collision_solver_of_state(legacy) == 1
+    with pytest.raises(ConfigError, match="collision solver must be one of \\[1, 2\\]; got 7"):
+        collision_solver_of_state({**state, "collision_solver": 7})

@@ -232,6 +232,7 @@ def test_export_records_every_identity_to_render_it_again(
         assert (ids.appearance_generator == GENERATOR_VERSION).all()
         assert list(ids["shape"][:2]) == ["male", "female"] and pd.isna(ids["shape"].iloc[2])
         assert set(tables["trials"].identity) == set(ids.identity)  # joins on (study, identity)
+        assert tables["trials"].collision_solver.isna().all()  # the study corrects no faces
         expected = {("faces", n): i for n, i in config.study_identities().items()}
         assert expected[("faces", "lab_coeffs")] == Identity(
             shape=(0.75, -0.5), appearance=config.identity["lab_coeffs"].appearance

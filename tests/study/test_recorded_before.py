@@ -13,6 +13,7 @@ from sqlalchemy import select
 from emogen.ga.engine import stream_of_state
 from emogen.ga.state import collision_solver_of_state
 from emogen.study.config import StudyConfig
+from emogen.study.export import export_tables
 from emogen.study.replay import replay_session
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, StudyRow, TrialRow
@@ -92,6 +93,10 @@ def test_a_session_recorded_mid_trial_continues_and_replays(tmp_path: Path, ict_
         assert _streams(store, old_2) == [1, 2]
         # and with the collision solver it was corrected with (2: the current one)
         assert _solvers(store, old_2) == [1, 2]
+        trials = export_tables(store)["trials"]
+        solvers = trials.set_index(["participant_id", "trial"])["collision_solver"]
+        assert solvers[("OLD-2", 0)] == 1 and solvers[("OLD-2", 1)] == 2
+        assert solvers[("OLD-1", 0)] == 1 and solvers[("OLD-1", 1)] == 1
         report = replay_session(store, old_2, ict_model.rig, ict_model.model_hash, model=ict_model)
         assert report.mismatches == [], report.mismatches
         assert report.populations == 10

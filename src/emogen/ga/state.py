@@ -9,10 +9,13 @@ from emogen.config import GAConfig, validate_config
 from emogen.errors import ConfigError
 from emogen.ga.draws import CURRENT_STREAM, check_stream
 
-#: Engine states: ``/2`` records the GA's random stream (``stream``); ``/1`` states (made before
-#: the GA was written once over runs) have none and continue with stream 1, as they were drawn.
-STATE_SCHEMA = "emogen.ga.engine/2"
-STATE_SCHEMAS = {"emogen.ga.engine/1": 1, STATE_SCHEMA: None}
+#: Engine states: ``/3`` also records the eq. 5 collision solver (``collision_solver``; an older
+#: EmoGen refuses such a state rather than correct its faces with another solver); ``/2`` records
+#: the GA's random stream (``stream``); ``/1`` states (made before the GA was written once over
+#: runs) have none and continue with stream 1, as they were drawn. ``/1`` and ``/2`` states were
+#: corrected with solver 1.
+STATE_SCHEMA = "emogen.ga.engine/3"
+STATE_SCHEMAS = {"emogen.ga.engine/1": 1, "emogen.ga.engine/2": None, STATE_SCHEMA: None}
 
 
 def state_data(state: str | dict[str, Any]) -> dict[str, Any]:
