@@ -147,6 +147,22 @@ def test_a_faces_correction_does_not_depend_on_its_batch_or_the_blas_threads(
         np.testing.assert_array_equal(correct_faces(ict_model, w).correctives, whole.correctives)
 
 
+def test_both_collision_solvers_correct_ga_faces_alike(ict_model, ga_weights) -> None:
+    """Solver 2 (compiled rounds: jacobian and exact eq. 5 blocks) against solver 1 (numpy
+    jacobian, scipy's BVLS) on 300 GA faces: the same detect–solve rounds, the same collisions
+    left, and corrective weights equal to 1e-9 — and each solver is exactly repeatable."""
+    w = ga_weights[0][:300]
+    one = correct_faces(ict_model, w, solver=1)
+    two = correct_faces(ict_model, w, solver=2)
+    assert one.collided.sum() > 30
+    np.testing.assert_array_equal(two.iterations, one.iterations)
+    np.testing.assert_array_equal(two.within_after, one.within_after)
+    np.testing.assert_allclose(two.collision, one.collision, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(correct_faces(ict_model, w, solver=2).collision, two.collision)
+    with pytest.raises(ValueError, match="collision solver must be one of"):
+        correct_faces(ict_model, w[:2], solver=0)
+
+
 def test_blend_is_start_plus_weights_times_rows_in_a_fixed_order() -> None:
     from emogen.correct.blend import blend
 

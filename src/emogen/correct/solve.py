@@ -246,6 +246,70 @@ def _eq5_compiled(
     return w
 
 
+@njit(cache=True, nogil=True)
+def _round_compiled(
+    face: np.ndarray,
+    kind: np.ndarray,
+    anchor: np.ndarray,
+    partner: np.ndarray,
+    partner_bary: np.ndarray,
+    depth: np.ndarray,
+    anchor_corners: np.ndarray,
+    anchor_bary: np.ndarray,
+    lower: np.ndarray,
+    deltas: np.ndarray,
+    active: np.ndarray,
+    colliding: np.ndarray,
+    weights: np.ndarray,
+    iterations: np.ndarray,
+    it: int,
+    w1: float,
+    alternations: int,
+) -> None:  # pragma: no cover - compiled
+    """Solver 2's solve round, compiled: for every colliding face of the batch, the depth
+    jacobian of its pairs (eqs. 3–4, as :func:`depth_jacobian`: the anchor's corrective offset
+    minus the partner's along the type's axis, signed for the negative ray) and the eq. 5
+    increment (:func:`_eq5_compiled`), added to its weights (``anchor``: index in the layout's
+    anchor table, lip anchors first)."""
+    n_c = deltas.shape[0]
+    m = face.shape[0]
+    for j in range(active.shape[0]):
+        if not colliding[j]:
+            continue
+        n_rows = 0
+        for r in range(m):
+            n_rows += face[r] == j
+        a = np.zeros((n_rows, n_c))
+        b = np.empty(n_rows)
+        k = np.empty(n_rows, dtype=np.int64)
+        row = 0
+        for r in range(m):
+            if face[r] != j:
+                continue
+            axis = 1 if kind[r] == 0 else 2  # lip: y, teeth: z
+            sign = 1.0 if kind[r] == 0 else -1.0  # the negative ray's direction
+            for c in range(n_c):
+                at_anchor = 0.0
+                at_partner = 0.0
+                for q in range(3):
+                    at_anchor += (
+                        anchor_bary[anchor[r], q] * deltas[c, anchor_corners[anchor[r], q], axis]
+                    )
+                    at_partner += partner_bary[r, q] * deltas[c, lower[partner[r], q], axis]
+                a[row, c] = sign * (at_anchor - at_partner)
+            b[row] = depth[r]
+            k[row] = kind[r]
+            row += 1
+        f = active[j]
+        upper = np.empty(n_c)
+        for c in range(n_c):
+            upper[c] = 1.0 - weights[f, c]
+        step = _eq5_compiled(a, b, k, upper, w1, alternations)
+        for c in range(n_c):
+            weights[f, c] += step[c]
+        iterations[f] = it + 1
+
+
 def solve_eq5(
     a: np.ndarray,
     b: np.ndarray,
@@ -337,6 +401,14 @@ def solve_collisions(
         depth_after[active] = deepest
         if it == max_iterations or not colliding.any():
             break
+        if solver == 2:
+            _round_compiled(
+                c.face, c.kind, c.anchor + len(layout.anchors[LIP]) * c.kind, c.partner,
+                c.partner_bary, c.depth, *layout.anchor_table[:2], layout.lower,
+                deltas_local, active, colliding, weights, iterations, it, W1, ALTERNATIONS,
+            )  # fmt: skip
+            active = active[colliding]
+            continue
         jac = depth_jacobian(c, layout, deltas_local)
         order = np.argsort(c.face, kind="stable")
         bounds = np.searchsorted(c.face[order], np.arange(len(active) + 1))
