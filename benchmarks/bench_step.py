@@ -189,6 +189,33 @@ def _line(label: str, ms: np.ndarray) -> str:
     )
 
 
+def _figures(ms: np.ndarray) -> dict[str, float]:
+    return {
+        "p50_ms": round(float(np.median(ms)), 2),
+        "p95_ms": round(float(np.percentile(ms, 95)), 2),
+        "mean_ms": round(float(ms.mean()), 2),
+        "selections": len(ms),
+    }
+
+
+def run(participants: int = 8, http: bool = True) -> dict[str, Any]:
+    """Print and return the figures (``http=False``: in process only)."""
+    print(f"study step CPU: {os.cpu_count()} cores, bench study {BENCH_STUDY['ga']}, corrected")
+    result: dict[str, Any] = {}
+    if http:
+        ms = over_http(participants)
+        print(_line("over HTTP", ms))
+        result["http"] = _figures(ms)
+    ms, parts = in_process(participants)
+    print(_line("in process", ms))
+    print(
+        "  per selection: "
+        + ", ".join(f"{k} {v:.2f} ms" for k, v in sorted(parts.items(), key=lambda kv: -kv[1]))
+    )
+    result["in_process"] = {**_figures(ms), "parts_ms": {k: round(v, 3) for k, v in parts.items()}}
+    return result
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--participants", type=int, default=8)
@@ -196,15 +223,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.participants < 1:
         parser.error(f"--participants must be at least 1; got {args.participants}")
-    print(f"study step CPU: {os.cpu_count()} cores, bench study {BENCH_STUDY['ga']}, corrected")
-    if not args.no_http:
-        print(_line("over HTTP", over_http(args.participants)))
-    ms, parts = in_process(args.participants)
-    print(_line("in process", ms))
-    print(
-        "  per selection: "
-        + ", ".join(f"{k} {v:.2f} ms" for k, v in sorted(parts.items(), key=lambda kv: -kv[1]))
-    )
+    run(args.participants, http=not args.no_http)
 
 
 if __name__ == "__main__":

@@ -182,6 +182,7 @@ def main() -> None:
         bench_gltf,
         bench_render,
         bench_simulate,
+        bench_step,
         bench_study,
         bench_viewer,
     )
@@ -197,6 +198,7 @@ def main() -> None:
         ),
         "simulate": lambda: bench_simulate.run(model),
         "study": lambda: bench_study.run(),
+        "step": lambda: bench_step.run(4 if args.quick else 8),
     }
     for name, run in sections.items():
         if args.only and name not in args.only:
