@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from emogen.correct import correct_faces, corrected_vertices
+from emogen.correct import correct_faces, corrected_vertices, evaluate_corrected
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -93,7 +93,12 @@ def _interpenetration(model, weights: np.ndarray, corrected: bool) -> np.ndarray
     test = Interpenetration.build(model.base_neutral.astype(np.float64), model.regions, mouth)
     out = np.zeros(len(weights), dtype=bool)
     for start in range(0, len(weights), 256):
-        verts = model.evaluate(weights[start : start + 256], correct=corrected, gaze=False)
+        rows = weights[start : start + 256]
+        verts = (
+            evaluate_corrected(model, rows, gaze=False)
+            if corrected
+            else model.evaluate(rows, gaze=False)
+        )
         out[start : start + 256] = test.penetrating(verts)
     return out
 
@@ -122,6 +127,7 @@ def _plausibility(model, weights: np.ndarray, combinational: bool) -> dict[str, 
 _TIMING_SNIPPET = """
 import json, sys, time
 import numpy as np
+from emogen.correct import correct_faces
 from emogen.model import load_model
 model = load_model(sys.argv[1])
 w = np.load(sys.argv[2])
