@@ -222,3 +222,31 @@ def test_serve_with_an_unreachable_postgresql_server_is_one_line(ict_dir: Path) 
     assert result.exit_code == EXIT_ENVIRONMENT, result.output
     assert len(result.output.strip().splitlines()) == 1 and "s3cret" not in result.output
     assert "cannot open the study database" in result.output
+
+
+def test_a_reader_that_goes_away_is_not_an_error(ict_dir: Path) -> None:
+    """``emogen model info | head -n 4``: when stdout's reader has gone, the command stops
+    quietly (status 141, as Unix tools do), not with an 'error: … Broken pipe' line."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "emogen", "model", "info", "--model", str(ict_dir)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # the reader goes before the command writes (it loads the model first)
+    err = proc.stderr.read().decode()
+    assert proc.wait(120) == 141
+    assert err == "", err
+
+
+def test_broken_pipe_inside_a_command_exits_141_without_a_line(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    @friendly_errors
+    def writes() -> None:
+        raise BrokenPipeError(errno.EPIPE, "Broken pipe")
+
+    with pytest.raises(SystemExit) as stop:
+        writes()
+    assert stop.value.code == 141
+    assert capsys.readouterr().err == ""

@@ -72,6 +72,8 @@ IdentityOpt = Annotated[
 
 #: Exit statuses of every command (docs/cli.md). 1 is a check that found a difference (replay).
 EXIT_USAGE, EXIT_DATA, EXIT_ENVIRONMENT = 2, 3, 4
+#: stdout's reader went away (a pipe into `head`): stopped quietly, as Unix tools do
+EXIT_BROKEN_PIPE = 141
 
 
 def use_colour() -> bool:
@@ -122,6 +124,24 @@ def os_error_message(exc: OSError) -> tuple[str, int]:
     return f"{where or 'a file'}: {what} ({hint})", EXIT_ENVIRONMENT
 
 
+def _reader_gone() -> None:
+    """The reader of stdout went away (``emogen model info | head -n 4``): not an error of
+    ours. Stop quietly, as Unix tools do (status 141 = 128 + SIGPIPE), with stdout pointed at
+    /dev/null so that flushing it at exit raises nothing more."""
+    import os
+    import sys
+
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):  # not a real file (captured, closed)
+        fd = None
+    if fd is not None:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, fd)
+        os.close(devnull)
+    raise SystemExit(EXIT_BROKEN_PIPE)
+
+
 def friendly_errors(func: F) -> F:
     """The one error path of every command: EmoGen's errors and the operating system's become
     one red line on stderr (no traceback) and the exit status of their kind (2 usage, 3 data,
@@ -133,6 +153,8 @@ def friendly_errors(func: F) -> F:
             return func(*args, **kwargs)
         except EmoGenError as exc:
             _fail(str(exc), exit_status(exc))
+        except BrokenPipeError:
+            _reader_gone()
         except OSError as exc:
             message, code = os_error_message(exc)
             _fail(message, code)
