@@ -35,3 +35,17 @@ def test_importing_the_cli_app_imports_no_heavy_library() -> None:
     code = f"import sys, emogen.cli.app; print(','.join(m for m in {HEAVY!r} if m in sys.modules))"
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert proc.stdout.strip() == ""
+
+
+def test_reading_a_trials_solver_and_exporting_load_no_compiled_correction() -> None:
+    """The solver number of a recorded state is read (exports, replay checks) without importing
+    the compiled eq. 5 code (numba costs over a second to import)."""
+    code = (
+        "import sys, json\n"
+        "from emogen.ga.state import collision_solver_of_state\n"
+        "import emogen.study.export_rows\n"
+        "s = collision_solver_of_state(json.dumps({'collision_solver': 2}))\n"
+        "print(s, 'numba' in sys.modules, 'emogen.correct.solve' in sys.modules)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert proc.stdout.split() == ["2", "False", "False"]

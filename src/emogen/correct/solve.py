@@ -44,24 +44,17 @@ from emogen.correct.collision import (
     depth_jacobian,
     detect,
 )
+from emogen.solvers import CURRENT_SOLVER, SOLVERS, check_solver
+
+#: CURRENT_SOLVER, SOLVERS and check_solver live in :mod:`emogen.solvers` (no numba there).
+__all__ = ["CURRENT_SOLVER", "SOLVERS", "check_solver", "solve_collisions", "solve_eq5"]
 
 W1 = 0.98
 MAX_ITERATIONS = 6
 ALTERNATIONS = 8
 DEPTH_MARGIN = 0.03  # cm added to every δb, so the regularised solution clears the contact
 N_ZONES = 4
-#: The block solvers of eq. 5 (see the module docstring); a corrected study trial records its.
-SOLVERS = {1: "scipy.optimize.lsq_linear (BVLS)", 2: "compiled exact active set"}
-CURRENT_SOLVER = 2
 KKT_TOLERANCE = 1e-12  # relative to the problem's scale
-
-
-def check_solver(solver: object) -> int:
-    """The eq. 5 solver number, checked (a recorded number this version does not know is an
-    error, not a silent fallback)."""
-    if isinstance(solver, bool) or not isinstance(solver, int) or solver not in SOLVERS:
-        raise ValueError(f"collision solver must be one of {sorted(SOLVERS)}; got {solver!r}")
-    return solver
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from emogen.ga.draws import CURRENT_STREAM, block_size, check_stream, generation
 from emogen.ga.init import first_generation, read_fixed_sets
 from emogen.ga.operators import select
 from emogen.ga.population import Population, readonly
-from emogen.ga.state import STATE_SCHEMA, read_state_header, stream_of_state
+from emogen.ga.state import STATE_SCHEMA, read_state_header, state_data, stream_of_state
 from emogen.model.rig import Rig
 from emogen.rng import check_seed, generation_rng
 
@@ -49,7 +49,7 @@ class ModelCorrector:
     as ``collision_solver``, so that a recorded trial is corrected again as it was)."""
 
     def __init__(self, model: Any, solver: int | None = None) -> None:
-        from emogen.correct.solve import CURRENT_SOLVER, check_solver
+        from emogen.solvers import CURRENT_SOLVER, check_solver
 
         self.model = model
         self.solver = check_solver(CURRENT_SOLVER if solver is None else solver)
@@ -314,10 +314,7 @@ class Engine:
         cls, text: str | dict[str, Any], rig: Rig, *, corrector: Corrector | None = None
     ) -> Engine:
         """Resume an engine saved with :meth:`to_json` (the rig must have the same genes)."""
-        try:
-            data = json.loads(text) if isinstance(text, str) else dict(text)
-        except json.JSONDecodeError as exc:
-            raise ConfigError(f"engine state is not valid JSON: {exc}") from None
+        data = state_data(text)
         self = cls.__new__(cls)
         config, seed, stream = read_state_header(data)
         self._setup(config, rig, seed, corrector, stream)

@@ -48,10 +48,10 @@ def state_stream(data: dict[str, Any]) -> int:
 
 
 def collision_solver_of_state(state: str | dict[str, Any] | None) -> int:
-    """The eq. 5 solver (:data:`emogen.correct.solve.SOLVERS`) a corrected trial's state was
+    """The eq. 5 solver (:data:`emogen.solvers.SOLVERS`) a corrected trial's state was
     recorded with: its ``collision_solver``, or 1 for a state recorded before solvers were
     numbered (they all used solver 1). ``None`` (nothing recorded yet) gives the current one."""
-    from emogen.correct.solve import CURRENT_SOLVER, check_solver
+    from emogen.solvers import CURRENT_SOLVER, check_solver
 
     if state is None or state == "":
         return CURRENT_SOLVER

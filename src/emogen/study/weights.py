@@ -123,7 +123,7 @@ class StudyCorrectors:
         if self.model is None:
             return None
         if solver is None:
-            from emogen.correct.solve import CURRENT_SOLVER
+            from emogen.solvers import CURRENT_SOLVER
 
             solver = CURRENT_SOLVER
         shape = self.config.identity_of(identity).shape
