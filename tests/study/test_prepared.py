@@ -81,7 +81,7 @@ def test_a_stale_preparation_is_not_used(service: StudyService, ict_model: Any) 
         real_state = trial.engine_state
     wrong = Engine.from_json(real_state, ict_model.rig, corrector=correctives_of(ict_model))
     wrong.tell(others[0], [elite])  # another selection: a different next generation
-    stale = Prepared("a state the trial is not in", wrong)
+    stale = Prepared("a state the trial is not in", wrong, wrong.to_json())
     key = new_key()
     result = service.steps.run(
         token, "select", key,
@@ -140,3 +140,108 @@ def test_a_face_shown_again_is_not_corrected_again(ict_model: Any) -> None:
     # generation 0: 10 faces; then the elite (slot 1) is remembered: 9 (or fewer) new ones
     assert rows[0] == 10 and all(n <= 9 for n in rows[1:])
     assert len(remembering._rows) <= 15  # bounded
+
+
+def stored_state(service: StudyService) -> str:
+    with service.store.read() as db:
+        return str(db.scalars(select(TrialRow).where(TrialRow.position == 0)).one().engine_state)
+
+
+def reference_engine(service: StudyService, ict_model: Any, selections: list) -> Engine:
+    with service.store.read() as db:
+        trial = db.scalars(select(TrialRow).where(TrialRow.position == 0)).one()
+        seed, identity = trial.seed, trial.identity
+    engine = Engine(service.ctx.config.ga_for(identity), ict_model.rig, seed,
+                    corrector=correctives_of(ict_model))  # fmt: skip
+    for elite, others in selections:
+        engine.tell(elite, others)
+    return engine
+
+
+@pytest.fixture
+def long_service(db_url: str, ict_model: Any) -> Any:
+    """The small study with five generations (room for several selections in a trial)."""
+    from emogen.study.config import study_from_dict
+    from emogen.study.storage import Store
+    from tests.study.conftest import SMALL_STUDY
+    from tests.study.drive import study_service
+
+    store = Store(db_url)
+    config = study_from_dict({**SMALL_STUDY, "ga": {**SMALL_STUDY["ga"], "generations": 5}})
+    yield study_service(config, store, ict_model)
+    store.dispose()
+
+
+def test_the_next_step_continues_the_kept_engine_and_stores_what_a_plain_engine_makes(
+    long_service: StudyService, ict_model: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """After the first step no engine is parsed from JSON again (each step's engine is kept),
+    and every stored generation and engine state is the plain engine's."""
+    service = long_service
+    token, _ = service.create_session("KEEP-1")
+    state = service.begin(token, new_key())
+    parsed: list[int] = []
+    original = Engine.from_json.__func__  # type: ignore[attr-defined]
+    monkeypatch.setattr(
+        Engine,
+        "from_json",
+        classmethod(lambda cls, *a, **k: parsed.append(1) or original(cls, *a, **k)),
+    )
+    selections = []
+    for g in range(1, 5):
+        elite, others = choose(state)
+        selections.append((elite, others))
+        state = service.select(token, new_key(), **step_args(state), elite=elite, others=others)
+        reference = reference_engine(service, ict_model, selections)
+        assert stored_state(service) == reference.to_json()
+        pop = reference.ask()
+        np.testing.assert_array_equal(
+            stored_weights(service, g), np.hstack([pop.weights, pop.correctives])
+        )
+    assert parsed == []
+
+
+def test_a_kept_engine_of_another_state_is_not_used(
+    long_service: StudyService, ict_model: Any
+) -> None:
+    """Two workers on one database: worker A keeps the engine of generation 1, worker B moves
+    the trial on; A's next step must continue from the stored state, not from what it kept."""
+    from tests.study.drive import study_service
+
+    a = long_service
+    b = study_service(a.ctx.config, a.store, ict_model)
+    token, _ = a.create_session("KEEP-2")
+    state = a.begin(token, new_key())
+    selections = []
+    for worker in (a, b, a, a):
+        elite, others = choose(state, n_others=1 + len(selections) % 2)
+        selections.append((elite, others))
+        state = worker.select(token, new_key(), **step_args(state), elite=elite, others=others)
+        assert stored_state(a) == reference_engine(a, ict_model, selections).to_json()
+    pop = reference_engine(a, ict_model, selections).ask()
+    shown = np.array([f["weights"] for f in state["population"]["faces"]])
+    np.testing.assert_array_equal(shown, np.hstack([pop.weights, pop.correctives]))
+    # A kept the engine of the state it stored in the first step; it is still there,
+    # unused, because B stored the state after it
+    assert len(a.steps.engines._kept) >= 1
+
+
+def test_kept_engines_are_bounded_and_taken_once(service: StudyService, ict_model: Any) -> None:
+    from emogen.config import GAConfig
+
+    engines = service.steps.engines
+    engines.keep_size = 2
+    corrector = engines.correctors("generic")
+    made = [Engine(GAConfig(), ict_model.rig, seed, corrector=corrector) for seed in (1, 2, 3)]
+    for e in made:
+        engines.keep(e.to_json(), "generic", e)
+    assert len(engines._kept) == 2
+    assert engines.restore_state(made[2].to_json(), "generic") is made[2]
+    # taken: the same state again is restored afresh (a new engine, equal to it)
+    again = engines.restore_state(made[2].to_json(), "generic")
+    assert again is not made[2] and again.to_json() == made[2].to_json()
+    # the oldest was dropped
+    assert engines.restore_state(made[0].to_json(), "generic") is not made[0]
+    # another identity's trial in the same state does not take it
+    assert engines.restore_state(made[1].to_json(), "female-light") is not made[1]
+    assert engines.restore_state(made[1].to_json(), "generic") is made[1]

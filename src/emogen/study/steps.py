@@ -123,10 +123,12 @@ def elapsed_ms(later: datetime, earlier: datetime | None) -> float:
 @dataclass(frozen=True)
 class Prepared:
     """A selection's GA work done outside the transaction: the engine state it started from,
-    and the engine told the selection (its next population made and corrected)."""
+    the engine told the selection (its next population made and corrected) and that engine's
+    state now (what the transaction stores)."""
 
     engine_state: str
     engine: Engine
+    next_state: str
 
 
 @dataclass(frozen=True)
@@ -225,9 +227,10 @@ class SessionSteps:
                 engine.result  # noqa: B018 - corrected here, not under the lock
             else:
                 engine.ask()
+            next_state = engine.to_json()
         except EmoGenError:
             return None
-        return Prepared(state, engine)
+        return Prepared(state, engine, next_state)
 
     def select(
         self, db: Session, sess: SessionRow, *, key: str, trial: int, attempt: int,
@@ -237,8 +240,10 @@ class SessionSteps:
         """The participant's selection of the shown generation; the next one is stored
         (``prepared``: the GA's work done beforehand, see :meth:`prepare_select`)."""
         row, pop = self._shown(db, sess, trial, attempt, generation)
+        next_state = None
         if prepared is not None and prepared.engine_state == row.engine_state:
             engine = prepared.engine  # computed from this very state, outside the lock
+            next_state = prepared.next_state
         else:
             engine = self.engines.restore(row)
             engine.tell(elite, others)
@@ -263,8 +268,10 @@ class SessionSteps:
             values = {"status": "rating", "final_face_id": int(engine.result.ids[0])}
         else:
             shown = store_population(db, row, engine.ask())
-        values.update(generation=engine.generation, engine_state=engine.to_json())
+        state = next_state if next_state is not None else engine.to_json()
+        values.update(generation=engine.generation, engine_state=state)
         _advance_trial(db, row, values)
+        self.engines.keep(state, row.identity, engine)
         return shown
 
     def restart(
@@ -293,6 +300,7 @@ class SessionSteps:
         row.generation = engine.generation
         shown = store_population(db, row, population)
         row.engine_state = engine.to_json()
+        self.engines.keep(row.engine_state, row.identity, engine)
         return shown
 
     def rate(

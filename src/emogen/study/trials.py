@@ -3,6 +3,9 @@ population it makes stored (genes, full weights, ids, parents, operators) before
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
+
 import numpy as np
 from sqlalchemy import insert
 from sqlalchemy.orm import Session
@@ -30,11 +33,36 @@ _INSERT_FACES = insert(core_table(FaceRow))
 
 
 class TrialEngines:
-    """Makes and restores the engines of a study's trials, each with its identity's corrector."""
+    """Makes and restores the engines of a study's trials, each with its identity's corrector.
 
-    def __init__(self, ctx: StudyContext, correctors: StudyCorrectors) -> None:
+    An engine whose state a step has just stored is kept in memory (:meth:`keep`, the last
+    ``keep_size``), keyed by that very state text and identity: the trial's next step, if this
+    process serves it and the stored state is still that text, continues it instead of parsing
+    and rebuilding it from JSON. The engine is deterministic and its state is the whole of it, so
+    the two are the same engine (tests/study/test_prepared.py checks the stored generations
+    against a plain engine); any other state (another worker moved the trial on, a restart)
+    simply misses and is restored.
+    """
+
+    def __init__(
+        self, ctx: StudyContext, correctors: StudyCorrectors, keep_size: int = 1024
+    ) -> None:
         self.ctx = ctx
         self.correctors = correctors
+        self.keep_size = keep_size
+        self._kept: OrderedDict[tuple[str, str], Engine] = OrderedDict()
+        self._kept_lock = threading.Lock()
+
+    def keep(self, state: str, identity: str, engine: Engine) -> None:
+        """Keep ``engine``, whose ``to_json()`` is ``state``, for the trial's next step (it must
+        not be changed afterwards: the next step takes it)."""
+        if self.keep_size <= 0 or engine.done:
+            return
+        with self._kept_lock:
+            self._kept[(identity, state)] = engine
+            self._kept.move_to_end((identity, state))
+            while len(self._kept) > self.keep_size:
+                self._kept.popitem(last=False)
 
     def restore(self, row: TrialRow) -> Engine:
         """The trial's engine, restored from its stored state."""
@@ -42,7 +70,12 @@ class TrialEngines:
 
     def restore_state(self, state: str, identity: str) -> Engine:
         """An engine of the study's trial of ``identity`` restored from a stored state, with
-        the collision solver the state was recorded with (a trial is corrected one way)."""
+        the collision solver the state was recorded with (a trial is corrected one way); the
+        kept engine in exactly that state if there is one (taken: one step continues it)."""
+        with self._kept_lock:
+            kept = self._kept.pop((identity, state), None)
+        if kept is not None:
+            return kept
         data = state_data(state)
         corrector = self.correctors(identity, collision_solver_of_state(data))
         return Engine.from_json(data, self.ctx.rig, corrector=corrector)
@@ -64,6 +97,7 @@ class TrialEngines:
         row.generation = engine.generation
         shown = store_population(db, row, engine.ask())
         row.engine_state = engine.to_json()
+        self.keep(row.engine_state, row.identity, engine)
         return shown
 
 
