@@ -83,11 +83,11 @@ def test_a_stale_preparation_is_not_used(service: StudyService, ict_model: Any) 
     wrong.tell(others[0], [elite])  # another selection: a different next generation
     stale = Prepared("a state the trial is not in", wrong, wrong.to_json())
     key = new_key()
-    result = service.steps.run(
+    result = service.steps.run_plain(
         token, "select", key,
         {"trial": args["trial"], "attempt": args["attempt"], "generation": args["generation"],
          "elite": elite, "others": others, "response_ms": None},
-        lambda db, sess: service.steps.select(db, sess, key=key, **args, elite=elite,
+        lambda conn, sess: service.steps.select(conn, sess, key=key, **args, elite=elite,
             others=others, timing=Timing(), prepared=stale),
     )  # fmt: skip
     expected = reference_weights(service, ict_model, [{"elite": elite, "others": others}])

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import json
 from datetime import datetime
-from typing import NamedTuple
+from typing import NamedTuple, TypeVar
 
-from sqlalchemy import bindparam, func, select
+from sqlalchemy import Connection, bindparam, func, select
 from sqlalchemy.orm import Session, selectinload
 
 from emogen.study.errors import SessionNotFound, StepConflict
@@ -22,7 +22,11 @@ from emogen.study.tables import (
     StepRow,
     StudyRow,
     TrialRow,
+    core_table,
 )
+
+#: What a query runs on: the ORM session, or (cheaper, for a step's plain rows) its connection.
+Executor = Session | Connection
 
 _BY_TOKEN = select(SessionRow).where(SessionRow.token == bindparam("token"))
 _BY_TOKEN_LOCKED = _BY_TOKEN.with_for_update()
@@ -45,9 +49,47 @@ _SHOWN = select(PopulationRow.id, PopulationRow.shown_at).where(
 )
 
 
-def session_by_token(db: Session, token: str, study_id: int, *, lock: bool = False) -> SessionRow:
-    """The session of this token in this study (locked for update if asked)."""
-    sess = db.scalar(_BY_TOKEN_LOCKED if lock else _BY_TOKEN, {"token": token})
+class SessionRecord(NamedTuple):
+    """A session as a selection or restart reads it: a plain row, no ORM object (loading one
+    costs a step more CPU than its query)."""
+
+    id: int
+    study_id: int
+    participant_id: str
+    stage: str
+    current_trial: int
+    trial_order: str
+
+
+class TrialRecord(NamedTuple):
+    """A trial as a selection or restart reads it (a plain row; a step that changes it answers
+    with a ``_replace``-d copy)."""
+
+    id: int
+    session_id: int
+    position: int
+    status: str
+    emotion: str
+    identity: str
+    attempt: int
+    generation: int
+    engine_state: str | None
+    final_face_id: int | None
+
+
+S = TypeVar("S", SessionRow, SessionRecord)
+_SESSIONS, _TRIALS = core_table(SessionRow), core_table(TrialRow)
+_SESSION_RECORD = select(*(_SESSIONS.c[name] for name in SessionRecord._fields)).where(
+    _SESSIONS.c.token == bindparam("token")
+)
+_SESSION_RECORD_LOCKED = _SESSION_RECORD.with_for_update()
+_TRIAL_RECORD = select(*(_TRIALS.c[name] for name in TrialRecord._fields)).where(
+    _TRIALS.c.session_id == bindparam("session_id"), _TRIALS.c.position == bindparam("position")
+)
+
+
+def _of_study(sess: S | None, study_id: int) -> S:
+    """The session found by its token, if it is one of this study's."""
     if sess is None:
         raise SessionNotFound("no session with this link; check the address")
     if sess.study_id != study_id:
@@ -56,6 +98,24 @@ def session_by_token(db: Session, token: str, study_id: int, *, lock: bool = Fal
             "server runs now; ask the researcher"
         )
     return sess
+
+
+def session_by_token(db: Session, token: str, study_id: int, *, lock: bool = False) -> SessionRow:
+    """The session of this token in this study (locked for update if asked)."""
+    return _of_study(db.scalar(_BY_TOKEN_LOCKED if lock else _BY_TOKEN, {"token": token}), study_id)
+
+
+def session_record(db: Executor, token: str, study_id: int, *, lock: bool = False) -> SessionRecord:
+    """:func:`session_by_token` as a plain row."""
+    found = db.execute(_SESSION_RECORD_LOCKED if lock else _SESSION_RECORD, {"token": token})
+    row = found.first()
+    return _of_study(None if row is None else SessionRecord(*row), study_id)
+
+
+def trial_record(db: Executor, session_id: int, position: int) -> TrialRecord | None:
+    """:func:`trial_at` as a plain row."""
+    row = db.execute(_TRIAL_RECORD, {"session_id": session_id, "position": position}).first()
+    return None if row is None else TrialRecord(*row)
 
 
 def lock_study(db: Session, study_id: int) -> None:
@@ -78,7 +138,7 @@ def count_sessions(db: Session, study_id: int) -> int:
     return int(n or 0)
 
 
-def n_trials(sess: SessionRow) -> int:
+def n_trials(sess: SessionRow | SessionRecord) -> int:
     """How many trials the session has (its stored trial order)."""
     return len(json.loads(sess.trial_order))
 
@@ -95,7 +155,7 @@ def population_at(
     return db.scalar(query, {"trial_id": trial_id, "attempt": attempt, "generation": generation})
 
 
-def final_face(db: Session, trial: TrialRow) -> FaceRow | None:
+def final_face(db: Session, trial: TrialRow | TrialRecord) -> FaceRow | None:
     """The trial's final face (the last elite) in its current attempt."""
     return db.scalar(
         select(FaceRow)
@@ -131,14 +191,14 @@ class ShownAt(NamedTuple):
     shown_at: datetime
 
 
-def step_with_key(db: Session, session_id: int, key: str) -> StepTaken | None:
+def step_with_key(db: Executor, session_id: int, key: str) -> StepTaken | None:
     """The session's step with this key, if it was taken (a plain row, no ORM object: every
     step asks)."""
     found = db.execute(_STEP_WITH_KEY, {"session_id": session_id, "key": key}).first()
     return None if found is None else StepTaken(found[0], found[1])
 
 
-def shown_population(db: Session, trial_id: int, attempt: int, generation: int) -> ShownAt | None:
+def shown_population(db: Executor, trial_id: int, attempt: int, generation: int) -> ShownAt | None:
     """A trial's stored population: its id and when it was shown (a plain row)."""
     found = db.execute(
         _SHOWN, {"trial_id": trial_id, "attempt": attempt, "generation": generation}

@@ -96,9 +96,9 @@ class StudyService:
                    "others": others, "response_ms": response_ms, **_load(load_ms)}  # fmt: skip
         prepared = self.steps.prepare_select(token, trial=trial, attempt=attempt,
             generation=generation, elite=elite, others=others)  # fmt: skip
-        return self.steps.run(
+        return self.steps.run_plain(
             token, "select", key, payload,
-            lambda db, sess: self.steps.select(db, sess, key=key, trial=trial, attempt=attempt,
+            lambda conn, sess: self.steps.select(conn, sess, key=key, trial=trial, attempt=attempt,
                 generation=generation, elite=elite, others=others,
                 timing=Timing(response_ms, load_ms), prepared=prepared),
         )  # fmt: skip
@@ -110,9 +110,9 @@ class StudyService:
         """'Start again': a new attempt of the trial at generation 0 (reinitialised or kept)."""
         payload = {"trial": trial, "attempt": attempt, "generation": generation,
                    "response_ms": response_ms, **_load(load_ms)}  # fmt: skip
-        return self.steps.run(
+        return self.steps.run_plain(
             token, "restart", key, payload,
-            lambda db, sess: self.steps.restart(db, sess, key=key, trial=trial, attempt=attempt,
+            lambda conn, sess: self.steps.restart(conn, sess, key=key, trial=trial, attempt=attempt,
                 generation=generation, timing=Timing(response_ms, load_ms)),
         )  # fmt: skip
 

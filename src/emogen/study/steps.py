@@ -15,10 +15,11 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import datetime
+from typing import Any
 
-from sqlalchemy import Update, bindparam, insert, select, update
+from sqlalchemy import Connection, Update, bindparam, insert, select, update
 from sqlalchemy.orm import Session
 from sqlalchemy.orm.attributes import set_committed_value
 
@@ -27,13 +28,18 @@ from emogen.ga.engine import Engine
 from emogen.study.context import StudyContext
 from emogen.study.errors import SessionNotFound, StepConflict
 from emogen.study.queries import (
+    Executor,
+    SessionRecord,
     ShownAt,
+    TrialRecord,
     last_selection_time,
     n_trials,
     session_by_token,
+    session_record,
     shown_population,
     step_with_key,
     trial_at,
+    trial_record,
 )
 from emogen.study.storage import Store
 from emogen.study.tables import (
@@ -54,6 +60,7 @@ from emogen.study.view import SessionState, ShownPopulation, session_state
 #: Plain inserts of the rows a step writes and never reads back (no ORM unit of work).
 _INSERT_STEP = insert(core_table(StepRow))
 _INSERT_SELECTION = insert(core_table(SelectionRow))
+_INSERT_RESTART = insert(core_table(RestartRow))
 _SESSIONS = core_table(SessionRow)
 _TOUCH_SESSION = (
     update(_SESSIONS).where(_SESSIONS.c.id == bindparam("sid")).values(updated_at=bindparam("at"))
@@ -68,17 +75,16 @@ _ADVANCE_TRIAL: dict[tuple[str, ...], Update] = {
     for names in (
         ("generation", "engine_state"),
         ("status", "final_face_id", "generation", "engine_state"),
+        ("attempt", "generation", "engine_state"),
     )
 }
 
 
-def _advance_trial(db: Session, row: TrialRow, values: dict[str, object]) -> None:
-    """UPDATE the trial's columns by a prepared statement and set them on its loaded object as
-    committed: the ORM's unit of work (a flush) costs the study step more than the update."""
+def _advance_trial(conn: Connection, row: TrialRecord, **values: Any) -> TrialRecord:
+    """UPDATE the trial's columns by a prepared statement; the trial as it is now."""
     params = {f"new_{name}": value for name, value in values.items()}
-    db.execute(_ADVANCE_TRIAL[tuple(values)], {"trial_id": row.id, **params})
-    for name, value in values.items():
-        set_committed_value(row, name, value)
+    conn.execute(_ADVANCE_TRIAL[tuple(values)], {"trial_id": row.id, **params})
+    return row._replace(**values)
 
 
 #: The session's current trial if it shows a population: engine state, identity, position,
@@ -104,6 +110,8 @@ _ACTIVE_TRIAL = (
 Payload = Mapping[str, int | float | list[int] | None]
 #: A step's work on the locked session; returns the population it has just shown, if any.
 Action = Callable[[Session, SessionRow], ShownPopulation | None]
+#: The same on plain rows (:meth:`SessionSteps.run_plain`): also the trial as the step left it.
+PlainAction = Callable[[Connection, SessionRecord], tuple[ShownPopulation | None, TrialRecord]]
 
 
 def request_hash(kind: str, payload: Payload) -> str:
@@ -160,33 +168,68 @@ class SessionSteps:
     ) -> SessionState:
         """Do ``action`` once per key, in one transaction; answer the session's state."""
         digest = request_hash(kind, payload)
-        config = self.ctx.config
 
         def work(db: Session) -> SessionState:
             sess = session_by_token(db, token, self.ctx.study_id, lock=True)
-            done = step_with_key(db, sess.id, key)
-            if done is not None:
-                if done.kind != kind or done.request_hash != digest:
-                    raise StepConflict(
-                        f"step key '{key}' was already used for a different request "
-                        f"({done.kind}); send a new key for a new step"
-                    )
-                state = session_state(db, config, sess)
-                state["replayed"] = True
-                return state
+            replayed = self._replayed(db, db, sess, kind, key, digest)
+            if replayed is not None:
+                return replayed
             shown = action(db, sess)
-            now = utcnow()
-            db.execute(
-                _INSERT_STEP,
-                {"session_id": sess.id, "key": key, "kind": kind, "request_hash": digest,
-                 "created_at": now},
-            )  # fmt: skip
-            db.flush()  # what the step changed through the ORM (nothing for a selection)
-            db.execute(_TOUCH_SESSION, {"sid": sess.id, "at": now})
-            set_committed_value(sess, "updated_at", now)
-            return session_state(db, config, sess, shown)
+            db.flush()  # what the step changed through the ORM
+            set_committed_value(sess, "updated_at", self._taken(db, sess.id, kind, key, digest))
+            return session_state(db, self.ctx.config, sess, shown)
 
         return self.store.transact(work)
+
+    def run_plain(
+        self, token: str, kind: str, key: str, payload: Payload, action: PlainAction
+    ) -> SessionState:
+        """:meth:`run` for the steps of a shown generation (select, restart): the session and
+        trial read and written as plain rows and statements on the transaction's connection —
+        the ORM's loading and unit of work cost a selection more CPU than its statements."""
+        digest = request_hash(kind, payload)
+
+        def work(db: Session) -> SessionState:
+            conn = db.connection()
+            sess = session_record(conn, token, self.ctx.study_id, lock=True)
+            replayed = self._replayed(db, conn, sess, kind, key, digest)
+            if replayed is not None:
+                return replayed
+            shown, trial = action(conn, sess)
+            self._taken(conn, sess.id, kind, key, digest)
+            return session_state(db, self.ctx.config, sess, shown, trial)
+
+        return self.store.transact(work)
+
+    def _replayed(
+        self, db: Session, ex: Executor, sess: SessionRow | SessionRecord, kind: str, key: str,
+        digest: str,
+    ) -> SessionState | None:  # fmt: skip
+        """The current state if this key's step was already taken (a conflict if the key was
+        used for another request); None for a new step."""
+        done = step_with_key(ex, sess.id, key)
+        if done is None:
+            return None
+        if done.kind != kind or done.request_hash != digest:
+            raise StepConflict(
+                f"step key '{key}' was already used for a different request ({done.kind}); "
+                "send a new key for a new step"
+            )
+        state = session_state(db, self.ctx.config, sess)
+        state["replayed"] = True
+        return state
+
+    @staticmethod
+    def _taken(ex: Executor, session_id: int, kind: str, key: str, digest: str) -> datetime:
+        """Record the step under its key and touch the session; returns the time."""
+        now = utcnow()
+        ex.execute(
+            _INSERT_STEP,
+            {"session_id": session_id, "key": key, "kind": kind, "request_hash": digest,
+             "created_at": now},
+        )  # fmt: skip
+        ex.execute(_TOUCH_SESSION, {"sid": session_id, "at": now})
+        return now
 
     # ---- the steps' work -------------------------------------------------------------------
     def begin(self, db: Session, sess: SessionRow) -> ShownPopulation:
@@ -233,13 +276,13 @@ class SessionSteps:
         return Prepared(state, engine, next_state)
 
     def select(
-        self, db: Session, sess: SessionRow, *, key: str, trial: int, attempt: int,
+        self, conn: Connection, sess: SessionRecord, *, key: str, trial: int, attempt: int,
         generation: int, elite: int, others: list[int], timing: Timing,
         prepared: Prepared | None = None,
-    ) -> ShownPopulation | None:  # fmt: skip
+    ) -> tuple[ShownPopulation | None, TrialRecord]:  # fmt: skip
         """The participant's selection of the shown generation; the next one is stored
         (``prepared``: the GA's work done beforehand, see :meth:`prepare_select`)."""
-        row, pop = self._shown(db, sess, trial, attempt, generation)
+        row, pop = self._shown(conn, sess, trial, attempt, generation)
         next_state = None
         if prepared is not None and prepared.engine_state == row.engine_state:
             engine = prepared.engine  # computed from this very state, outside the lock
@@ -248,7 +291,7 @@ class SessionSteps:
             engine = self.engines.restore(row)
             engine.tell(elite, others)
         now = utcnow()
-        db.execute(
+        conn.execute(
             _INSERT_SELECTION,
             {
                 "population_id": pop.id,
@@ -262,46 +305,47 @@ class SessionSteps:
                 "step_key": key,
             },
         )
-        shown = None
-        values: dict[str, object] = {}
-        if engine.done:
-            values = {"status": "rating", "final_face_id": int(engine.result.ids[0])}
-        else:
-            shown = store_population(db, row, engine.ask())
         state = next_state if next_state is not None else engine.to_json()
-        values.update(generation=engine.generation, engine_state=state)
-        _advance_trial(db, row, values)
+        if engine.done:
+            final = int(engine.result.ids[0])
+            row = _advance_trial(conn, row, status="rating", final_face_id=final,
+                                 generation=engine.generation, engine_state=state)  # fmt: skip
+            return None, row
+        shown = store_population(conn, row, engine.ask())
+        row = _advance_trial(conn, row, generation=engine.generation, engine_state=state)
         self.engines.keep(state, row.identity, engine)
-        return shown
+        return replace(shown, trial=row), row
 
     def restart(
-        self, db: Session, sess: SessionRow, *, key: str, trial: int, attempt: int,
+        self, conn: Connection, sess: SessionRecord, *, key: str, trial: int, attempt: int,
         generation: int, timing: Timing,
-    ) -> ShownPopulation:  # fmt: skip
+    ) -> tuple[ShownPopulation, TrialRecord]:  # fmt: skip
         """'Start again': a new attempt of the trial at generation 0 (reinitialised or kept)."""
         if not self.ctx.config.allow_restart:
             raise StepConflict("this study does not allow starting a trial again")
-        row, pop = self._shown(db, sess, trial, attempt, generation)
+        row, pop = self._shown(conn, sess, trial, attempt, generation)
         engine = self.engines.restore(row)
         now = utcnow()
-        db.add(
-            RestartRow(
-                population_id=pop.id,
-                trial_id=row.id,
-                submitted_at=now,
-                server_response_ms=server_ms(now, pop.shown_at, timing.load_ms),
-                client_response_ms=timing.response_ms,
-                load_ms=timing.load_ms,
-                step_key=key,
-            )
+        conn.execute(
+            _INSERT_RESTART,
+            {
+                "population_id": pop.id,
+                "trial_id": row.id,
+                "submitted_at": now,
+                "server_response_ms": server_ms(now, pop.shown_at, timing.load_ms),
+                "client_response_ms": timing.response_ms,
+                "load_ms": timing.load_ms,
+                "step_key": key,
+            },
         )
         population = engine.reset()
-        row.attempt = engine.trial
-        row.generation = engine.generation
-        shown = store_population(db, row, population)
-        row.engine_state = engine.to_json()
-        self.engines.keep(row.engine_state, row.identity, engine)
-        return shown
+        shown = store_population(conn, row, population)
+        state = engine.to_json()
+        row = _advance_trial(
+            conn, row, attempt=engine.trial, generation=engine.generation, engine_state=state
+        )
+        self.engines.keep(state, row.identity, engine)
+        return replace(shown, trial=row), row
 
     def rate(
         self, db: Session, sess: SessionRow, *, key: str, trial: int, value: int,
@@ -340,7 +384,8 @@ class SessionSteps:
         return None
 
     # ---- guards ----------------------------------------------------------------------------
-    def _current_trial(self, db: Session, sess: SessionRow, trial: int) -> TrialRow:
+    @staticmethod
+    def _check_trial(sess: SessionRow | SessionRecord, trial: int) -> None:
         if sess.stage != "trial":
             raise StepConflict(
                 f"the session is not in a trial (stage '{sess.stage}'); reload the page"
@@ -350,15 +395,21 @@ class SessionSteps:
                 f"this request is for trial {trial + 1}, but the session is at trial "
                 f"{sess.current_trial + 1}; reload the page"
             )
+
+    def _current_trial(self, db: Session, sess: SessionRow, trial: int) -> TrialRow:
+        self._check_trial(sess, trial)
         row = trial_at(db, sess.id, trial)
         if row is None:  # pragma: no cover - created with the session
             raise SessionNotFound(f"trial {trial + 1} does not exist")
         return row
 
     def _shown(
-        self, db: Session, sess: SessionRow, trial: int, attempt: int, generation: int
-    ) -> tuple[TrialRow, ShownAt]:
-        row = self._current_trial(db, sess, trial)
+        self, conn: Connection, sess: SessionRecord, trial: int, attempt: int, generation: int
+    ) -> tuple[TrialRecord, ShownAt]:
+        self._check_trial(sess, trial)
+        row = trial_record(conn, sess.id, trial)
+        if row is None:  # pragma: no cover - created with the session
+            raise SessionNotFound(f"trial {trial + 1} does not exist")
         if row.status != "active":
             raise StepConflict(
                 f"trial {trial + 1} has no generation to select from (it is waiting for the "
@@ -370,7 +421,7 @@ class SessionSteps:
                 f"{trial + 1}, but generation {row.generation} (attempt {row.attempt + 1}) is "
                 "shown now; reload the page"
             )
-        pop = shown_population(db, row.id, attempt, generation)
+        pop = shown_population(conn, row.id, attempt, generation)
         if pop is None:  # pragma: no cover - stored with the engine state
             raise StepConflict("the shown generation was not stored; reload the page")
         return row, pop

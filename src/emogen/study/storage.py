@@ -197,6 +197,9 @@ class _GroupCommit:
             ):
                 for fn, future in batch:
                     session.info.clear()
+                    # each job sees the database, not the objects an earlier job loaded (a
+                    # job may change rows by plain statements, which those would not show)
+                    session.expunge_all()
                     try:
                         with session.begin_nested():
                             result = fn(session)

@@ -14,7 +14,7 @@ from emogen.ga.engine import Engine, Population
 from emogen.ga.state import collision_solver_of_state, state_data
 from emogen.study.context import StudyContext
 from emogen.study.errors import SessionNotFound
-from emogen.study.queries import trial_at
+from emogen.study.queries import Executor, TrialRecord, trial_at
 from emogen.study.tables import (
     FaceRow,
     PopulationRow,
@@ -64,7 +64,7 @@ class TrialEngines:
             while len(self._kept) > self.keep_size:
                 self._kept.popitem(last=False)
 
-    def restore(self, row: TrialRow) -> Engine:
+    def restore(self, row: TrialRow | TrialRecord) -> Engine:
         """The trial's engine, restored from its stored state."""
         return self.restore_state(row.engine_state or "", row.identity)
 
@@ -101,7 +101,9 @@ class TrialEngines:
         return shown
 
 
-def store_population(db: Session, trial: TrialRow, population: Population) -> ShownPopulation:
+def store_population(
+    db: Executor, trial: TrialRow | TrialRecord, population: Population
+) -> ShownPopulation:
     """Store a population about to be shown; returns it as the view shows it.
 
     Plain inserts (the population's id returned by the insert), not ORM objects: nothing reads

@@ -16,7 +16,14 @@ from sqlalchemy.orm import Session
 from typing_extensions import TypedDict
 
 from emogen.study.config import StudyConfig
-from emogen.study.queries import final_face, n_trials, population_at, trial_at
+from emogen.study.queries import (
+    SessionRecord,
+    TrialRecord,
+    final_face,
+    n_trials,
+    population_at,
+    trial_at,
+)
 from emogen.study.tables import SessionRow, TrialRow
 
 Stage = Literal["instructions", "trial", "done"]
@@ -108,7 +115,7 @@ class ShownPopulation:
     generation: int
     faces: list[FaceView]
     #: the trial's row, as the step left it (the view then reads it without a query)
-    trial: TrialRow | None = field(default=None, compare=False)
+    trial: TrialRow | TrialRecord | None = field(default=None, compare=False)
 
 
 def completion(config: StudyConfig, participant_id: str) -> Completion:
@@ -126,7 +133,9 @@ def _face(face_id: int, weights_json: str) -> FaceView:
     return {"id": face_id, "weights": json.loads(weights_json)}
 
 
-def _population(db: Session, row: TrialRow, shown: ShownPopulation | None) -> PopulationView | None:
+def _population(
+    db: Session, row: TrialRow | TrialRecord, shown: ShownPopulation | None
+) -> PopulationView | None:
     if shown is not None and (shown.trial_id, shown.attempt, shown.generation) == (
         row.id,
         row.attempt,
@@ -140,7 +149,7 @@ def _population(db: Session, row: TrialRow, shown: ShownPopulation | None) -> Po
     return {"attempt": pop.attempt, "generation": pop.generation, "faces": faces}
 
 
-def _rating(db: Session, config: StudyConfig, row: TrialRow) -> RatingView:
+def _rating(db: Session, config: StudyConfig, row: TrialRow | TrialRecord) -> RatingView:
     face = final_face(db, row)
     r = config.rating
     return {
@@ -152,19 +161,29 @@ def _rating(db: Session, config: StudyConfig, row: TrialRow) -> RatingView:
     }
 
 
-def _current_trial(db: Session, sess: SessionRow, shown: ShownPopulation | None) -> TrialRow | None:
-    """The session's current trial: the one a step has just shown a population of (no query),
-    or the one read."""
-    row = None if shown is None else shown.trial
-    if row is not None and row.session_id == sess.id and row.position == sess.current_trial:
-        return row
+def _current_trial(
+    db: Session,
+    sess: SessionRow | SessionRecord,
+    shown: ShownPopulation | None,
+    trial: TrialRow | TrialRecord | None,
+) -> TrialRow | TrialRecord | None:
+    """The session's current trial: the one a step has just left (``trial``) or shown a
+    population of (no query), or the one read."""
+    for row in (trial, None if shown is None else shown.trial):
+        if row is not None and row.session_id == sess.id and row.position == sess.current_trial:
+            return row
     return trial_at(db, sess.id, sess.current_trial)
 
 
 def session_state(
-    db: Session, config: StudyConfig, sess: SessionRow, shown: ShownPopulation | None = None
+    db: Session,
+    config: StudyConfig,
+    sess: SessionRow | SessionRecord,
+    shown: ShownPopulation | None = None,
+    trial: TrialRow | TrialRecord | None = None,
 ) -> SessionState:
-    """The session as the participant sees it now (``shown``: a population just stored)."""
+    """The session as the participant sees it now (``shown``: a population just stored;
+    ``trial``: the current trial's row as a step has just left it)."""
     trials = n_trials(sess)
     generations = config.ga.generations
     stage: Stage = (
@@ -194,7 +213,7 @@ def session_state(
         state["progress"]["trial"] = trials - 1
         state["progress"]["generation"] = generations
         return state
-    row = _current_trial(db, sess, shown) if stage == "trial" else None
+    row = _current_trial(db, sess, shown, trial) if stage == "trial" else None
     if row is None:
         return state
     status: TrialStatus = row.status  # type: ignore[assignment]  # a stored TrialStatus
