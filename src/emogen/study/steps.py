@@ -17,9 +17,8 @@ import json
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from datetime import datetime
-from typing import Any
 
-from sqlalchemy import Connection, Update, bindparam, insert, select, update
+from sqlalchemy import Connection, bindparam, select
 from sqlalchemy.orm import Session
 from sqlalchemy.orm.attributes import set_committed_value
 
@@ -44,48 +43,15 @@ from emogen.study.queries import (
 from emogen.study.storage import Store
 from emogen.study.tables import (
     RatingRow,
-    RestartRow,
-    SelectionRow,
     SessionRow,
-    StepRow,
     TrialRow,
     as_utc,
-    core_table,
     dumps,
     utcnow,
 )
 from emogen.study.trials import TrialEngines, store_population
 from emogen.study.view import SessionState, ShownPopulation, session_state
-
-#: Plain inserts of the rows a step writes and never reads back (no ORM unit of work).
-_INSERT_STEP = insert(core_table(StepRow))
-_INSERT_SELECTION = insert(core_table(SelectionRow))
-_INSERT_RESTART = insert(core_table(RestartRow))
-_SESSIONS = core_table(SessionRow)
-_TOUCH_SESSION = (
-    update(_SESSIONS).where(_SESSIONS.c.id == bindparam("sid")).values(updated_at=bindparam("at"))
-)
-
-
-_TRIALS = core_table(TrialRow)
-_ADVANCE_TRIAL: dict[tuple[str, ...], Update] = {
-    names: update(_TRIALS)
-    .where(_TRIALS.c.id == bindparam("trial_id"))
-    .values({name: bindparam(f"new_{name}") for name in names})
-    for names in (
-        ("generation", "engine_state"),
-        ("status", "final_face_id", "generation", "engine_state"),
-        ("attempt", "generation", "engine_state"),
-    )
-}
-
-
-def _advance_trial(conn: Connection, row: TrialRecord, **values: Any) -> TrialRecord:
-    """UPDATE the trial's columns by a prepared statement; the trial as it is now."""
-    params = {f"new_{name}": value for name, value in values.items()}
-    conn.execute(_ADVANCE_TRIAL[tuple(values)], {"trial_id": row.id, **params})
-    return row._replace(**values)
-
+from emogen.study.writes import INSERT_RESTART, INSERT_SELECTION, advance_trial, record_step
 
 #: The session's current trial if it shows a population: engine state, identity, position,
 #: attempt, generation (read without a lock to prepare a selection).
@@ -176,7 +142,7 @@ class SessionSteps:
                 return replayed
             shown = action(db, sess)
             db.flush()  # what the step changed through the ORM
-            set_committed_value(sess, "updated_at", self._taken(db, sess.id, kind, key, digest))
+            set_committed_value(sess, "updated_at", record_step(db, sess.id, kind, key, digest))
             return session_state(db, self.ctx.config, sess, shown)
 
         return self.store.transact(work)
@@ -196,7 +162,7 @@ class SessionSteps:
             if replayed is not None:
                 return replayed
             shown, trial = action(conn, sess)
-            self._taken(conn, sess.id, kind, key, digest)
+            record_step(conn, sess.id, kind, key, digest)
             return session_state(db, self.ctx.config, sess, shown, trial)
 
         return self.store.transact(work)
@@ -218,18 +184,6 @@ class SessionSteps:
         state = session_state(db, self.ctx.config, sess)
         state["replayed"] = True
         return state
-
-    @staticmethod
-    def _taken(ex: Executor, session_id: int, kind: str, key: str, digest: str) -> datetime:
-        """Record the step under its key and touch the session; returns the time."""
-        now = utcnow()
-        ex.execute(
-            _INSERT_STEP,
-            {"session_id": session_id, "key": key, "kind": kind, "request_hash": digest,
-             "created_at": now},
-        )  # fmt: skip
-        ex.execute(_TOUCH_SESSION, {"sid": session_id, "at": now})
-        return now
 
     # ---- the steps' work -------------------------------------------------------------------
     def begin(self, db: Session, sess: SessionRow) -> ShownPopulation:
@@ -292,7 +246,7 @@ class SessionSteps:
             engine.tell(elite, others)
         now = utcnow()
         conn.execute(
-            _INSERT_SELECTION,
+            INSERT_SELECTION,
             {
                 "population_id": pop.id,
                 "trial_id": row.id,
@@ -308,11 +262,11 @@ class SessionSteps:
         state = next_state if next_state is not None else engine.to_json()
         if engine.done:
             final = int(engine.result.ids[0])
-            row = _advance_trial(conn, row, status="rating", final_face_id=final,
+            row = advance_trial(conn, row, status="rating", final_face_id=final,
                                  generation=engine.generation, engine_state=state)  # fmt: skip
             return None, row
         shown = store_population(conn, row, engine.ask())
-        row = _advance_trial(conn, row, generation=engine.generation, engine_state=state)
+        row = advance_trial(conn, row, generation=engine.generation, engine_state=state)
         self.engines.keep(state, row.identity, engine)
         return replace(shown, trial=row), row
 
@@ -327,7 +281,7 @@ class SessionSteps:
         engine = self.engines.restore(row)
         now = utcnow()
         conn.execute(
-            _INSERT_RESTART,
+            INSERT_RESTART,
             {
                 "population_id": pop.id,
                 "trial_id": row.id,
@@ -341,7 +295,7 @@ class SessionSteps:
         population = engine.reset()
         shown = store_population(conn, row, population)
         state = engine.to_json()
-        row = _advance_trial(
+        row = advance_trial(
             conn, row, attempt=engine.trial, generation=engine.generation, engine_state=state
         )
         self.engines.keep(state, row.identity, engine)
