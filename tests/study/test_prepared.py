@@ -213,17 +213,21 @@ def test_a_kept_engine_of_another_state_is_not_used(
     token, _ = a.create_session("KEEP-2")
     state = a.begin(token, new_key())
     selections = []
+    first_kept = None
     for worker in (a, b, a, a):
         elite, others = choose(state, n_others=1 + len(selections) % 2)
         selections.append((elite, others))
         state = worker.select(token, new_key(), **step_args(state), elite=elite, others=others)
         assert stored_state(a) == reference_engine(a, ict_model, selections).to_json()
+        if first_kept is None:  # the engine A kept after the first selection
+            first_kept = next(reversed(a.steps.engines._kept.values()))
     pop = reference_engine(a, ict_model, selections).ask()
     shown = np.array([f["weights"] for f in state["population"]["faces"]])
     np.testing.assert_array_equal(shown, np.hstack([pop.weights, pop.correctives]))
-    # A kept the engine of the state it stored in the first step; it is still there,
-    # unused, because B stored the state after it
-    assert len(a.steps.engines._kept) >= 1
+    # B stored the state after the one A kept, so A's later steps restored that state and never
+    # took the engine it kept (a key by trial or identity alone would have taken it)
+    assert any(e is first_kept for e in a.steps.engines._kept.values())
+    assert first_kept.generation == 1
 
 
 def test_kept_engines_are_bounded_and_taken_once(service: StudyService, ict_model: Any) -> None:
