@@ -87,7 +87,7 @@ def test_a_stale_preparation_is_not_used(service: StudyService, ict_model: Any) 
         token, "select", key,
         {"trial": args["trial"], "attempt": args["attempt"], "generation": args["generation"],
          "elite": elite, "others": others, "response_ms": None},
-        lambda conn, sess: service.steps.select(conn, sess, key=key, **args, elite=elite,
+        lambda conn, read: service.steps.select(conn, read, key=key, **args, elite=elite,
             others=others, timing=Timing(), prepared=stale),
     )  # fmt: skip
     expected = reference_weights(service, ict_model, [{"elite": elite, "others": others}])

@@ -9,13 +9,13 @@ selections (:meth:`Engine.replay`), and its state survives a JSON round trip
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import orjson
 
 from emogen.config import GAConfig
 from emogen.errors import ConfigError, SelectionError
@@ -307,7 +307,18 @@ class Engine:
         }
 
     def to_json(self) -> str:
-        return json.dumps(self.state())
+        """:meth:`state` as compact JSON, written by orjson (a study step stores it; Python's
+        encoder cost ~20x more): the same shortest round-trip decimals. orjson would write a
+        non-finite number as null, so a state carrying one is refused instead."""
+        arrays = {
+            "initial": None if self._initial is None else self._initial[0],
+            "population": self._population.genes,
+            "result": None if self._result is None else self._result.genes,
+        }
+        for part, genes in arrays.items():
+            if genes is not None and not np.isfinite(genes).all():
+                raise ValueError(f"engine state: the {part} genes have a non-finite value")
+        return orjson.dumps(self.state()).decode()
 
     @classmethod
     def from_json(

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
+
+import orjson
 
 from emogen.config import GAConfig, validate_config
 from emogen.errors import ConfigError
@@ -21,8 +22,8 @@ STATE_SCHEMAS = {"emogen.ga.engine/1": 1, "emogen.ga.engine/2": None, STATE_SCHE
 def state_data(state: str | dict[str, Any]) -> dict[str, Any]:
     """A stored engine state as a dict (JSON text parsed; a bad text is a ConfigError)."""
     try:
-        return json.loads(state) if isinstance(state, str) else dict(state)
-    except json.JSONDecodeError as exc:
+        return orjson.loads(state) if isinstance(state, str) else dict(state)
+    except orjson.JSONDecodeError as exc:
         raise ConfigError(f"engine state is not valid JSON: {exc}") from None
 
 

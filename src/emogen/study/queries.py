@@ -42,11 +42,6 @@ _POPULATION_AT_WITH_FACES = _POPULATION_AT.options(selectinload(PopulationRow.fa
 _STEP_WITH_KEY = select(StepRow.kind, StepRow.request_hash).where(
     StepRow.session_id == bindparam("session_id"), StepRow.key == bindparam("key")
 )
-_SHOWN = select(PopulationRow.id, PopulationRow.shown_at).where(
-    PopulationRow.trial_id == bindparam("trial_id"),
-    PopulationRow.attempt == bindparam("attempt"),
-    PopulationRow.generation == bindparam("generation"),
-)
 
 
 class SessionRecord(NamedTuple):
@@ -78,20 +73,14 @@ class TrialRecord(NamedTuple):
 
 
 S = TypeVar("S", SessionRow, SessionRecord)
+NO_SESSION = "no session with this link; check the address"
 _SESSIONS, _TRIALS = core_table(SessionRow), core_table(TrialRow)
-_SESSION_RECORD = select(*(_SESSIONS.c[name] for name in SessionRecord._fields)).where(
-    _SESSIONS.c.token == bindparam("token")
-)
-_SESSION_RECORD_LOCKED = _SESSION_RECORD.with_for_update()
-_TRIAL_RECORD = select(*(_TRIALS.c[name] for name in TrialRecord._fields)).where(
-    _TRIALS.c.session_id == bindparam("session_id"), _TRIALS.c.position == bindparam("position")
-)
 
 
 def _of_study(sess: S | None, study_id: int) -> S:
     """The session found by its token, if it is one of this study's."""
     if sess is None:
-        raise SessionNotFound("no session with this link; check the address")
+        raise SessionNotFound(NO_SESSION)
     if sess.study_id != study_id:
         raise StepConflict(
             "this session belongs to another version of the study config than the one the "
@@ -103,19 +92,6 @@ def _of_study(sess: S | None, study_id: int) -> S:
 def session_by_token(db: Session, token: str, study_id: int, *, lock: bool = False) -> SessionRow:
     """The session of this token in this study (locked for update if asked)."""
     return _of_study(db.scalar(_BY_TOKEN_LOCKED if lock else _BY_TOKEN, {"token": token}), study_id)
-
-
-def session_record(db: Executor, token: str, study_id: int, *, lock: bool = False) -> SessionRecord:
-    """:func:`session_by_token` as a plain row."""
-    found = db.execute(_SESSION_RECORD_LOCKED if lock else _SESSION_RECORD, {"token": token})
-    row = found.first()
-    return _of_study(None if row is None else SessionRecord(*row), study_id)
-
-
-def trial_record(db: Executor, session_id: int, position: int) -> TrialRecord | None:
-    """:func:`trial_at` as a plain row."""
-    row = db.execute(_TRIAL_RECORD, {"session_id": session_id, "position": position}).first()
-    return None if row is None else TrialRecord(*row)
 
 
 def lock_study(db: Session, study_id: int) -> None:
@@ -191,19 +167,82 @@ class ShownAt(NamedTuple):
     shown_at: datetime
 
 
+class StepRead(NamedTuple):
+    """What a selection or restart reads first, in one statement: the session (locked), the
+    step already taken under the request's key if any, the session's current trial and the
+    population it shows (None where there is none)."""
+
+    session: SessionRecord
+    taken: StepTaken | None
+    trial: TrialRecord | None
+    shown: ShownAt | None
+
+
+_STEPS, _POPULATIONS = core_table(StepRow), core_table(PopulationRow)
+_STEP_READ = (
+    select(
+        *(_SESSIONS.c[name] for name in SessionRecord._fields),
+        _STEPS.c.kind,
+        _STEPS.c.request_hash,
+        *(_TRIALS.c[name] for name in TrialRecord._fields),
+        _POPULATIONS.c.id,
+        _POPULATIONS.c.shown_at,
+    )
+    .select_from(_SESSIONS)
+    .outerjoin(
+        _STEPS, (_STEPS.c.session_id == _SESSIONS.c.id) & (_STEPS.c["key"] == bindparam("key"))
+    )
+    .outerjoin(
+        _TRIALS,
+        (_TRIALS.c.session_id == _SESSIONS.c.id)
+        & (_TRIALS.c.position == _SESSIONS.c.current_trial),
+    )
+    .outerjoin(
+        _POPULATIONS,
+        (_POPULATIONS.c.trial_id == _TRIALS.c.id)
+        & (_POPULATIONS.c.attempt == _TRIALS.c.attempt)
+        & (_POPULATIONS.c.generation == _TRIALS.c.generation),
+    )
+    .where(_SESSIONS.c.token == bindparam("token"))
+)
+#: PostgreSQL locks the session's row first, by itself: a statement that waited for a row lock
+#: sees the locked row as the lock's holder committed it but the rows it joins as they were
+#: when the statement began (READ COMMITTED), so a joined read that waited would miss the step
+#: and the generation the holder stored. (SQLite: the transaction holds the write lock from its
+#: BEGIN IMMEDIATE, before anything is read.)
+_LOCK_SESSION = (
+    select(_SESSIONS.c.id).where(_SESSIONS.c.token == bindparam("token")).with_for_update()
+)
+_N_SESSION, _N_TRIAL = len(SessionRecord._fields), len(TrialRecord._fields)
+
+
+def step_read(conn: Connection, token: str, study_id: int, key: str) -> StepRead:
+    """:class:`StepRead` of the session with this token in this study: one statement (indexed
+    joins; on PostgreSQL after the session's row lock) where reading the session, the key's
+    step, the trial and its population one by one would take four."""
+    if conn.dialect.name != "sqlite":
+        conn.execute(_LOCK_SESSION, {"token": token})
+    row = conn.execute(_STEP_READ, {"token": token, "key": key}).first()
+    if row is None:
+        raise SessionNotFound(NO_SESSION)
+    sess = _of_study(SessionRecord(*row[:_N_SESSION]), study_id)
+    at = _N_SESSION + 2
+    kind, digest = row[_N_SESSION], row[_N_SESSION + 1]
+    trial_id = row[at]
+    pop_id, shown_at = row[at + _N_TRIAL], row[at + _N_TRIAL + 1]
+    return StepRead(
+        session=sess,
+        taken=None if kind is None else StepTaken(kind, digest),
+        trial=None if trial_id is None else TrialRecord(*row[at : at + _N_TRIAL]),
+        shown=None if pop_id is None else ShownAt(pop_id, shown_at),
+    )
+
+
 def step_with_key(db: Executor, session_id: int, key: str) -> StepTaken | None:
     """The session's step with this key, if it was taken (a plain row, no ORM object: every
     step asks)."""
     found = db.execute(_STEP_WITH_KEY, {"session_id": session_id, "key": key}).first()
     return None if found is None else StepTaken(found[0], found[1])
-
-
-def shown_population(db: Executor, trial_id: int, attempt: int, generation: int) -> ShownAt | None:
-    """A trial's stored population: its id and when it was shown (a plain row)."""
-    found = db.execute(
-        _SHOWN, {"trial_id": trial_id, "attempt": attempt, "generation": generation}
-    ).first()
-    return None if found is None else ShownAt(found[0], found[1])
 
 
 def current_face(db: Session, sess: SessionRow, face_id: int) -> tuple[str, str] | None:

@@ -98,7 +98,7 @@ class StudyService:
             generation=generation, elite=elite, others=others)  # fmt: skip
         return self.steps.run_plain(
             token, "select", key, payload,
-            lambda conn, sess: self.steps.select(conn, sess, key=key, trial=trial, attempt=attempt,
+            lambda conn, read: self.steps.select(conn, read, key=key, trial=trial, attempt=attempt,
                 generation=generation, elite=elite, others=others,
                 timing=Timing(response_ms, load_ms), prepared=prepared),
         )  # fmt: skip
@@ -112,7 +112,7 @@ class StudyService:
                    "response_ms": response_ms, **_load(load_ms)}  # fmt: skip
         return self.steps.run_plain(
             token, "restart", key, payload,
-            lambda conn, sess: self.steps.restart(conn, sess, key=key, trial=trial, attempt=attempt,
+            lambda conn, read: self.steps.restart(conn, read, key=key, trial=trial, attempt=attempt,
                 generation=generation, timing=Timing(response_ms, load_ms)),
         )  # fmt: skip
 

@@ -30,15 +30,15 @@ from emogen.study.queries import (
     Executor,
     SessionRecord,
     ShownAt,
+    StepRead,
+    StepTaken,
     TrialRecord,
     last_selection_time,
     n_trials,
     session_by_token,
-    session_record,
-    shown_population,
+    step_read,
     step_with_key,
     trial_at,
-    trial_record,
 )
 from emogen.study.storage import Store
 from emogen.study.tables import (
@@ -77,7 +77,7 @@ Payload = Mapping[str, int | float | list[int] | None]
 #: A step's work on the locked session; returns the population it has just shown, if any.
 Action = Callable[[Session, SessionRow], ShownPopulation | None]
 #: The same on plain rows (:meth:`SessionSteps.run_plain`): also the trial as the step left it.
-PlainAction = Callable[[Connection, SessionRecord], tuple[ShownPopulation | None, TrialRecord]]
+PlainAction = Callable[[Connection, StepRead], tuple[ShownPopulation | None, TrialRecord]]
 
 
 def request_hash(kind: str, payload: Payload) -> str:
@@ -150,20 +150,20 @@ class SessionSteps:
     def run_plain(
         self, token: str, kind: str, key: str, payload: Payload, action: PlainAction
     ) -> SessionState:
-        """:meth:`run` for the steps of a shown generation (select, restart): the session and
-        trial read and written as plain rows and statements on the transaction's connection —
-        the ORM's loading and unit of work cost a selection more CPU than its statements."""
+        """:meth:`run` for the steps of a shown generation (select, restart): the session, the
+        key's step, the trial and its shown population read by one statement, and written by
+        plain statements on the transaction's connection — the ORM's loading and unit of work
+        cost a selection more CPU than its statements."""
         digest = request_hash(kind, payload)
 
         def work(db: Session) -> SessionState:
             conn = db.connection()
-            sess = session_record(conn, token, self.ctx.study_id, lock=True)
-            replayed = self._replayed(db, conn, sess, kind, key, digest)
-            if replayed is not None:
-                return replayed
-            shown, trial = action(conn, sess)
-            record_step(conn, sess.id, kind, key, digest)
-            return session_state(db, self.ctx.config, sess, shown, trial)
+            read = step_read(conn, token, self.ctx.study_id, key)
+            if read.taken is not None:
+                return self._replay(db, read.session, read.taken, kind, key, digest)
+            shown, trial = action(conn, read)
+            record_step(conn, read.session.id, kind, key, digest)
+            return session_state(db, self.ctx.config, read.session, shown, trial)
 
         return self.store.transact(work)
 
@@ -174,8 +174,14 @@ class SessionSteps:
         """The current state if this key's step was already taken (a conflict if the key was
         used for another request); None for a new step."""
         done = step_with_key(ex, sess.id, key)
-        if done is None:
-            return None
+        return None if done is None else self._replay(db, sess, done, kind, key, digest)
+
+    def _replay(
+        self, db: Session, sess: SessionRow | SessionRecord, done: StepTaken, kind: str, key: str,
+        digest: str,
+    ) -> SessionState:  # fmt: skip
+        """The answer to a key already used: the current state (the same request again), or a
+        conflict (another request under it)."""
         if done.kind != kind or done.request_hash != digest:
             raise StepConflict(
                 f"step key '{key}' was already used for a different request ({done.kind}); "
@@ -230,13 +236,13 @@ class SessionSteps:
         return Prepared(state, engine, next_state)
 
     def select(
-        self, conn: Connection, sess: SessionRecord, *, key: str, trial: int, attempt: int,
+        self, conn: Connection, read: StepRead, *, key: str, trial: int, attempt: int,
         generation: int, elite: int, others: list[int], timing: Timing,
         prepared: Prepared | None = None,
     ) -> tuple[ShownPopulation | None, TrialRecord]:  # fmt: skip
         """The participant's selection of the shown generation; the next one is stored
         (``prepared``: the GA's work done beforehand, see :meth:`prepare_select`)."""
-        row, pop = self._shown(conn, sess, trial, attempt, generation)
+        row, pop = self._shown(read, trial, attempt, generation)
         next_state = None
         if prepared is not None and prepared.engine_state == row.engine_state:
             engine = prepared.engine  # computed from this very state, outside the lock
@@ -271,13 +277,13 @@ class SessionSteps:
         return replace(shown, trial=row), row
 
     def restart(
-        self, conn: Connection, sess: SessionRecord, *, key: str, trial: int, attempt: int,
+        self, conn: Connection, read: StepRead, *, key: str, trial: int, attempt: int,
         generation: int, timing: Timing,
     ) -> tuple[ShownPopulation, TrialRecord]:  # fmt: skip
         """'Start again': a new attempt of the trial at generation 0 (reinitialised or kept)."""
         if not self.ctx.config.allow_restart:
             raise StepConflict("this study does not allow starting a trial again")
-        row, pop = self._shown(conn, sess, trial, attempt, generation)
+        row, pop = self._shown(read, trial, attempt, generation)
         engine = self.engines.restore(row)
         now = utcnow()
         conn.execute(
@@ -358,10 +364,12 @@ class SessionSteps:
         return row
 
     def _shown(
-        self, conn: Connection, sess: SessionRecord, trial: int, attempt: int, generation: int
+        self, read: StepRead, trial: int, attempt: int, generation: int
     ) -> tuple[TrialRecord, ShownAt]:
-        self._check_trial(sess, trial)
-        row = trial_record(conn, sess.id, trial)
+        """The trial and population a selection or restart is for, as :func:`step_read` found
+        them (a conflict if the request is not for what the session shows now)."""
+        self._check_trial(read.session, trial)
+        row = read.trial  # the session's current trial: the request's, checked above
         if row is None:  # pragma: no cover - created with the session
             raise SessionNotFound(f"trial {trial + 1} does not exist")
         if row.status != "active":
@@ -375,7 +383,7 @@ class SessionSteps:
                 f"{trial + 1}, but generation {row.generation} (attempt {row.attempt + 1}) is "
                 "shown now; reload the page"
             )
-        pop = shown_population(conn, row.id, attempt, generation)
+        pop = read.shown  # the trial's population at its attempt and generation: the request's
         if pop is None:  # pragma: no cover - stored with the engine state
             raise StepConflict("the shown generation was not stored; reload the page")
         return row, pop
