@@ -1,7 +1,7 @@
 """Server CPU of one study step (a selection of a corrected ten-face generation).
 
-``python benchmarks/bench_step.py [--participants 8] [--no-http]`` runs participants one at a
-time through the bench study (two trials, G = 5, corrected faces, three faces chosen per
+``python benchmarks/bench_step.py [--participants 8] [--no-http] [--against SRC]`` runs
+participants one at a time through the bench study (two trials, G = 5, corrected faces, three faces chosen per
 generation) and prints the CPU time of every selection, p50/p95/mean:
 
 * **over HTTP** — the real server (``emogen serve``, one worker, SQLite in a temporary folder);
@@ -10,8 +10,15 @@ generation) and prints the CPU time of every selection, p50/p95/mean:
   and after the request. One request at a time, so nothing else runs in the server meanwhile;
 * **in process** — the study service itself (no HTTP), with the process's CPU per selection and
   where it goes: the GA work and correction done before the write transaction
-  (``prepare``: of which ``correct``, and of that ``detect`` — the ray casting — and ``eq5``
-  — the solves) and the write transaction on the database writer thread (``writer``).
+  (``prepare``: of which ``correct``, and of that ``collisions`` — the detect–solve loop, ray
+  casting and eq. 5, compiled) and the write transaction on the database writer thread
+  (``writer``).
+
+``--against SRC`` (another checkout's ``src`` folder, e.g. a ``git worktree`` of main) runs a
+second server with that code beside this one, in the same virtual environment, and alternates
+participants between the two: the only fair comparison of two versions on a machine whose
+speed drifts from one run to the next (on the 2-core VM of the figures in docs/study.md, ±15%
+and more; two runs of the same code minutes apart can differ by 2 ms).
 
 Machine: BLAS on one thread (as the server runs). Linux only (``/proc``).
 """
@@ -64,43 +71,69 @@ def _selection(state: Any, rng: random.Random) -> dict[str, Any]:
     return selection_body(state, rng.sample([f["id"] for f in state["population"]["faces"]], 3))
 
 
-def over_http(participants: int) -> np.ndarray:
-    """Server CPU (ms) of each selection over HTTP, one request at a time."""
+def over_http(participants: int, against: Path | None = None) -> dict[str, np.ndarray]:
+    """Server CPU (ms) of each selection over HTTP, one request at a time: ``{"this": …}``.
+
+    ``against``: the ``src`` folder of another checkout; a second server runs that code side
+    by side (its own database) and the participants alternate between the two, so that both
+    are measured in the same minutes of this machine, whose speed drifts by ±15% and more from
+    one run to the next: ``{"this": …, "against": …}``.
+    """
+    roots = {"this": REPO / "src"} | ({} if against is None else {"against": against})
     with tempfile.TemporaryDirectory(prefix="emogen-step-") as tmp:
         folder = Path(tmp)
         config = write_study_toml(BENCH_STUDY, folder / "bench.toml")
-        url = f"sqlite:///{folder / 'bench.sqlite'}"
-        server = ServerProcess(
-            config, url, model_path(), folder / "server.log", extra=("--session-limit", "off")
-        ).start()  # many sessions from one address: not a flood here
-        rng, out, n = random.Random(0), [], 0
+        servers = {name: _server(config, folder, name, root) for name, root in roots.items()}
+        rng, out, n = random.Random(0), {name: [] for name in roots}, 0
         try:
-            pids = server.pids()
-            with httpx.Client(base_url=server.url, timeout=30.0) as client:
-
-                def post(path: str, body: dict[str, Any]) -> dict[str, Any]:
-                    r = client.post(path, json=body)
-                    r.raise_for_status()
-                    return r.json()  # type: ignore[no-any-return]
-
-                for p in range(participants + 1):  # the first one warms the server up
-                    token = post("/api/sessions", {"participant_id": f"step-{p}"})["token"]
-                    state = post(f"/api/s/{token}/begin", {"key": f"begin-{p:06d}"})
-                    while state["stage"] != "done":
-                        n += 1
-                        key = f"step-{n:06d}"
-                        if state["trial"]["status"] != "active":
-                            body = {"key": key, "trial": state["progress"]["trial"], "value": 4}
-                            state = post(f"/api/s/{token}/rating", body)
-                            continue
-                        body = {"key": key, **_selection(state, rng)}
-                        t0 = _server_cpu_ns(pids)
-                        state = post(f"/api/s/{token}/select", body)
-                        if p:
-                            out.append((_server_cpu_ns(pids) - t0) / 1e6)
+            for server in servers.values():
+                server.start()
+            for p in range(participants + 1):  # the first one warms the servers up
+                order = list(servers) if p % 2 else list(reversed(servers))
+                for name in order:
+                    n = _participant(servers[name], f"{name}-{p}", n, rng, out[name] if p else [])
         finally:
-            server.stop()
-    return np.array(out)
+            for server in servers.values():
+                server.stop()
+    return {name: np.array(ms) for name, ms in out.items()}
+
+
+def _server(config: Path, folder: Path, name: str, src: Path) -> ServerProcess:
+    """``emogen serve`` of the code in ``src``, SQLite in ``folder``; no session limit (many
+    sessions from one address are not a flood here)."""
+    url = f"sqlite:///{folder / name}.sqlite"
+    log = folder / f"{name}.log"
+    env = {"PYTHONPATH": str(src)}
+    return ServerProcess(config, url, model_path(), log, extra=("--session-limit", "off"), env=env)
+
+
+def _participant(
+    server: ServerProcess, participant: str, n: int, rng: random.Random, out: list[float]
+) -> int:
+    """One participant through the study; each selection's server CPU appended to ``out``.
+    Returns the step count so far (``n``: before)."""
+    pids = server.pids()
+    with httpx.Client(base_url=server.url, timeout=30.0) as client:
+
+        def post(path: str, body: dict[str, Any]) -> dict[str, Any]:
+            r = client.post(path, json=body)
+            r.raise_for_status()
+            return r.json()  # type: ignore[no-any-return]
+
+        token = post("/api/sessions", {"participant_id": participant})["token"]
+        state = post(f"/api/s/{token}/begin", {"key": f"begin-{n:06d}"})
+        while state["stage"] != "done":
+            n += 1
+            key = f"step-{n:06d}"
+            if state["trial"]["status"] != "active":
+                body = {"key": key, "trial": state["progress"]["trial"], "value": 4}
+                state = post(f"/api/s/{token}/rating", body)
+                continue
+            body = {"key": key, **_selection(state, rng)}
+            t0 = _server_cpu_ns(pids)
+            state = post(f"/api/s/{token}/select", body)
+            out.append((_server_cpu_ns(pids) - t0) / 1e6)
+    return n
 
 
 def _timed(acc: dict[str, float], phase: dict[str, bool], label: str) -> Callable[[Any], Any]:
@@ -126,7 +159,6 @@ def _timed(acc: dict[str, float], phase: dict[str, bool], label: str) -> Callabl
 def in_process(participants: int) -> tuple[np.ndarray, dict[str, float]]:
     """Process CPU (ms) of each selection of the study service, and the mean ms per part."""
     import emogen.correct.apply as apply
-    import emogen.correct.solve as solve
     from emogen.model import load_model
     from emogen.study import steps, storage
     from emogen.study.config import load_study_config
@@ -138,8 +170,7 @@ def in_process(participants: int) -> tuple[np.ndarray, dict[str, float]]:
     patches = [
         (steps.SessionSteps, "prepare_select", "prepare"),
         (apply.Corrector, "correct", "correct"),
-        (solve, "detect", "detect"),
-        (solve, "solve_eq5", "eq5"),
+        (apply, "solve_collisions", "collisions"),
         (storage._GroupCommit, "_execute", "writer"),
     ]
     saved = [(owner, name, getattr(owner, name)) for owner, name, _ in patches]
@@ -200,14 +231,18 @@ def _figures(ms: np.ndarray) -> dict[str, float]:
     }
 
 
-def run(participants: int = 8, http: bool = True) -> dict[str, Any]:
-    """Print and return the figures (``http=False``: in process only)."""
+def run(participants: int = 8, http: bool = True, against: Path | None = None) -> dict[str, Any]:
+    """Print and return the figures (``http=False``: in process only; ``against``: see
+    :func:`over_http`)."""
     print(f"study step CPU: {os.cpu_count()} cores, bench study {BENCH_STUDY['ga']}, corrected")
     result: dict[str, Any] = {}
     if http:
-        ms = over_http(participants)
-        print(_line("over HTTP", ms))
-        result["http"] = _figures(ms)
+        runs = over_http(participants, against)
+        print(_line("over HTTP", runs["this"]))
+        result["http"] = _figures(runs["this"])
+        if "against" in runs:
+            print(_line("  against", runs["against"]) + f"  ({against})")
+            result["http_against"] = _figures(runs["against"])
     ms, parts = in_process(participants)
     print(_line("in process", ms))
     print(
@@ -222,10 +257,23 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--participants", type=int, default=8)
     parser.add_argument("--no-http", action="store_true", help="in process only")
+    parser.add_argument(
+        "--against",
+        type=Path,
+        metavar="SRC",
+        help="another checkout's src folder: its server runs side by side, participants "
+        "alternate between the two (a fair comparison on a machine whose speed drifts)",
+    )
     args = parser.parse_args()
     if args.participants < 1:
         parser.error(f"--participants must be at least 1; got {args.participants}")
-    run(args.participants, http=not args.no_http)
+    if args.against is not None and not (args.against / "emogen" / "__init__.py").is_file():
+        parser.error(
+            f"--against must be a checkout's src folder (with emogen/); got {args.against}"
+        )
+    if args.against is not None and args.no_http:
+        parser.error("--against compares servers over HTTP; leave out --no-http")
+    run(args.participants, http=not args.no_http, against=args.against)
 
 
 if __name__ == "__main__":

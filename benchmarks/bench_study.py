@@ -78,10 +78,10 @@ class ServerProcess:
 
     def __init__(
         self, config: Path, database_url: str, model: Path, log: Path, workers: int = 1,
-        extra: tuple[str, ...] = (),
+        extra: tuple[str, ...] = (), env: dict[str, str] | None = None,
     ) -> None:  # fmt: skip
         self.config, self.database_url, self.model, self.log = config, database_url, model, log
-        self.workers, self.extra = workers, extra
+        self.workers, self.extra, self.env = workers, extra, env or {}
         self.port = free_port()
         self.proc: subprocess.Popen[bytes] | None = None
 
@@ -90,7 +90,7 @@ class ServerProcess:
         return f"http://127.0.0.1:{self.port}"
 
     def start(self, timeout: float = 120.0) -> ServerProcess:
-        env = {**os.environ, "EMOGEN_RESEARCHER_TOKEN": "bench-token"}
+        env = {**os.environ, "EMOGEN_RESEARCHER_TOKEN": "bench-token", **self.env}
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(
                 [

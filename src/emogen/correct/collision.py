@@ -281,7 +281,7 @@ def _summarise(
 
 
 @njit(cache=True, nogil=True)
-def _detect_faces(
+def detect_faces(
     local: np.ndarray,
     lower: np.ndarray,
     lower_vertices: np.ndarray,
@@ -449,7 +449,7 @@ def detect(local: np.ndarray, layout: CollisionLayout, *, margin: float = 0.0) -
         raise ValueError(
             f"local vertices must be (B, {len(layout.vertices)}, 3); got shape {local.shape}"
         )
-    within, ids, values = _detect_faces(
+    within, ids, values = detect_faces(
         local,
         layout.lower,
         layout.lower_vertices,

@@ -38,11 +38,13 @@ from numba import njit
 
 from emogen.correct.blend import blend
 from emogen.correct.collision import (
+    CONTACT_TOLERANCE,
     LIP,
     TEETH,
     CollisionLayout,
     depth_jacobian,
     detect,
+    detect_faces,
 )
 from emogen.solvers import CURRENT_SOLVER, SOLVERS, check_solver
 
@@ -303,6 +305,89 @@ def _round_compiled(
         iterations[f] = it + 1
 
 
+@njit(cache=True, nogil=True)
+def _solve_compiled(
+    base_local: np.ndarray,
+    deltas_local: np.ndarray,
+    lower: np.ndarray,
+    lower_vertices: np.ndarray,
+    anchor_corners: np.ndarray,
+    anchor_bary: np.ndarray,
+    anchor_kind: np.ndarray,
+    cell: float,
+    tolerance: float,
+    margin: float,
+    max_iterations: int,
+    w1: float,
+    alternations: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+    """Solver 2's detect–solve loop of a batch, compiled whole (:func:`_solve_stepwise` with
+    solver 2, the same arithmetic in the same order, without a trip through Python per round):
+    each round blends the still-colliding faces' current positions (base + the collision
+    correctives at their weights so far, shape by shape, zero weights skipped, as
+    :func:`emogen.correct.blend.blend`), detects (:func:`detect_faces`), records within counts
+    and the deepest remaining pair, and solves the colliding faces' increments
+    (:func:`_round_compiled`). Returns weights, within_before, within_after, depth_after,
+    iterations (:class:`CollisionSolution`)."""
+    b_n, l_n, n_c = base_local.shape[0], base_local.shape[1], deltas_local.shape[0]
+    n_lip = 0
+    for n in range(anchor_kind.shape[0]):
+        n_lip += anchor_kind[n] == LIP
+    weights = np.zeros((b_n, n_c))
+    within_before = np.zeros((b_n, 2), dtype=np.int64)
+    within_after = np.zeros((b_n, 2), dtype=np.int64)
+    depth_after = np.zeros(b_n)
+    iterations = np.zeros(b_n, dtype=np.int64)
+    active = np.arange(b_n)
+    for it in range(max_iterations + 1):
+        n_act = active.shape[0]
+        if n_act == 0:
+            break
+        current = np.empty((n_act, l_n, 3))
+        for i in range(n_act):
+            f = active[i]
+            current[i] = base_local[f]
+            for k in range(n_c if it else 0):
+                w = weights[f, k]
+                if w != 0.0:
+                    for v in range(l_n):
+                        for d in range(3):
+                            current[i, v, d] += w * deltas_local[k, v, d]
+        within, ids, values = detect_faces(
+            current, lower, lower_vertices, anchor_corners, anchor_bary, anchor_kind, cell,
+            tolerance,
+        )  # fmt: skip
+        colliding = np.zeros(n_act, dtype=np.bool_)
+        for i in range(n_act):
+            if it == 0:
+                within_before[active[i]] = within[i]
+            within_after[active[i]] = within[i]
+            colliding[i] = within[i, 0] + within[i, 1] > 0
+        m = ids.shape[0]
+        face, anchor, partner = ids[:, 0].copy(), ids[:, 1].copy(), ids[:, 2].copy()
+        kind = np.empty(m, dtype=np.int64)
+        bary = np.empty((m, 3))
+        depth = np.empty(m)
+        deepest = np.zeros(n_act)
+        for r in range(m):
+            kind[r] = TEETH if anchor[r] >= n_lip else LIP
+            u, v = values[r, 0], values[r, 1]
+            bary[r, 0], bary[r, 1], bary[r, 2] = 1.0 - u - v, u, v
+            depth[r] = values[r, 2] + margin
+            if ids[r, 3] != 0:  # within: (δb + margin) − margin, as the stepwise loop has it
+                deepest[face[r]] = max(deepest[face[r]], depth[r] - margin)
+        for i in range(n_act):
+            depth_after[active[i]] = deepest[i]
+        if it == max_iterations or not colliding.any():
+            break
+        _round_compiled(
+            face, kind, anchor, partner, bary, depth, anchor_corners, anchor_bary, lower,
+            deltas_local, active, colliding, weights, iterations, it, w1, alternations,
+        )  # fmt: skip
+        active = active[colliding]
+    return weights, within_before, within_after, depth_after, iterations
+
+
 def solve_eq5(
     a: np.ndarray,
     b: np.ndarray,
@@ -362,9 +447,34 @@ def solve_collisions(
 
     base_local : (B, L, 3) float64 positions of ``layout.vertices`` before collision correction
     deltas_local : (8, L, 3) the collision correctives at those vertices
-    solver : the eq. 5 block solver (:data:`SOLVERS`)
+    solver : the eq. 5 block solver (:data:`SOLVERS`); solver 2's whole loop is compiled
+      (:func:`_solve_compiled`: the same bits as :func:`_solve_stepwise`, tested)
     """
-    check_solver(solver)
+    if check_solver(solver) == 2:
+        solved = _solve_compiled(
+            np.ascontiguousarray(base_local, dtype=np.float64),
+            np.ascontiguousarray(deltas_local, dtype=np.float64),
+            layout.lower, layout.lower_vertices, *layout.anchor_table, layout.cell,
+            CONTACT_TOLERANCE, margin, max_iterations, W1, ALTERNATIONS,
+        )  # fmt: skip
+        return CollisionSolution(*solved)
+    return _solve_stepwise(
+        base_local, deltas_local, layout, max_iterations=max_iterations, margin=margin,
+        solver=solver,
+    )  # fmt: skip
+
+
+def _solve_stepwise(
+    base_local: np.ndarray,
+    deltas_local: np.ndarray,
+    layout: CollisionLayout,
+    *,
+    max_iterations: int,
+    margin: float,
+    solver: int,
+) -> CollisionSolution:
+    """The detect–solve loop round by round in Python (solver 1, whose BVLS solves run in
+    scipy; and, for the tests, solver 2 as the compiled loop's reference)."""
     b_n = len(base_local)
     n_c = deltas_local.shape[0]
     flat_deltas = deltas_local.reshape(n_c, -1)
