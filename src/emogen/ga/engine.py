@@ -307,9 +307,8 @@ class Engine:
         }
 
     def to_json(self) -> str:
-        """:meth:`state` as compact JSON, written by orjson (a study step stores it; Python's
-        encoder cost ~20x more): the same shortest round-trip decimals. orjson would write a
-        non-finite number as null, so a state carrying one is refused instead."""
+        """:meth:`state` as compact JSON by orjson (~20x cheaper than Python's encoder; exact
+        round trip); it would write a non-finite number as null, so such a state is refused."""
         arrays = {
             "initial": None if self._initial is None else self._initial[0],
             "population": self._population.genes,

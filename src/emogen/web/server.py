@@ -70,7 +70,9 @@ def worker_app() -> FastAPI:
     """The app of one worker process (uvicorn's app factory; options from the environment)."""
     options = json.loads(os.environ[WORKER_OPTIONS_ENV])
     _die_with_parent(int(options["parent"]))
-    return _app(options)
+    app = _app(options)
+    warm_up(app)  # the kernels the parent compiled, loaded from numba's cache
+    return app
 
 
 def run_server(
@@ -106,6 +108,7 @@ def run_server(
         "parent": os.getpid(),
     }
     app = _app(options)  # the whole study checked here, once
+    warm_up(app, announce=announce)
     if announce:
         _announce(app, host, port, n_workers)
     common: dict[str, Any] = {
@@ -125,6 +128,31 @@ def run_server(
     del app
     os.environ[WORKER_OPTIONS_ENV] = json.dumps(options)
     uvicorn.run("emogen.web.server:worker_app", factory=True, workers=n_workers, **common)
+
+
+def warm_up(app: FastAPI, *, announce: bool = False) -> None:
+    """Correct one face now, if the study corrects faces: the correction's compiled kernels
+    are compiled on the first start after an install (~20 s on a 2-core machine) and loaded
+    from numba's on-disk cache after that (~0.3 s), so no participant's first step waits for
+    them. Worker processes started after this load them from that cache."""
+    if not app.state.config.correct:
+        return
+    import time
+
+    import numpy as np
+
+    from emogen.correct.faces import correct_faces
+
+    model = app.state.model
+    if announce:
+        sys.stdout.write("Preparing the face correction (the first start after an install "
+                         "compiles it: up to a minute) ... ")  # fmt: skip
+        sys.stdout.flush()
+    start = time.perf_counter()
+    correct_faces(model, np.zeros((1, model.n_shapes)))
+    if announce:
+        sys.stdout.write(f"ready ({time.perf_counter() - start:.1f} s)\n")
+        sys.stdout.flush()
 
 
 def _announce(app: FastAPI, host: str, port: int, workers: int) -> None:
