@@ -10,7 +10,6 @@ import logging
 from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
-from types import SimpleNamespace
 from typing import Any
 
 import pandas as pd
@@ -279,10 +278,7 @@ def test_the_researcher_token_is_never_logged(
 
 
 class _FakeApp:
-    """What run_server reads of an app before uvicorn runs it (a study without correction:
-    nothing to prepare)."""
-
-    state = SimpleNamespace(config=SimpleNamespace(correct=False))
+    pass
 
 
 def test_researcher_page_says_when_the_api_is_disabled(tmp_path: Path, ict_model: Any) -> None:

@@ -14,6 +14,7 @@ import json
 import os
 import signal
 import sys
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -70,9 +71,7 @@ def worker_app() -> FastAPI:
     """The app of one worker process (uvicorn's app factory; options from the environment)."""
     options = json.loads(os.environ[WORKER_OPTIONS_ENV])
     _die_with_parent(int(options["parent"]))
-    app = _app(options)
-    warm_up(app)  # the kernels the parent compiled, loaded from numba's cache
-    return app
+    return _app(options)
 
 
 def run_server(
@@ -107,8 +106,7 @@ def run_server(
         "hsts": hsts,
         "parent": os.getpid(),
     }
-    app = _app(options)  # the whole study checked here, once
-    warm_up(app, announce=announce)
+    app = _loaded_app(options, announce)  # the whole study checked here, once
     if announce:
         _announce(app, host, port, n_workers)
     common: dict[str, Any] = {
@@ -130,29 +128,25 @@ def run_server(
     uvicorn.run("emogen.web.server:worker_app", factory=True, workers=n_workers, **common)
 
 
-def warm_up(app: FastAPI, *, announce: bool = False) -> None:
-    """Correct one face now, if the study corrects faces: the correction's compiled kernels
-    are compiled on the first start after an install (~20 s on a 2-core machine) and loaded
-    from numba's on-disk cache after that (~0.3 s), so no participant's first step waits for
-    them. Worker processes started after this load them from that cache."""
-    if not app.state.config.correct:
-        return
-    import time
-
-    import numpy as np
-
-    from emogen.correct.faces import correct_faces
-
-    model = app.state.model
-    if announce:
-        sys.stdout.write("Preparing the face correction (the first start after an install "
-                         "compiles it: up to a minute) ... ")  # fmt: skip
-        sys.stdout.flush()
+def _loaded_app(options: dict[str, Any], announce: bool) -> FastAPI:
+    """:func:`_app`, saying what takes the time: loading the model and the study, and on the
+    first start after an install compiling the face correction (the study's probe generation
+    is corrected while the app is made, so no participant's first step waits for it)."""
+    if not announce:
+        return _app(options)
+    sys.stdout.write(
+        "Loading the study and the face model (the first start after an install also compiles "
+        "the face correction: up to a minute) ... "
+    )
+    sys.stdout.flush()
     start = time.perf_counter()
-    correct_faces(model, np.zeros((1, model.n_shapes)))
-    if announce:
-        sys.stdout.write(f"ready ({time.perf_counter() - start:.1f} s)\n")
-        sys.stdout.flush()
+    try:
+        app = _app(options)
+    except BaseException:
+        sys.stdout.write("\n")  # the error follows on a line of its own
+        raise
+    sys.stdout.write(f"ready ({time.perf_counter() - start:.1f} s)\n")
+    return app
 
 
 def _announce(app: FastAPI, host: str, port: int, workers: int) -> None:
