@@ -75,7 +75,11 @@ def test_step_read_finds_what_separate_reads_find(service: StudyService) -> None
         ("trial", "rating"),
         ("done", "done"),
     } <= stages
-    assert all(s["taken"] == seen[1]["taken"] is not None for s in seen[1::2])
+    # every read under the begin's key finds that step (the same one); under fresh keys, none
+    begin_step = seen[1]["taken"]
+    assert begin_step is not None and begin_step[0] == "begin"
+    assert all(s["taken"] == begin_step for s in seen[1::2])
+    assert all(s["taken"] is None for s in seen[2::2])
     assert any(s["shown"] is not None and s["trial"][3] > 0 for s in seen)  # a later generation
 
 

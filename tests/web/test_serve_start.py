@@ -45,7 +45,7 @@ def test_the_loading_line_comes_before_the_app_is_made_then_the_banner(
     run(monkeypatch, make)
     after = capsys.readouterr().out
     assert printed_before[0].startswith("Loading the study and the face model")
-    assert "compiles the face correction" in printed_before[0]
+    assert "compile the face correction" in printed_before[0]
     first, banner = after.split("\n", 1)
     assert first.startswith("ready (") and first.endswith(" s)")
     assert banner.startswith("EmoGen study 'small' (2 trials)")

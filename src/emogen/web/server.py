@@ -135,7 +135,7 @@ def _loaded_app(options: dict[str, Any], announce: bool) -> FastAPI:
     if not announce:
         return _app(options)
     sys.stdout.write(
-        "Loading the study and the face model (the first start after an install also compiles "
+        "Loading the study and the face model (the first start after an install may also compile "
         "the face correction: up to a minute) ... "
     )
     sys.stdout.flush()
