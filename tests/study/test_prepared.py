@@ -249,3 +249,99 @@ def test_kept_engines_are_bounded_and_taken_once(service: StudyService, ict_mode
     # another identity's trial in the same state does not take it
     assert engines.restore_state(made[1].to_json(), "female-light") is not made[1]
     assert engines.restore_state(made[1].to_json(), "generic") is made[1]
+
+
+def statements_during(service: StudyService, call: Any, **kwargs: Any) -> tuple[Any, list[str]]:
+    """``call(**kwargs)``'s result and the SQL statements it runs on the service's database."""
+    from sqlalchemy import event
+
+    seen: list[str] = []
+
+    def record(conn: Any, cursor: Any, statement: str, *args: Any) -> None:
+        seen.append(statement)
+
+    event.listen(service.store.engine, "before_cursor_execute", record)
+    try:
+        result = call(**kwargs)
+    finally:
+        event.remove(service.store.engine, "before_cursor_execute", record)
+    return result, seen
+
+
+def test_a_step_after_one_this_process_stored_is_prepared_without_a_read(
+    long_service: StudyService, ict_model: Any
+) -> None:
+    """The state this process stored for the session (after begin, after each selection) is
+    where the next selection's work starts: no statement before the transaction, and what is
+    stored is still the plain engine's generation."""
+    service = long_service
+    token, _ = service.create_session("LATEST-1")
+    state = service.begin(token, new_key())
+    selections = []
+    for _ in range(3):
+        elite, others = choose(state)
+        args = step_args(state)
+        prepared, seen = statements_during(
+            service, service.steps.prepare_select, token=token, **args, elite=elite, others=others
+        )
+        assert seen == []
+        assert prepared is not None and prepared.engine_state == stored_state(service)
+        selections.append((elite, others))
+        state = service.select(token, new_key(), **args, elite=elite, others=others)
+        assert stored_state(service) == reference_engine(service, ict_model, selections).to_json()
+    # a session this process has not stored a step for: read from the database
+    service.steps.engines._latest.clear()
+    elite, others = choose(state)
+    prepared, seen = statements_during(
+        service, service.steps.prepare_select, token=token, **step_args(state), elite=elite,
+        others=others,
+    )  # fmt: skip
+    reads = [s for s in seen if s.startswith("SELECT")]
+    assert prepared is not None and len(reads) == 1 and "trials.engine_state" in reads[0]
+
+
+def test_a_remembered_state_is_checked_by_the_transaction(
+    service: StudyService, ict_model: Any
+) -> None:
+    """The remembered state is a guess: if the trial's stored state is another (here: made to
+    differ), the transaction does the work from the stored one."""
+    token, _ = service.create_session("LATEST-2")
+    state = service.begin(token, new_key())
+    elite, others = choose(state)
+    args = step_args(state)
+    engines = service.steps.engines
+    where, (identity, real_state) = engines._latest[token][:3], engines._latest[token][3:]
+    assert real_state == stored_state(service)
+    other = Engine(service.ctx.config.ga_for(identity), ict_model.rig, 12345,
+                   corrector=correctives_of(ict_model))  # fmt: skip
+    engines._latest[token] = (*where, identity, other.to_json())
+    prepared = service.steps.prepare_select(token, **args, elite=elite, others=others)
+    assert prepared is not None and prepared.engine_state == other.to_json()  # the guess used
+    state = service.select(token, new_key(), **args, elite=elite, others=others)
+    expected = reference_weights(service, ict_model, [{"elite": elite, "others": others}])
+    np.testing.assert_array_equal(stored_weights(service, 1), expected)
+    other.tell(elite, others)
+    assert not np.array_equal(np.hstack([other.ask().weights, other.ask().correctives]), expected)
+
+
+def test_remembered_states_are_bounded_and_forgotten_without_a_shown_generation(
+    service: StudyService,
+) -> None:
+    from emogen.study.queries import TrialRecord
+
+    engines = service.steps.engines
+    engines.keep_size = 2
+
+    def trial(status: str, generation: int) -> TrialRecord:
+        return TrialRecord(1, 1, 0, status, "joy", "generic", 0, generation, f"state-{generation}",
+                           None)  # fmt: skip
+
+    for n in range(3):
+        engines.remember(f"t{n}", trial("active", n))
+    assert list(engines._latest) == ["t1", "t2"]
+    assert engines.latest("t2", 0, 0, 2) == ("state-2", "generic")
+    assert engines.latest("t2", 0, 0, 1) is None  # another generation
+    assert engines.latest("t2", 1, 0, 2) is None and engines.latest("t2", 0, 1, 2) is None
+    engines.remember("t2", trial("rating", 3))  # the trial waits for its rating
+    engines.remember("t1", None)  # the step showed nothing (the session ended)
+    assert engines.latest("t2", 0, 0, 2) is None and engines._latest == {}

@@ -142,6 +142,7 @@ class SessionSteps:
                 return replayed
             shown = action(db, sess)
             db.flush()  # what the step changed through the ORM
+            self.engines.remember(token, None if shown is None else shown.trial)
             set_committed_value(sess, "updated_at", record_step(db, sess.id, kind, key, digest))
             return session_state(db, self.ctx.config, sess, shown)
 
@@ -163,6 +164,7 @@ class SessionSteps:
                 return self._replay(db, read.session, read.taken, kind, key, digest)
             shown, trial = action(conn, read)
             record_step(conn, read.session.id, kind, key, digest)
+            self.engines.remember(token, trial)
             return session_state(db, self.ctx.config, read.session, shown, trial)
 
         return self.store.transact(work)
@@ -208,20 +210,29 @@ class SessionSteps:
         corrected) done before its write transaction, so that no lock is held meanwhile and
         steps of other sessions (other workers, other threads) proceed in parallel.
 
-        The transaction uses it only if the trial's stored engine state is still the one it
-        was computed from (the engine is deterministic: the same state and selection make the
-        same generation); otherwise, and for anything unexpected here (another trial or
-        generation shown, a selection the engine refuses), it does the work itself and answers
-        as it always did. Returns None when there is nothing to prepare.
+        It starts from the state this process last stored for the session, if that is of the
+        request's generation (no read: :meth:`TrialEngines.latest`), else from the database's.
+        The transaction uses it only if the trial's stored engine state is still the one it was
+        computed from (the engine is deterministic: the same state and selection make the same
+        generation); otherwise, and for anything unexpected here (another trial or generation
+        shown, a selection the engine refuses), it does the work itself and answers as it
+        always did. Returns None when there is nothing to prepare.
         """
-        with self.store.engine.connect() as conn:  # one plain read, no ORM session
-            found = conn.execute(
-                _ACTIVE_TRIAL, {"token": token, "study_id": self.ctx.study_id}
-            ).first()
-        if found is None:
-            return None
-        state, identity, position, row_attempt, row_generation = found
-        if (position, row_attempt, row_generation) != (trial, attempt, generation) or not state:
+        state: str | None
+        known = self.engines.latest(token, trial, attempt, generation)  # stored by this process
+        if known is not None:
+            state, identity = known
+        else:
+            with self.store.engine.connect() as conn:  # one plain read, no ORM session
+                found = conn.execute(
+                    _ACTIVE_TRIAL, {"token": token, "study_id": self.ctx.study_id}
+                ).first()
+            if found is None:
+                return None
+            state, identity, position, row_attempt, row_generation = found
+            if (position, row_attempt, row_generation) != (trial, attempt, generation):
+                return None
+        if not state:
             return None
         try:
             engine = self.engines.restore_state(state, identity)

@@ -42,6 +42,12 @@ class TrialEngines:
     the two are the same engine (tests/study/test_prepared.py checks the stored generations
     against a plain engine); any other state (another worker moved the trial on, a restart)
     simply misses and is restored.
+
+    It also remembers, per session token, the shown generation and engine state this process
+    last stored for the session (:meth:`remember`, :meth:`latest`): a selection's GA work,
+    done before its transaction, starts from that state without reading the database first.
+    A guess, never trusted: the transaction uses that work only if the trial's stored state is
+    still that very text (see ``SessionSteps.prepare_select``).
     """
 
     def __init__(
@@ -51,7 +57,34 @@ class TrialEngines:
         self.correctors = correctors
         self.keep_size = keep_size
         self._kept: OrderedDict[tuple[str, str], Engine] = OrderedDict()
+        self._latest: OrderedDict[str, tuple[int, int, int, str, str]] = OrderedDict()
         self._kept_lock = threading.Lock()
+
+    def remember(self, token: str, trial: TrialRow | TrialRecord | None) -> None:
+        """The session ``token`` now shows ``trial``'s generation (stored in this transaction);
+        forgotten when no generation is shown (None, or the trial waits for its rating)."""
+        with self._kept_lock:
+            self._latest.pop(token, None)
+            if self.keep_size <= 0 or trial is None or trial.status != "active":
+                return
+            state = trial.engine_state
+            if not state:
+                return
+            where = (trial.position, trial.attempt, trial.generation)
+            self._latest[token] = (*where, trial.identity, state)
+            while len(self._latest) > self.keep_size:
+                self._latest.popitem(last=False)
+
+    def latest(
+        self, token: str, trial: int, attempt: int, generation: int
+    ) -> tuple[str, str] | None:
+        """(engine state, identity) this process last stored for the session, if it is of
+        that trial, attempt and generation."""
+        with self._kept_lock:
+            known = self._latest.get(token)
+        if known is None or known[:3] != (trial, attempt, generation):
+            return None
+        return known[4], known[3]
 
     def keep(self, state: str, identity: str, engine: Engine) -> None:
         """Keep ``engine``, whose ``to_json()`` is ``state``, for the trial's next step (it must
