@@ -273,7 +273,11 @@ def test_the_researcher_token_is_never_logged(
     seen: dict[str, Any] = {}
     monkeypatch.setattr(uvicorn, "run", lambda app, **kw: seen.update(kw))
     monkeypatch.setattr(web_app, "create_app", lambda *a, **kw: _FakeApp())
-    server.run_server(Path("x.toml"), announce=False, session_limit="off", workers=1)
+    from tests.web.test_serve_start import free_port
+
+    server.run_server(
+        Path("x.toml"), announce=False, session_limit="off", workers=1, port=free_port()
+    )
     assert seen["access_log"] is False
 
 

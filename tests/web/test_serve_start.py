@@ -1,15 +1,18 @@
 """`emogen serve` says what it is doing while it loads (the first start after an install
-compiles the face correction: a silent pause of ~20 s otherwise), then prints the banner."""
+compiles the face correction: a silent pause of ~20 s otherwise), checks its address before
+anything loads, and prints the banner with the links once the address accepts connections."""
 
 from __future__ import annotations
 
+import socket
+import time
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
 import pytest
 
-from emogen.errors import ConfigError
+from emogen.errors import ConfigError, ResourceError
 from emogen.study.config import study_from_dict
 from tests.study.conftest import SMALL_STUDY
 
@@ -20,7 +23,14 @@ def fake_app() -> Any:
     return SimpleNamespace(state=SimpleNamespace(config=config, store=store, researcher_token=None))
 
 
-def run(monkeypatch: pytest.MonkeyPatch, make: Any) -> None:
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def run(monkeypatch: pytest.MonkeyPatch, make: Any, serve: Any, port: int) -> None:
+    """run_server with the study and app faked and uvicorn.run replaced by ``serve``."""
     import uvicorn
 
     import emogen.study.config as config
@@ -28,12 +38,28 @@ def run(monkeypatch: pytest.MonkeyPatch, make: Any) -> None:
     from emogen.web import server
 
     monkeypatch.setattr(config, "load_study_config", lambda path: study_from_dict(SMALL_STUDY))
-    monkeypatch.setattr(uvicorn, "run", lambda app, **kw: None)
+    monkeypatch.setattr(uvicorn, "run", serve)
     monkeypatch.setattr(web_app, "create_app", make)
-    server.run_server(Path("x.toml"), session_limit="off", workers=1)
+    server.run_server(Path("x.toml"), session_limit="off", workers=1, port=port)
 
 
-def test_the_loading_line_comes_before_the_app_is_made_then_the_banner(
+def listening_server(capsys: pytest.CaptureFixture[str], before: list[str]) -> Any:
+    """A stand-in for uvicorn.run: a moment before listening (what was printed by then is
+    kept in ``before``), then listening on the port for a while."""
+
+    def serve(app: Any, **kw: Any) -> None:
+        time.sleep(0.4)
+        before.append(capsys.readouterr().out)
+        with socket.socket() as s:
+            s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            s.bind((kw["host"], kw["port"]))
+            s.listen()
+            time.sleep(1.0)
+
+    return serve
+
+
+def test_the_loading_line_then_the_banner_once_the_address_accepts_connections(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     printed_before: list[str] = []
@@ -42,13 +68,55 @@ def test_the_loading_line_comes_before_the_app_is_made_then_the_banner(
         printed_before.append(capsys.readouterr().out)
         return fake_app()
 
-    run(monkeypatch, make)
+    before_listening: list[str] = []
+    run(monkeypatch, make, listening_server(capsys, before_listening), free_port())
     after = capsys.readouterr().out
     assert printed_before[0].startswith("Loading the study and the face model")
     assert "compile the face correction" in printed_before[0]
-    first, banner = after.split("\n", 1)
-    assert first.startswith("ready (") and first.endswith(" s)")
-    assert banner.startswith("EmoGen study 'small' (2 trials)")
+    # loaded: 'ready', but no links while nothing listens
+    assert before_listening[0].startswith("ready (") and before_listening[0].endswith(" s)\n")
+    assert "participants open" not in before_listening[0]
+    assert after.startswith("EmoGen study 'small' (2 trials)")
+    assert "participants open:    http://localhost:" in after
+
+
+def test_no_banner_when_the_server_never_listens(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run(monkeypatch, lambda *a, **kw: fake_app(), lambda app, **kw: None, free_port())
+    time.sleep(0.3)  # the banner's thread has stopped waiting
+    out = capsys.readouterr().out
+    assert out.startswith("Loading the study") and "participants open" not in out
+
+
+def test_a_port_in_use_is_refused_before_anything_loads(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    made: list[int] = []
+    served: list[int] = []
+    with socket.socket() as other:
+        other.bind(("127.0.0.1", 0))
+        other.listen()
+        port = other.getsockname()[1]
+        with pytest.raises(ResourceError, match=f"port {port} is in use.*--port"):
+            run(monkeypatch, lambda *a, **kw: made.append(1), lambda a, **kw: served.append(1),
+                port)  # fmt: skip
+    assert made == [] and served == [] and capsys.readouterr().out == ""
+
+
+@pytest.mark.parametrize(
+    ("host", "port", "error", "match"),
+    [
+        ("127.0.0.1", 70000, ConfigError, "--port must be in 1..65535; got 70000"),
+        ("127.0.0.1", 0, ConfigError, "--port must be in 1..65535; got 0"),
+        ("no-such-host.invalid", 8000, ResourceError, "cannot listen on no-such-host.invalid"),
+    ],
+)
+def test_a_bad_address_is_named(host: str, port: int, error: type, match: str) -> None:
+    from emogen.web.server import check_address
+
+    with pytest.raises(error, match=match):
+        check_address(host, port)
 
 
 def test_a_failing_load_ends_the_line_before_the_error(
@@ -58,6 +126,6 @@ def test_a_failing_load_ends_the_line_before_the_error(
         raise ConfigError("model folder 'nowhere' does not exist")
 
     with pytest.raises(ConfigError, match="nowhere"):
-        run(monkeypatch, make)
+        run(monkeypatch, make, lambda app, **kw: None, free_port())
     out = capsys.readouterr().out
     assert out.startswith("Loading the study") and out.endswith(" ... \n")

@@ -6,19 +6,27 @@ and database connections, sharing the listening socket; the study is checked (mo
 migration, the study's row) once here before they start, so a broken config fails at once
 instead of in every worker. A worker dies with the process that started it (``SIGKILL``ed
 with it on Linux), so a killed server leaves no worker holding its port.
+
+The address is checked before anything loads (a port in use, a host this machine does not
+have: a clear error at once, not after the model has loaded), and the banner with the links
+is printed once the address accepts connections, not before (with several workers a request
+sent then waits for the first worker instead of being refused).
 """
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import signal
+import socket
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from emogen.errors import ConfigError
+from emogen.errors import ConfigError, ResourceError
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
@@ -27,6 +35,8 @@ if TYPE_CHECKING:
 WORKER_OPTIONS_ENV = "EMOGEN_SERVE_WORKER_OPTIONS"
 #: Idle keep-alive connections are closed after this many seconds (nginx's default).
 KEEP_ALIVE_S = 75
+#: How long the banner waits for the address to accept connections (then it is not printed).
+LISTEN_WAIT_S = 120.0
 
 
 def default_workers() -> int:
@@ -98,6 +108,7 @@ def run_server(
     n_workers = default_workers() if workers is None else workers
     if n_workers < 1:
         raise ConfigError(f"--workers must be at least 1; got {n_workers}")
+    check_address(host, port)
     options = {
         "config": str(Path(config_path).resolve()),
         "model": None if model is None else str(Path(model).resolve()),
@@ -107,8 +118,9 @@ def run_server(
         "parent": os.getpid(),
     }
     app = _loaded_app(options, announce)  # the whole study checked here, once
+    listening = threading.Event()  # set: stop waiting (the server stopped)
     if announce:
-        _announce(app, host, port, n_workers)
+        _announce_when_listening(_banner(app, host, port, n_workers), host, port, listening)
     common: dict[str, Any] = {
         "host": host,
         "port": port,
@@ -119,13 +131,16 @@ def run_server(
         # most connections between steps, and a step sent as the server closes it fails
         "timeout_keep_alive": KEEP_ALIVE_S,
     }
-    if n_workers == 1:
-        uvicorn.run(app, **common)
-        return
-    app.state.store.dispose()
-    del app
-    os.environ[WORKER_OPTIONS_ENV] = json.dumps(options)
-    uvicorn.run("emogen.web.server:worker_app", factory=True, workers=n_workers, **common)
+    try:
+        if n_workers == 1:
+            uvicorn.run(app, **common)
+            return
+        app.state.store.dispose()
+        del app
+        os.environ[WORKER_OPTIONS_ENV] = json.dumps(options)
+        uvicorn.run("emogen.web.server:worker_app", factory=True, workers=n_workers, **common)
+    finally:
+        listening.set()
 
 
 def _loaded_app(options: dict[str, Any], announce: bool) -> FastAPI:
@@ -149,10 +164,50 @@ def _loaded_app(options: dict[str, Any], announce: bool) -> FastAPI:
     return app
 
 
-def _announce(app: FastAPI, host: str, port: int, workers: int) -> None:
+def check_address(host: str, port: int) -> None:
+    """Refuse an address this machine cannot listen on (the server binds it again itself)."""
+    hint = "choose another with --port"
+    if not 1 <= port <= 65535:
+        raise ConfigError(f"--port must be in 1..65535; got {port}")
+    try:
+        with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as sock:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as uvicorn binds
+            sock.bind((host, port))
+    except OSError as exc:
+        if exc.errno == errno.EADDRINUSE:
+            why = f"port {port} is in use (another server, or another `emogen serve`?): {hint}"
+        elif exc.errno == errno.EACCES:
+            why = f"permission denied (ports below 1024 need administrator rights): {hint}"
+        else:
+            why = f"{exc.strerror or exc} (check --host '{host}' and --port)"
+        raise ResourceError(f"cannot listen on {host}:{port}: {why}") from None
+
+
+def _announce_when_listening(banner: str, host: str, port: int, stop: threading.Event) -> None:
+    """Print ``banner`` (from a thread) once ``host:port`` accepts connections; not at all if
+    ``stop`` is set first or it does not within ``LISTEN_WAIT_S``."""
+    target = {"0.0.0.0": "127.0.0.1", "::": "::1", "": "127.0.0.1"}.get(host, host)
+
+    def wait() -> None:
+        deadline = time.monotonic() + LISTEN_WAIT_S
+        while not stop.is_set() and time.monotonic() < deadline:
+            try:
+                with socket.create_connection((target, port), timeout=1.0):
+                    pass
+            except OSError:
+                stop.wait(0.05)
+                continue
+            sys.stdout.write(banner)
+            sys.stdout.flush()
+            return
+
+    threading.Thread(target=wait, name="emogen-banner", daemon=True).start()
+
+
+def _banner(app: FastAPI, host: str, port: int, workers: int) -> str:
     config = app.state.config
     shown = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::") else host
-    sys.stdout.write(
+    return (
         f"EmoGen study '{config.name}' ({config.n_trials} trials), data in "
         f"{app.state.store.describe()}, {workers} worker process{'es' if workers > 1 else ''}\n"
         f"  participants open:    http://{shown}:{port}/?{config.participant_param}=PARTICIPANT_ID\n"
@@ -160,4 +215,3 @@ def _announce(app: FastAPI, host: str, port: int, workers: int) -> None:
         f"{'' if app.state.researcher_token else '  (set EMOGEN_RESEARCHER_TOKEN to enable)'}\n"
         "  stop with Ctrl-C\n"
     )
-    sys.stdout.flush()
