@@ -118,9 +118,9 @@ def run_server(
         "parent": os.getpid(),
     }
     app = _loaded_app(options, announce)  # the whole study checked here, once
-    listening = threading.Event()  # set: stop waiting (the server stopped)
+    stopped = threading.Event()  # the banner stops waiting for the address
     if announce:
-        _announce_when_listening(_banner(app, host, port, n_workers), host, port, listening)
+        _announce_when_listening(_banner(app, host, port, n_workers), host, port, stopped)
     common: dict[str, Any] = {
         "host": host,
         "port": port,
@@ -140,7 +140,7 @@ def run_server(
         os.environ[WORKER_OPTIONS_ENV] = json.dumps(options)
         uvicorn.run("emogen.web.server:worker_app", factory=True, workers=n_workers, **common)
     finally:
-        listening.set()
+        stopped.set()
 
 
 def _loaded_app(options: dict[str, Any], announce: bool) -> FastAPI:
