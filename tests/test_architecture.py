@@ -17,7 +17,7 @@ PACKAGE = SRC / "emogen"
 
 #: The layers, lowest first: a module may import from its own package and from packages of
 #: lower layers only; packages sharing a layer are siblings and import nothing of each other.
-#: model → correct → ga → (simulate | study → web) → analysis → cli, with metrics, appearance
+#: model → correct → ga → tasks → (simulate | study → web) → analysis → cli, with metrics, appearance
 #: and render where they are used (docs/architecture.md).
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors",),
@@ -27,6 +27,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("correct",),
     ("render",),
     ("ga",),
+    ("tasks",),
     ("simulate", "study"),
     ("web",),
     ("analysis",),

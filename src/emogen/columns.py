@@ -44,7 +44,8 @@ _INT = frozenset({
     "attempts", "generation_reached", "final_face_id", "attempt", "generation", "position",
     "face_id", "parent_a", "parent_b", "rank", "n_selected", "n_trials", "value", "points",
     "run", "slot", "appearance_generator", "cell_runs", "n_samples", "n_groups", "sample_size",
-    "n",
+    "n", "block", "source_session_id", "source_trial", "source_face_id", "source_row",
+    "label_position", "intensity", "confidence",
 })  # fmt: skip
 _SEED = frozenset(("seed", "run_seed"))
 _FLOAT = frozenset({
@@ -55,8 +56,11 @@ _STR = frozenset({
     "study", "participant_id", "participant_source", "order_kind", "stage", "user_agent",
     "emotion", "identity", "status", "operator", "role", "step_key", "schema_version",
     "package_version", "model_hash", "study_config_hash", "shape", "shape_coefficients",
-    "config_json", "model_name", "group", "statistic", "unit",
+    "config_json", "model_name", "group", "statistic", "unit", "block_name", "task", "source",
+    "source_participant_id", "source_label", "intended", "labels", "label",
 })  # fmt: skip
+#: Booleans by name (a study export's categorisation: a fallback face, a correct answer).
+_BOOL = frozenset(("fallback", "correct"))
 
 
 def kind(column: str) -> Kind | None:
@@ -71,6 +75,8 @@ def kind(column: str) -> Kind | None:
         return "float"
     if column in _STR:
         return "str"
+    if column in _BOOL:
+        return "bool"
     return None
 
 

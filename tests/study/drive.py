@@ -39,6 +39,8 @@ def run_to_end(
     while state["stage"] != "done" and not stop(state):
         if state["stage"] == "instructions":
             state = call("begin", {"key": new_key()})
+        elif state["trial"]["task"] == "categorise":
+            state = call("categorise", categorise_body(state))
         elif state["trial"]["status"] == "active":
             elite, others = choose(state)
             state = call(
@@ -55,6 +57,21 @@ def run_to_end(
     return state
 
 
+def categorise_body(state: dict[str, Any]) -> dict[str, Any]:
+    """An answer to a categorise trial: the label offered at (trial mod labels), the ratings
+    asked (4 of 7)."""
+    view = state["categorise"]
+    labels = view["labels"]
+    return {
+        "key": new_key(),
+        "trial": state["progress"]["trial"],
+        "label": labels[state["progress"]["trial"] % len(labels)],
+        "intensity": None if view["intensity"] is None else 4,
+        "confidence": None if view["confidence"] is None else 4,
+        "response_ms": 900.0,
+    }
+
+
 def service_caller(service: Any, token: str) -> Callable[[str, dict[str, Any]], dict[str, Any]]:
     def call(kind: str, body: dict[str, Any]) -> dict[str, Any]:
         body = dict(body)
@@ -65,6 +82,8 @@ def service_caller(service: Any, token: str) -> Callable[[str, dict[str, Any]], 
             return service.select(token, key, **body)  # type: ignore[no-any-return]
         if kind == "rating":
             return service.rate(token, key, **body)  # type: ignore[no-any-return]
+        if kind == "categorise":
+            return service.categorise(token, key, **body)  # type: ignore[no-any-return]
         return service.restart(token, key, **body)  # type: ignore[no-any-return]
 
     return call

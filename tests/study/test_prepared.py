@@ -14,8 +14,9 @@ import pytest
 from sqlalchemy import select
 
 from emogen.ga.engine import Engine, correctives_of
+from emogen.study.prepared import Prepared
 from emogen.study.sessions import StudyService
-from emogen.study.steps import Prepared, Timing
+from emogen.study.steps import Timing
 from emogen.study.tables import FaceRow, PopulationRow, TrialRow
 from tests.study.drive import choose, new_key, step_args
 

@@ -129,7 +129,7 @@ def test_participants_cannot_reach_researcher_data(client: TestClient, app: Any)
     state = client.get(f"/api/s/{token}/state").json()
     assert set(state) == {
         "stage", "participant_id", "progress", "limits", "allow_restart", "trial",
-        "population", "rating", "completion",
+        "population", "rating", "categorise", "completion",
     }  # fmt: skip
     app.state.researcher_token = None
     r = client.get("/api/researcher/status", headers=AUTH)

@@ -33,6 +33,7 @@ from emogen.appearance.identities import PRESETS, Identity, identity_from_dict
 from emogen.config import GAConfig, _Strict, read_toml, validate_config
 from emogen.errors import ConfigError, EmoGenError
 from emogen.model.rig import Rig
+from emogen.tasks.blocks import Block, CategoriseBlock, Condition, EvolveBlock, check_blocks
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
@@ -135,6 +136,9 @@ class StudyConfig(_Strict):
     ga: GAConfig = GAConfig()
     rating: RatingConfig = RatingConfig()
     completion: CompletionConfig = CompletionConfig()
+    #: ``[[blocks]]``: the study's blocks in order, each running one task (``evolve`` or
+    #: ``categorise``, :mod:`emogen.tasks.blocks`); none: one evolve block of the keys above.
+    blocks: tuple[Block, ...] = ()
 
     @field_validator("name")
     @classmethod
@@ -211,25 +215,73 @@ class StudyConfig(_Strict):
                 "participants: name the browser's 'user agent' in it (or leave consent out for "
                 f"the default text that does); got consent = {self.consent[:80]!r}"
             )
+        check_blocks(self.emotions, self.blocks)
         if self.n_trials > 500:
             raise ValueError(
-                f"emotions × repetitions × identities must be at most 500 trials; "
-                f"got {self.n_trials}"
+                f"a study must have at most 500 trials (evolve: emotions × repetitions × "
+                f"identities; categorise: its faces); got {self.n_trials}"
             )
         return self
 
     @property
     def n_trials(self) -> int:
-        return len(self.emotions) * self.repetitions * len(self.identities)
+        """How many trials a session has (a categorise block's ``file`` without ``file_faces``
+        counts as 0 here: its rows are counted when the server reads the file)."""
+        return len(self.conditions())
 
-    def conditions(self) -> list[tuple[str, str, int]]:
-        """Every trial condition (emotion, identity, repetition), in config order."""
-        return [
-            (e, i, r)
-            for e in self.emotions
-            for i in self.identities
-            for r in range(self.repetitions)
+    def study_blocks(self) -> tuple[EvolveBlock | CategoriseBlock, ...]:
+        """The blocks with the study's defaults filled in (an evolve block's emotions,
+        identities, repetitions and order; a categorise block's labels and identities)."""
+        if not self.blocks:
+            return (self._evolve(EvolveBlock()),)
+        return tuple(
+            self._evolve(b) if isinstance(b, EvolveBlock) else self._categorise(b)
+            for b in self.blocks
+        )
+
+    def _evolve(self, b: EvolveBlock) -> EvolveBlock:
+        return b.model_copy(update={
+            "emotions": b.emotions or self.emotions,
+            "identities": b.identities or self.identities,
+            "repetitions": b.repetitions or self.repetitions,
+            "order": b.order or self.order,
+        })  # fmt: skip
+
+    def _categorise(self, b: CategoriseBlock) -> CategoriseBlock:
+        """Labels default to the study's emotions; identities to those of its evolve blocks."""
+        evolve = [
+            x.identities or self.identities for x in self.blocks if isinstance(x, EvolveBlock)
         ]
+        shown = tuple(dict.fromkeys(i for ids in evolve for i in ids)) or self.identities
+        return b.model_copy(
+            update={"labels": b.labels or self.emotions, "identities": b.identities or shown}
+        )
+
+    def conditions(self, file_rows: dict[int, int] | None = None) -> list[Condition]:
+        """Every trial in config order, block by block (``file_rows``: the number of rows of
+        each categorise block's ``file``, by block index, where ``file_faces`` is not set)."""
+        out: list[Condition] = []
+        for k, b in enumerate(self.study_blocks()):
+            if isinstance(b, EvolveBlock):
+                out += [
+                    Condition(k, "evolve", e, i, r)
+                    for e in b.emotions or ()
+                    for i in b.identities or ()
+                    for r in range(b.repetitions or 1)
+                ]
+                continue
+            counts = {
+                "own": sum(c.task == "evolve" for c in out) if b.own else 0,
+                "other": b.others,
+                "file": b.file_faces or (file_rows or {}).get(k, 0) if b.file else 0,
+                "random": b.random,
+            }
+            out += [
+                Condition(k, "categorise", "", "", j, source)
+                for source, n in counts.items()
+                for j in range(n)
+            ]
+        return out
 
     def identity_of(self, name: str) -> Identity:
         """The identity called ``name``: the lab's own, a preset, or else a rig shape preset of
@@ -239,8 +291,15 @@ class StudyConfig(_Strict):
         return PRESETS.get(name) or Identity(shape=name)
 
     def study_identities(self) -> dict[str, Identity]:
-        """Every identity the study shows, by name, in config order."""
-        return {name: self.identity_of(name) for name in self.identities}
+        """Every identity the study shows, by name, in config order (blocks' included)."""
+        return {name: self.identity_of(name) for name in self.all_identities()}
+
+    def all_identities(self) -> tuple[str, ...]:
+        """The names of every identity the study's blocks show, in config order."""
+        names = dict.fromkeys(self.identities)
+        for b in self.study_blocks():
+            names.update(dict.fromkeys(b.identities or ()))
+        return tuple(names)
 
     def ga_for(self, identity: str) -> GAConfig:
         """The GA config of a trial of ``identity``; the engine sees the identity's shape
@@ -263,6 +322,8 @@ class StudyConfig(_Strict):
             del data["identity"]
         if not data["collect_user_agent"]:  # nor do studies that do not collect user agents
             del data["collect_user_agent"]
+        if not data["blocks"]:  # nor studies of one evolve block (written before blocks)
+            del data["blocks"]
         return json.dumps(data, sort_keys=True, separators=(",", ":"))
 
 
@@ -278,6 +339,11 @@ def load_study_config(path: Path) -> StudyConfig:
         value = data.get(key)
         if isinstance(value, str) and value and not Path(value).expanduser().is_absolute():
             data[key] = str((path.parent / value).resolve())
+    for block in data.get("blocks") or ():
+        for key in ("file", "others_fallback"):
+            value = block.get(key) if isinstance(block, dict) else None
+            if isinstance(value, str) and value and not Path(value).expanduser().is_absolute():
+                block[key] = str((path.parent / value).resolve())
     if "ga" in data and isinstance(data["ga"], dict):
         init = data["ga"].get("init")
         if isinstance(init, dict) and isinstance(init.get("fixed_file"), str):
@@ -303,13 +369,13 @@ def check_identities(config: StudyConfig, rig: Rig, model: FaceModel | None = No
     rig has (``generic`` or its presets); with ``model``, coefficient shapes must fit it."""
     shapes = ["generic", *sorted(rig.identities)]
     known = sorted({*PRESETS, *config.identity, *rig.identities})
-    bad = [i for i in config.identities if i not in known]
+    bad = [i for i in config.all_identities() if i not in known]
     if bad:
         raise ConfigError(
             f"invalid study config: 'identities' must be among the presets and the study's own "
             f"[identity.NAME] tables ({', '.join(known)}); got {bad}"
         )
-    for name in config.identities:
+    for name in config.all_identities():
         shape = config.identity_of(name).shape
         if isinstance(shape, str) and shape not in shapes:
             raise ConfigError(

@@ -14,6 +14,7 @@ from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
 from emogen.study.storage import Store
 from emogen.study.tables import StudyRow, dumps, utcnow
+from emogen.tasks.blocks import Condition
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
@@ -21,7 +22,8 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class StudyContext:
-    """The config, the rig, the model's name and hash, the study row's id and its columns."""
+    """The config, the rig, the model's name and hash, the study row's id and its columns,
+    and the study's trials (conditions)."""
 
     config: StudyConfig
     rig: Rig
@@ -30,6 +32,9 @@ class StudyContext:
     study_id: int
     gene_names: tuple[str, ...]
     weight_names: tuple[str, ...]
+    #: every trial of a session in config order (``StudyConfig.conditions``, its blocks' face
+    #: tables counted)
+    conditions: tuple[Condition, ...] = ()
 
 
 def accepted_hashes(model_hash: str, model: FaceModel | None) -> frozenset[str]:

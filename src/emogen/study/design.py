@@ -9,12 +9,14 @@ arrival: sessions made by others (anonymous or not) shift nobody's seeds or tria
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from emogen.rng import fresh_seed
 from emogen.study.config import StudyConfig
+from emogen.tasks.blocks import Condition, EvolveBlock
 
 #: Domain of the keyed hashes (changing it would change every new participant's assignment).
 ASSIGNMENT_KEY = b"emogen.study/assignment/1"
@@ -66,14 +68,36 @@ def balanced_latin_square(n: int) -> list[list[int]]:
     return rows
 
 
-def trial_order(config: StudyConfig, *, slot: int, rng: np.random.Generator) -> TrialOrder:
-    """The order of a session's trials: the Latin-square row is ``slot`` modulo the rows
-    (``slot`` is :func:`participant_slot`; sessions recorded before it used their number)."""
-    n = config.n_trials
-    if config.order == "fixed":
+def _block_order(order: str, n: int, slot: int, rng: np.random.Generator) -> TrialOrder:
+    """One block's order of its ``n`` trials."""
+    if order == "fixed":
         return TrialOrder(tuple(range(n)), "fixed", -1)
-    if config.order == "latin_square":
+    if order == "latin_square":
         rows = balanced_latin_square(n)
-        row = slot % len(rows)
-        return TrialOrder(tuple(rows[row]), "latin_square", row)
+        row = slot % len(rows) if rows else -1
+        return TrialOrder(tuple(rows[row]) if rows else (), "latin_square", row)
     return TrialOrder(tuple(int(i) for i in rng.permutation(n)), "random", -1)
+
+
+def trial_order(
+    config: StudyConfig,
+    conditions: Sequence[Condition] | None = None,
+    *,
+    slot: int,
+    rng: np.random.Generator,
+) -> TrialOrder:
+    """The order of a session's trials (indices into ``conditions``): block after block, each
+    block's trials in its own order, drawn with ``rng`` in block order. An evolve block's
+    Latin-square row is ``slot`` modulo its rows (``slot`` is :func:`participant_slot`;
+    sessions recorded before it used their number). ``kind`` and ``row`` are those of the first
+    evolve block (a categorise block's order is ``random`` or ``fixed``)."""
+    conditions = config.conditions() if conditions is None else conditions
+    order: list[int] = []
+    kind, row = "", -1
+    for k, block in enumerate(config.study_blocks()):
+        indices = [i for i, c in enumerate(conditions) if c.block == k]
+        local = _block_order(block.order or "random", len(indices), slot, rng)
+        order += [indices[j] for j in local.order]
+        if not kind and isinstance(block, EvolveBlock):
+            kind, row = local.kind, local.row
+    return TrialOrder(tuple(order), kind or "random", row)

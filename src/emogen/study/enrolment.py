@@ -46,9 +46,10 @@ def _new_session(
     cfg = ctx.config
     number = count_sessions(db, ctx.study_id)
     seed = participant_seed(cfg.seed, participant_id)
-    order_seed, *trial_seeds = spawn_seeds(seed, cfg.n_trials + 1)
+    conditions = ctx.conditions
+    order_seed, *trial_seeds = spawn_seeds(seed, len(conditions) + 1)
     slot = participant_slot(cfg, participant_id)
-    order = trial_order(cfg, slot=slot, rng=np.random.default_rng(order_seed))
+    order = trial_order(cfg, conditions, slot=slot, rng=np.random.default_rng(order_seed))
     now = utcnow()
     sess = SessionRow(
         study_id=ctx.study_id,
@@ -70,17 +71,18 @@ def _new_session(
     )
     db.add(sess)
     db.flush()
-    conditions = cfg.conditions()
     for pos, cond in enumerate(order.order):
-        emotion, identity, rep = conditions[cond]
+        c = conditions[cond]
         db.add(
             TrialRow(
                 session_id=sess.id,
                 position=pos,
+                block=c.block,
+                task=c.task,
                 condition=cond,
-                emotion=emotion,
-                identity=identity,
-                repetition=rep,
+                emotion=c.emotion,
+                identity=c.identity,
+                repetition=c.repetition,
                 seed=trial_seeds[pos],
                 status="pending",
                 attempt=0,

@@ -18,6 +18,7 @@ Parquet file's metadata follow :mod:`emogen.columns`; every column is in docs/da
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -32,9 +33,9 @@ from emogen.study.config import StudyConfig
 from emogen.study.export_rows import (
     SESSION_TABLE_ROWS,
     TABLE_COLUMNS,
+    Row,
     iso,
     load_records,
-    study_rows,
 )
 from emogen.study.storage import Store
 from emogen.study.tables import (
@@ -52,6 +53,7 @@ TABLES = (
     "selections",
     "restarts",
     "ratings",
+    "responses",
     "identities",
     "study",
 )
@@ -161,12 +163,11 @@ def table_extras(studies: list[StudyRow]) -> dict[str, list[str]]:
     ``g_<gene>`` and ``w_<weight>`` columns (present even when no face has been shown)."""
     names = [json.loads(s.gene_names) for s in studies]
     weights = [json.loads(s.weight_names) for s in studies]
-    return {
-        "faces": [
-            *dict.fromkeys(f"g_{n}" for ns in names for n in ns),
-            *dict.fromkeys(f"w_{n}" for ns in weights for n in ns),
-        ]
-    }
+    face_columns = [
+        *dict.fromkeys(f"g_{n}" for ns in names for n in ns),
+        *dict.fromkeys(f"w_{n}" for ns in weights for n in ns),
+    ]
+    return {"faces": face_columns, "responses": face_columns}
 
 
 def identity_rows(study: StudyRow) -> list[dict[str, Any]]:
@@ -291,3 +292,22 @@ def write_export(tables: dict[str, pd.DataFrame], out: Path, fmt: str = "parquet
             path.write_text(csv_text(df), encoding="utf-8")
         paths.append(path)
     return paths
+
+
+def study_rows(studies: list[StudyRow]) -> Iterator[Row]:
+    """One row per study: its resolved config itself (``config_json``, canonical JSON: the
+    exact config its sessions ran with, and replay from exported files reads), not only its
+    hash; the model, the gene and weight column names (JSON lists)."""
+    for st in studies:
+        yield {
+            "study": st.name,
+            "config_json": st.config_json,
+            "model_name": st.model_name,
+            "gene_names": st.gene_names,
+            "weight_names": st.weight_names,
+            "created_at": iso(st.created_at),
+            "schema_version": SCHEMA_VERSION,
+            "package_version": st.package_version,
+            "model_hash": st.model_hash,
+            "study_config_hash": st.config_hash,
+        }

@@ -21,9 +21,11 @@ from emogen.study.tables import (
     FaceRow,
     PopulationRow,
     RatingRow,
+    ResponseRow,
     RestartRow,
     SelectionRow,
     SessionRow,
+    StimulusRow,
     StudyRow,
     TrialRow,
     as_utc,
@@ -37,20 +39,27 @@ TABLE_COLUMNS = {
     "sessions": ["study", "session_id", "participant_id", "participant_source", "session_number",
                  "seed", "order_kind", "order_row", "stage", "n_trials", "user_agent",
                  "created_at", "consented_at", "started_at", "completed_at"],
-    "trials": ["study", "session_id", "participant_id", "trial", "condition", "emotion",
+    "trials": ["study", "session_id", "participant_id", "participant_source", "trial", "block",
+               "block_name", "task", "condition", "emotion",
                "identity", "repetition", "seed", "ga_stream", "collision_solver", "status", "attempts",
                "generation_reached", "final_face_id", "started_at", "finished_at"],
-    "faces": ["study", "session_id", "participant_id", "trial", "attempt", "generation",
+    "faces": ["study", "session_id", "participant_id", "participant_source", "trial", "attempt", "generation",
               "position", "face_id", "parent_a", "parent_b", "operator", "shown_at"],
-    "selections": ["study", "session_id", "participant_id", "trial", "attempt", "generation",
+    "selections": ["study", "session_id", "participant_id", "participant_source", "trial", "attempt", "generation",
                    "face_id", "role", "rank", "n_selected", "shown_at", "submitted_at",
                    "server_response_ms", "load_ms", "client_response_ms", "step_key"],
-    "restarts": ["study", "session_id", "participant_id", "trial", "attempt", "generation",
+    "restarts": ["study", "session_id", "participant_id", "participant_source", "trial", "attempt", "generation",
                  "shown_at", "submitted_at", "server_response_ms", "load_ms",
                  "client_response_ms", "step_key"],
-    "ratings": ["study", "session_id", "participant_id", "trial", "emotion", "identity",
+    "ratings": ["study", "session_id", "participant_id", "participant_source", "trial", "emotion", "identity",
                 "face_id", "value", "points", "submitted_at", "server_response_ms",
                 "client_response_ms", "step_key"],
+    "responses": ["study", "session_id", "participant_id", "participant_source", "trial",
+                  "block", "block_name", "source", "fallback", "source_session_id",
+                  "source_participant_id", "source_trial", "source_face_id", "source_row",
+                  "source_label", "intended", "identity", "labels", "label", "label_position",
+                  "correct", "intensity", "confidence", "shown_at", "submitted_at",
+                  "server_response_ms", "load_ms", "client_response_ms", "step_key"],
     "identities": ["study", "identity", "shape", "shape_coefficients"],
     "study": ["study", "config_json", "model_name", "gene_names", "weight_names", "created_at"],
 }  # fmt: skip
@@ -73,10 +82,15 @@ class Records:
     selections: list[SelectionRow]
     restarts: list[RestartRow]
     ratings: list[RatingRow]
+    stimuli: list[StimulusRow] = field(default_factory=list)
+    responses: list[ResponseRow] = field(default_factory=list)
+    #: participant ids of the sessions others' faces came from (any session of the study)
+    participants: dict[int, str] = field(default_factory=dict)
     by_session: dict[int, SessionRow] = field(init=False)
     by_trial: dict[int, TrialRow] = field(init=False)
     by_population: dict[int, PopulationRow] = field(init=False)
     _corrects: dict[int, bool] = field(init=False, default_factory=dict)
+    _block_names: dict[int, list[str]] = field(init=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         self.by_session = {s.id: s for s in self.sessions}
@@ -100,8 +114,20 @@ class Records:
             "study": self.studies[s.study_id].name,
             "session_id": s.id,
             "participant_id": s.participant_id,
+            "participant_source": s.participant_source,
             "trial": trial.position,
         }
+
+    def block_name(self, trial: TrialRow) -> str:
+        """The trial's block's name (its ``name`` in the config, else ``block<k>`` from 1)."""
+        st = self.studies[self.by_session[trial.session_id].study_id]
+        if st.id not in self._block_names:
+            blocks = json.loads(st.config_json).get("blocks") or [{}]
+            self._block_names[st.id] = [
+                b.get("name") or f"block{k + 1}" for k, b in enumerate(blocks)
+            ]
+        names = self._block_names[st.id]
+        return names[trial.block] if trial.block < len(names) else f"block{trial.block + 1}"
 
     def corrects(self, trial: TrialRow) -> bool:
         """Whether the trial's study corrects its faces (``correct`` in its config)."""
@@ -147,7 +173,17 @@ def load_records(
     selections = list(db.scalars(select(SelectionRow).where(SelectionRow.population_id.in_(pids))))
     restarts = list(db.scalars(select(RestartRow).where(RestartRow.population_id.in_(pids))))
     ratings = list(db.scalars(select(RatingRow).where(RatingRow.trial_id.in_(tids))))
-    return Records(studies, sessions, trials, pops, faces, selections, restarts, ratings)
+    stimuli = list(
+        db.scalars(
+            select(StimulusRow).where(StimulusRow.trial_id.in_(tids)).order_by(StimulusRow.trial_id)
+        )
+    )
+    responses = list(db.scalars(select(ResponseRow).where(ResponseRow.trial_id.in_(tids))))
+    sources = {s.source_session_id for s in stimuli if s.source_session_id is not None}
+    query = select(SessionRow.id, SessionRow.participant_id).where(SessionRow.id.in_(sources))
+    participants = {int(i): str(p) for i, p in db.execute(query)}
+    return Records(studies, sessions, trials, pops, faces, selections, restarts, ratings,
+                   stimuli, responses, participants)  # fmt: skip
 
 
 def session_rows(rec: Records) -> Iterator[Row]:
@@ -176,8 +212,11 @@ def trial_rows(rec: Records) -> Iterator[Row]:
     for t in rec.trials:
         yield {
             **rec.key(t),
+            "block": t.block,
+            "block_name": rec.block_name(t),
+            "task": t.task,
             "condition": t.condition,
-            "emotion": t.emotion,
+            "emotion": t.emotion or None,  # a categorise face of unknown making: NA
             "identity": t.identity,
             "repetition": t.repetition,
             "seed": t.seed,
@@ -284,23 +323,51 @@ def rating_rows(rec: Records) -> Iterator[Row]:
         }
 
 
-def study_rows(studies: list[StudyRow]) -> Iterator[Row]:
-    """One row per study: its resolved config itself (``config_json``, canonical JSON: the
-    exact config its sessions ran with, and replay from exported files reads), not only its
-    hash; the model, the gene and weight column names (JSON lists)."""
-    for st in studies:
-        yield {
-            "study": st.name,
-            "config_json": st.config_json,
-            "model_name": st.model_name,
-            "gene_names": st.gene_names,
-            "weight_names": st.weight_names,
-            "created_at": iso(st.created_at),
-            "schema_version": SCHEMA_VERSION,
-            "package_version": st.package_version,
-            "model_hash": st.model_hash,
-            "study_config_hash": st.config_hash,
+def response_rows(rec: Records) -> Iterator[Row]:
+    """One row per categorise trial whose face was drawn: the face (source, identity, genes
+    and full weights), the labels offered in their order, the answer (NA until answered)."""
+    gene_cols = {sid: json.loads(st.gene_names) for sid, st in rec.studies.items()}
+    weight_cols = {sid: json.loads(st.weight_names) for sid, st in rec.studies.items()}
+    answers = {r.trial_id: r for r in rec.responses}
+    for stim in rec.stimuli:  # in trial id order: sessions, then positions
+        t = rec.by_trial[stim.trial_id]
+        s = rec.by_session[t.session_id]
+        r = answers.get(t.id)
+        label = None if r is None else r.label
+        row: Row = {
+            **rec.key(t),
+            "block": t.block,
+            "block_name": rec.block_name(t),
+            "source": stim.source,
+            "fallback": bool(stim.fallback),
+            "source_session_id": stim.source_session_id,
+            "source_participant_id": rec.participants.get(stim.source_session_id or -1),
+            "source_trial": stim.source_trial,
+            "source_face_id": stim.source_face_id,
+            "source_row": stim.source_row,
+            "source_label": stim.source_label,
+            "intended": stim.intended,
+            "identity": stim.identity,
+            "labels": "|".join(json.loads(stim.labels)),
+            "label": label,
+            "label_position": None if r is None else r.label_position,
+            "correct": None if r is None or stim.intended is None else label == stim.intended,
+            "intensity": None if r is None else r.intensity,
+            "confidence": None if r is None else r.confidence,
+            "shown_at": iso(stim.shown_at),
+            "submitted_at": None if r is None else iso(r.submitted_at),
+            "server_response_ms": None if r is None else r.server_response_ms,
+            "load_ms": None if r is None else r.load_ms,
+            "client_response_ms": None if r is None else r.client_response_ms,
+            "step_key": None if r is None else r.step_key,
         }
+        genes = json.loads(stim.genes) if stim.genes else [None] * len(gene_cols[s.study_id])
+        row.update(zip((f"g_{n}" for n in gene_cols[s.study_id]), genes, strict=True))
+        row.update(
+            zip((f"w_{n}" for n in weight_cols[s.study_id]), json.loads(stim.weights), strict=True)
+        )
+        row.update(rec.stamp(s))
+        yield row
 
 
 #: The per-session tables and the function that makes each one's rows from the records.
@@ -311,4 +378,5 @@ SESSION_TABLE_ROWS: dict[str, Callable[[Records], Iterator[Row]]] = {
     "selections": selection_rows,
     "restarts": restart_rows,
     "ratings": rating_rows,
+    "responses": response_rows,
 }

@@ -46,9 +46,10 @@ from emogen.study.export import (
     export_provenance,
     identity_rows,
     neutralise_formulas,
+    study_rows,
     table_extras,
 )
-from emogen.study.export_rows import SESSION_TABLE_ROWS, iso, load_records, study_rows
+from emogen.study.export_rows import SESSION_TABLE_ROWS, iso, load_records
 from emogen.study.storage import Store
 from emogen.study.tables import FaceRow, PopulationRow, SessionRow, StudyRow, TrialRow, as_utc
 

@@ -20,6 +20,7 @@ from emogen.study.tables import (
     SelectionRow,
     SessionRow,
     StepRow,
+    StimulusRow,
     StudyRow,
     TrialRow,
     core_table,
@@ -70,6 +71,8 @@ class TrialRecord(NamedTuple):
     generation: int
     engine_state: str | None
     final_face_id: int | None
+    block: int = 0
+    task: str = "evolve"
 
 
 S = TypeVar("S", SessionRow, SessionRecord)
@@ -245,8 +248,21 @@ def step_with_key(db: Executor, session_id: int, key: str) -> StepTaken | None:
     return None if found is None else StepTaken(found[0], found[1])
 
 
-def current_face(db: Session, sess: SessionRow, face_id: int) -> tuple[str, str] | None:
-    """(weights JSON, identity) of a face in the session's current trial, if there is one."""
+def current_face(
+    db: Session, sess: SessionRow, face_id: int, *, categorise_face: int = 0
+) -> tuple[str, str] | None:
+    """(weights JSON, identity) of a face in the session's current trial, if there is one (a
+    categorise trial's one face has id ``categorise_face``)."""
+    trial = trial_at(db, sess.id, sess.current_trial)
+    if trial is not None and trial.task == "categorise":
+        stim = db.execute(
+            select(StimulusRow.weights, StimulusRow.identity).where(
+                StimulusRow.trial_id == trial.id
+            )
+        ).first()
+        if stim is None or face_id != categorise_face:
+            return None
+        return str(stim[0]), str(stim[1])
     found = db.execute(
         select(FaceRow.weights, TrialRow.identity)
         .join(PopulationRow, FaceRow.population_id == PopulationRow.id)

@@ -9,23 +9,26 @@ answers with).
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from emogen.ga.engine import Engine
 from emogen.model.rig import Rig
+from emogen.study.categorise import FACE_ID, CategoriseTrials, block_files, file_rows
 from emogen.study.config import StudyConfig, check_identities
 from emogen.study.context import StudyContext, accepted_hashes, register_study
 from emogen.study.enrolment import PARTICIPANT_ID, checked_participant, create_session
 from emogen.study.errors import SessionNotFound
 from emogen.study.progress import participant_token
 from emogen.study.queries import current_face, session_by_token
-from emogen.study.steps import Payload, SessionSteps, Timing, request_hash
+from emogen.study.steps import Payload, SessionSteps, request_hash
 from emogen.study.storage import Store
 from emogen.study.trials import TrialEngines
 from emogen.study.view import Completion, SessionState, completion, session_state
 from emogen.study.weights import Floats, StudyCorrectors, full_weights, weight_names
+from emogen.study.writes import Timing
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
@@ -65,8 +68,17 @@ class StudyService:
         study_id = register_study(store, config, model_name=model_name, model_hash=model_hash,
                                   gene_names=genes, weight_names=names,
                                   aliases=accepted_hashes(model_hash, model))  # fmt: skip
-        self.ctx = StudyContext(config, rig, model_name, model_hash, study_id, genes, names)
-        self.steps = SessionSteps(self.ctx, store, TrialEngines(self.ctx, self.correctors))
+        ctx = StudyContext(config, rig, model_name, model_hash, study_id, genes, names)
+        files = block_files(ctx)  # categorise blocks' face tables, checked before anyone starts
+        self.ctx = replace(ctx, conditions=tuple(config.conditions(file_rows(files))))
+        categorise = CategoriseTrials(self.ctx, self.correctors, files)
+        engines = TrialEngines(self.ctx, self.correctors)
+        self.steps = SessionSteps(self.ctx, store, engines, categorise)
+
+    @property
+    def n_trials(self) -> int:
+        """Trials per session (every block's; a categorise block's file rows counted)."""
+        return len(self.ctx.conditions)
 
     def create_session(
         self, participant_id: str | None = None, *, resume_token: str | None = None,
@@ -127,6 +139,23 @@ class StudyService:
                                              response_ms=response_ms),
         )  # fmt: skip
 
+    def categorise(
+        self, token: str, key: str, *, trial: int, label: str, intensity: int | None = None,
+        confidence: int | None = None, response_ms: float | None = None,
+        load_ms: float | None = None,
+    ) -> SessionState:  # fmt: skip
+        """The participant's label (and ratings, if the block asks) of a categorise trial's
+        face; then the next trial starts (or the session ends)."""
+        payload: Payload = {"trial": trial, "label": label, "intensity": intensity,
+                            "confidence": confidence, "response_ms": response_ms,
+                            **_load(load_ms)}  # fmt: skip
+        return self.steps.run(
+            token, "categorise", key, payload,
+            lambda db, sess: self.steps.categorise(db, sess, key=key, trial=trial, label=label,
+                intensity=intensity, confidence=confidence,
+                timing=Timing(response_ms, load_ms)),
+        )  # fmt: skip
+
     def participant_token(self, participant_id: str) -> str:
         """The token of the participant's session in this study (404 when there is none)."""
         checked_participant(participant_id)  # a bad id is named as such
@@ -141,7 +170,7 @@ class StudyService:
             sess = session_by_token(db, token, self.ctx.study_id)
             if sess.stage != "trial":
                 raise SessionNotFound("no faces are shown now")
-            found = current_face(db, sess, face_id)
+            found = current_face(db, sess, face_id, categorise_face=FACE_ID)
         if found is None:
             raise SessionNotFound(f"face {face_id} is not in this session's current trial")
         return np.asarray(json.loads(found[0]), dtype=np.float64), found[1]

@@ -15,17 +15,17 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, replace
-from datetime import datetime
+from dataclasses import replace
 
-from sqlalchemy import Connection, bindparam, select
+from sqlalchemy import Connection
 from sqlalchemy.orm import Session
 from sqlalchemy.orm.attributes import set_committed_value
 
-from emogen.errors import EmoGenError, SelectionError
-from emogen.ga.engine import Engine
+from emogen.errors import SelectionError
+from emogen.study.categorise import CategoriseTrials
 from emogen.study.context import StudyContext
 from emogen.study.errors import SessionNotFound, StepConflict
+from emogen.study.prepared import Prepared, prepare_select
 from emogen.study.queries import (
     Executor,
     SessionRecord,
@@ -45,35 +45,23 @@ from emogen.study.tables import (
     RatingRow,
     SessionRow,
     TrialRow,
-    as_utc,
     dumps,
     utcnow,
 )
 from emogen.study.trials import TrialEngines, store_population
 from emogen.study.view import SessionState, ShownPopulation, session_state
-from emogen.study.writes import INSERT_RESTART, INSERT_SELECTION, advance_trial, record_step
-
-#: The session's current trial if it shows a population: engine state, identity, position,
-#: attempt, generation (read without a lock to prepare a selection).
-_ACTIVE_TRIAL = (
-    select(
-        TrialRow.engine_state,
-        TrialRow.identity,
-        TrialRow.position,
-        TrialRow.attempt,
-        TrialRow.generation,
-    )
-    .join(SessionRow, TrialRow.session_id == SessionRow.id)
-    .where(
-        SessionRow.token == bindparam("token"),
-        SessionRow.study_id == bindparam("study_id"),
-        SessionRow.stage == "trial",
-        TrialRow.position == SessionRow.current_trial,
-        TrialRow.status == "active",
-    )
+from emogen.study.writes import (
+    INSERT_RESTART,
+    INSERT_SELECTION,
+    Timing,
+    advance_trial,
+    elapsed_ms,
+    record_step,
+    server_ms,
 )
+
 #: What a step's request held (hashed to tell a replayed key from a reused one).
-Payload = Mapping[str, int | float | list[int] | None]
+Payload = Mapping[str, int | float | str | list[int] | None]
 #: A step's work on the locked session; returns the population it has just shown, if any.
 Action = Callable[[Session, SessionRow], ShownPopulation | None]
 #: The same on plain rows (:meth:`SessionSteps.run_plain`): also the trial as the step left it.
@@ -85,49 +73,16 @@ def request_hash(kind: str, payload: Payload) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-def elapsed_ms(later: datetime, earlier: datetime | None) -> float:
-    """Milliseconds from ``earlier`` to ``later`` (0 when there is no earlier time)."""
-    e = as_utc(earlier)
-    later_utc = as_utc(later)
-    if e is None or later_utc is None:
-        return 0.0
-    return max(0.0, (later_utc - e).total_seconds() * 1000.0)
-
-
-@dataclass(frozen=True)
-class Prepared:
-    """A selection's GA work done outside the transaction: the engine state it started from,
-    the engine told the selection (its next population made and corrected) and that engine's
-    state now (what the transaction stores)."""
-
-    engine_state: str
-    engine: Engine
-    next_state: str
-
-
-@dataclass(frozen=True)
-class Timing:
-    """What the page reports of a step: ``response_ms`` (faces visible → answer) and
-    ``load_ms`` (population received → faces drawn: for generation 0 the page, model and
-    texture loading). The server's time excludes ``load_ms``: see :func:`server_ms`."""
-
-    response_ms: float | None = None
-    load_ms: float | None = None
-
-
-def server_ms(later: datetime, shown_at: datetime | None, load_ms: float | None) -> float:
-    """``server_response_ms``: from the population stored to the answer received, less the
-    page's reported loading time (so generation 0 does not count page and model loading)."""
-    return max(0.0, elapsed_ms(later, shown_at) - (load_ms or 0.0))
-
-
 class SessionSteps:
     """The transitions of a session: begin, select, restart, rate (each under a step key)."""
 
-    def __init__(self, ctx: StudyContext, store: Store, engines: TrialEngines) -> None:
+    def __init__(
+        self, ctx: StudyContext, store: Store, engines: TrialEngines, categorise: CategoriseTrials
+    ) -> None:
         self.ctx = ctx
         self.store = store
         self.engines = engines
+        self.categorise_trials = categorise
 
     def run(
         self, token: str, kind: str, key: str, payload: Payload, action: Action
@@ -194,57 +149,43 @@ class SessionSteps:
         return state
 
     # ---- the steps' work -------------------------------------------------------------------
-    def begin(self, db: Session, sess: SessionRow) -> ShownPopulation:
+    def begin(self, db: Session, sess: SessionRow) -> ShownPopulation | None:
         """Instructions read: the first trial starts (generation 0 is made and stored)."""
         if sess.stage != "instructions":
             raise StepConflict(f"the session is past the instructions (stage '{sess.stage}')")
         sess.stage = "trial"
         sess.started_at = utcnow()
-        return self.engines.start(db, sess, 0)
+        return self.start_trial(db, sess, 0)
+
+    def start_trial(self, db: Session, sess: SessionRow, position: int) -> ShownPopulation | None:
+        """Start the session's trial at ``position`` by its task: what it shows is stored first
+        (an evolve trial's generation 0; a categorise trial's face, its block's drawn at once)."""
+        row = trial_at(db, sess.id, position)
+        if row is None:  # pragma: no cover - created with the session
+            raise SessionNotFound(f"trial {position + 1} does not exist")
+        if row.task == "categorise":
+            self.categorise_trials.start(db, sess, row)
+            return None
+        return self.engines.start(db, sess, row)
+
+    def next_trial(self, db: Session, sess: SessionRow, trial: int) -> ShownPopulation | None:
+        """The trial at ``trial`` is finished: the next one starts, or the session ends."""
+        if trial + 1 < n_trials(sess):
+            sess.current_trial = trial + 1
+            return self.start_trial(db, sess, trial + 1)
+        sess.stage = "done"
+        sess.completed_at = utcnow()
+        return None
 
     def prepare_select(
         self, token: str, *, trial: int, attempt: int, generation: int, elite: int,
         others: list[int],
     ) -> Prepared | None:  # fmt: skip
-        """A selection's GA work (the engine restored, told, the next generation made and
-        corrected) done before its write transaction, so that no lock is held meanwhile and
-        steps of other sessions (other workers, other threads) proceed in parallel.
-
-        It starts from the state this process last stored for the session, if that is of the
-        request's generation (no read: :meth:`TrialEngines.latest`), else from the database's.
-        The transaction uses it only if the trial's stored engine state is still the one it was
-        computed from (the engine is deterministic: the same state and selection make the same
-        generation); otherwise, and for anything unexpected here (another trial or generation
-        shown, a selection the engine refuses), it does the work itself and answers as it
-        always did. Returns None when there is nothing to prepare.
-        """
-        state: str | None
-        known = self.engines.latest(token, trial, attempt, generation)  # stored by this process
-        if known is not None:
-            state, identity = known
-        else:
-            with self.store.engine.connect() as conn:  # one plain read, no ORM session
-                found = conn.execute(
-                    _ACTIVE_TRIAL, {"token": token, "study_id": self.ctx.study_id}
-                ).first()
-            if found is None:
-                return None
-            state, identity, position, row_attempt, row_generation = found
-            if (position, row_attempt, row_generation) != (trial, attempt, generation):
-                return None
-        if not state:
-            return None
-        try:
-            engine = self.engines.restore_state(state, identity)
-            engine.tell(elite, others)
-            if engine.done:
-                engine.result  # noqa: B018 - corrected here, not under the lock
-            else:
-                engine.ask()
-            next_state = engine.to_json()
-        except EmoGenError:
-            return None
-        return Prepared(state, engine, next_state)
+        """A selection's GA work done before its write transaction
+        (:func:`emogen.study.prepared.prepare_select`)."""
+        return prepare_select(self.engines, self.store, self.ctx.study_id, token, trial=trial,
+                              attempt=attempt, generation=generation, elite=elite,
+                              others=others)  # fmt: skip
 
     def select(
         self, conn: Connection, read: StepRead, *, key: str, trial: int, attempt: int,
@@ -324,7 +265,7 @@ class SessionSteps:
     ) -> ShownPopulation | None:  # fmt: skip
         """The rating of the trial's final face; then the next trial starts (or the session ends)."""
         points = self.ctx.config.rating.points
-        row = self._current_trial(db, sess, trial)
+        row = self._current_trial(db, sess, trial, "evolve")
         if row.status != "rating":
             raise StepConflict(
                 f"trial {trial + 1} is not waiting for a rating (it is at generation "
@@ -347,12 +288,20 @@ class SessionSteps:
         )
         row.status = "done"
         row.finished_at = now
-        if trial + 1 < n_trials(sess):
-            sess.current_trial = trial + 1
-            return self.engines.start(db, sess, trial + 1)
-        sess.stage = "done"
-        sess.completed_at = now
-        return None
+        return self.next_trial(db, sess, trial)
+
+    def categorise(
+        self, db: Session, sess: SessionRow, *, key: str, trial: int, label: str,
+        intensity: int | None, confidence: int | None, timing: Timing,
+    ) -> ShownPopulation | None:  # fmt: skip
+        """The participant's label (and ratings) of a categorise trial's face; then the next
+        trial starts (or the session ends)."""
+        row = self._current_trial(db, sess, trial, "categorise")
+        if row.status != "active":  # pragma: no cover - a done trial is no longer current
+            raise StepConflict(f"trial {trial + 1} is not waiting for an answer; reload the page")
+        self.categorise_trials.respond(db, row, key=key, label=label, intensity=intensity,
+                                       confidence=confidence, timing=timing)  # fmt: skip
+        return self.next_trial(db, sess, trial)
 
     # ---- guards ----------------------------------------------------------------------------
     @staticmethod
@@ -367,11 +316,12 @@ class SessionSteps:
                 f"{sess.current_trial + 1}; reload the page"
             )
 
-    def _current_trial(self, db: Session, sess: SessionRow, trial: int) -> TrialRow:
+    def _current_trial(self, db: Session, sess: SessionRow, trial: int, task: str) -> TrialRow:
         self._check_trial(sess, trial)
         row = trial_at(db, sess.id, trial)
         if row is None:  # pragma: no cover - created with the session
             raise SessionNotFound(f"trial {trial + 1} does not exist")
+        _check_task(row, trial, task)
         return row
 
     def _shown(
@@ -383,6 +333,7 @@ class SessionSteps:
         row = read.trial  # the session's current trial: the request's, checked above
         if row is None:  # pragma: no cover - created with the session
             raise SessionNotFound(f"trial {trial + 1} does not exist")
+        _check_task(row, trial, "evolve")
         if row.status != "active":
             raise StepConflict(
                 f"trial {trial + 1} has no generation to select from (it is waiting for the "
@@ -398,3 +349,15 @@ class SessionSteps:
         if pop is None:  # pragma: no cover - stored with the engine state
             raise StepConflict("the shown generation was not stored; reload the page")
         return row, pop
+
+
+_WHAT = {"evolve": "makes a face (selections)", "categorise": "asks for a label"}
+
+
+def _check_task(row: TrialRow | TrialRecord, trial: int, task: str) -> None:
+    """A step of ``task`` must be for a trial of that task."""
+    if row.task != task:
+        raise StepConflict(
+            f"trial {trial + 1} is a {row.task} trial: it {_WHAT.get(row.task, 'is another task')}, "
+            f"not a {task} step; reload the page"
+        )

@@ -13,6 +13,7 @@ from typing import Any, cast
 import orjson
 from sqlalchemy import (
     BigInteger,
+    Boolean,
     DateTime,
     Float,
     ForeignKey,
@@ -31,7 +32,9 @@ from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 #: ``sessions.trial_order`` dropped (the ``trials`` table holds the order), provenance in
 #: every Parquet file's metadata (:mod:`emogen.columns`). Exports of schema 2 still analyse
 #: and replay.
-SCHEMA_VERSION = "emogen.study/4"
+#: 5: blocks and tasks: ``trials.block`` and ``trials.task``, the ``responses`` table (a
+#: categorise trial's face and answer). Exports of schema 4 still analyse and replay.
+SCHEMA_VERSION = "emogen.study/5"
 
 
 def utcnow() -> datetime:
@@ -133,6 +136,9 @@ class TrialRow(Base):
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
     session_id: Mapped[int] = mapped_column(ForeignKey("sessions.id"), index=True)
     position: Mapped[int] = mapped_column(Integer)
+    #: The block (0-based, config order) and the task it runs (``evolve``, ``categorise``).
+    block: Mapped[int] = mapped_column(Integer, server_default="0")
+    task: Mapped[str] = mapped_column(String(16), server_default="evolve")
     condition: Mapped[int] = mapped_column(Integer)
     emotion: Mapped[str] = mapped_column(String(64))
     identity: Mapped[str] = mapped_column(String(64))
@@ -236,6 +242,53 @@ class RatingRow(Base):
     submitted_at: Mapped[datetime] = mapped_column(Stamp)
     server_response_ms: Mapped[float] = mapped_column(Float)
     client_response_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
+    step_key: Mapped[str] = mapped_column(String(64))
+
+
+class StimulusRow(Base):
+    """The face a categorise trial shows, fixed when its block starts (before it is shown):
+    where it comes from, the labels offered in their order, its identity and full weights."""
+
+    __tablename__ = "stimuli"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    trial_id: Mapped[int] = mapped_column(ForeignKey("trials.id"), unique=True)
+    #: own / other / file / random; ``fallback``: a face standing in for an other's face.
+    source: Mapped[str] = mapped_column(String(16))
+    fallback: Mapped[bool] = mapped_column(Boolean, default=False)
+    #: An own or other face: the session, trial (position) and face id it was made in.
+    source_session_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    source_trial: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    source_face_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    #: A file face: its row (0-based, as read); a random face: its kind (protocol label).
+    source_row: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    source_label: Mapped[str | None] = mapped_column(String(64), nullable=True)
+    #: The emotion the face was made for (own, other; a file's label column), if known.
+    intended: Mapped[str | None] = mapped_column(String(64), nullable=True)
+    identity: Mapped[str] = mapped_column(String(64))
+    #: JSON lists: genes (random faces; own/other: the source face's), full weights, labels.
+    genes: Mapped[str | None] = mapped_column(Text, nullable=True)
+    weights: Mapped[str] = mapped_column(Text)
+    labels: Mapped[str] = mapped_column(Text)
+    shown_at: Mapped[datetime | None] = mapped_column(Stamp, nullable=True)
+
+
+class ResponseRow(Base):
+    """A categorisation: the label chosen (or ``none``), its position among those offered,
+    the intensity and confidence ratings if asked, and the times."""
+
+    __tablename__ = "responses"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    trial_id: Mapped[int] = mapped_column(ForeignKey("trials.id"), unique=True)
+    label: Mapped[str] = mapped_column(String(64))
+    label_position: Mapped[int] = mapped_column(Integer)
+    intensity: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    confidence: Mapped[int | None] = mapped_column(Integer, nullable=True)
+    submitted_at: Mapped[datetime] = mapped_column(Stamp)
+    server_response_ms: Mapped[float] = mapped_column(Float)
+    client_response_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
+    load_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
     step_key: Mapped[str] = mapped_column(String(64))
 
 

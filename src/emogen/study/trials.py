@@ -13,8 +13,7 @@ from sqlalchemy.orm import Session
 from emogen.ga.engine import Engine, Population
 from emogen.ga.state import collision_solver_of_state, state_data
 from emogen.study.context import StudyContext
-from emogen.study.errors import SessionNotFound
-from emogen.study.queries import Executor, TrialRecord, trial_at
+from emogen.study.queries import Executor, TrialRecord
 from emogen.study.tables import (
     FaceRow,
     PopulationRow,
@@ -113,11 +112,8 @@ class TrialEngines:
         corrector = self.correctors(identity, collision_solver_of_state(data))
         return Engine.from_json(data, self.ctx.rig, corrector=corrector)
 
-    def start(self, db: Session, sess: SessionRow, position: int) -> ShownPopulation:
-        """Start the session's trial at ``position``: its generation 0 is made and stored."""
-        row = trial_at(db, sess.id, position)
-        if row is None:  # pragma: no cover - created with the session
-            raise SessionNotFound(f"trial {position + 1} does not exist")
+    def start(self, db: Session, sess: SessionRow, row: TrialRow) -> ShownPopulation:
+        """Start the session's evolve trial ``row``: its generation 0 is made and stored."""
         engine = Engine(
             self.ctx.config.ga_for(row.identity),
             self.ctx.rig,

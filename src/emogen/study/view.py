@@ -15,6 +15,7 @@ from urllib.parse import quote
 from sqlalchemy.orm import Session
 from typing_extensions import TypedDict
 
+from emogen.study.categorise import categorise_state
 from emogen.study.config import StudyConfig
 from emogen.study.queries import (
     SessionRecord,
@@ -25,16 +26,22 @@ from emogen.study.queries import (
     trial_at,
 )
 from emogen.study.tables import SessionRow, TrialRow
+from emogen.tasks.categorise import CategoriseView
+from emogen.tasks.protocol import FaceView
+
+__all__ = ["FaceView", "SessionState", "ShownPopulation", "completion", "session_state"]
 
 Stage = Literal["instructions", "trial", "done"]
 TrialStatus = Literal["pending", "active", "rating", "done"]
 
 
 class Progress(TypedDict):
-    """Trial and generation shown (0-based) of how many."""
+    """Trial, block and generation shown (0-based) of how many."""
 
     trial: int
     trials: int
+    block: int
+    blocks: int
     generation: int
     generations: int
 
@@ -47,21 +54,17 @@ class Limits(TypedDict):
 
 
 class TrialView(TypedDict):
-    """The current trial: which emotion on which identity, and where it is."""
+    """The current trial: its task and block; an evolve trial's emotion on its identity (a
+    categorise trial's emotion is "": the participant is not told what the face was made for)."""
 
     position: int
+    block: int
+    task: str
     emotion: str
     prompt: str
     identity: str
     attempt: int
     status: TrialStatus
-
-
-class FaceView(TypedDict):
-    """A face: its engine id and full weights (shapes, then correctives) in GLB target order."""
-
-    id: int
-    weights: list[float]
 
 
 class PopulationView(TypedDict):
@@ -101,6 +104,8 @@ class SessionState(TypedDict):
     trial: TrialView | None
     population: PopulationView | None
     rating: RatingView | None
+    #: a categorise trial's face and labels
+    categorise: CategoriseView | None
     completion: Completion | None
     #: true when the request's step key was already done (nothing was changed)
     replayed: NotRequired[bool]
@@ -186,6 +191,7 @@ def session_state(
     ``trial``: the current trial's row as a step has just left it)."""
     trials = n_trials(sess)
     generations = config.ga.generations
+    blocks = len(config.study_blocks())
     stage: Stage = (
         "done" if sess.stage == "done" else "trial" if sess.stage == "trial" else "instructions"
     )
@@ -195,6 +201,8 @@ def session_state(
         "progress": {
             "trial": sess.current_trial,
             "trials": trials,
+            "block": 0,
+            "blocks": blocks,
             "generation": 0,
             "generations": generations,
         },
@@ -206,27 +214,39 @@ def session_state(
         "trial": None,
         "population": None,
         "rating": None,
+        "categorise": None,
         "completion": None,
     }
     if stage == "done":
         state["completion"] = completion(config, sess.participant_id)
         state["progress"]["trial"] = trials - 1
         state["progress"]["generation"] = generations
+        state["progress"]["block"] = blocks - 1
         return state
     row = _current_trial(db, sess, shown, trial) if stage == "trial" else None
     if row is None:
         return state
     status: TrialStatus = row.status  # type: ignore[assignment]  # a stored TrialStatus
-    state["trial"] = {
+    evolve = row.task == "evolve"
+    state["progress"]["block"] = row.block
+    trial_view: TrialView = {
         "position": row.position,
-        "emotion": row.emotion,
-        "prompt": config.prompt_for(row.emotion),
+        "block": row.block,
+        "task": row.task,
+        "emotion": row.emotion if evolve else "",
+        "prompt": config.prompt_for(row.emotion) if evolve else "",
         "identity": row.identity,
         "attempt": row.attempt,
         "status": status,
     }
+    state["trial"] = trial_view
     state["progress"]["generation"] = row.generation
-    if row.status == "active":
+    if not evolve:
+        view = categorise_state(db, config, row)
+        state["categorise"] = view
+        if view is not None:
+            trial_view["prompt"] = view["question"]
+    elif row.status == "active":
         state["population"] = _population(db, row, shown)
     elif row.status == "rating":
         state["rating"] = _rating(db, config, row)

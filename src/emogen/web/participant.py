@@ -17,6 +17,7 @@ from emogen.web.ratelimit import client_key, too_many
 from emogen.web.schemas import (
     TOKEN_PATTERN,
     Begin,
+    Categorisation,
     Created,
     NewSession,
     Rating,
@@ -183,6 +184,23 @@ def rate(request: Request, token: Token, body: Rating) -> JSONResponse:
     return _json(
         _service(request).rate(
             token, body.key, trial=body.trial, value=body.value, response_ms=body.response_ms
+        )
+    )
+
+
+@router.post("/api/s/{token}/categorise", response_model=SessionState, responses=STEP_ERRORS)
+def categorise(request: Request, token: Token, body: Categorisation) -> JSONResponse:
+    """The label (and the ratings the block asks) given to a categorise trial's face."""
+    return _json(
+        _service(request).categorise(
+            token,
+            body.key,
+            trial=body.trial,
+            label=body.label,
+            intensity=body.intensity,
+            confidence=body.confidence,
+            response_ms=body.response_ms,
+            load_ms=body.load_ms,
         )
     )
 

@@ -86,6 +86,20 @@ class Rating(_Body):
     response_ms: Millis | None = None
 
 
+class Categorisation(_Body):
+    """The answer to a categorise trial's face: one of the labels it offered (or ``none`` where
+    the block offers "none of these"), and the intensity / confidence ratings the block asks."""
+
+    key: StepKey
+    trial: Index
+    label: Annotated[str, Field(min_length=1, max_length=64)]
+    intensity: Annotated[int, Field(ge=1, le=11), BeforeValidator(_whole_number)] | None = None
+    confidence: Annotated[int, Field(ge=1, le=11), BeforeValidator(_whole_number)] | None = None
+    response_ms: Millis | None = None
+    #: Page's time from receiving the face to it drawn (see ``Selection.load_ms``).
+    load_ms: Millis | None = None
+
+
 class Created(BaseModel):
     """A session made (or resumed): its secret token, its page and its state."""
 

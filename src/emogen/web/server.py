@@ -208,7 +208,7 @@ def _banner(app: FastAPI, host: str, port: int, workers: int) -> str:
     config = app.state.config
     shown = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::") else host
     return (
-        f"EmoGen study '{config.name}' ({config.n_trials} trials), data in "
+        f"EmoGen study '{config.name}' ({app.state.service.n_trials} trials), data in "
         f"{app.state.store.describe()}, {workers} worker process{'es' if workers > 1 else ''}\n"
         f"  participants open:    http://{shown}:{port}/?{config.participant_param}=PARTICIPANT_ID\n"
         f"  researcher dashboard: http://{shown}:{port}/researcher"

@@ -107,6 +107,26 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/s/{token}/categorise": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Categorise
+         * @description The label (and the ratings the block asks) given to a categorise trial's face.
+         */
+        post: operations["categorise_api_s__token__categorise_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/s/{token}/faces/{face_id}.png": {
         parameters: {
             query?: never;
@@ -239,6 +259,45 @@ export interface components {
             key: string;
         };
         /**
+         * Categorisation
+         * @description The answer to a categorise trial's face: one of the labels it offered (or ``none`` where
+         *     the block offers "none of these"), and the intensity / confidence ratings the block asks.
+         */
+        Categorisation: {
+            /** Confidence */
+            confidence?: number | null;
+            /** Intensity */
+            intensity?: number | null;
+            /** Key */
+            key: string;
+            /** Label */
+            label: string;
+            /** Load Ms */
+            load_ms?: number | null;
+            /** Response Ms */
+            response_ms?: number | null;
+            /** Trial */
+            trial: number;
+        };
+        /**
+         * CategoriseView
+         * @description What a categorise trial shows: the face, the question, the labels in their order, and the
+         *     ratings asked (their number of points; None when not asked).
+         */
+        CategoriseView: {
+            /** Confidence */
+            confidence: number | null;
+            face: components["schemas"]["FaceView"];
+            /** Intensity */
+            intensity: number | null;
+            /** Labels */
+            labels: string[];
+            /** None Option */
+            none_option: boolean;
+            /** Question */
+            question: string;
+        };
+        /**
          * Completion
          * @description What a participant sees at the end: a message, a code, a link back.
          */
@@ -263,7 +322,8 @@ export interface components {
         };
         /**
          * FaceView
-         * @description A face: its engine id and full weights (shapes, then correctives) in GLB target order.
+         * @description A face: its id in the trial and its full weights (shapes, then correctives) in GLB
+         *     target order.
          */
         FaceView: {
             /** Id */
@@ -335,9 +395,13 @@ export interface components {
         };
         /**
          * Progress
-         * @description Trial and generation shown (0-based) of how many.
+         * @description Trial, block and generation shown (0-based) of how many.
          */
         Progress: {
+            /** Block */
+            block: number;
+            /** Blocks */
+            blocks: number;
             /** Generation */
             generation: number;
             /** Generations */
@@ -435,6 +499,7 @@ export interface components {
         SessionState: {
             /** Allow Restart */
             allow_restart: boolean;
+            categorise: components["schemas"]["CategoriseView"] | null;
             completion: components["schemas"]["Completion"] | null;
             limits: components["schemas"]["Limits"];
             /** Participant Id */
@@ -453,11 +518,14 @@ export interface components {
         };
         /**
          * TrialView
-         * @description The current trial: which emotion on which identity, and where it is.
+         * @description The current trial: its task and block; an evolve trial's emotion on its identity (a
+         *     categorise trial's emotion is "": the participant is not told what the face was made for).
          */
         TrialView: {
             /** Attempt */
             attempt: number;
+            /** Block */
+            block: number;
             /** Emotion */
             emotion: string;
             /** Identity */
@@ -471,6 +539,8 @@ export interface components {
              * @enum {string}
              */
             status: "pending" | "active" | "rating" | "done";
+            /** Task */
+            task: string;
         };
     };
     responses: never;
@@ -727,6 +797,78 @@ export interface operations {
         requestBody: {
             content: {
                 "application/json": components["schemas"]["Begin"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SessionState"];
+                };
+            };
+            /** @description No session with this token, or no such face now. */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The request does not fit the session now (stale page, reused step key). */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The request body is larger than 65536 bytes. */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The request's values break a rule (the message names the value). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["InvalidRequest"];
+                };
+            };
+            /** @description The server is busy or shutting down; try again in a moment. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+        };
+    };
+    categorise_api_s__token__categorise_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description The session's secret token (from the session link). */
+                token: string;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["Categorisation"];
             };
         };
         responses: {
