@@ -357,7 +357,8 @@ _WHAT = {"evolve": "makes a face (selections)", "categorise": "asks for a label"
 def _check_task(row: TrialRow | TrialRecord, trial: int, task: str) -> None:
     """A step of ``task`` must be for a trial of that task."""
     if row.task != task:
+        article = "an" if row.task[:1] in "aeiou" else "a"
         raise StepConflict(
-            f"trial {trial + 1} is a {row.task} trial: it {_WHAT.get(row.task, 'is another task')}, "
-            f"not a {task} step; reload the page"
+            f"trial {trial + 1} is {article} {row.task} trial: it "
+            f"{_WHAT.get(row.task, 'is another task')}, not a {task} step; reload the page"
         )
