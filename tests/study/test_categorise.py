@@ -21,9 +21,10 @@ from emogen.errors import ConfigError, DataError, SelectionError
 from emogen.study.config import study_from_dict
 from emogen.study.errors import StepConflict
 from emogen.study.export import export_tables
+from emogen.study.replay import replay_session
 from emogen.study.sessions import StudyService
 from emogen.study.storage import Store
-from emogen.study.tables import ResponseRow
+from emogen.study.tables import ResponseRow, StimulusRow, TrialRow
 from tests.study.drive import (
     categorise_body,
     new_key,
@@ -222,3 +223,35 @@ def test_answers_of_a_categorise_body_fit_the_view(mixed: StudyService) -> None:
     again = mixed.state(token)  # the state read again shows the same face and order
     assert json.dumps(again["categorise"]["labels"]) == labels_before
     assert again["categorise"]["face"] == state["categorise"]["face"]
+
+
+def test_replay_checks_every_categorised_face_and_catches_a_changed_one(
+    mixed: StudyService, ict_model: Any
+) -> None:
+    first, state = mixed.create_session("R-first")
+    run_to_end(state, service_caller(mixed, first))
+    token, state = mixed.create_session("R-second")
+    run_to_end(state, service_caller(mixed, token))
+    rig, mhash = ict_model.rig, ict_model.model_hash
+    ids = {row.participant_id: int(row.session_id) for row in
+           export_tables(mixed.store)["sessions"].itertuples()}  # fmt: skip
+    report = replay_session(mixed.store, ids["R-second"], rig, mhash, model=ict_model)
+    assert report.ok and report.stimuli == 8 and report.populations == 6, report.mismatches
+    with (
+        mixed.store.write() as db
+    ):  # a random face's weight moved by 1e-6; an own face's label order
+        stims = {s.source: s for s in db.scalars(select(StimulusRow).join(TrialRow).where(
+            TrialRow.session_id == ids["R-second"]))}  # fmt: skip
+        w = json.loads(stims["random"].weights)
+        w[3] += 1e-6
+        stims["random"].weights = json.dumps(w)
+        stims["own"].labels = json.dumps(list(reversed(json.loads(stims["own"].labels))))
+        g = json.loads(stims["other"].genes)
+        g[0] = 1.0 - g[0]
+        stims["other"].genes = json.dumps(g)
+    report = replay_session(mixed.store, ids["R-second"], rig, mhash, model=ict_model)
+    text = " / ".join(report.mismatches)
+    assert len(report.mismatches) == 3, text
+    assert "(random face): weights differ by up to 1e-06" in text
+    assert "(own face): labels offered" in text
+    assert "(other face): weights or genes differ from its source face" in text

@@ -263,9 +263,11 @@ def _replay_export(folder: Path, session_id: int | None, model: Path | None) -> 
 
 def _echo_report(report: Any) -> None:
     verdict = "every face matches" if report.ok else "MISMATCH"
+    stimuli = getattr(report, "stimuli", 0)
+    labelled = f", {stimuli} categorised faces checked" if stimuli else ""
     typer.echo(
         f"session {report.session_id}: {report.populations} populations, {report.faces} faces "
-        f"replayed: {verdict}"
+        f"replayed{labelled}: {verdict}"
     )
     if not report.model_hash_matches:
         typer.echo("  the model differs from the one the session was recorded with")

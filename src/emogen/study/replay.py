@@ -1,4 +1,5 @@
-"""Replay a stored session: regenerate every population from its seeds and recorded selections.
+"""Replay a stored session: regenerate every population from its seeds and recorded selections,
+and check every categorise trial's face against its source (:mod:`emogen.study.replay_stimuli`).
 
 For each trial the GA engine is rebuilt from the trial's seed and driven through the recorded
 selections and restarts in the order they happened; every population it makes is compared with
@@ -22,6 +23,7 @@ from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
 from emogen.study.context import accepted_hashes
 from emogen.study.errors import SessionNotFound
+from emogen.study.replay_stimuli import check_stimulus
 from emogen.study.weights import StudyCorrectors, full_weights
 
 if TYPE_CHECKING:
@@ -44,6 +46,8 @@ class ReplayReport:
     model_hash_matches: bool
     populations: int = 0
     faces: int = 0
+    #: categorise trials' faces checked (:mod:`emogen.study.replay_stimuli`)
+    stimuli: int = 0
     mismatches: list[str] = field(default_factory=list)
 
     @property
@@ -57,6 +61,7 @@ class ReplayReport:
             "model_hash_matches": self.model_hash_matches,
             "populations": self.populations,
             "faces": self.faces,
+            "stimuli": self.stimuli,
             "mismatches": self.mismatches,
         }
 
@@ -154,6 +159,11 @@ def replay_session(
             select(TrialRow).where(TrialRow.session_id == sess.id).order_by(TrialRow.position)
         ).all()
         for trial in trials:
+            if trial.task == "categorise":
+                n, problems = check_stimulus(db, trial, config, rig, correctors)
+                report.stimuli += n
+                report.mismatches += problems
+                continue
             pops = db.scalars(
                 select(PopulationRow)
                 .where(PopulationRow.trial_id == trial.id)
