@@ -15,12 +15,16 @@ import typer
 
 from emogen.cli.options import JsonOpt, friendly_errors, show_result
 from emogen.cli.outputs import ForceOpt, check_out_folder, moved, output_folder
+from emogen.cli.study_simulate import simulate_study_command
 from emogen.errors import ConfigError
 
 if TYPE_CHECKING:
     from emogen.study.storage import Store
 
-study_app = typer.Typer(help="Participant studies: progress and data export.", no_args_is_help=True)
+study_app = typer.Typer(
+    help="Participant studies: progress, data export and simulated pilots.", no_args_is_help=True
+)
+study_app.command("simulate")(simulate_study_command)
 
 DatabaseOpt = Annotated[
     str | None,

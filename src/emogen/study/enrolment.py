@@ -100,14 +100,17 @@ def create_session(
     *,
     resume_token: str | None = None,
     user_agent: str = "",
+    source: str | None = None,
 ) -> tuple[str, SessionState]:
     """A new session (token, state), or the participant's own one again.
 
     A participant id that already has a session is resumed only with that session's token
     (``resume_token``, kept by the participant's browser); otherwise it is a conflict.
     ``user_agent`` is stored only when the study collects it (``collect_user_agent``).
+    ``source`` records where the id came from instead of the URL (``simulated``).
     """
-    pid, source = checked_participant(participant_id)
+    pid, given = checked_participant(participant_id)
+    source = source or given
 
     def work(db: Session) -> tuple[str, SessionState]:
         lock_study(db, ctx.study_id)  # one new session at a time per study (session numbers)

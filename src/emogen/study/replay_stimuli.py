@@ -102,11 +102,11 @@ def _file_face(
 
 def _corrected(shapes: np.ndarray, identity: str, correctors: StudyCorrectors) -> np.ndarray:
     corrector = correctors(identity)
+    face = np.asarray(shapes[0], dtype=np.float64)
     if corrector is None:
-        return shapes[0]
+        return face
     _, extra = corrector(shapes)
-    full: np.ndarray = np.hstack([shapes[0], np.asarray(extra, dtype=np.float64).reshape(-1)])
-    return full
+    return np.concatenate([face, np.asarray(extra, dtype=np.float64).reshape(-1)])
 
 
 def _compare(where: str, stored: np.ndarray, replayed: np.ndarray) -> list[str]:

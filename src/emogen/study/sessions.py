@@ -82,11 +82,12 @@ class StudyService:
 
     def create_session(
         self, participant_id: str | None = None, *, resume_token: str | None = None,
-        user_agent: str = "",
+        user_agent: str = "", source: str | None = None,
     ) -> tuple[str, SessionState]:  # fmt: skip
-        """Consent given: a new session (token, state), or the participant's own one again."""
+        """Consent given: a new session (token, state), or the participant's own one again
+        (``source``: ``simulated`` for :mod:`emogen.study.simulate`'s participants)."""
         return create_session(self.store, self.ctx, participant_id, resume_token=resume_token,
-                              user_agent=user_agent)  # fmt: skip
+                              user_agent=user_agent, source=source)  # fmt: skip
 
     def state(self, token: str) -> SessionState:
         with self.store.read() as db:

@@ -1,0 +1,226 @@
+"""``emogen study simulate``: simulated participants run a whole study through the real study
+service and database — every block, categorisation included — so a lab can pilot the design,
+the export and the analysis before going live.
+
+Participant ``i`` (id ``sim-0001`` …) draws their prototypes and every choice from child ``i``
+of the seed (:func:`numpy.random.SeedSequence.spawn`); they answer what the page would show
+(the service's state), through the same steps a browser sends. Their sessions are recorded
+with ``participant_source = "simulated"`` (a column of every exported table).
+
+With one worker the participants run one after another, so participant ``i`` draws others'
+faces from participants ``< i``: the same seed gives the same data. With several workers each
+runs a share of the participants in its own process on the same database; everything but
+which other participants' faces a categorise block finds complete is the same.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from sqlalchemy import func, select
+
+from emogen.errors import ConfigError
+from emogen.study.config import StudyConfig
+from emogen.study.storage import Store
+from emogen.study.tables import SessionRow
+from emogen.tasks.simulated import (
+    SimulatedDesign,
+    SimulatedParticipant,
+    own_prototypes,
+    population_prototypes,
+)
+
+if TYPE_CHECKING:
+    from emogen.model.face import FaceModel
+    from emogen.study.sessions import StudyService
+
+SOURCE = "simulated"
+
+
+@dataclass(frozen=True)
+class SimulationPlan:
+    """Everything a worker needs (picklable): the study, where to record it, who to run."""
+
+    config: StudyConfig
+    database_url: str
+    seed: int
+    participants: int
+    design: SimulatedDesign
+    shuffle_prototypes: bool
+    model_path: Path | None = None
+
+
+@dataclass
+class SimulationSummary:
+    participants: int
+    database: str
+    seed: int
+    seconds: float
+    shuffled: bool
+    steps: int = 0
+    by_task: dict[str, int] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return dict(self.__dict__)
+
+
+def participant_id(i: int) -> str:
+    return f"sim-{i + 1:04d}"
+
+
+def participant_stream(
+    plan: SimulationPlan, rig: Any, i: int
+) -> tuple[dict[str, np.ndarray], np.random.Generator]:
+    """Participant ``i``'s prototypes, drawn first from their own child of the seed, and that
+    generator (their choices come next from it)."""
+    cfg = plan.config
+    population = population_prototypes(rig, cfg.emotions, plan.design, cfg.ga.eye_motion)
+    child = np.random.SeedSequence(plan.seed).spawn(plan.participants)[i]
+    rng = np.random.default_rng(child)
+    return own_prototypes(population, plan.design, rng), rng
+
+
+def all_prototypes(plan: SimulationPlan, rig: Any) -> list[dict[str, np.ndarray]]:
+    """Every participant's prototypes."""
+    return [participant_stream(plan, rig, i)[0] for i in range(plan.participants)]
+
+
+def run_participant(
+    service: StudyService, plan: SimulationPlan, i: int, prototypes: list[dict[str, np.ndarray]]
+) -> dict[str, int]:
+    """Participant ``i`` through the whole study; the steps taken per kind."""
+    rig = service.ctx.rig
+    _, rng = participant_stream(plan, rig, i)
+    labeller = prototypes[(i + 1) % plan.participants] if plan.shuffle_prototypes else prototypes[i]
+    maker = SimulatedParticipant(prototypes[i], plan.design, rig, plan.config.ga.eye_motion, rng)
+    judge = SimulatedParticipant(labeller, plan.design, rig, plan.config.ga.eye_motion, rng)
+    token, state = service.create_session(participant_id(i), source=SOURCE)
+    counts: dict[str, int] = {}
+    k = 0
+    while state["stage"] != "done":
+        k += 1
+        key = f"sim{i + 1:05d}s{k:05d}"
+        state, kind = _step(service, token, key, state, maker, judge)
+        counts[kind] = counts.get(kind, 0) + 1
+    return counts
+
+
+def _step(
+    service: StudyService, token: str, key: str, state: Any, maker: SimulatedParticipant,
+    judge: SimulatedParticipant,
+) -> tuple[Any, str]:  # fmt: skip
+    if state["stage"] == "instructions":
+        return service.begin(token, key), "begin"
+    trial, where = state["trial"], state["progress"]["trial"]
+    if trial["task"] == "categorise":
+        view = state["categorise"]
+        label, intensity, confidence = judge.categorise(
+            np.asarray(view["face"]["weights"]), view["labels"], view["intensity"] or 7
+        )
+        return service.categorise(
+            token, key, trial=where, label=label,
+            intensity=intensity if view["intensity"] else None,
+            confidence=confidence if view["confidence"] else None,
+        ), "categorise"  # fmt: skip
+    if trial["status"] == "rating":
+        face = state["rating"]["face"]
+        value = maker.rate(np.asarray(face["weights"]), trial["emotion"], state["rating"]["points"])
+        return service.rate(token, key, trial=where, value=value), "rate"
+    faces = state["population"]["faces"]
+    limits = (state["limits"]["min_selections"], state["limits"]["max_selections"])
+    elite, others = maker.select(
+        np.asarray([f["weights"] for f in faces]), trial["emotion"], limits
+    )
+    return service.select(
+        token, key, trial=where, attempt=trial["attempt"], generation=state["progress"]["generation"],
+        elite=faces[elite]["id"], others=[faces[j]["id"] for j in others],
+    ), "select"  # fmt: skip
+
+
+def _service(plan: SimulationPlan, model: FaceModel | None) -> tuple[StudyService, Store]:
+    from emogen.model import load_model
+    from emogen.study.sessions import StudyService
+
+    if model is None:
+        model = load_model(plan.model_path or plan.config.model, rig=plan.config.rig)
+    store = Store(plan.database_url)
+    service = StudyService(plan.config, store, model.rig, model_name=model.name,
+                           model_hash=model.model_hash, model=model)  # fmt: skip
+    return service, store
+
+
+def _run_share(plan: SimulationPlan, share: Sequence[int]) -> dict[str, int]:
+    """A worker process: its share of the participants."""
+    service, store = _service(plan, None)
+    try:
+        prototypes = all_prototypes(plan, service.ctx.rig)
+        total: dict[str, int] = {}
+        for i in share:
+            for kind, n in run_participant(service, plan, i, prototypes).items():
+                total[kind] = total.get(kind, 0) + n
+        return total
+    finally:
+        store.dispose()
+
+
+def _check_fresh(store: Store, study_id: int) -> None:
+    """Simulated participants go into a database of their own: never beside real ones, never
+    twice (the same ids would collide and the data would not be the seed's)."""
+    with store.read() as db:
+        n = db.scalar(
+            select(func.count()).select_from(SessionRow).where(SessionRow.study_id == study_id)
+        )
+    if n:
+        raise ConfigError(
+            f"{store.describe()} already holds {n} session(s) of this study: simulated "
+            "participants go into a database of their own (choose a new --database-url)"
+        )
+
+
+def simulate_study(
+    plan: SimulationPlan,
+    *,
+    workers: int = 1,
+    model: FaceModel | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> SimulationSummary:
+    """Run ``plan.participants`` simulated participants through the study."""
+    if plan.participants < 1:
+        raise ConfigError(f"--participants must be >= 1; got {plan.participants}")
+    if workers < 1:
+        raise ConfigError(f"--workers must be >= 1; got {workers}")
+    started = time.perf_counter()
+    service, store = _service(plan, model)
+    try:
+        _check_fresh(store, service.ctx.study_id)
+        total: dict[str, int] = {}
+        if workers == 1:
+            prototypes = all_prototypes(plan, service.ctx.rig)
+            for i in range(plan.participants):
+                for kind, n in run_participant(service, plan, i, prototypes).items():
+                    total[kind] = total.get(kind, 0) + n
+                if progress is not None:
+                    progress(i + 1, plan.participants)
+        else:
+            if plan.model_path is None and model is not None and model.source:
+                plan = replace(plan, model_path=Path(model.source))  # workers load the same
+            shares = [list(range(w, plan.participants, workers)) for w in range(workers)]
+            with ProcessPoolExecutor(max_workers=workers) as pool:
+                for done, part in enumerate(pool.map(_run_share, [plan] * workers, shares)):
+                    for kind, n in part.items():
+                        total[kind] = total.get(kind, 0) + n
+                    if progress is not None:
+                        progress(sum(len(s) for s in shares[: done + 1]), plan.participants)
+    finally:
+        store.dispose()
+    return SimulationSummary(
+        participants=plan.participants, database=store.describe(), seed=plan.seed,
+        seconds=round(time.perf_counter() - started, 2), shuffled=plan.shuffle_prototypes,
+        steps=sum(total.values()), by_task=total,
+    )  # fmt: skip
