@@ -44,15 +44,21 @@ sys.path[:0] = [str(REPO), str(REPO / "src")]
 
 from benchmarks.bench_study import (  # noqa: E402
     BENCH_STUDY,
+    MIXED_STUDY,
     ServerProcess,
     model_path,
     write_study_toml,
 )
 
+STUDIES = {"evolve": BENCH_STUDY, "mixed": MIXED_STUDY}
+
 
 @dataclass
 class Run:
     steps: list[tuple[float, float]] = field(default_factory=list)  # (sent at, seconds)
+    #: ratings and categorisations (a rating that ends an evolve block also draws the next
+    #: categorise block's faces): (sent at, seconds)
+    answers: list[tuple[float, float]] = field(default_factory=list)
     requests: int = 0
     errors: list[str] = field(default_factory=list)
     completed: int = 0
@@ -101,7 +107,17 @@ async def participant(client: httpx.AsyncClient, i: int, run: Run, cfg: argparse
         pause = rng.uniform(lo, hi)
         await asyncio.sleep(pause)
         trial = state["progress"]["trial"]
-        if state["trial"]["status"] == "active":
+        if state["trial"]["task"] == "categorise":
+            view = state["categorise"]
+            body = {"key": next(keys), "trial": trial, "label": rng.choice(view["labels"]),
+                    "intensity": rng.randint(1, view["intensity"]["points"]) if view["intensity"] else None,
+                    "confidence": rng.randint(1, view["confidence"]["points"]) if view["confidence"] else None,
+                    "response_ms": round(1000 * pause), "load_ms": 5.0}  # fmt: skip
+            t0 = time.monotonic()
+            state = await call("POST", f"/api/s/{token}/categorise", body)
+            if state is not None:
+                run.answers.append((t0, time.monotonic() - t0))
+        elif state["trial"]["status"] == "active":
             ids = [f["id"] for f in state["population"]["faces"]]
             limits = state["limits"]
             chosen = rng.sample(ids, rng.randint(limits["min_selections"],
@@ -117,7 +133,10 @@ async def participant(client: httpx.AsyncClient, i: int, run: Run, cfg: argparse
         else:
             body = {"key": next(keys), "trial": trial, "value": rng.randint(1, 7),
                     "response_ms": round(1000 * pause)}  # fmt: skip
+            t0 = time.monotonic()
             state = await call("POST", f"/api/s/{token}/rating", body)
+            if state is not None:
+                run.answers.append((t0, time.monotonic() - t0))
     if state is not None and state["stage"] == "done":
         run.completed += 1
 
@@ -174,7 +193,7 @@ def _pct(values: list[float], q: float) -> float:
 
 def one_run(database_url: str, workers: int, n: int, cfg: argparse.Namespace,
             folder: Path) -> dict[str, Any]:  # fmt: skip
-    config = write_study_toml(BENCH_STUDY, folder / "bench.toml")
+    config = write_study_toml(STUDIES[cfg.study], folder / "bench.toml")
     if cfg.export_during:
         from benchmarks.bench_export import fill
 
@@ -200,6 +219,7 @@ def one_run(database_url: str, workers: int, n: int, cfg: argparse.Namespace,
         "participants": n, "pause": f"{cfg.pause[0]:g}-{cfg.pause[1]:g}",
         "steps": len(steps), "step_p50_ms": _pct(steps, 50), "step_p95_ms": _pct(steps, 95),
         "step_max_ms": _pct(steps, 100), "errors": len(run.errors),
+        "answer_p95_ms": _pct([s for _, s in run.answers], 95), "answers": len(run.answers),
         "steps_per_s": len(steps) / max(last - first, 1e-9), "completed": run.completed,
         "unfinished": run.unfinished,
         "server_cpu_ms_per_request": 1000 * cpu / max(run.requests, 1),
@@ -227,6 +247,8 @@ def line(r: dict[str, Any]) -> str:
             f"{r['steps']:>6} {r['step_p50_ms']:>8.0f} {r['step_p95_ms']:>8.0f} "
             f"{r['step_max_ms']:>8.0f} {r['errors']:>6} {r['steps_per_s']:>8.1f} "
             f"{r['server_cpu_ms_per_request']:>8.1f} {r['driver_cpu_pct']:>7.0f}")  # fmt: skip
+    if r["answers"]:
+        text += f"  ratings+categorisations p95 {r['answer_p95_ms']:.0f} ms ({r['answers']})"
     if r["driver_cpu_pct"] > 70:
         text += "  (driver busy: figures may be the driver's)"
     if r["unfinished"]:
@@ -260,6 +282,13 @@ def main() -> None:
     parser.add_argument("--workers", nargs="+", type=int, default=[1, 2])
     parser.add_argument("--participants", nargs="+", type=int, default=[50, 100, 200, 400])
     parser.add_argument("--pause", default="1-3", help="seconds before each step: LO-HI")
+    parser.add_argument(
+        "--study",
+        choices=sorted(STUDIES),
+        default="evolve",
+        help="evolve: two GA trials; mixed: GA trials, then a categorise block "
+        "(own + others' + random faces)",
+    )
     parser.add_argument("--ramp", type=float, default=10.0, help="arrivals spread over (s)")
     parser.add_argument("--max-seconds", type=float, default=900.0, help="cap per run")
     parser.add_argument("--breaking-point", action="store_true",

@@ -37,6 +37,16 @@ BENCH_STUDY: dict[str, Any] = {
     "seed": 7,
     "ga": {"generations": 5, "min_selections": 1, "max_selections": 4},
 }
+#: The same GA trials, then a categorise block: the participant's own two faces, four of other
+#: participants' (random stand-ins until others are complete) and two random faces.
+MIXED_STUDY: dict[str, Any] = {
+    **BENCH_STUDY,
+    "name": "bench-mixed",
+    "blocks": [
+        {"task": "evolve"},
+        {"task": "categorise", "own": True, "others": 4, "random": 2, "intensity": True},
+    ],
+}
 
 
 def model_path() -> Path:
@@ -52,12 +62,16 @@ def free_port() -> int:
 
 
 def write_study_toml(data: dict[str, Any], path: Path) -> Path:
-    """A study config dict (nested tables allowed, e.g. [ga], [ga.init]) as TOML."""
+    """A study config dict (nested tables allowed, e.g. [ga], [ga.init]; a list of dicts is an
+    array of tables, e.g. [[blocks]]) as TOML."""
     lines: list[str] = []
     tables: list[tuple[str, dict[str, Any]]] = []
+    arrays: list[tuple[str, dict[str, Any]]] = []
     for k, v in data.items():
         if isinstance(v, dict):
             tables.append((k, v))
+        elif isinstance(v, list) and v and all(isinstance(x, dict) for x in v):
+            arrays.extend((k, x) for x in v)
         else:
             lines.append(f"{k} = {json.dumps(v)}")  # strings, numbers, lists: valid TOML
     while tables:
@@ -68,6 +82,9 @@ def write_study_toml(data: dict[str, Any], path: Path) -> Path:
                 tables.append((f"{name}.{k}", v))
             else:
                 lines.append(f"{k} = {json.dumps(v)}")
+    for name, table in arrays:
+        lines.append(f"[[{name}]]")
+        lines.extend(f"{k} = {json.dumps(v)}" for k, v in table.items())
     path.write_text("\n".join(lines) + "\n")
     return path
 

@@ -78,7 +78,9 @@ def test_a_mixed_study_shows_own_faces_and_stores_every_answer(mixed: StudyServi
         view = s["categorise"]
         assert sorted(view["labels"]) == sorted(LABELS)  # every label, in a drawn order
         assert s["trial"]["emotion"] == "" and s["trial"]["prompt"] == view["question"]
-        assert view["none_option"] and view["intensity"] == 7 and view["confidence"] is None
+        assert (
+            view["none_option"] and view["intensity"]["points"] == 7 and view["confidence"] is None
+        )
     tables = export_tables(mixed.store)
     resp = tables["responses"]
     assert len(resp) == 8 and resp["label"].notna().all()
@@ -173,7 +175,7 @@ def test_a_stimulus_file_shows_its_rows_on_their_identities(ict_model: Any, tmp_
         "happy,male-dark,0.1,0.8,0.8\nsad,,0.0,0.0,0.0\nangry,female-light,0.5,0.2,0.2\n"
     )
     cfg = study_from_dict({
-        "name": "file", "emotions": LABELS, "identities": ["generic", "male-dark", "female-light"],
+        "name": "file", "emotions": LABELS, "seed": 3, "identities": ["generic", "male-dark", "female-light"],
         "blocks": [{"task": "categorise", "file": str(csv)}],
     })  # fmt: skip
     store = Store(f"sqlite:///{tmp_path / 'file.sqlite'}")
@@ -183,11 +185,19 @@ def test_a_stimulus_file_shows_its_rows_on_their_identities(ict_model: Any, tmp_
     run_to_end(state, service_caller(svc, token))
     resp = export_tables(store)["responses"].sort_values("source_row")
     assert list(resp["intended"]) == ["happy", "sad", "angry"]
-    assert list(resp["identity"]) == ["male-dark", "generic", "female-light"]
+    # rows with an identity keep it; a row without one takes the block's identities cycled
+    # over the session's draw of the rows (so over participants it meets every identity)
+    assert list(resp["identity"])[::2] == ["male-dark", "female-light"]
     assert resp["g_jawOpen"].isna().all()  # file faces have weights, not genes
     cells = pd.read_csv(csv)  # the file's own cells are the shown shape weights
     for col in ("jawOpen", "mouthSmile_L", "mouthSmile_R"):
         np.testing.assert_array_equal(resp[f"w_{col}"].to_numpy(float), cells[col].to_numpy(float))
+    for k in range(2, 10):
+        token, state = svc.create_session(f"F-{k}")
+        run_to_end(state, service_caller(svc, token))
+    resp = export_tables(store)["responses"]
+    blank = resp[resp["source_row"] == 1]
+    assert len(blank) == 9 and set(blank["identity"]) == {"generic", "male-dark", "female-light"}
     store.dispose()
 
 

@@ -24,7 +24,7 @@ from emogen.study.export import export_tables
 from emogen.study.replay import replay_session
 from emogen.study.storage import Store
 from tests.study.conftest import SMALL_STUDY
-from tests.study.drive import choose, new_key, run_to_end, step_args
+from tests.study.drive import categorise_body, choose, new_key, run_to_end, step_args
 from tests.study_fixtures import db_url, pg_cluster  # noqa: F401
 
 pytestmark = pytest.mark.slow
@@ -34,6 +34,22 @@ def post(url: str, path: str, body: dict[str, Any]) -> dict[str, Any]:
     r = httpx.post(url + path, json=body, timeout=30)
     assert r.status_code in (200, 201), r.text
     return r.json()  # type: ignore[no-any-return]
+
+
+def kill_with_step_in_flight(server: ServerProcess, path: str, body: dict[str, Any]) -> None:
+    """SIGKILL the server 5 ms after sending a step (whose answer is then lost), and start it
+    again."""
+
+    def send() -> None:
+        with contextlib.suppress(httpx.HTTPError):  # the server dies under it
+            httpx.post(f"{server.url}{path}", json=body, timeout=5)
+
+    in_flight = threading.Thread(target=send, daemon=True)
+    in_flight.start()
+    time.sleep(0.005)
+    server.kill()
+    in_flight.join(10)
+    server.start()
 
 
 @pytest.mark.parametrize("workers", [1, 2])
@@ -65,16 +81,7 @@ def test_sigkill_mid_session_loses_and_duplicates_nothing(
         elite, others = choose(state)
         body = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
 
-        def send() -> None:
-            with contextlib.suppress(httpx.HTTPError):  # the server dies under it
-                httpx.post(f"{server.url}/api/s/{token}/select", json=body, timeout=5)
-
-        in_flight = threading.Thread(target=send, daemon=True)
-        in_flight.start()
-        time.sleep(0.005)
-        server.kill()
-        in_flight.join(10)
-        server.start()
+        kill_with_step_in_flight(server, f"/api/s/{token}/select", body)
         before = httpx.get(f"{server.url}/api/s/{token}/state", timeout=30).json()
         assert before["progress"]["generation"] in (1, 2)  # the step happened wholly or not at all
         after = post(server.url, f"/api/s/{token}/select", body)
@@ -137,3 +144,51 @@ def test_the_same_step_sent_at_once_to_two_workers_is_stored_once(
     assert len(tables["selections"].query("role == 'elite'")) == 1
     per_generation = tables["faces"].groupby("generation").size()
     assert per_generation.to_dict() == {0: 10, 1: 10}
+
+
+MIXED_STUDY = {
+    **SMALL_STUDY,
+    "name": "mixed-fault",
+    "blocks": [{"task": "evolve"}, {"task": "categorise", "own": True, "random": 2,
+                                    "intensity": True}],
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_sigkill_during_categorisation_loses_and_duplicates_nothing(
+    db_url: str, tmp_path: Path, ict_dir: Path, ict_model, workers: int
+) -> None:
+    config = write_study_toml(MIXED_STUDY, tmp_path / "study.toml")
+    server = ServerProcess(config, db_url, ict_dir, tmp_path / "server.log", workers).start()
+
+    def call(kind: str, body: dict[str, Any]) -> dict[str, Any]:
+        return post(server.url, f"/api/s/{token}/{kind}", body)
+
+    try:
+        token = post(server.url, "/api/sessions", {"participant_id": "K-3"})["token"]
+        state = post(server.url, f"/api/s/{token}/begin", {"key": new_key()})
+        state = run_to_end(state, call, stop=lambda s: s["stage"] == "trial"
+                           and s["trial"]["task"] == "categorise")  # fmt: skip
+        state = call("categorise", categorise_body(state))  # one answered
+        server.kill()  # 1. between steps: the answer and the next face were committed
+        server.start()
+        assert httpx.get(f"{server.url}/api/s/{token}/state", timeout=30).json() == state
+        body = categorise_body(state)  # 2. killed with an answer in flight: done once
+        kill_with_step_in_flight(server, f"/api/s/{token}/categorise", body)
+        before = httpx.get(f"{server.url}/api/s/{token}/state", timeout=30).json()
+        after = call("categorise", body)
+        moved = before["progress"]["trial"] != state["progress"]["trial"]
+        assert after.get("replayed", False) == moved
+        assert after["progress"]["trial"] == state["progress"]["trial"] + 1
+        assert run_to_end(after, call)["stage"] == "done"
+    finally:
+        server.stop()
+    store = Store(db_url)
+    tables = export_tables(store)
+    responses = tables["responses"]
+    assert len(responses) == 4 and responses["label"].notna().all()  # 2 own + 2 random, once
+    assert not responses.duplicated(["trial"]).any()
+    assert (tables["trials"]["status"] == "done").all()
+    report = replay_session(store, 1, ict_model.rig, ict_model.model_hash, model=ict_model)
+    assert report.ok and report.stimuli == 4, report.mismatches
+    store.dispose()

@@ -14,7 +14,9 @@ Sections (each skipped, with a note saying why, when the data cannot support it)
    settings (generations, population, selections per generation);
 6. prototypes: each participant's mean final face per group, group means, renders and
    heatmaps (the mean face against the target, or against the neutral face);
-7. ratings (studies).
+7. ratings (studies);
+8. categorisation (studies with categorise blocks): accuracy by face source and own- against
+   other-face accuracy over participants (:mod:`emogen.analysis.categorisation`).
 
 Everything lands in ``OUT``: ``index.html`` and ``README.md``, ``figures/*.png``,
 ``tables/*.csv`` and ``analysis.json`` (the headline numbers).
@@ -36,6 +38,7 @@ from emogen.analysis import plots
 from emogen.analysis.analyse_faces import prototypes_section, separability_section
 from emogen.analysis.analyse_noise import noise_section
 from emogen.analysis.analyse_options import AnalysisOptions
+from emogen.analysis.categorisation import categorisation_section
 from emogen.analysis.data import Dataset, load_dataset
 from emogen.analysis.distributions import generation_summary, kl_per_generation
 from emogen.analysis.repeatability import BIN_LABELS, repeatability_bins
@@ -84,6 +87,7 @@ def analyse(
     step("prototypes and renders")
     prototypes_section(ds, report, summary, opts, model)
     _ratings(ds, report, summary)
+    categorisation_section(ds.responses, report, summary)
     step("writing the report")
     if ds.has_weights:
         tidy.write_csv(

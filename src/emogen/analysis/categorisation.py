@@ -13,12 +13,15 @@ per-participant differences, with its 95% CI; scipy.stats.ttest_1samp).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
 from emogen.errors import DataError
+
+if TYPE_CHECKING:
+    from emogen.analysis.report import Report
 
 
 def accuracy_by_source(responses: pd.DataFrame) -> pd.DataFrame:
@@ -66,3 +69,50 @@ def own_advantage(responses: pd.DataFrame, confidence: float = 0.95) -> dict[str
     result.update(ci_low=float(ci.low), ci_high=float(ci.high), t=float(test.statistic),
                   p=float(test.pvalue), confidence=confidence)  # fmt: skip
     return result
+
+
+def categorisation_section(
+    responses: pd.DataFrame | None, report: Report, summary: dict[str, Any]
+) -> None:
+    """The report's section on a study's categorise answers: accuracy by face source, and own-
+    against other-face accuracy with the participant as the unit (nothing without answers)."""
+    if responses is None or responses.empty or "label" not in responses.columns:
+        return
+    answered = responses[responses["label"].notna()]
+    report.heading("Categorisation of faces")
+    if answered.empty:
+        report.paragraph("The study has categorise trials, but none has been answered yet.")
+        summary["categorisation"] = {"n_answers": 0}
+        return
+    known = answered[answered["intended"].notna()]
+    by_source = (
+        known.assign(hit=(known["label"] == known["intended"]).astype(float))
+        .groupby("source")
+        .agg(
+            participants=("participant_id", "nunique"),
+            answers=("hit", "size"),
+            accuracy=("hit", "mean"),
+        )
+        .reset_index()
+    )
+    report.paragraph(
+        f"{len(answered)} answers of {answered['participant_id'].nunique()} participants; "
+        f"{len(answered) - len(known)} of faces made for no named emotion (random faces, or "
+        "file rows without a label) have no right answer and are not in the accuracies. "
+        "Pooled accuracies below describe the answers; the test is over participants."
+    )
+    report.table(by_source, "categorisation_by_source", "Accuracy by face source (pooled)")
+    per = accuracy_by_source(responses)
+    report.table(per, "categorisation_participants", "Accuracy per participant")
+    adv = own_advantage(responses)
+    summary["categorisation"] = {"n_answers": len(answered), "own_advantage": adv}
+    if np.isnan(adv["ci_low"]):
+        report.paragraph(f"Own- against other-face accuracy: {adv['note']}.")
+        return
+    report.paragraph(
+        f"Own- against other-face accuracy ({adv['test']}; the participant is the unit, "
+        f"n = {adv['n_participants']}; fallback faces left out): own "
+        f"{adv['accuracy_own']:.3f}, others' {adv['accuracy_other']:.3f}, difference "
+        f"{adv['difference']:+.3f}, 95% CI [{adv['ci_low']:+.3f}, {adv['ci_high']:+.3f}], "
+        f"t = {adv['t']:.2f}, p = {adv['p']:.3g}."
+    )

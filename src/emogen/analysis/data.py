@@ -58,6 +58,8 @@ class Dataset:
     targets: dict[str, np.ndarray] = field(default_factory=dict)
     configs: dict[str, dict[str, Any]] = field(default_factory=dict)
     ratings: pd.DataFrame | None = None
+    #: a study's categorise answers (the export's ``responses`` table), when it has one
+    responses: pd.DataFrame | None = None
     population_size: int = 10
     selections: tuple[int, ...] = ()
     notes: list[str] = field(default_factory=list)
@@ -157,6 +159,7 @@ def _study_tables(
 
 def load_study(folder: Path) -> Dataset:
     trials, faces, selections, ratings = _study_tables(folder)
+    responses = _read(folder, "responses", required=False)
     notes: list[str] = []
     wcols = [c for c in faces.columns if str(c).startswith("w_")]
     columns = tuple(str(c)[2:] for c in wcols)
@@ -226,6 +229,7 @@ def load_study(folder: Path) -> Dataset:
         bias=pd.DataFrame(bias_rows, columns=["group", "sample", "best_initial_error"]),
         groups=groups,
         ratings=ratings,
+        responses=responses,
         population_size=pop_size,
         selections=tuple(int(s) for s in sel_counts),
         notes=notes,

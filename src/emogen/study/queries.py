@@ -249,29 +249,39 @@ def step_with_key(db: Executor, session_id: int, key: str) -> StepTaken | None:
 
 
 def current_face(
-    db: Session, sess: SessionRow, face_id: int, *, categorise_face: int = 0
+    db: Session,
+    sess: SessionRow,
+    face_id: int,
+    *,
+    categorise_face: int = 0,
+    trial: int | None = None,
+    attempt: int | None = None,
 ) -> tuple[str, str] | None:
     """(weights JSON, identity) of a face in the session's current trial, if there is one (a
-    categorise trial's one face has id ``categorise_face``)."""
-    trial = trial_at(db, sess.id, sess.current_trial)
-    if trial is not None and trial.task == "categorise":
+    categorise trial's one face has id ``categorise_face``); None also when ``trial`` or
+    ``attempt`` is given and is not the current trial's position or attempt."""
+    if trial is not None and trial != sess.current_trial:
+        return None
+    current = trial_at(db, sess.id, sess.current_trial)
+    if current is None or (attempt is not None and current.attempt != attempt):
+        return None
+    if current.task == "categorise":
         stim = db.execute(
             select(StimulusRow.weights, StimulusRow.identity).where(
-                StimulusRow.trial_id == trial.id
+                StimulusRow.trial_id == current.id
             )
         ).first()
         if stim is None or face_id != categorise_face:
             return None
         return str(stim[0]), str(stim[1])
     found = db.execute(
-        select(FaceRow.weights, TrialRow.identity)
+        select(FaceRow.weights)
         .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
-        .join(TrialRow, PopulationRow.trial_id == TrialRow.id)
         .where(
-            TrialRow.session_id == sess.id,
-            TrialRow.position == sess.current_trial,
+            PopulationRow.trial_id == current.id,
             FaceRow.face_id == face_id,
+            *(() if attempt is None else (PopulationRow.attempt == attempt,)),
         )
         .limit(1)
     ).first()
-    return None if found is None else (str(found[0]), str(found[1]))
+    return None if found is None else (str(found[0]), current.identity)

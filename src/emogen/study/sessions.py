@@ -165,13 +165,19 @@ class StudyService:
     def completion(self, participant_id: str) -> Completion:
         return completion(self.ctx.config, participant_id)
 
-    def face_weights(self, token: str, face_id: int) -> tuple[Floats, str]:
-        """(full weights (n_columns,), identity) of a face of the caller's current trial."""
+    def face_weights(
+        self, token: str, face_id: int, trial: int | None = None, attempt: int | None = None
+    ) -> tuple[Floats, str]:
+        """(full weights (n_columns,), identity) of a face of the caller's current trial (and,
+        where given, only if that is trial position ``trial`` in its attempt ``attempt``)."""
         with self.store.read() as db:
             sess = session_by_token(db, token, self.ctx.study_id)
             if sess.stage != "trial":
                 raise SessionNotFound("no faces are shown now")
-            found = current_face(db, sess, face_id, categorise_face=FACE_ID)
+            found = current_face(
+                db, sess, face_id, categorise_face=FACE_ID, trial=trial, attempt=attempt
+            )
         if found is None:
-            raise SessionNotFound(f"face {face_id} is not in this session's current trial")
+            where = "" if trial is None else f" (trial {trial}, attempt {attempt or 0})"
+            raise SessionNotFound(f"face {face_id}{where} is not in this session's current trial")
         return np.asarray(json.loads(found[0]), dtype=np.float64), found[1]

@@ -121,7 +121,9 @@ def _step(
     if trial["task"] == "categorise":
         view = state["categorise"]
         label, intensity, confidence = judge.categorise(
-            np.asarray(view["face"]["weights"]), view["labels"], view["intensity"] or 7
+            np.asarray(view["face"]["weights"]),
+            view["labels"],
+            (view["intensity"] or view["confidence"] or {"points": 7})["points"],
         )
         return service.categorise(
             token, key, trial=where, label=label,

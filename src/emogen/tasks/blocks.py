@@ -86,7 +86,12 @@ class CategoriseBlock(_Block):
     intensity: bool = False
     confidence: bool = False
     points: Annotated[int, Field(ge=2, le=11)] = 7
-    question: str = "Which emotion does this face show?"
+    question: str = Field(default="Which emotion does this face show?", min_length=1)
+    #: The rating questions and the words at their ends (1 and ``points``), as shown.
+    intensity_question: str = Field(default="How intense is the expression?", min_length=1)
+    intensity_labels: tuple[str, str] = ("very weak", "very strong")
+    confidence_question: str = Field(default="How sure are you?", min_length=1)
+    confidence_labels: tuple[str, str] = ("guessing", "certain")
     #: The participant's own finished faces of the evolve blocks before this one (one trial each).
     own: bool = False
     #: Finished faces of other participants of this study (drawn when the block starts, from

@@ -16,16 +16,39 @@ from emogen.tasks.blocks import NONE_LABEL, CategoriseBlock
 from emogen.tasks.protocol import FaceView
 
 
+class RatingScale(TypedDict):
+    """A rating a categorise trial asks: its question, its number of points and the words at
+    its ends (1 and ``points``)."""
+
+    question: str
+    points: int
+    low_label: str
+    high_label: str
+
+
 class CategoriseView(TypedDict):
     """What a categorise trial shows: the face, the question, the labels in their order, and the
-    ratings asked (their number of points; None when not asked)."""
+    ratings asked (None when not asked)."""
 
     question: str
     face: FaceView
     labels: list[str]
     none_option: bool
-    intensity: int | None
-    confidence: int | None
+    intensity: RatingScale | None
+    confidence: RatingScale | None
+
+
+def _scale(
+    block: CategoriseBlock, asked: bool, question: str, ends: tuple[str, str]
+) -> RatingScale | None:
+    if not asked:
+        return None
+    return {
+        "question": question,
+        "points": block.points,
+        "low_label": ends[0],
+        "high_label": ends[1],
+    }
 
 
 def categorise_view(block: CategoriseBlock, face: FaceView, labels: list[str]) -> CategoriseView:
@@ -34,8 +57,12 @@ def categorise_view(block: CategoriseBlock, face: FaceView, labels: list[str]) -
         "face": face,
         "labels": labels,
         "none_option": block.none_option,
-        "intensity": block.points if block.intensity else None,
-        "confidence": block.points if block.confidence else None,
+        "intensity": _scale(
+            block, block.intensity, block.intensity_question, block.intensity_labels
+        ),
+        "confidence": _scale(
+            block, block.confidence, block.confidence_question, block.confidence_labels
+        ),
     }
 
 

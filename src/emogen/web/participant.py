@@ -7,7 +7,7 @@ from typing import Annotated, Any
 from urllib.parse import quote
 
 import orjson
-from fastapi import APIRouter, HTTPException, Path, Request
+from fastapi import APIRouter, HTTPException, Path, Query, Request
 from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse, Response
 
 from emogen.study.errors import StudyError
@@ -211,13 +211,23 @@ def categorise(request: Request, token: Token, body: Categorisation) -> JSONResp
     response_class=Response,
 )
 async def face_png(
-    request: Request, token: Token, face_id: Annotated[int, Path(ge=0, le=2**31 - 1)]
+    request: Request,
+    token: Token,
+    face_id: Annotated[int, Path(ge=0, le=2**31 - 1)],
+    trial: Annotated[int | None, Query(ge=0, le=2**31 - 1)] = None,
+    attempt: Annotated[int | None, Query(ge=0, le=2**31 - 1)] = None,
 ) -> Response:
-    """A face of the current trial rendered on the server (for browsers without WebGL)."""
+    """A face of the current trial rendered on the server (for browsers without WebGL).
+
+    Face ids count from 0 in every trial and attempt, so the page names both (``?trial=&attempt=``):
+    the URL, and so the browser's cached image, is then that trial's face only; a face of a trial
+    or attempt that is not the current one is not found."""
     from starlette.concurrency import run_in_threadpool
 
     service = _service(request)
-    weights, identity = await run_in_threadpool(service.face_weights, token, face_id)
+    weights, identity = await run_in_threadpool(
+        service.face_weights, token, face_id, trial, attempt
+    )
     faces = request.app.state.faces  # made with the study's identities when the app starts
     if faces is None:
         raise HTTPException(503, "the server is shutting down; try again in a moment")

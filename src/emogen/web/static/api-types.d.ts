@@ -282,14 +282,12 @@ export interface components {
         /**
          * CategoriseView
          * @description What a categorise trial shows: the face, the question, the labels in their order, and the
-         *     ratings asked (their number of points; None when not asked).
+         *     ratings asked (None when not asked).
          */
         CategoriseView: {
-            /** Confidence */
-            confidence: number | null;
+            confidence: components["schemas"]["RatingScale"] | null;
             face: components["schemas"]["FaceView"];
-            /** Intensity */
-            intensity: number | null;
+            intensity: components["schemas"]["RatingScale"] | null;
             /** Labels */
             labels: string[];
             /** None Option */
@@ -421,6 +419,21 @@ export interface components {
             trial: number;
             /** Value */
             value: number;
+        };
+        /**
+         * RatingScale
+         * @description A rating a categorise trial asks: its question, its number of points and the words at
+         *     its ends (1 and ``points``).
+         */
+        RatingScale: {
+            /** High Label */
+            high_label: string;
+            /** Low Label */
+            low_label: string;
+            /** Points */
+            points: number;
+            /** Question */
+            question: string;
         };
         /**
          * RatingView

@@ -1,7 +1,8 @@
 // Face display: the 3D viewer (three.js, WebGL) when available, else PNGs rendered by the server.
 //
 //   const display = await createFaceDisplay({ token });
-//   await display.show(slots, faces, identity, onProgress);   // slots: elements; faces: [{id, weights}]
+//   await display.show(slots, faces, identity, onProgress, where);
+//   // slots: elements; faces: [{id, weights}]; where: {trial, attempt} the faces belong to
 //
 // `show` resolves when every face is drawn (or has failed to load), so the caller can start
 // the response-time clock and set the page's ready flag. `onProgress(done, total, unit)` hears
@@ -23,7 +24,10 @@ class PngDisplay {
     this.kind = "png";
   }
 
-  show(slots, faces, _identity, onProgress = () => {}) {
+  show(slots, faces, _identity, onProgress = () => {}, where = { trial: 0, attempt: 0 }) {
+    // Face ids count from 0 in every trial and attempt: the URL names both, so a cached image
+    // of an earlier trial's face with the same id is never shown.
+    const query = `?trial=${where.trial}&attempt=${where.attempt}`;
     let done = 0;
     onProgress(0, faces.length, "faces");
     const loaded = (ok) => {
@@ -48,7 +52,7 @@ class PngDisplay {
           slot.classList.add("failed");
           resolve(false);
         };
-        img.src = `/api/s/${this.token}/faces/${face.id}.png`;
+        img.src = `/api/s/${this.token}/faces/${face.id}.png${query}`;
       }).then(loaded);
     });
     return Promise.all(loads);

@@ -5,7 +5,7 @@
 /** @typedef {import("./api-types").components["schemas"]["SessionState"]} SessionState */
 /** @typedef {import("./api-types").components["schemas"]["Limits"]} Limits */
 /** @typedef {import("./api-types").components["schemas"]["Selection"]} SelectionBody */
-/** @typedef {"instructions" | "trial" | "rating" | "done"} View */
+/** @typedef {"instructions" | "trial" | "rating" | "categorise" | "done"} View */
 
 /**
  * A selection in progress: the best face (elite) and the others, in the order chosen.
@@ -13,13 +13,18 @@
  */
 
 /**
- * The view a state shows (a trial waiting for its rating shows the rating).
+ * The view a state shows: an evolve trial shows its faces ("trial"), or its rating once it waits
+ * for one; a categorise trial shows its face and labels.
  * @param {SessionState} state
  * @returns {View}
  */
 export function viewOf(state) {
   if (state.stage === "trial") {
     if (!state.trial) throw new Error("a state in stage 'trial' must carry its trial");
+    if (state.trial.task === "categorise") {
+      if (!state.categorise) throw new Error("a categorise trial's state must carry its face");
+      return "categorise";
+    }
     return state.trial.status === "rating" ? "rating" : "trial";
   }
   return state.stage;

@@ -1,16 +1,18 @@
-// The participant's session: instructions, trials (ten faces, choose the best and any others),
-// ratings, completion. Every step is sent with an idempotency key and the page state always
-// comes from the server, so a reload or a server restart resumes exactly.
+// The participant's session: consent was given on the landing page; here the instructions,
+// the trials of every block — each drawn by its task's component (tasks/evolve.js: the GA's ten
+// faces and the rating; tasks/categorise.js: one face to label) — and the completion. Every
+// step is sent with an idempotency key and the page state always comes from the server, so a
+// reload or a server restart resumes exactly.
 import { api, ApiError, newKey } from "./api.js";
 import { statusText } from "./connection.js";
 import { createFaceDisplay } from "./faces.js";
 import * as selection from "./selection.js";
+import { createCategorise } from "./tasks/categorise.js";
+import { createEvolve } from "./tasks/evolve.js";
 
 const token = document.body.dataset.token;
 const $ = (id) => document.getElementById(id);
-const views = ["loading", "instructions", "trial", "rating", "done"];
-// The grid also holds the 3D viewer's canvas: always go through the cells.
-const cellsOf = () => Array.from($("grid").querySelectorAll(":scope > .cell"));
+const views = ["loading", "instructions", "trial", "rating", "categorise", "done"];
 
 const ui = {
   state: null,
@@ -19,13 +21,10 @@ const ui = {
   // performance.now() when the answer holding the current faces arrived; the first faces this
   // page shows count from the page's start (0), so their load_ms includes page, model, textures
   receivedAt: /** @type {number | null} */ (null),
-  loadMs: 0, // receivedAt → shownAt, reported with the select / restart step
+  loadMs: 0, // receivedAt → shownAt, reported with the step that answers these faces
   key: null, // idempotency key of the pending step
-  elite: null, // face id
-  others: [], // face ids, in the order chosen
   busy: false,
   loading: false, // faces being fetched or drawn
-  focus: 0,
   link: /** @type {import("./connection.js").Link} */ ({ kind: "online" }),
   linkTimer: 0,
   said: "", // the last message that was not about the connection
@@ -99,7 +98,8 @@ async function drawFaces(slots, faces, identity) {
   $("load-bar").removeAttribute("value");
   const timer = setTimeout(() => ($("load-status").hidden = false), 150);
   try {
-    await ui.display.show(slots, faces, identity, onLoadProgress);
+    const where = { trial: ui.state.progress.trial, attempt: ui.state.trial.attempt };
+    await ui.display.show(slots, faces, identity, onLoadProgress, where);
   } finally {
     clearTimeout(timer);
     ui.loading = false;
@@ -111,209 +111,64 @@ async function drawFaces(slots, faces, identity) {
 function renderProgress(state) {
   const p = state.progress;
   const G = p.generations + 1;
+  const trial = state.stage === "trial" ? state.trial : null;
   $("trial-progress").textContent = `Trial ${p.trial + 1} of ${p.trials}`;
-  $("gen-progress").textContent =
-    state.stage === "trial" && state.trial && state.trial.status === "active"
-      ? `· Generation ${p.generation + 1} of ${G}`
-      : state.stage === "trial"
-        ? "· Rating"
-        : "";
-  const done = state.stage === "done" ? 1 : (p.trial + (p.generation + 1) / (G + 1)) / p.trials;
+  let detail = "";
+  if (trial && trial.task === "evolve") {
+    detail = trial.status === "active" ? `· Generation ${p.generation + 1} of ${G}` : "· Rating";
+  } else if (trial && p.blocks > 1) {
+    detail = `· Part ${p.block + 1} of ${p.blocks}`;
+  }
+  $("gen-progress").textContent = detail;
+  const within = trial && trial.task === "evolve" ? (p.generation + 1) / (G + 1) : 0;
+  const done = state.stage === "done" ? 1 : (p.trial + within) / p.trials;
   $("meter-fill").style.width = `${Math.round(100 * Math.min(1, done))}%`;
-  $("prompt").textContent = state.trial ? state.trial.prompt : document.title;
+  $("prompt").textContent = trial ? trial.prompt : document.title;
 }
 
-// ---- selection (kept in sessionStorage until submitted, so a reload keeps the clicks) ---------
-function selectionKey() {
-  const s = ui.state;
-  return `emogen-sel:${token}:${s.progress.trial}:${s.trial.attempt}:${s.progress.generation}`;
-}
-
-function saveSelection() {
-  try {
-    sessionStorage.setItem(
-      selectionKey(),
-      JSON.stringify({ elite: ui.elite, others: ui.others, key: ui.key }),
-    );
-  } catch {
-    /* storage unavailable: fine */
-  }
-}
-
-function restoreSelection(ids) {
-  ui.key = newKey();
-  let saved = null;
-  try {
-    saved = JSON.parse(sessionStorage.getItem(selectionKey()) || "null");
-  } catch {
-    /* storage unavailable or garbled: start afresh */
-  }
-  ({ elite: ui.elite, others: ui.others } = selection.restoreChoice(saved, ids));
-  if (saved && typeof saved.key === "string") ui.key = saved.key;
-}
-
-function count() {
-  return selection.count(ui);
-}
-
-// A click (toggle) or the star (makeBest): the pure rule decides, the page shows the result.
-function choose(rule, id) {
-  const { choice, refused } = rule({ elite: ui.elite, others: ui.others }, id, ui.state.limits);
-  if (refused) {
-    say(refused);
-    return;
-  }
-  ({ elite: ui.elite, others: ui.others } = choice);
-  say("");
-  saveSelection();
-  paintSelection();
-}
-
-const toggle = (id) => choose(selection.toggle, id);
-const makeBest = (id) => choose(selection.makeBest, id);
-
-function paintSelection() {
-  const { min_selections: min, max_selections: max } = ui.state.limits;
-  for (const cell of cellsOf()) {
-    const id = Number(cell.dataset.face);
-    const face = cell.querySelector(".face");
-    const role = ui.elite === id ? "best" : ui.others.includes(id) ? "ok" : "none";
-    cell.dataset.role = role;
-    face.setAttribute("aria-pressed", role === "none" ? "false" : "true");
-    const n = Number(cell.dataset.pos) + 1;
-    face.setAttribute(
-      "aria-label",
-      `Face ${n}` + (role === "best" ? ": best" : role === "ok" ? ": also acceptable" : ""),
-    );
-    cell.querySelector(".badge").textContent = role === "best" ? "★ Best" : role === "ok" ? "✓" : "";
-  }
-  const n = count();
-  let status;
-  if (ui.busy) status = "Saving your choice…";
-  else if (ui.loading) status = "Loading the faces: please wait until they appear.";
-  else if (ui.elite === null) status = "Click the face that looks most like the emotion: it becomes ★ best.";
-  else if (n < min) status = `Choose at least ${min} faces (${n} chosen).`;
-  else status = `${n} chosen (up to ${max}): ★ best + ${ui.others.length} also acceptable. Then press Next generation.`;
-  $("selection-status").textContent = status;
-  $("next").disabled = ui.busy || ui.loading || !selection.complete(ui, ui.state.limits);
-  $("next").textContent = ui.busy ? "Saving…" : "Next generation";
-}
-
-// ---- the grid --------------------------------------------------------------------------------
-function buildGrid(n) {
-  const grid = $("grid");
-  if (cellsOf().length === n) return;
-  for (const old of cellsOf()) old.remove();
-  const first = grid.firstChild;
-  for (let i = 0; i < n; i++) {
-    const cell = document.createElement("div");
-    cell.className = "cell";
-    cell.dataset.pos = String(i);
-    cell.innerHTML =
-      `<button type="button" class="face" aria-pressed="false">` +
-      `<span class="slot"></span><span class="num" aria-hidden="true">${i + 1}</span>` +
-      `<span class="badge" aria-hidden="true"></span></button>` +
-      `<button type="button" class="star" tabindex="-1" title="Make this the best face" aria-label="Make face ${i + 1} the best">★</button>`;
-    grid.insertBefore(cell, first);
-  }
-}
-
-function cellOf(target) {
-  const cell = target.closest(".cell");
-  return cell && $("grid").contains(cell) ? cell : null;
-}
-
-function onGridClick(event) {
-  const cell = cellOf(event.target);
-  if (!cell || ui.busy || !window.emogenStudy.ready) return;
-  const id = Number(cell.dataset.face);
-  focusCell(Number(cell.dataset.pos));
-  if (event.target.closest(".star")) makeBest(id);
-  else toggle(id);
-}
-
-function columns() {
-  const grid = $("grid");
-  return getComputedStyle(grid).gridTemplateColumns.split(" ").length || 5;
-}
-
-function focusCell(pos) {
-  const cells = cellsOf();
-  pos = Math.max(0, Math.min(cells.length - 1, pos));
-  // Every face is in the Tab order (as the instructions say); the arrows move by rows too.
-  cells[pos].querySelector(".face").focus({ preventScroll: false });
-  ui.focus = pos;
-}
-
-function onGridKey(event) {
-  const cell = cellOf(event.target);
-  if (!cell) return;
-  const pos = Number(cell.dataset.pos);
-  const cols = columns();
-  const moves = { ArrowRight: 1, ArrowLeft: -1, ArrowDown: cols, ArrowUp: -cols };
-  if (event.key in moves) {
-    event.preventDefault();
-    focusCell(pos + moves[event.key]);
-  } else if (event.key === "Home") {
-    event.preventDefault();
-    focusCell(0);
-  } else if (event.key === "End") {
-    event.preventDefault();
-    focusCell(cellsOf().length - 1);
-  } else if ((event.key === "b" || event.key === "B") && window.emogenStudy.ready && !ui.busy) {
-    event.preventDefault();
-    makeBest(Number(cell.dataset.face));
-  }
-}
-
-async function showTrial(state) {
-  const pop = state.population;
-  const ids = pop.faces.map((f) => f.id);
-  buildGrid(ids.length);
-  const cells = cellsOf();
-  cells.forEach((cell, i) => {
-    cell.dataset.face = String(ids[i]);
-  });
-  restoreSelection(ids);
-  show("trial");
-  $("restart").hidden = !state.allow_restart;
-  setReady(false);
-  ui.loading = true;
-  paintSelection();
-  $("grid").setAttribute("aria-busy", "true");
-  await drawFaces(
-    cells.map((c) => c.querySelector(".slot")),
-    pop.faces,
-    state.trial.identity,
-  );
-  $("grid").setAttribute("aria-busy", "false");
-  ui.shownAt = performance.now();
-  ui.loadMs = Math.max(0, Math.round(ui.shownAt - (ui.receivedAt ?? 0)));
-  setReady(true);
-  paintSelection();
-}
-
-// ---- rating ----------------------------------------------------------------------------------
-async function showRating(state) {
-  const r = state.rating;
-  $("rating-question").textContent = r.question;
-  $("rating-low").textContent = `1 = ${r.low_label}`;
-  $("rating-high").textContent = `${r.points} = ${r.high_label}`;
-  const scale = $("rating-scale");
+// ---- what the task components share ---------------------------------------------------------
+/** A rating scale's radio buttons 1 … points, named ``name``. */
+function fillScale(scale, name, points) {
   scale.replaceChildren();
-  for (let v = 1; v <= r.points; v++) {
+  for (let v = 1; v <= points; v++) {
     const label = document.createElement("label");
-    label.innerHTML = `<input type="radio" name="rating" value="${v}"><span>${v}</span>`;
+    const input = document.createElement("input");
+    input.type = "radio";
+    input.name = name;
+    input.value = String(v);
+    const text = document.createElement("span");
+    text.textContent = String(v);
+    label.append(input, text);
     scale.appendChild(label);
   }
-  ui.key = newKey();
-  $("rate").disabled = true;
-  show("rating");
-  setReady(false);
-  if (r.face) await drawFaces([$("rating-slot")], [r.face], state.trial.identity);
-  ui.shownAt = performance.now();
-  setReady(true);
 }
+
+/** The faces of the current screen are drawn: the response-time clock starts now. */
+function facesShown() {
+  ui.shownAt = performance.now();
+  ui.loadMs = Math.max(0, Math.round(ui.shownAt - (ui.receivedAt ?? 0)));
+}
+
+function elapsed() {
+  return Math.max(0, Math.round(performance.now() - ui.shownAt));
+}
+
+const page = {
+  $,
+  ui,
+  token,
+  show,
+  say,
+  setReady,
+  ready: () => window.emogenStudy.ready,
+  stage: () => window.emogenStudy.stage,
+  drawFaces,
+  fillScale,
+  facesShown,
+  elapsed,
+  step: (path, body) => step(path, body),
+};
+const tasks = { evolve: createEvolve(page), categorise: createCategorise(page) };
 
 // ---- completion ------------------------------------------------------------------------------
 function showDone(state) {
@@ -334,7 +189,7 @@ function showDone(state) {
 
 // ---- state machine ---------------------------------------------------------------------------
 async function render(state) {
-  // the first population this page draws counts from the page's start (receivedAt stays 0)
+  // the first faces this page draws count from the page's start (receivedAt stays 0)
   ui.receivedAt = ui.receivedAt === null ? 0 : performance.now();
   ui.state = state;
   renderProgress(state);
@@ -344,16 +199,20 @@ async function render(state) {
     show("instructions");
     setReady(true);
     $("begin").focus();
-  } else if (view === "trial") {
-    await showTrial(state);
-  } else if (view === "rating") {
-    await showRating(state);
-  } else {
+  } else if (view === "done") {
     showDone(state);
+  } else {
+    const task = tasks[state.trial.task];
+    if (!task) throw new Error(`this page cannot show a '${state.trial.task}' trial`);
+    await task.render(state);
   }
 }
 
 const savingLabels = { begin: ["begin", "Starting…"], rating: ["rate", "Saving…"] };
+
+function paintTask() {
+  for (const task of Object.values(tasks)) task.paint();
+}
 
 function paintBusy(path) {
   const [id, label] = savingLabels[path] || [];
@@ -368,7 +227,7 @@ async function step(path, body) {
   if (ui.busy) return; // one step at a time (and the key makes a repeat harmless)
   ui.busy = true;
   setReady(false);
-  paintIfTrial();
+  paintTask();
   paintBusy(path);
   try {
     const state = await call(`/api/s/${token}/${path}`, { method: "POST", body });
@@ -387,7 +246,7 @@ async function step(path, body) {
     } else {
       say(err.message);
       setReady(true);
-      paintIfTrial();
+      paintTask();
     }
   }
 }
@@ -424,50 +283,7 @@ async function copyLink() {
 $("copy-link").addEventListener("click", copyLink);
 $("resume-link").addEventListener("focus", (event) => event.target.select());
 
-function paintIfTrial() {
-  if (ui.state && ui.state.stage === "trial" && ui.state.trial.status === "active") paintSelection();
-}
-
-function elapsed() {
-  return Math.max(0, Math.round(performance.now() - ui.shownAt));
-}
-
-function position() {
-  const s = ui.state;
-  return { trial: s.progress.trial, attempt: s.trial.attempt, generation: s.progress.generation };
-}
-
-$("grid").addEventListener("click", onGridClick);
-$("grid").addEventListener("keydown", onGridKey);
-
 $("begin").addEventListener("click", () => step("begin", { key: newKey() }));
-
-$("next").addEventListener("click", () => {
-  if (ui.elite === null || ui.busy) return;
-  step("select", selection.selectionBody(ui.state, ui, ui.key, elapsed(), ui.loadMs));
-});
-
-$("restart").addEventListener("click", () => {
-  if (ui.busy) return;
-  if (!confirm("Start this face again from a new set of faces?")) return;
-  step("restart", { key: ui.key, ...position(), response_ms: elapsed(), load_ms: ui.loadMs });
-});
-
-$("rating-scale").addEventListener("change", () => {
-  $("rate").disabled = false;
-});
-
-$("rating-form").addEventListener("submit", (event) => {
-  event.preventDefault();
-  const checked = document.querySelector('input[name="rating"]:checked');
-  if (!checked || ui.busy) return;
-  step("rating", {
-    key: ui.key,
-    trial: ui.state.progress.trial,
-    value: Number(checked.value),
-    response_ms: elapsed(),
-  });
-});
 
 async function main() {
   try {
