@@ -9,10 +9,10 @@ generation) and prints the CPU time of every selection, p50/p95/mean:
   and the database writer's) read from ``/proc/<pid>/task/*/schedstat`` (nanoseconds) before
   and after the request. One request at a time, so nothing else runs in the server meanwhile;
 * **in process** — the study service itself (no HTTP), with the process's CPU per selection and
-  where it goes: the GA work and correction done before the write transaction
-  (``prepare``: of which ``correct``, and of that ``collisions`` — the detect–solve loop, ray
-  casting and eq. 5, compiled) and the write transaction on the database writer thread
-  (``writer``).
+  where it goes: the write transaction on the database writer thread (``writer``), of which the
+  selection's own work (``select``: the engine restored from its stored state, told, its next
+  generation made, corrected and stored), of that the correction (``correct``) and of that
+  ``collisions`` — the detect–solve loop, ray casting and eq. 5, compiled.
 
 ``--against SRC`` (another checkout's ``src`` folder, e.g. a ``git worktree`` of main) runs a
 second server with that code beside this one, in the same virtual environment, and alternates
@@ -168,7 +168,7 @@ def in_process(participants: int) -> tuple[np.ndarray, dict[str, float]]:
     acc: dict[str, float] = defaultdict(float)
     phase = {"on": False}
     patches = [
-        (steps.SessionSteps, "prepare_select", "prepare"),
+        (steps.SessionSteps, "select", "select"),
         (apply.Corrector, "correct", "correct"),
         (apply, "solve_collisions", "collisions"),
         (storage._GroupCommit, "_execute", "writer"),

@@ -128,3 +128,34 @@ def test_own_advantage_matches_a_plain_computation() -> None:
     got = own_advantage(table)
     assert got["difference"] == pytest.approx(mean)
     assert (got["ci_low"], got["ci_high"]) == pytest.approx((mean - half, mean + half))
+
+
+def test_emogen_analyse_reads_a_study_of_evolve_and_categorise_blocks(
+    tmp_path: Path, ict_model: Any, ict_dir: Path
+) -> None:
+    """The GA analysis takes the evolve trials (categorise trials have no emotion of their own:
+    they once stopped it, "column 'emotion' row 9: empty") and the report has the
+    categorisation, with the participant as the unit."""
+    import json
+
+    from emogen.study.export import write_export
+
+    tables = run(tmp_path, ict_model, "analysed", n=6)
+    write_export(tables, tmp_path / "export")
+    out = tmp_path / "analysis"
+    result = CliRunner().invoke(app, [
+        "analyse", str(tmp_path / "export"), "--out", str(out), "--model", str(ict_dir),
+        "--noise-runs", "20", "--no-render",
+    ])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    summary = json.loads((out / "analysis.json").read_text())
+    assert set(summary["groups"]) == {"happy", "sad", "angry", "fearful"}
+    reported = summary["categorisation"]["own_advantage"]
+    expected = own_advantage(tables["responses"])
+    assert reported["n_participants"] == expected["n_participants"] == 5
+    assert reported["difference"] == pytest.approx(expected["difference"])
+    assert summary["categorisation"]["n_answers"] == tables["responses"]["label"].notna().sum()
+    html = (out / "index.html").read_text()
+    assert "Categorisation of faces" in html and "the participant is the unit" in html
+    per = pd.read_csv(out / "tables" / "categorisation_participants.csv")
+    assert len(per) == 6

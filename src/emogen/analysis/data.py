@@ -153,6 +153,8 @@ def _study_tables(
             raise ConfigError(f"{folder}/{name}: missing columns {missing} (see docs/study.md)")
     if trials is None or faces is None or selections is None:  # for the type checker
         raise ConfigError(f"{folder}: incomplete study export")
+    if "task" in trials.columns:  # the GA's trials; categorise trials are the responses table
+        trials = trials[trials["task"] == "evolve"].reset_index(drop=True)
     check_study(folder, {"trials": trials, "faces": faces, "selections": selections})
     return trials, faces, selections, ratings
 

@@ -25,7 +25,6 @@ from emogen.model.face_table import read_face_table
 from emogen.study.config import StudyConfig
 from emogen.study.context import StudyContext
 from emogen.study.errors import StepConflict
-from emogen.study.queries import TrialRecord
 from emogen.study.tables import (
     FaceRow,
     PopulationRow,
@@ -307,9 +306,7 @@ class CategoriseTrials:
         row.finished_at = now
 
 
-def categorise_state(
-    db: Session, config: StudyConfig, row: TrialRow | TrialRecord
-) -> CategoriseView | None:
+def categorise_state(db: Session, config: StudyConfig, row: TrialRow) -> CategoriseView | None:
     """What the participant is shown of a categorise trial: its face and the labels in their
     order (never the face's source or the emotion it was made for)."""
     stim = db.scalar(select(StimulusRow).where(StimulusRow.trial_id == row.id))

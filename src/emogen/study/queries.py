@@ -1,14 +1,10 @@
-"""Reads of the study database the steps and the view need; each takes an open session.
-
-The statements a participant's step runs are built once (with bound parameters), not per call:
-building a SQLAlchemy expression costs more CPU than the indexed lookup it describes.
-"""
+"""Reads of the study database the steps and the view need; each takes an open session."""
 
 from __future__ import annotations
 
 import json
 from datetime import datetime
-from typing import NamedTuple, TypeVar
+from typing import NamedTuple
 
 from sqlalchemy import Connection, bindparam, func, select
 from sqlalchemy.orm import Session, selectinload
@@ -23,7 +19,6 @@ from emogen.study.tables import (
     StimulusRow,
     StudyRow,
     TrialRow,
-    core_table,
 )
 
 #: What a query runs on: the ORM session, or (cheaper, for a step's plain rows) its connection.
@@ -45,42 +40,10 @@ _STEP_WITH_KEY = select(StepRow.kind, StepRow.request_hash).where(
 )
 
 
-class SessionRecord(NamedTuple):
-    """A session as a selection or restart reads it: a plain row, no ORM object (loading one
-    costs a step more CPU than its query)."""
-
-    id: int
-    study_id: int
-    participant_id: str
-    stage: str
-    current_trial: int
-    trial_order: str
-
-
-class TrialRecord(NamedTuple):
-    """A trial as a selection or restart reads it (a plain row; a step that changes it answers
-    with a ``_replace``-d copy)."""
-
-    id: int
-    session_id: int
-    position: int
-    status: str
-    emotion: str
-    identity: str
-    attempt: int
-    generation: int
-    engine_state: str | None
-    final_face_id: int | None
-    block: int = 0
-    task: str = "evolve"
-
-
-S = TypeVar("S", SessionRow, SessionRecord)
 NO_SESSION = "no session with this link; check the address"
-_SESSIONS, _TRIALS = core_table(SessionRow), core_table(TrialRow)
 
 
-def _of_study(sess: S | None, study_id: int) -> S:
+def _of_study(sess: SessionRow | None, study_id: int) -> SessionRow:
     """The session found by its token, if it is one of this study's."""
     if sess is None:
         raise SessionNotFound(NO_SESSION)
@@ -117,7 +80,7 @@ def count_sessions(db: Session, study_id: int) -> int:
     return int(n or 0)
 
 
-def n_trials(sess: SessionRow | SessionRecord) -> int:
+def n_trials(sess: SessionRow) -> int:
     """How many trials the session has (its stored trial order)."""
     return len(json.loads(sess.trial_order))
 
@@ -134,7 +97,7 @@ def population_at(
     return db.scalar(query, {"trial_id": trial_id, "attempt": attempt, "generation": generation})
 
 
-def final_face(db: Session, trial: TrialRow | TrialRecord) -> FaceRow | None:
+def final_face(db: Session, trial: TrialRow) -> FaceRow | None:
     """The trial's final face (the last elite) in its current attempt."""
     return db.scalar(
         select(FaceRow)
@@ -161,84 +124,6 @@ class StepTaken(NamedTuple):
 
     kind: str
     request_hash: str
-
-
-class ShownAt(NamedTuple):
-    """A stored population: its id and when it was shown."""
-
-    id: int
-    shown_at: datetime
-
-
-class StepRead(NamedTuple):
-    """What a selection or restart reads first, in one statement: the session (locked), the
-    step already taken under the request's key if any, the session's current trial and the
-    population it shows (None where there is none)."""
-
-    session: SessionRecord
-    taken: StepTaken | None
-    trial: TrialRecord | None
-    shown: ShownAt | None
-
-
-_STEPS, _POPULATIONS = core_table(StepRow), core_table(PopulationRow)
-_STEP_READ = (
-    select(
-        *(_SESSIONS.c[name] for name in SessionRecord._fields),
-        _STEPS.c.kind,
-        _STEPS.c.request_hash,
-        *(_TRIALS.c[name] for name in TrialRecord._fields),
-        _POPULATIONS.c.id,
-        _POPULATIONS.c.shown_at,
-    )
-    .select_from(_SESSIONS)
-    .outerjoin(
-        _STEPS, (_STEPS.c.session_id == _SESSIONS.c.id) & (_STEPS.c["key"] == bindparam("key"))
-    )
-    .outerjoin(
-        _TRIALS,
-        (_TRIALS.c.session_id == _SESSIONS.c.id)
-        & (_TRIALS.c.position == _SESSIONS.c.current_trial),
-    )
-    .outerjoin(
-        _POPULATIONS,
-        (_POPULATIONS.c.trial_id == _TRIALS.c.id)
-        & (_POPULATIONS.c.attempt == _TRIALS.c.attempt)
-        & (_POPULATIONS.c.generation == _TRIALS.c.generation),
-    )
-    .where(_SESSIONS.c.token == bindparam("token"))
-)
-#: PostgreSQL locks the session's row first, by itself: a statement that waited for a row lock
-#: sees the locked row as the lock's holder committed it but the rows it joins as they were
-#: when the statement began (READ COMMITTED), so a joined read that waited would miss the step
-#: and the generation the holder stored. (SQLite: the transaction holds the write lock from its
-#: BEGIN IMMEDIATE, before anything is read.)
-_LOCK_SESSION = (
-    select(_SESSIONS.c.id).where(_SESSIONS.c.token == bindparam("token")).with_for_update()
-)
-_N_SESSION, _N_TRIAL = len(SessionRecord._fields), len(TrialRecord._fields)
-
-
-def step_read(conn: Connection, token: str, study_id: int, key: str) -> StepRead:
-    """:class:`StepRead` of the session with this token in this study: one statement (indexed
-    joins; on PostgreSQL after the session's row lock) where reading the session, the key's
-    step, the trial and its population one by one would take four."""
-    if conn.dialect.name != "sqlite":
-        conn.execute(_LOCK_SESSION, {"token": token})
-    row = conn.execute(_STEP_READ, {"token": token, "key": key}).first()
-    if row is None:
-        raise SessionNotFound(NO_SESSION)
-    sess = _of_study(SessionRecord(*row[:_N_SESSION]), study_id)
-    at = _N_SESSION + 2
-    kind, digest = row[_N_SESSION], row[_N_SESSION + 1]
-    trial_id = row[at]
-    pop_id, shown_at = row[at + _N_TRIAL], row[at + _N_TRIAL + 1]
-    return StepRead(
-        session=sess,
-        taken=None if kind is None else StepTaken(kind, digest),
-        trial=None if trial_id is None else TrialRecord(*row[at : at + _N_TRIAL]),
-        shown=None if pop_id is None else ShownAt(pop_id, shown_at),
-    )
 
 
 def step_with_key(db: Executor, session_id: int, key: str) -> StepTaken | None:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from sqlalchemy import select
-from sqlalchemy.orm import selectinload
+from sqlalchemy.orm import Session, selectinload
 
 from emogen.errors import EmoGenError
 from emogen.ga.engine import Engine, stream_of_state
@@ -164,50 +164,57 @@ def replay_session(
                 report.stimuli += n
                 report.mismatches += problems
                 continue
-            pops = db.scalars(
-                select(PopulationRow)
-                .where(PopulationRow.trial_id == trial.id)
-                .order_by(PopulationRow.attempt, PopulationRow.generation)
-                .options(selectinload(PopulationRow.faces))
-            ).all()
-            if not pops:
-                continue
-            sels = {
-                s.population_id: s
-                for s in db.scalars(select(SelectionRow).where(SelectionRow.trial_id == trial.id))
-            }
-            restarts = {
-                r.population_id
-                for r in db.scalars(select(RestartRow).where(RestartRow.trial_id == trial.id))
-            }
-            try:
-                engine = Engine(
-                    config.ga_for(trial.identity),
-                    rig,
-                    trial.seed,
-                    corrector=correctors(
-                        trial.identity, collision_solver_of_state(trial.engine_state)
-                    ),
-                    stream=stream_of_state(trial.engine_state),  # as it was drawn
-                )
-                for p in pops:
-                    where = f"trial {trial.position + 1} attempt {p.attempt + 1} generation {p.generation}"
-                    if (engine.trial, engine.generation) != (p.attempt, p.generation):
-                        report.mismatches.append(
-                            f"{where}: replay is at attempt {engine.trial + 1} generation "
-                            f"{engine.generation}"
-                        )
-                        break
-                    n, problems = compare_population(where, StoredFaces.of_row(p), engine)
-                    report.populations += 1
-                    report.faces += n
-                    report.mismatches += problems
-                    if p.id in sels:
-                        s = sels[p.id]
-                        engine.tell(s.elite_face_id, json.loads(s.other_face_ids))
-                    elif p.id in restarts:
-                        engine.reset()
-                    # else: the population still shown; nothing follows it
-            except EmoGenError as exc:
-                report.mismatches.append(f"trial {trial.position + 1}: replay failed: {exc}")
+            _replay_trial(db, trial, config, rig, correctors, report)
     return report
+
+
+def _replay_trial(
+    db: Session, trial: TrialRow, config: StudyConfig, rig: Rig, correctors: StudyCorrectors,
+    report: ReplayReport,
+) -> None:  # fmt: skip
+    """Replay an evolve trial's populations (attempt by attempt, with its selections and
+    restarts) into ``report``."""
+    pops = db.scalars(
+        select(PopulationRow)
+        .where(PopulationRow.trial_id == trial.id)
+        .order_by(PopulationRow.attempt, PopulationRow.generation)
+        .options(selectinload(PopulationRow.faces))
+    ).all()
+    if not pops:
+        return
+    sels = {
+        s.population_id: s
+        for s in db.scalars(select(SelectionRow).where(SelectionRow.trial_id == trial.id))
+    }
+    restarts = {
+        r.population_id
+        for r in db.scalars(select(RestartRow).where(RestartRow.trial_id == trial.id))
+    }
+    try:
+        engine = Engine(
+            config.ga_for(trial.identity),
+            rig,
+            trial.seed,
+            corrector=correctors(trial.identity, collision_solver_of_state(trial.engine_state)),
+            stream=stream_of_state(trial.engine_state),  # as it was drawn
+        )
+        for p in pops:
+            where = f"trial {trial.position + 1} attempt {p.attempt + 1} generation {p.generation}"
+            if (engine.trial, engine.generation) != (p.attempt, p.generation):
+                report.mismatches.append(
+                    f"{where}: replay is at attempt {engine.trial + 1} generation "
+                    f"{engine.generation}"
+                )
+                break
+            n, problems = compare_population(where, StoredFaces.of_row(p), engine)
+            report.populations += 1
+            report.faces += n
+            report.mismatches += problems
+            if p.id in sels:
+                s = sels[p.id]
+                engine.tell(s.elite_face_id, json.loads(s.other_face_ids))
+            elif p.id in restarts:
+                engine.reset()
+            # else: the population still shown; nothing follows it
+    except EmoGenError as exc:
+        report.mismatches.append(f"trial {trial.position + 1}: replay failed: {exc}")

@@ -107,13 +107,11 @@ class StudyService:
         ``load_ms``: the page's time to load and draw the faces (model, textures), if it says."""
         payload: Payload = {"trial": trial, "attempt": attempt, "generation": generation, "elite": elite,
                    "others": others, "response_ms": response_ms, **_load(load_ms)}  # fmt: skip
-        prepared = self.steps.prepare_select(token, trial=trial, attempt=attempt,
-            generation=generation, elite=elite, others=others)  # fmt: skip
-        return self.steps.run_plain(
+        return self.steps.run(
             token, "select", key, payload,
-            lambda conn, read: self.steps.select(conn, read, key=key, trial=trial, attempt=attempt,
+            lambda db, sess: self.steps.select(db, sess, key=key, trial=trial, attempt=attempt,
                 generation=generation, elite=elite, others=others,
-                timing=Timing(response_ms, load_ms), prepared=prepared),
+                timing=Timing(response_ms, load_ms)),
         )  # fmt: skip
 
     def restart(
@@ -123,9 +121,9 @@ class StudyService:
         """'Start again': a new attempt of the trial at generation 0 (reinitialised or kept)."""
         payload = {"trial": trial, "attempt": attempt, "generation": generation,
                    "response_ms": response_ms, **_load(load_ms)}  # fmt: skip
-        return self.steps.run_plain(
+        return self.steps.run(
             token, "restart", key, payload,
-            lambda conn, read: self.steps.restart(conn, read, key=key, trial=trial, attempt=attempt,
+            lambda db, sess: self.steps.restart(db, sess, key=key, trial=trial, attempt=attempt,
                 generation=generation, timing=Timing(response_ms, load_ms)),
         )  # fmt: skip
 

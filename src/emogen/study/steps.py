@@ -17,7 +17,6 @@ import json
 from collections.abc import Callable, Mapping
 from dataclasses import replace
 
-from sqlalchemy import Connection
 from sqlalchemy.orm import Session
 from sqlalchemy.orm.attributes import set_committed_value
 
@@ -25,24 +24,21 @@ from emogen.errors import SelectionError
 from emogen.study.categorise import CategoriseTrials
 from emogen.study.context import StudyContext
 from emogen.study.errors import SessionNotFound, StepConflict
-from emogen.study.prepared import Prepared, prepare_select
 from emogen.study.queries import (
-    Executor,
-    SessionRecord,
-    ShownAt,
-    StepRead,
     StepTaken,
-    TrialRecord,
     last_selection_time,
     n_trials,
+    population_at,
     session_by_token,
-    step_read,
     step_with_key,
     trial_at,
 )
 from emogen.study.storage import Store
 from emogen.study.tables import (
+    PopulationRow,
     RatingRow,
+    RestartRow,
+    SelectionRow,
     SessionRow,
     TrialRow,
     dumps,
@@ -50,22 +46,13 @@ from emogen.study.tables import (
 )
 from emogen.study.trials import TrialEngines, store_population
 from emogen.study.view import SessionState, ShownPopulation, session_state
-from emogen.study.writes import (
-    INSERT_RESTART,
-    INSERT_SELECTION,
-    Timing,
-    advance_trial,
-    elapsed_ms,
-    record_step,
-    server_ms,
-)
+from emogen.study.writes import Timing, elapsed_ms, record_step, server_ms
+from emogen.tasks.protocol import TaskRunner
 
 #: What a step's request held (hashed to tell a replayed key from a reused one).
 Payload = Mapping[str, int | float | str | list[int] | None]
 #: A step's work on the locked session; returns the population it has just shown, if any.
 Action = Callable[[Session, SessionRow], ShownPopulation | None]
-#: The same on plain rows (:meth:`SessionSteps.run_plain`): also the trial as the step left it.
-PlainAction = Callable[[Connection, StepRead], tuple[ShownPopulation | None, TrialRecord]]
 
 
 def request_hash(kind: str, payload: Payload) -> str:
@@ -83,6 +70,8 @@ class SessionSteps:
         self.store = store
         self.engines = engines
         self.categorise_trials = categorise
+        #: each task's runner: what starts its trials (a task adds its runner here)
+        self.runners: dict[str, TaskRunner] = {r.task: r for r in (engines, categorise)}
 
     def run(
         self, token: str, kind: str, key: str, payload: Payload, action: Action
@@ -92,51 +81,27 @@ class SessionSteps:
 
         def work(db: Session) -> SessionState:
             sess = session_by_token(db, token, self.ctx.study_id, lock=True)
-            replayed = self._replayed(db, db, sess, kind, key, digest)
+            replayed = self._replayed(db, sess, kind, key, digest)
             if replayed is not None:
                 return replayed
             shown = action(db, sess)
-            db.flush()  # what the step changed through the ORM
-            self.engines.remember(token, None if shown is None else shown.trial)
+            db.flush()  # what the step changed
             set_committed_value(sess, "updated_at", record_step(db, sess.id, kind, key, digest))
             return session_state(db, self.ctx.config, sess, shown)
 
         return self.store.transact(work)
 
-    def run_plain(
-        self, token: str, kind: str, key: str, payload: Payload, action: PlainAction
-    ) -> SessionState:
-        """:meth:`run` for the steps of a shown generation (select, restart): the session, the
-        key's step, the trial and its shown population read by one statement, and written by
-        plain statements on the transaction's connection — the ORM's loading and unit of work
-        cost a selection more CPU than its statements."""
-        digest = request_hash(kind, payload)
-
-        def work(db: Session) -> SessionState:
-            conn = db.connection()
-            read = step_read(conn, token, self.ctx.study_id, key)
-            if read.taken is not None:
-                return self._replay(db, read.session, read.taken, kind, key, digest)
-            shown, trial = action(conn, read)
-            record_step(conn, read.session.id, kind, key, digest)
-            self.engines.remember(token, trial)
-            return session_state(db, self.ctx.config, read.session, shown, trial)
-
-        return self.store.transact(work)
-
     def _replayed(
-        self, db: Session, ex: Executor, sess: SessionRow | SessionRecord, kind: str, key: str,
-        digest: str,
-    ) -> SessionState | None:  # fmt: skip
+        self, db: Session, sess: SessionRow, kind: str, key: str, digest: str
+    ) -> SessionState | None:
         """The current state if this key's step was already taken (a conflict if the key was
         used for another request); None for a new step."""
-        done = step_with_key(ex, sess.id, key)
+        done = step_with_key(db, sess.id, key)
         return None if done is None else self._replay(db, sess, done, kind, key, digest)
 
     def _replay(
-        self, db: Session, sess: SessionRow | SessionRecord, done: StepTaken, kind: str, key: str,
-        digest: str,
-    ) -> SessionState:  # fmt: skip
+        self, db: Session, sess: SessionRow, done: StepTaken, kind: str, key: str, digest: str
+    ) -> SessionState:
         """The answer to a key already used: the current state (the same request again), or a
         conflict (another request under it)."""
         if done.kind != kind or done.request_hash != digest:
@@ -163,10 +128,7 @@ class SessionSteps:
         row = trial_at(db, sess.id, position)
         if row is None:  # pragma: no cover - created with the session
             raise SessionNotFound(f"trial {position + 1} does not exist")
-        if row.task == "categorise":
-            self.categorise_trials.start(db, sess, row)
-            return None
-        return self.engines.start(db, sess, row)
+        return self.runners[row.task].start(db, sess, row)  # type: ignore[no-any-return]
 
     def next_trial(self, db: Session, sess: SessionRow, trial: int) -> ShownPopulation | None:
         """The trial at ``trial`` is finished: the next one starts, or the session ends."""
@@ -177,87 +139,63 @@ class SessionSteps:
         sess.completed_at = utcnow()
         return None
 
-    def prepare_select(
-        self, token: str, *, trial: int, attempt: int, generation: int, elite: int,
-        others: list[int],
-    ) -> Prepared | None:  # fmt: skip
-        """A selection's GA work done before its write transaction
-        (:func:`emogen.study.prepared.prepare_select`)."""
-        return prepare_select(self.engines, self.store, self.ctx.study_id, token, trial=trial,
-                              attempt=attempt, generation=generation, elite=elite,
-                              others=others)  # fmt: skip
-
     def select(
-        self, conn: Connection, read: StepRead, *, key: str, trial: int, attempt: int,
+        self, db: Session, sess: SessionRow, *, key: str, trial: int, attempt: int,
         generation: int, elite: int, others: list[int], timing: Timing,
-        prepared: Prepared | None = None,
-    ) -> tuple[ShownPopulation | None, TrialRecord]:  # fmt: skip
-        """The participant's selection of the shown generation; the next one is stored
-        (``prepared``: the GA's work done beforehand, see :meth:`prepare_select`)."""
-        row, pop = self._shown(read, trial, attempt, generation)
-        next_state = None
-        if prepared is not None and prepared.engine_state == row.engine_state:
-            engine = prepared.engine  # computed from this very state, outside the lock
-            next_state = prepared.next_state
-        else:
-            engine = self.engines.restore(row)
-            engine.tell(elite, others)
+    ) -> ShownPopulation | None:  # fmt: skip
+        """The participant's selection of the shown generation; the next one is stored (or
+        the trial waits for its rating)."""
+        row, pop = self._shown(db, sess, trial, attempt, generation)
+        engine = self.engines.restore(row)
+        engine.tell(elite, others)
         now = utcnow()
-        conn.execute(
-            INSERT_SELECTION,
-            {
-                "population_id": pop.id,
-                "trial_id": row.id,
-                "elite_face_id": elite,
-                "other_face_ids": dumps(list(others)),
-                "submitted_at": now,
-                "server_response_ms": server_ms(now, pop.shown_at, timing.load_ms),
-                "client_response_ms": timing.response_ms,
-                "load_ms": timing.load_ms,
-                "step_key": key,
-            },
+        db.add(
+            SelectionRow(
+                population_id=pop.id,
+                trial_id=row.id,
+                elite_face_id=elite,
+                other_face_ids=dumps(list(others)),
+                submitted_at=now,
+                server_response_ms=server_ms(now, pop.shown_at, timing.load_ms),
+                client_response_ms=timing.response_ms,
+                load_ms=timing.load_ms,
+                step_key=key,
+            )
         )
-        state = next_state if next_state is not None else engine.to_json()
+        row.generation = engine.generation
+        row.engine_state = engine.to_json()
         if engine.done:
-            final = int(engine.result.ids[0])
-            row = advance_trial(conn, row, status="rating", final_face_id=final,
-                                 generation=engine.generation, engine_state=state)  # fmt: skip
-            return None, row
-        shown = store_population(conn, row, engine.ask())
-        row = advance_trial(conn, row, generation=engine.generation, engine_state=state)
-        self.engines.keep(state, row.identity, engine)
-        return replace(shown, trial=row), row
+            row.status = "rating"
+            row.final_face_id = int(engine.result.ids[0])
+            return None
+        return replace(store_population(db, row, engine.ask()), trial=row)
 
     def restart(
-        self, conn: Connection, read: StepRead, *, key: str, trial: int, attempt: int,
+        self, db: Session, sess: SessionRow, *, key: str, trial: int, attempt: int,
         generation: int, timing: Timing,
-    ) -> tuple[ShownPopulation, TrialRecord]:  # fmt: skip
+    ) -> ShownPopulation:  # fmt: skip
         """'Start again': a new attempt of the trial at generation 0 (reinitialised or kept)."""
         if not self.ctx.config.allow_restart:
             raise StepConflict("this study does not allow starting a trial again")
-        row, pop = self._shown(read, trial, attempt, generation)
+        row, pop = self._shown(db, sess, trial, attempt, generation)
         engine = self.engines.restore(row)
         now = utcnow()
-        conn.execute(
-            INSERT_RESTART,
-            {
-                "population_id": pop.id,
-                "trial_id": row.id,
-                "submitted_at": now,
-                "server_response_ms": server_ms(now, pop.shown_at, timing.load_ms),
-                "client_response_ms": timing.response_ms,
-                "load_ms": timing.load_ms,
-                "step_key": key,
-            },
+        db.add(
+            RestartRow(
+                population_id=pop.id,
+                trial_id=row.id,
+                submitted_at=now,
+                server_response_ms=server_ms(now, pop.shown_at, timing.load_ms),
+                client_response_ms=timing.response_ms,
+                load_ms=timing.load_ms,
+                step_key=key,
+            )
         )
-        population = engine.reset()
-        shown = store_population(conn, row, population)
-        state = engine.to_json()
-        row = advance_trial(
-            conn, row, attempt=engine.trial, generation=engine.generation, engine_state=state
-        )
-        self.engines.keep(state, row.identity, engine)
-        return replace(shown, trial=row), row
+        shown = store_population(db, row, engine.reset())
+        row.attempt = engine.trial
+        row.generation = engine.generation
+        row.engine_state = engine.to_json()
+        return replace(shown, trial=row)
 
     def rate(
         self, db: Session, sess: SessionRow, *, key: str, trial: int, value: int,
@@ -305,7 +243,7 @@ class SessionSteps:
 
     # ---- guards ----------------------------------------------------------------------------
     @staticmethod
-    def _check_trial(sess: SessionRow | SessionRecord, trial: int) -> None:
+    def _check_trial(sess: SessionRow, trial: int) -> None:
         if sess.stage != "trial":
             raise StepConflict(
                 f"the session is not in a trial (stage '{sess.stage}'); reload the page"
@@ -325,15 +263,11 @@ class SessionSteps:
         return row
 
     def _shown(
-        self, read: StepRead, trial: int, attempt: int, generation: int
-    ) -> tuple[TrialRecord, ShownAt]:
-        """The trial and population a selection or restart is for, as :func:`step_read` found
-        them (a conflict if the request is not for what the session shows now)."""
-        self._check_trial(read.session, trial)
-        row = read.trial  # the session's current trial: the request's, checked above
-        if row is None:  # pragma: no cover - created with the session
-            raise SessionNotFound(f"trial {trial + 1} does not exist")
-        _check_task(row, trial, "evolve")
+        self, db: Session, sess: SessionRow, trial: int, attempt: int, generation: int
+    ) -> tuple[TrialRow, PopulationRow]:
+        """The trial and population a selection or restart is for (a conflict if the request is
+        not for what the session shows now)."""
+        row = self._current_trial(db, sess, trial, "evolve")
         if row.status != "active":
             raise StepConflict(
                 f"trial {trial + 1} has no generation to select from (it is waiting for the "
@@ -345,7 +279,7 @@ class SessionSteps:
                 f"{trial + 1}, but generation {row.generation} (attempt {row.attempt + 1}) is "
                 "shown now; reload the page"
             )
-        pop = read.shown  # the trial's population at its attempt and generation: the request's
+        pop = population_at(db, row.id, row.attempt, row.generation)
         if pop is None:  # pragma: no cover - stored with the engine state
             raise StepConflict("the shown generation was not stored; reload the page")
         return row, pop
@@ -354,7 +288,7 @@ class SessionSteps:
 _WHAT = {"evolve": "makes a face (selections)", "categorise": "asks for a label"}
 
 
-def _check_task(row: TrialRow | TrialRecord, trial: int, task: str) -> None:
+def _check_task(row: TrialRow, trial: int, task: str) -> None:
     """A step of ``task`` must be for a trial of that task."""
     if row.task != task:
         article = "an" if row.task[:1] in "aeiou" else "a"

@@ -8,6 +8,7 @@ population passes it in (:class:`ShownPopulation`) so it is not read back from t
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal, NotRequired
 from urllib.parse import quote
@@ -18,8 +19,6 @@ from typing_extensions import TypedDict
 from emogen.study.categorise import categorise_state
 from emogen.study.config import StudyConfig
 from emogen.study.queries import (
-    SessionRecord,
-    TrialRecord,
     final_face,
     n_trials,
     population_at,
@@ -120,7 +119,7 @@ class ShownPopulation:
     generation: int
     faces: list[FaceView]
     #: the trial's row, as the step left it (the view then reads it without a query)
-    trial: TrialRow | TrialRecord | None = field(default=None, compare=False)
+    trial: TrialRow | None = field(default=None, compare=False)
 
 
 def completion(config: StudyConfig, participant_id: str) -> Completion:
@@ -138,9 +137,7 @@ def _face(face_id: int, weights_json: str) -> FaceView:
     return {"id": face_id, "weights": json.loads(weights_json)}
 
 
-def _population(
-    db: Session, row: TrialRow | TrialRecord, shown: ShownPopulation | None
-) -> PopulationView | None:
+def _population(db: Session, row: TrialRow, shown: ShownPopulation | None) -> PopulationView | None:
     if shown is not None and (shown.trial_id, shown.attempt, shown.generation) == (
         row.id,
         row.attempt,
@@ -154,7 +151,7 @@ def _population(
     return {"attempt": pop.attempt, "generation": pop.generation, "faces": faces}
 
 
-def _rating(db: Session, config: StudyConfig, row: TrialRow | TrialRecord) -> RatingView:
+def _rating(db: Session, config: StudyConfig, row: TrialRow) -> RatingView:
     face = final_face(db, row)
     r = config.rating
     return {
@@ -168,10 +165,10 @@ def _rating(db: Session, config: StudyConfig, row: TrialRow | TrialRecord) -> Ra
 
 def _current_trial(
     db: Session,
-    sess: SessionRow | SessionRecord,
+    sess: SessionRow,
     shown: ShownPopulation | None,
-    trial: TrialRow | TrialRecord | None,
-) -> TrialRow | TrialRecord | None:
+    trial: TrialRow | None,
+) -> TrialRow | None:
     """The session's current trial: the one a step has just left (``trial``) or shown a
     population of (no query), or the one read."""
     for row in (trial, None if shown is None else shown.trial):
@@ -183,9 +180,9 @@ def _current_trial(
 def session_state(
     db: Session,
     config: StudyConfig,
-    sess: SessionRow | SessionRecord,
+    sess: SessionRow,
     shown: ShownPopulation | None = None,
-    trial: TrialRow | TrialRecord | None = None,
+    trial: TrialRow | None = None,
 ) -> SessionState:
     """The session as the participant sees it now (``shown``: a population just stored;
     ``trial``: the current trial's row as a step has just left it)."""
@@ -227,27 +224,50 @@ def session_state(
     if row is None:
         return state
     status: TrialStatus = row.status  # type: ignore[assignment]  # a stored TrialStatus
-    evolve = row.task == "evolve"
     state["progress"]["block"] = row.block
-    trial_view: TrialView = {
+    state["trial"] = {
         "position": row.position,
         "block": row.block,
         "task": row.task,
-        "emotion": row.emotion if evolve else "",
-        "prompt": config.prompt_for(row.emotion) if evolve else "",
+        "emotion": "",
+        "prompt": "",
         "identity": row.identity,
         "attempt": row.attempt,
         "status": status,
     }
-    state["trial"] = trial_view
     state["progress"]["generation"] = row.generation
-    if not evolve:
-        view = categorise_state(db, config, row)
-        state["categorise"] = view
-        if view is not None:
-            trial_view["prompt"] = view["question"]
-    elif row.status == "active":
+    TRIAL_VIEWS[row.task](db, config, row, shown, state)
+    return state
+
+
+# ---- each task's part of the state (a task adds its function here) ------------------------
+def _evolve_view(
+    db: Session, config: StudyConfig, row: TrialRow, shown: ShownPopulation | None,
+    state: SessionState,
+) -> None:  # fmt: skip
+    """An evolve trial: its emotion and prompt, the generation shown or the rating asked."""
+    trial = state["trial"]
+    if trial is not None:
+        trial["emotion"], trial["prompt"] = row.emotion, config.prompt_for(row.emotion)
+    if row.status == "active":
         state["population"] = _population(db, row, shown)
     elif row.status == "rating":
         state["rating"] = _rating(db, config, row)
-    return state
+
+
+def _categorise_view(
+    db: Session, config: StudyConfig, row: TrialRow, shown: ShownPopulation | None,
+    state: SessionState,
+) -> None:  # fmt: skip
+    """A categorise trial: its face and labels (the participant is not told the emotion the
+    face was made for); its question is the prompt."""
+    view = categorise_state(db, config, row)
+    state["categorise"] = view
+    if view is not None and state["trial"] is not None:
+        state["trial"]["prompt"] = view["question"]
+
+
+#: The participant's view of a trial, by task (:data:`emogen.tasks.protocol.TASKS`).
+TRIAL_VIEWS: dict[
+    str, Callable[[Session, StudyConfig, TrialRow, ShownPopulation | None, SessionState], None]
+] = {"evolve": _evolve_view, "categorise": _categorise_view}

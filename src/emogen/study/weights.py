@@ -5,8 +5,6 @@ Also the per-identity correctors a study's engines use (:class:`StudyCorrectors`
 
 from __future__ import annotations
 
-import threading
-from collections import OrderedDict
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -58,54 +56,10 @@ def weight_names(population: Population, rig: Rig) -> list[str]:
     return list(rig.shape_names) + ([] if extra is None else extra[0])
 
 
-class RememberingCorrector:
-    """A corrector that remembers the correctives of the last ``size`` faces it corrected.
-
-    A face's correction depends on that face alone, bit for bit (not on its batch: see
-    docs/study.md, ``correct``), so a face shown again — the elite a participant selected is
-    slot 1 of the next generation, a ``kept`` face too — takes its remembered correctives
-    instead of being corrected again. Safe to share between threads.
-    """
-
-    def __init__(self, corrector: Corrector, size: int = 4096) -> None:
-        self.corrector = corrector
-        #: the collision solver of the corrector it wraps (recorded in engine states)
-        self.solver: int | None = getattr(corrector, "solver", None)
-        self.size = size
-        self._rows: OrderedDict[bytes, Floats] = OrderedDict()
-        self._names: tuple[str, ...] | None = None
-        self._lock = threading.Lock()
-
-    def __call__(self, weights: np.ndarray) -> tuple[tuple[str, ...], Floats]:
-        w = np.ascontiguousarray(weights, dtype=np.float64)
-        keys = [row.tobytes() for row in w]
-        with self._lock:
-            known = {i: self._rows[k] for i, k in enumerate(keys) if k in self._rows}
-            for i in known:
-                self._rows.move_to_end(keys[i])
-            names = self._names
-        todo = [i for i in range(len(w)) if i not in known]
-        if names is None or todo:
-            names, values = self.corrector(w[todo])
-            names = tuple(names)
-            values = np.asarray(values, dtype=np.float64).reshape(len(todo), len(names))
-            with self._lock:
-                self._names = names
-                for j, i in enumerate(todo):
-                    known[i] = self._rows[keys[i]] = values[j].copy()
-                while len(self._rows) > self.size:
-                    self._rows.popitem(last=False)
-        out = np.empty((len(w), len(names)))
-        for i, row in known.items():
-            out[i] = row
-        return names, out
-
-
 class StudyCorrectors:
     """One corrector per identity shape and collision solver (``correctives_of`` the model with
     the shape of the study's identity of that name; identities that share a shape share it),
-    made on first use and remembering the faces it corrected (:class:`RememberingCorrector`);
-    none when the study does not correct faces. ``solver``: the eq. 5 block solver a trial was
+    made on first use; none when the study does not correct faces. ``solver``: the eq. 5 block solver a trial was
     recorded with (:func:`emogen.ga.state.collision_solver_of_state`; default the current)."""
 
     def __init__(self, config: StudyConfig, model: FaceModel | None) -> None:
@@ -132,7 +86,5 @@ class StudyCorrectors:
                 self._models[shape] = (
                     self.model if shape == "generic" else self.model.with_identity(shape)
                 )
-            self._made[(shape, solver)] = RememberingCorrector(
-                correctives_of(self._models[shape], solver)
-            )
+            self._made[(shape, solver)] = correctives_of(self._models[shape], solver)
         return self._made[(shape, solver)]

@@ -33,14 +33,13 @@ TASKS: tuple[str, ...] = tuple(COMMANDS)
 
 
 class TaskRunner(Protocol):
-    """A task as the study layer runs it over a session's trials (one runner per task)."""
+    """A task as the study layer runs it over a session's trials (one runner per task,
+    registered in ``SessionSteps.runners``; its part of the participant's state is registered in
+    ``emogen.study.view.TRIAL_VIEWS``; its step commands in :data:`COMMANDS`)."""
 
     #: the task's name, as in ``[[blocks]] task = …`` and ``trials.task``
     task: str
 
     def start(self, db: Any, sess: Any, row: Any) -> Any:
         """Start the session's trial ``row``: store what it shows (before it is shown); return
-        what the view needs of it now, if anything."""
-
-    def view(self, db: Any, sess: Any, row: Any, shown: Any) -> dict[str, Any]:
-        """The trial's part of the participant's state (keys of ``SessionState``)."""
+        the population it has just shown, if any (the view then need not read it back)."""
