@@ -3,7 +3,9 @@ and the tables use."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -17,7 +19,11 @@ class Finding:
     **inconclusive** (the evidence does not decide), by the named ``rule``
     (:data:`~emogen.analysis.replication.verdicts.RULES`). ``value``: the effect size the
     verdict rests on (``value_label`` says what it is), combined over seeds.
-    ``paper_finding=False``: our own proposal, reported apart from the tally."""
+    ``paper_finding=False``: our own proposal, reported apart from the tally.
+    ``evidence``: per-run data and their tests (one per part of the claim): the verdict over
+    seeds is decided on the runs of all seeds pooled, the parts' verdicts joined by ``parts``
+    (default :func:`~emogen.analysis.replication.verdicts.parts_verdict`); ``interval``: the
+    decisions in words."""
 
     section: str
     claim: str
@@ -29,6 +35,9 @@ class Finding:
     value: float | None = None
     value_label: str = ""
     paper_finding: bool = True
+    evidence: tuple[Any, ...] = field(default=(), compare=False)  # intervals.Evidence
+    parts: Callable[[list[str]], str] | None = field(default=None, compare=False)
+    interval: str = ""
 
     def __post_init__(self) -> None:
         if self.verdict not in VERDICTS:

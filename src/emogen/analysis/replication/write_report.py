@@ -121,9 +121,12 @@ def write_closing(
     report.paragraph(
         f"{len(paper)} findings of the paper, each judged on {k} independent seed"
         f"{'s' if k > 1 else ''} ({provenance['seeds']}) by its written rule: {tally}. A "
-        "finding whose verdict differs between seeds is **inconclusive**; 'effect over seeds' "
-        "is the mean of the finding's effect size over the seeds ± the half-width of its 95% "
-        f"t-interval ({k} seeds). Tables and figures above are the first seed's. Our own "
+        "finding with an interval is decided on the runs of all seeds pooled (paired where "
+        "conditions share their runs' generators): 'pooled interval' shows the estimate, its "
+        "CI and the test, and 'per seed' each seed's own verdict as a robustness check. A "
+        "finding without one keeps the seeds' common verdict, **inconclusive** when they "
+        "disagree. 'Effect over seeds' is the mean of the finding's effect size over the seeds "
+        f"± the half-width of its 95% t-interval ({k} seeds). Tables and figures above are the first seed's. Our own "
         "checks (not paper findings) are listed apart and are not in the tally."
     )
     report.insert_paragraph(
@@ -189,6 +192,7 @@ def _records(combined: list[Combined]) -> pd.DataFrame:
             "effect_mean": c.mean if has else None,
             "effect_ci_half_width": c.half_width if has and np.isfinite(c.half_width) else None,
             "effect_measure": f.value_label if has else None,
+            "pooled_interval": c.interval or None,
             "rule": f.rule,
             "verdict": c.verdict,
             "n_seeds": len(c.seed_verdicts),
@@ -208,6 +212,7 @@ def _rows(combined: list[Combined]) -> pd.DataFrame:
                 "paper": c.finding.paper,
                 "ours (first seed)": c.finding.ours,
                 "effect over seeds": c.effect,
+                "pooled interval": c.interval or "–",
                 "rule": c.finding.rule,
                 "per seed": " / ".join(c.seed_verdicts),
                 "verdict": f"**{c.verdict}**",
