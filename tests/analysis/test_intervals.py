@@ -14,12 +14,14 @@ from emogen.analysis.replication.intervals import (
     Evidence,
     NotWorse,
     Share,
+    SpreadDirection,
     decided,
     tost_p,
 )
 from emogen.analysis.replication.verdicts import (
     ci_verdict,
     combine,
+    compromise_verdict,
     level_verdict,
     main_part_verdict,
     negligible_verdict,
@@ -252,3 +254,50 @@ def test_rule_main_part(verdicts: list[str], n_main: int, verdict: str) -> None:
 )
 def test_rule_readings(a: str, b: str, verdict: str) -> None:
     assert readings_verdict(a, b) == verdict
+
+
+H, D, U = "holds", "differs", "inconclusive"
+
+
+@pytest.mark.parametrize(
+    ("verdicts", "verdict"),
+    [
+        # per target: (1–3 vs 3–8: μ, σ), (8–16 vs 3–8: μ, σ); holds = 3–8 better
+        ([D, H, H, D] * 2, "holds"),
+        ([D, H, H, D, D, U, H, D], "partly"),
+        ([D, H, H, D, D, D, H, H], "differs"),
+        ([U, U, U, U] * 2, "inconclusive"),
+    ],
+)
+def test_rule_compromise(verdicts: list[str], verdict: str) -> None:
+    assert compromise_verdict(verdicts) == verdict
+
+
+def _point(other: float, ours: float) -> str:
+    return H if other > ours else D
+
+
+def test_compromise_on_the_papers_table_iv() -> None:
+    """The rank sum put the paper's own 3–8 last; by the compromise rule (point estimates for
+    intervals) target 1's 3–8 is a compromise, while on target 2 the paper's 1–3 has both the
+    lower μ10 and σ10 (0.222 < 0.234, 0.075 < 0.082): the rule can say so."""
+    mu = {1: (0.362, 0.430, 0.434), 2: (0.222, 0.234, 0.265)}
+    sd = {1: (0.206, 0.162, 0.130), 2: (0.075, 0.082, 0.072)}
+    v = [_point(x[t][g], x[t][1]) for t in (1, 2) for g in (0, 2) for x in (mu, sd)]
+    assert compromise_verdict(v[:4] * 2) == "holds"
+    assert compromise_verdict(v) == "differs"
+    with pytest.raises(ValueError, match="expected 8 verdicts; got 3"):
+        compromise_verdict([H, H, H])
+
+
+def test_spread_direction_is_a_paired_bootstrap_reaching_each_verdict() -> None:
+    rng = np.random.default_rng(4)
+    shared = rng.normal(0, 1, 600)
+    wide, narrow = shared * 1.3, shared + rng.normal(0, 0.05, 600)
+    assert SpreadDirection(+1)(wide, narrow).verdict == "holds"
+    assert SpreadDirection(-1)(wide, narrow).verdict == "differs"
+    same = SpreadDirection(+1)(shared + rng.normal(0, 0.05, 600), shared)
+    assert same.verdict == "inconclusive"
+    want = np.std(wide, ddof=1) - np.std(narrow, ddof=1)
+    dec = SpreadDirection(+1)(wide, narrow)
+    assert dec.estimate == pytest.approx(want) and dec.lo < want < dec.hi

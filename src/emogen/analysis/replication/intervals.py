@@ -30,6 +30,7 @@ from typing import Protocol
 import numpy as np
 from scipy import stats
 
+from emogen.analysis.replication.findings import Finding
 from emogen.analysis.replication.verdicts import (
     ALPHA,
     ci_verdict,
@@ -176,6 +177,39 @@ class NotWorse:
 
 
 @dataclass(frozen=True)
+class SpreadDirection:
+    """sd(a) − sd(b) against the paper's sign (±1): rule ``ci`` on a 95% paired bootstrap
+    interval (scipy's BCa, ``resamples`` draws from a generator seeded with ``seed``)."""
+
+    sign: int
+    seed: int = 0
+    resamples: int = 999
+
+    def __call__(self, *arrays: np.ndarray) -> Decision:
+        a, b = _pair(arrays[0], arrays[1], True)
+
+        def diff(x: np.ndarray, y: np.ndarray, axis: int = -1) -> np.ndarray:
+            return np.asarray(np.std(x, ddof=1, axis=axis) - np.std(y, ddof=1, axis=axis))
+
+        ci = stats.bootstrap(
+            (a, b),
+            diff,
+            paired=True,
+            n_resamples=self.resamples,
+            rng=np.random.default_rng(self.seed),
+        ).confidence_interval
+        lo, hi = float(ci.low), float(ci.high)
+        return Decision(
+            ci_verdict(lo, hi, self.sign),
+            float(diff(a, b)),
+            lo,
+            hi,
+            0.95,
+            f"paired bootstrap of the SD difference, n = {len(a)}",
+        )
+
+
+@dataclass(frozen=True)
 class Share:
     """The share of runs that pass (a 0/1 array) against ``level`` (holds past it) and
     ``weaker`` (partly past it): the Wilson 95% interval, rule ``level``."""
@@ -229,3 +263,39 @@ def decided(
     decisions = [e.decide() for e in evidence]
     verdict = (parts or parts_verdict)([d.verdict for d in decisions])
     return verdict, "; ".join(d.text() for d in decisions)
+
+
+def judged(
+    section: str,
+    claim: str,
+    paper: str,
+    ours: str,
+    evidence: list[Evidence],
+    rule: str,
+    *,
+    note: str = "",
+    parts: Callable[[list[str]], str] | None = None,
+    value: float | None = None,
+    value_label: str = "",
+) -> Finding:
+    """A finding whose verdict is its evidence's (this seed's runs; over seeds the pooled
+    runs'); its effect size defaults to the first part's estimate."""
+    ev = tuple(evidence)
+    verdict, text = decided(ev, parts)
+    if value is None:
+        first = ev[0].decide()
+        value, value_label = first.estimate, value_label or "first part's estimate"
+    return Finding(
+        section,
+        claim,
+        paper,
+        ours,
+        verdict,
+        note,
+        rule=rule,
+        value=value,
+        value_label=value_label,
+        evidence=ev,
+        parts=parts,
+        interval=text,
+    )

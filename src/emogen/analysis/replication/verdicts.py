@@ -200,3 +200,22 @@ def readings_verdict(first: str, second: str) -> str:
     """Two readings the paper leaves open (e.g. the GMM's dimension): their common verdict,
     else **inconclusive**."""
     return first if first == second else "inconclusive"
+
+
+def compromise_verdict(verdicts: list[str], targets: int = 2, others: int = 2) -> str:
+    """Rule 'compromise': a setting is a compromise of two criteria when no other setting
+    beats it on both (it is not dominated) and it beats each other setting on at least one.
+    ``verdicts``: per target, per other setting, (criterion 1, criterion 2) of
+    ``ci``-verdicts of (other − ours), lower is better (**holds**: ours significantly better,
+    **differs**: the other significantly better). **differs** when some other setting is
+    significantly better on both for some target; **holds** when it is significantly beaten
+    on one criterion by every other setting for every target; **partly** for some targets;
+    **inconclusive** otherwise."""
+    if len(verdicts) != targets * others * 2:
+        raise ValueError(f"expected {targets * others * 2} verdicts; got {len(verdicts)}")
+    pairs = [verdicts[i : i + 2] for i in range(0, len(verdicts), 2)]
+    per_target = [pairs[t * others : (t + 1) * others] for t in range(targets)]
+    if any(p == ["differs", "differs"] for p in pairs):
+        return "differs"
+    optimal = [all("holds" in p for p in ps) for ps in per_target]
+    return "holds" if all(optimal) else "partly" if any(optimal) else "inconclusive"
