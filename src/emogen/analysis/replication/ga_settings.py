@@ -187,7 +187,7 @@ def complexity_noise(runner: ConditionRunner, geometry: FaceGeometry) -> Complex
                 "paper σ": psd,
                 "CD(mean face, target)": s.mean_face_cd,
                 "|mean| / |target|": float(np.linalg.norm(s.mean_face) / np.linalg.norm(s.target)),
-                "intensity ×": fits[t][0],
+                "intensity scale ×": fits[t][0],
                 "residual off the line": fits[t][1],
             }
         )

@@ -150,6 +150,15 @@ def write_closing(
         "Every finding, with the paper's numbers and ours",
         data=_records(paper),
     )
+    changed = _changed(paper)
+    if len(changed):
+        report.heading("Verdicts that changed with issue #30", level=3)
+        report.paragraph(
+            f"{len(changed)} of {len(paper)} verdicts differ from the report before verdicts "
+            "were decided on intervals and equivalence tests (3 seeds, rules on point "
+            "estimates, seeds' agreement)."
+        )
+        report.table(changed, "verdict_changes", "Every verdict that changed, and why")
     if ours:
         report.heading("Our own checks (outside the tally)", level=3)
         report.table(
@@ -169,6 +178,26 @@ def write_closing(
     report.bullets([f"{key}: `{value}`" for key, value in provenance.items()])
     timing = pd.DataFrame({"experiment": list(timings), "seconds": list(timings.values())})
     report.table(timing, "timings", "Seconds per experiment (all seeds)")
+
+
+def _changed(combined: list[Combined]) -> pd.DataFrame:
+    """Findings whose verdict differs from :data:`~.previous.BEFORE`, with the reason."""
+    from emogen.analysis.replication.previous import BEFORE, WHY
+
+    rows = []
+    for k, c in enumerate(combined, start=1):
+        f = c.finding
+        old = BEFORE.get(f.key)
+        if old is None or old == c.verdict:
+            continue
+        why = WHY.get(f.claim) or (
+            "decided on the pooled runs' interval" if c.interval else "the seeds' verdicts"
+        )
+        rows.append(
+            {"finding": k, "section": f.section, "claim": f.claim, "before": old,
+             "now": c.verdict, "why": why}
+        )  # fmt: skip
+    return pd.DataFrame(rows, columns=["finding", "section", "claim", "before", "now", "why"])
 
 
 def _rules_table() -> pd.DataFrame:
