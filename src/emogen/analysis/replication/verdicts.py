@@ -45,6 +45,10 @@ RULES: dict[str, str] = {
     "level": "a share against a stated level: **holds** when its 95% CI lies at or past the "
     "level; **partly** when past the weaker level only; **differs** when wholly short of the "
     "weaker level; **inconclusive** otherwise",
+    "compromise": "a setting as a compromise of two criteria (lower is better), paired CIs "
+    "against each other setting: **differs** when another is significantly better on both; "
+    "**holds** when it is significantly better than every other on at least one, for every "
+    "target; **partly** for some targets; **inconclusive** otherwise",
     "kl": "KL steps: a rise counts only where KL(P_g ‖ P_g−1) grows by more than the KL "
     "noise floor (95th percentile of the KL of two same-size samples of one distribution); "
     "**holds** when the paper's pattern of rises holds for both initialisations, **partly** "
