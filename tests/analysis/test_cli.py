@@ -82,7 +82,9 @@ def test_replicate_one_section(ict_dir: Path, tmp_path: Path) -> None:
     pooled = findings["pooled_interval"].notna()
     assert ((verdicts == "inconclusive") == ~agree)[~pooled].all()
     compromise = findings[findings["paper_finding"].str.startswith("3–8")].iloc[0]
-    assert pooled.sum() == 1 and "paired t, n = 120" in compromise["pooled_interval"]
+    assert pooled.all() and "paired t, n = 120" in compromise["pooled_interval"]
+    sigma0 = findings[findings["paper"].str.startswith("0.370")].iloc[0]
+    assert "paired bootstrap of the SD difference, n = 120" in sigma0["pooled_interval"]
     assert "Table IV" in result.output and "paper findings:" in result.output
     readme = (out / "README.md").read_text()
     assert "9,592" in readme

@@ -19,6 +19,7 @@ from emogen.analysis.replication.intervals import (
     tost_p,
 )
 from emogen.analysis.replication.verdicts import (
+    chain_verdict,
     ci_verdict,
     combine,
     compromise_verdict,
@@ -301,3 +302,27 @@ def test_spread_direction_is_a_paired_bootstrap_reaching_each_verdict() -> None:
     want = np.std(wide, ddof=1) - np.std(narrow, ddof=1)
     dec = SpreadDirection(+1)(wide, narrow)
     assert dec.estimate == pytest.approx(want) and dec.lo < want < dec.hi
+
+
+@pytest.mark.parametrize(
+    ("verdicts", "groups", "partly_at", "verdict"),
+    [
+        ([H, H, H, H], 2, 1, "holds"),
+        ([H, H, H, U], 2, 1, "partly"),
+        ([H, H, D, H], 2, 1, "partly"),
+        ([H, U, D, H], 2, 1, "differs"),
+        ([H, U, U, H], 2, 1, "inconclusive"),
+        ([H, H, H, U, U, D], 3, 2, "differs"),  # one group of three holds: short of two
+        ([H, H, H, H, U, U], 3, 2, "partly"),
+        ([D], 1, 1, "differs"),
+    ],
+)
+def test_rule_chain(verdicts: list[str], groups: int, partly_at: int, verdict: str) -> None:
+    assert chain_verdict(verdicts, groups, partly_at) == verdict
+
+
+def test_rule_chain_refuses_uneven_groups() -> None:
+    with pytest.raises(ValueError, match="3 links do not split into 2 equal groups"):
+        chain_verdict([H, H, H], 2)
+    with pytest.raises(ValueError, match="partly_at must be 1…2; got 3"):
+        chain_verdict([H, H], 2, 3)

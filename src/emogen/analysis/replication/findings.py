@@ -82,20 +82,5 @@ def mean_diff_ci(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
     return d, d - 1.96 * se, d + 1.96 * se
 
 
-def sd_diff_ci(
-    a: np.ndarray, b: np.ndarray, rng: np.random.Generator, resamples: int = 1000
-) -> tuple[float, float, float]:
-    """sd(a) − sd(b) and its 95% bootstrap interval: (difference, lo, hi)."""
-    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-    ia = rng.integers(len(a), size=(resamples, len(a)))
-    ib = rng.integers(len(b), size=(resamples, len(b)))
-    d = a[ia].std(axis=1, ddof=1) - b[ib].std(axis=1, ddof=1)
-    return (
-        float(a.std(ddof=1) - b.std(ddof=1)),
-        float(np.quantile(d, 0.025)),
-        float(np.quantile(d, 0.975)),
-    )
-
-
 def ci_text(d: float, lo: float, hi: float) -> str:
     return f"{d:+.3f} (95% CI {lo:+.3f}…{hi:+.3f})"

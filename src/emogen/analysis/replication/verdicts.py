@@ -49,6 +49,11 @@ RULES: dict[str, str] = {
     "against each other setting: **differs** when another is significantly better on both; "
     "**holds** when it is significantly better than every other on at least one, for every "
     "target; **partly** for some targets; **inconclusive** otherwise",
+    "chain": "orderings (x₁ > x₂ > …, per group — a target, a generation), each link a paired "
+    "95% CI (means: t; SDs: bootstrap): a group **holds** when every link holds; **holds** when "
+    "every group does; **partly** when at least the stated number of groups do (one, unless "
+    "the claim says); **differs** when fewer do and some link lies on the other side of 0; "
+    "**inconclusive** otherwise",
     "kl": "KL steps: a rise counts only where KL(P_g ‖ P_g−1) grows by more than the KL "
     "noise floor (95th percentile of the KL of two same-size samples of one distribution); "
     "**holds** when the paper's pattern of rises holds for both initialisations, **partly** "
@@ -171,6 +176,26 @@ def combine(per_seed: list[list[Finding]]) -> list[Combined]:
         mean, half = mean_ci([g.value for g in found if g.value is not None])
         out.append(Combined(f, verdict, verdicts, mean, half, interval))
     return out
+
+
+def chain_verdict(verdicts: list[str], groups: int = 1, partly_at: int = 1) -> str:
+    """Rule 'chain': ``verdicts`` are the links' ``ci``-verdicts, group after group (equal
+    sizes). A group holds when all its links hold. **holds** when every group holds;
+    **partly** when at least ``partly_at`` groups hold; **differs** when fewer do and some link
+    differs; **inconclusive** otherwise."""
+    if groups < 1 or not verdicts or len(verdicts) % groups:
+        raise ValueError(f"{len(verdicts)} links do not split into {groups} equal groups")
+    if not 1 <= partly_at <= groups:
+        raise ValueError(f"partly_at must be 1…{groups}; got {partly_at}")
+    size = len(verdicts) // groups
+    held = sum(
+        all(v == "holds" for v in verdicts[i * size : (i + 1) * size]) for i in range(groups)
+    )
+    if held == groups:
+        return "holds"
+    if held >= partly_at:
+        return "partly"
+    return "differs" if "differs" in verdicts else "inconclusive"
 
 
 def parts_verdict(verdicts: list[str]) -> str:
