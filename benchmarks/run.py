@@ -180,6 +180,7 @@ def main() -> None:
         bench_cli,
         bench_correct,
         bench_gltf,
+        bench_plain_ga,
         bench_render,
         bench_simulate,
         bench_step,
@@ -197,6 +198,7 @@ def main() -> None:
             model, 2_000 if args.quick else 10_000, model_path=path
         ),
         "simulate": lambda: bench_simulate.run(model),
+        "plain_ga": lambda: bench_plain_ga.run(model.rig),
         "study": lambda: bench_study.run(),
         "step": lambda: bench_step.run(4 if args.quick else 8),
     }

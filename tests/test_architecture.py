@@ -21,6 +21,7 @@ PACKAGE = SRC / "emogen"
 #: and render where they are used (docs/architecture.md).
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors",),
+    ("seeding",),
     ("rng", "config", "data", "columns", "solvers"),
     ("model",),
     ("metrics", "appearance"),

@@ -9,9 +9,12 @@ seed per run from the simulation's seed (:func:`spawn_seeds`) and record them.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from emogen.errors import ConfigError
+from emogen.seeding import generators, seed_states
 
 # Seeds are kept below 2**63 so that they fit signed 64-bit columns (Parquet, SQL, pandas).
 SEED_BITS = 63
@@ -46,6 +49,14 @@ def generation_rng(seed: int, trial: int, generation: int) -> np.random.Generato
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(trial, generation)))
 
 
+def generation_rngs(
+    seeds: Sequence[int] | np.ndarray, trial: int, generation: int
+) -> list[np.random.Generator]:
+    """:func:`generation_rng` for many seeds at once: the same generators (same numbers), their
+    seed sequences hashed together (:func:`emogen.seeding.seed_states`) instead of one by one."""
+    return generators(seed_states(seeds, (trial, generation)))
+
+
 #: Spawn-key words of the observer's choice-noise stream. The GA's generators use two-word
 #: keys (trial, generation); a three-word key can never coincide with one of them.
 OBSERVER_KEY = (0x0B5, 0xC401CE)
@@ -54,3 +65,8 @@ OBSERVER_KEY = (0x0B5, 0xC401CE)
 def observer_rng(seed: int, trial: int = 0) -> np.random.Generator:
     """The simulated observer's generator for trial ``trial`` under ``seed`` (choice noise)."""
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(trial, *OBSERVER_KEY)))
+
+
+def observer_rngs(seeds: Sequence[int] | np.ndarray, trial: int = 0) -> list[np.random.Generator]:
+    """:func:`observer_rng` for many seeds at once (same generators, hashed together)."""
+    return generators(seed_states(seeds, (trial, *OBSERVER_KEY)))

@@ -93,3 +93,18 @@ def test_the_null_takes_the_data_s_choice_noise(ict_model, tmp_path: Path) -> No
     assert noise_config(ds, group, opts).noise_temperature == 0.07
     given = AnalysisOptions(choice_noise=0.02)
     assert noise_config(ds, group, given).noise_temperature == 0.02
+
+
+def test_the_latent_target_test_as_analyse_runs_it_is_calibrated(ict_model) -> None:  # type: ignore[no-untyped-def]
+    """``latent_spread_test`` itself (no oracle: its target is fitted from the group's mean,
+    as in ``emogen analyse``) on groups of one shared target with T = 0.05, G = 10: the share
+    flagged stays within α + 2 SE. A small cell of the grid in
+    ``benchmarks/spread_calibration.py`` (the full grid's figures: docs/analysis.md); 12
+    groups keep it to ~30 s, so the bound is loose (2 of 12 flagged at most) but fails a test
+    that flags one-target groups as often as the noiseless null (59%)."""
+    from benchmarks.spread_calibration import cell
+
+    row = cell(ict_model.rig, "medium", 20, 0.05, groups=12, seed=3)
+    se = np.sqrt(ALPHA * (1 - ALPHA) / 12)
+    assert row["flagged"] <= ALPHA + 2 * se, row
+    assert row["within α + 2 SE"] is True

@@ -49,4 +49,7 @@ def test_selection_pressure_returns_its_table_and_finding(ict_model) -> None:  #
     res = selection_pressure(runner)
     assert list(res.table["target"]) == ["target 1", "target 3", "target 2"]
     assert res.table["Cohen's d"].tolist() == pytest.approx(list(res.cohen_d.values()))
-    assert len(res.findings) == 1 and res.findings[0].verdict in ("holds", "partly", "differs")
+    # "no difference" needs an equivalence test: 12 runs per target are too few to show it
+    (found,) = res.findings
+    assert len(found.evidence) == 3 and "TOST" in found.interval
+    assert found.verdict == "inconclusive"

@@ -78,3 +78,4 @@ def test_seeds_that_disagree_make_a_finding_inconclusive() -> None:
 
 def test_every_rule_a_finding_names_is_written_down() -> None:
     assert set(RULES) >= {"order", "ci", "negligible", "number", "direction", "threshold", "kl"}
+    assert set(RULES) >= {"tost", "noninferior", "level", "compromise"}

@@ -32,7 +32,7 @@ from typing import Protocol
 import numpy as np
 
 from emogen.errors import ConfigError
-from emogen.rng import generation_rng
+from emogen.rng import generation_rngs
 
 #: The stream new engines and simulations use.
 CURRENT_STREAM = 2
@@ -82,9 +82,9 @@ class BlockDraws:
 
     def __init__(self, rngs: Sequence[np.random.Generator], size: int) -> None:
         self._rngs = list(rngs)
-        self._block = np.stack([rng.random(max(size, 1)) for rng in self._rngs]).reshape(
-            len(self._rngs), -1
-        )
+        self._block = np.empty((len(self._rngs), max(size, 1)))
+        for rng, row in zip(self._rngs, self._block, strict=True):
+            rng.random(out=row)
         self._at = 0
 
     @property
@@ -155,7 +155,7 @@ def generation_draws(
 
     ``block``: :func:`block_size` of the population (stream 2's block length).
     """
-    rngs = [generation_rng(int(s), trial, generation) for s in seeds]
+    rngs = generation_rngs(seeds, trial, generation)
     if check_stream(stream) == 1:
         return LegacyDraws(rngs)
     return BlockDraws(rngs, block)

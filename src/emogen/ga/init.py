@@ -58,8 +58,7 @@ def protocol_init(
         raise ConfigError(f"activation_range must be [lo, hi] with 1 <= lo <= hi; got {lo}-{hi}")
     names = rig.gene_names(eye_motion)
     index = {g: i for i, g in enumerate(names)}
-    rows: list[np.ndarray] = []
-    labels: list[str] = []
+    blocks = []
     for emotion in emotions:
         if emotion not in rig.emotions:
             raise ConfigError(
@@ -67,26 +66,25 @@ def protocol_init(
                 f"{', '.join(rig.emotions) or 'none'}"
             )
         spec = rig.emotions[emotion]
-        core = [index[g] for g in spec.core if g in index]
-        optional = [index[g] for g in spec.optional if g in index]
+        core = np.array([index[g] for g in spec.core if g in index], dtype=np.int64)
+        optional = np.array([index[g] for g in spec.optional if g in index], dtype=np.int64)
+        blocks.append((emotion_label(emotion), core, optional))
+    genes = np.zeros((len(emotions) * faces_per_emotion + arbitrary + 1, len(names)))
+    labels: list[str] = []
+    for label, core, optional in blocks:
         for _ in range(faces_per_emotion):
             n = int(rng.integers(lo, hi + 1))
-            order = [*rng.permutation(core), *rng.permutation(optional)][:n]
-            face = np.zeros(len(names))
-            face[np.asarray(order, dtype=np.int64)] = rng.random(len(order))
-            rows.append(face)
-            labels.append(emotion_label(emotion))
+            order = np.concatenate((rng.permutation(core), rng.permutation(optional)))[:n]
+            genes[len(labels), order] = rng.random(len(order))
+            labels.append(label)
     for _ in range(arbitrary):
         n = int(rng.integers(lo, hi + 1))
         chosen = rng.choice(len(names), size=min(n, len(names)), replace=False)
-        face = np.zeros(len(names))
-        face[chosen] = rng.random(len(chosen))
-        rows.append(face)
+        genes[len(labels), chosen] = rng.random(len(chosen))
         labels.append(ARBITRARY)
-    rows.append(np.zeros(len(names)))
     labels.append(NEUTRAL)
-    perm = rng.permutation(len(rows))
-    return np.stack(rows)[perm], np.asarray(labels)[perm]
+    perm = rng.permutation(len(labels))
+    return genes[perm], np.asarray(labels)[perm]
 
 
 # ---- fixed sets ----------------------------------------------------------------------------

@@ -6,7 +6,8 @@ lets the observer choose (vectorised; per-run Gumbel draws for choice noise) and
 next generation with :func:`~emogen.ga.algorithm.next_generation` — the same function, over
 the same run axis, that the engine calls with one run. Run r draws from the generators the
 engine would use for its seed — :func:`~emogen.ga.draws.generation_draws` (seed, 0, g) for
-the GA, :func:`~emogen.rng.observer_rng` for the choice noise — so its numbers equal those
+the GA, :func:`~emogen.rng.observer_rng` for the choice noise, all seeded together
+(:mod:`emogen.seeding`, the same generators) — so its numbers equal those
 of :func:`engine_run`, which drives the :class:`~emogen.ga.engine.Engine` one run at a time
 through ``ask()``/``tell()`` like a participant. Results depend on each run's seed only, never
 on how runs are grouped into chunks or spread over workers.
@@ -28,16 +29,15 @@ from emogen.ga.draws import CURRENT_STREAM, block_size, generation_draws
 from emogen.ga.engine import Engine
 from emogen.ga.init import first_generation
 from emogen.metrics import cosine_distance
-from emogen.rng import generation_rng, observer_rng
+from emogen.rng import generation_rngs, observer_rng, observer_rngs
 from emogen.simulate.observer import Observer, choice_order, selection_count
 from emogen.simulate.problem import Problem, RunArrays
 
 
-def _initial(problem: Problem, seed: int) -> tuple[np.ndarray, np.ndarray, int]:
-    """Generation 0 of one run, as the engine makes it."""
-    return first_generation(
-        problem.config.ga, problem.rig, problem.fixed_sets, rng=generation_rng(seed, 0, 0)
-    )
+def _initial(problem: Problem, seeds: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, int]]:
+    """Generation 0 of each run, as the engine makes it."""
+    ga, rig, fixed = problem.config.ga, problem.rig, problem.fixed_sets
+    return [first_generation(ga, rig, fixed, rng=rng) for rng in generation_rngs(seeds, 0, 0)]
 
 
 def _measure(problem: Problem, shown: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -65,12 +65,12 @@ def simulate_runs(
     ga = cfg.ga
     seeds = np.asarray(seeds, dtype=np.int64)
     r_count, n_gen = len(seeds), problem.n_generations
-    first = [_initial(problem, int(s)) for s in seeds]
+    first = _initial(problem, seeds)
     genes = np.stack([f[0] for f in first])
     operators = np.stack([f[1] for f in first])
     n = genes.shape[1]
     expansion = rig.expansion_matrix(ga.eye_motion)
-    obs = [observer_rng(int(s), 0) for s in seeds] if cfg.noise_temperature > 0 else []
+    obs = observer_rngs(seeds, 0) if cfg.noise_temperature > 0 else []
     distance = np.empty((r_count, n_gen, n))
     error = np.empty((r_count, n_gen, n))
     rank = np.full((r_count, n_gen, n), -1, dtype=np.int16)

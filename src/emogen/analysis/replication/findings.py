@@ -3,7 +3,9 @@ and the tables use."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -17,7 +19,11 @@ class Finding:
     **inconclusive** (the evidence does not decide), by the named ``rule``
     (:data:`~emogen.analysis.replication.verdicts.RULES`). ``value``: the effect size the
     verdict rests on (``value_label`` says what it is), combined over seeds.
-    ``paper_finding=False``: our own proposal, reported apart from the tally."""
+    ``paper_finding=False``: our own proposal, reported apart from the tally.
+    ``evidence``: per-run data and their tests (one per part of the claim): the verdict over
+    seeds is decided on the runs of all seeds pooled, the parts' verdicts joined by ``parts``
+    (default :func:`~emogen.analysis.replication.verdicts.parts_verdict`); ``interval``: the
+    decisions in words."""
 
     section: str
     claim: str
@@ -29,6 +35,9 @@ class Finding:
     value: float | None = None
     value_label: str = ""
     paper_finding: bool = True
+    evidence: tuple[Any, ...] = field(default=(), compare=False)  # intervals.Evidence
+    parts: Callable[[list[str]], str] | None = field(default=None, compare=False)
+    interval: str = ""
 
     def __post_init__(self) -> None:
         if self.verdict not in VERDICTS:
@@ -71,21 +80,6 @@ def mean_diff_ci(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
     d = float(a.mean() - b.mean())
     se = float(np.sqrt(a.var(ddof=1) / len(a) + b.var(ddof=1) / len(b)))
     return d, d - 1.96 * se, d + 1.96 * se
-
-
-def sd_diff_ci(
-    a: np.ndarray, b: np.ndarray, rng: np.random.Generator, resamples: int = 1000
-) -> tuple[float, float, float]:
-    """sd(a) − sd(b) and its 95% bootstrap interval: (difference, lo, hi)."""
-    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-    ia = rng.integers(len(a), size=(resamples, len(a)))
-    ib = rng.integers(len(b), size=(resamples, len(b)))
-    d = a[ia].std(axis=1, ddof=1) - b[ib].std(axis=1, ddof=1)
-    return (
-        float(a.std(ddof=1) - b.std(ddof=1)),
-        float(np.quantile(d, 0.025)),
-        float(np.quantile(d, 0.975)),
-    )
 
 
 def ci_text(d: float, lo: float, hi: float) -> str:

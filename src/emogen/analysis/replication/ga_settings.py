@@ -5,6 +5,8 @@ selection pressure (the classical variant)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
+from itertools import pairwise
 
 import numpy as np
 import pandas as pd
@@ -16,7 +18,18 @@ from emogen.analysis.paper_targets import paper_targets
 from emogen.analysis.replication.conditions import Condition, ConditionRunner, ConditionSpec
 from emogen.analysis.replication.findings import Finding, cohen_d, graded, pm
 from emogen.analysis.replication.geometry import FaceGeometry
-from emogen.analysis.replication.verdicts import negligible_verdict, number_verdict, parts_verdict
+from emogen.analysis.replication.intervals import (
+    Direction,
+    Equivalence,
+    Evidence,
+    SpreadDirection,
+    judged,
+)
+from emogen.analysis.replication.verdicts import (
+    chain_verdict,
+    compromise_verdict,
+    number_verdict,
+)
 
 RANGES = ((1, 3), (3, 8), (8, 16))
 T1, T2 = "target 1", "target 2"
@@ -33,11 +46,12 @@ class ActivationRanges:
 
 def activation_ranges(runner: ConditionRunner) -> ActivationRanges:
     targets = paper_targets(runner.rig)
-    res = {}
+    res, sims = {}, {}
     rows = []
     for t in (T1, T2):
         for rng_ in RANGES:
             s = runner.condition(f"{t} {rng_}", targets[t], ConditionSpec(activation_range=rng_))
+            sims[(t, rng_)] = s
             m0, s0 = s.stats(0)
             m10, s10 = s.stats()
             res[(t, rng_)] = (m0, s0, m10, s10)
@@ -53,47 +67,66 @@ def activation_ranges(runner: ConditionRunner) -> ActivationRanges:
                     "paper μ0, σ0, μ10, σ10": ", ".join(f"{v:.3f}" for v in p),
                 }
             )
-    return ActivationRanges(res, pd.DataFrame(rows), _range_findings(res))
+    findings = [*_range_findings(res, sims), _recommended(sims)]
+    return ActivationRanges(res, pd.DataFrame(rows), findings)
+
+
+def falling(values: list[np.ndarray], spread: bool = False, seed: int = 0) -> list[Evidence]:
+    """The links of a claimed fall x₁ > x₂ > …, one per neighbouring pair of per-run arrays
+    (paired: conditions share the runs' seeds): means by paired t, SDs by paired bootstrap."""
+    return [
+        Evidence(SpreadDirection(+1, seed=seed) if spread else Direction(+1), (a, b))
+        for a, b in pairwise(values)
+    ]
 
 
 def _range_findings(
     res: dict[tuple[str, tuple[int, int]], tuple[float, float, float, float]],
+    sims: dict[tuple[str, tuple[int, int]], Condition],
 ) -> list[Finding]:
-    def falls(i: int, t: str) -> bool:
-        v = [res[(t, g)][i] for g in RANGES]
-        return bool(v[0] > v[1] > v[2])
-
     def chain(i: int, t: str) -> str:
         return " > ".join(f"{res[(t, g)][i]:.3f}" for g in RANGES)
 
+    def at(t: str, g: int) -> list[np.ndarray]:
+        return [sims[(t, r)].errors[:, g] for r in RANGES]
+
     best = {t: min(RANGES, key=lambda g: res[(t, g)][2]) for t in (T1, T2)}
-    fewest = [best[t] == (1, 3) for t in (T1, T2)]
+    fewest = [
+        Evidence(Direction(+1), (sims[(t, g)].final_errors, sims[(t, RANGES[0])].final_errors))
+        for t in (T1, T2)
+        for g in RANGES[1:]
+    ]
+    per_target = "chain, paired per run, per target: "
     return [
-        Finding(
+        judged(
             "Table IV",
             "more initial activations lower the initial bias μ0",
             "0.752 > 0.744 > 0.737; 0.557 > 0.530 > 0.501",
             f"{chain(0, T1)}; {chain(0, T2)}",
-            graded(falls(0, T1) and falls(0, T2), falls(0, T1) or falls(0, T2)),
-            rule="order: μ0 falls over 1–3, 3–8, 8–16 for both targets; partly: for one",
+            [*falling(at(T1, 0)), *falling(at(T2, 0))],
+            per_target + "μ0 (1–3) > μ0 (3–8) > μ0 (8–16), each link a paired t 95% CI; both "
+            "targets holds, one partly",
+            parts=partial(chain_verdict, groups=2),
             value=float(
                 np.mean([res[(t, RANGES[0])][0] - res[(t, RANGES[-1])][0] for t in (T1, T2)])
             ),
             value_label="μ0 (1–3) − μ0 (8–16), mean of targets",
         ),
-        Finding(
+        judged(
             "Table IV",
             "more initial activations make the bias more consistent (σ0 falls)",
             "0.370 > 0.238 > 0.150; 0.132 > 0.129 > 0.102",
             f"{chain(1, T1)}; {chain(1, T2)}",
-            graded(falls(1, T1) and falls(1, T2), falls(1, T1) or falls(1, T2)),
-            rule="order: σ0 falls over the ranges for both targets; partly: for one",
+            [*falling(at(T1, 0), spread=True, seed=29), *falling(at(T2, 0), True, 29)],
+            per_target + "σ0 falls over the ranges, each link a paired bootstrap 95% CI of the "
+            "SD difference; both targets holds, one partly",
+            parts=partial(chain_verdict, groups=2),
             value=float(
                 np.mean([res[(t, RANGES[0])][1] - res[(t, RANGES[-1])][1] for t in (T1, T2)])
             ),
             value_label="σ0 (1–3) − σ0 (8–16), mean of targets",
         ),
-        Finding(
+        judged(
             "Table IV",
             "the fewest activations (1–3) converge best (lowest μ10), for both targets",
             "μ10 0.362 / 0.222 at 1–3",
@@ -101,55 +134,58 @@ def _range_findings(
             + "; ".join(
                 f"{t} {best[t][0]}–{best[t][1]} ({res[(t, best[t])][2]:.3f})" for t in (T1, T2)
             ),
-            graded(all(fewest), any(fewest)),
-            ""
-            if all(fewest)
-            else "our twelve-gene target covers 40% of our 30-gene space: richer random "
+            fewest,
+            per_target + "μ10 of 3–8 and of 8–16 above 1–3's (paired t 95% CIs); both targets "
+            "holds, one partly",
+            note="our twelve-gene target covers 40% of our 30-gene space: richer random "
             "faces already overlap it (docs/ga.md)",
-            rule="order: 1–3 has the lowest μ10 for both targets; partly: for one",
-            value=float(sum(fewest)),
-            value_label="targets best at 1–3",
+            parts=partial(chain_verdict, groups=2),
+            value=res[(T2, (1, 3))][2] - res[(T2, best[T2])][2],
+            value_label="target 2: μ10 (1–3) − the best range's",
         ),
-        Finding(
+        judged(
             "Table IV",
             "1–3 activations lower the consistency (raise σ10) for the simple target 1",
             "σ10 0.206 (1–3) > 0.162 (3–8)",
             f"σ10 {res[(T1, (1, 3))][3]:.3f} (1–3) vs {res[(T1, (3, 8))][3]:.3f} (3–8)",
-            "holds" if res[(T1, (1, 3))][3] > res[(T1, (3, 8))][3] else "differs",
-            rule="order: σ10 (1–3) > σ10 (3–8) for target 1",
+            [
+                Evidence(
+                    SpreadDirection(+1, seed=31),
+                    (sims[(T1, (1, 3))].final_errors, sims[(T1, (3, 8))].final_errors),
+                )
+            ],
+            "ci, paired per run: σ10 (1–3) − σ10 (3–8) > 0 for target 1 (bootstrap 95% CI)",
             value=res[(T1, (1, 3))][3] - res[(T1, (3, 8))][3],
             value_label="σ10 (1–3) − (3–8)",
         ),
-        _recommended(res),
     ]
 
 
-def _recommended(
-    res: dict[tuple[str, tuple[int, int]], tuple[float, float, float, float]],
-) -> Finding:
-    """The paper's recommended range, re-derived: the range whose μ10 and σ10 rank best summed
-    over both targets (the paper's compromise between accuracy and consistency)."""
-    score = {
-        g: sum(
-            sorted(res[(t, h)][i] for h in RANGES).index(res[(t, g)][i])
-            for t in (T1, T2)
-            for i in (2, 3)
-        )
+def _recommended(sims: dict[tuple[str, tuple[int, int]], Condition]) -> Finding:
+    """The paper's recommended range as a compromise of accuracy (μ10) and consistency (σ10):
+    not beaten on both by another range, and better than each other range on one."""
+    mid = (3, 8)
+    evidence = [
+        Evidence(test, (sims[(t, g)].final_errors, sims[(t, mid)].final_errors))
+        for t in (T1, T2)
         for g in RANGES
-    }
-    order = sorted(RANGES, key=lambda g: (score[g], g != (3, 8)))
-    place = order.index((3, 8))
-    return Finding(
+        if g != mid
+        for test in (Direction(+1), SpreadDirection(+1, seed=32))
+    ]
+
+    def said(t: str) -> str:
+        return ", ".join(f"{g[0]}–{g[1]}: {pm(*sims[(t, g)].stats())}" for g in RANGES)
+
+    return judged(
         "Table IV",
         "3–8 active genes is the best compromise of accuracy (μ10) and consistency (σ10)",
         "recommended default 3–8",
-        "rank sums of μ10 and σ10 over both targets (lower is better): "
-        + ", ".join(f"{g[0]}–{g[1]}: {score[g]}" for g in RANGES)
-        + f"; best here {order[0][0]}–{order[0][1]}",
-        "holds" if place == 0 else "partly" if place == 1 else "differs",
-        rule="order: 3–8 has the lowest rank sum (ties go to 3–8); partly: second",
-        value=float(score[(3, 8)] - score[order[0]]),
-        value_label="3–8's rank sum − the best's",
+        f"μ10 ± σ10 {T1}: {said(T1)}; {T2}: {said(T2)}",
+        evidence,
+        "compromise, paired per run (μ10: t; σ10: bootstrap), each other range against 3–8: "
+        "differs when one beats 3–8 on both; holds when 3–8 beats every other range on one, "
+        "for both targets; partly for one",
+        parts=compromise_verdict,
     )
 
 
@@ -181,7 +217,7 @@ def complexity_noise(runner: ConditionRunner, geometry: FaceGeometry) -> Complex
                 "paper σ": psd,
                 "CD(mean face, target)": s.mean_face_cd,
                 "|mean| / |target|": float(np.linalg.norm(s.mean_face) / np.linalg.norm(s.target)),
-                "intensity ×": fits[t][0],
+                "intensity scale ×": fits[t][0],
                 "residual off the line": fits[t][1],
             }
         )
@@ -196,13 +232,13 @@ def _complexity_findings(
 ) -> list[Finding]:
     mus = [s.stats()[0] for s in sims.values()]
     sds = [s.stats()[1] for s in sims.values()]
-    mono_mu, mono_sd = bool(np.all(np.diff(mus) < 0)), bool(np.all(np.diff(sds) < 0))
+    finals = [s.final_errors for s in sims.values()]
     pmu, psd = paper.GA_NOISE
     threshold, _ = number_verdict(noise.mean, noise.sd, pmu, psd)
     on_line = all(res < 0.35 for _, res in fits.values())
     scale = fits["dense happy"][0]
     return [
-        Finding(
+        judged(
             "Table V",
             "GA noise falls with target complexity (μ and σ)",
             "μ 0.426 > 0.267 > 0.237 > 0.222; σ 0.164 > 0.100 > 0.076 > 0.055",
@@ -210,8 +246,10 @@ def _complexity_findings(
             + " > ".join(f"{m:.3f}" for m in mus)
             + "; σ "
             + " > ".join(f"{s:.3f}" for s in sds),
-            graded(mono_mu and mono_sd, mono_mu or mono_sd),
-            rule="order: μ and σ fall with complexity; partly: one of the two",
+            [*falling(finals), *falling(finals, spread=True, seed=33)],
+            "chain, paired per run (the targets' runs share seeds): μ10 falls target by target "
+            "(paired t 95% CIs) and σ10 falls (paired bootstrap); both holds, one partly",
+            parts=partial(chain_verdict, groups=2),
             value=mus[0] - mus[-1],
             value_label="μ target 1 − dense",
         ),
@@ -249,18 +287,21 @@ def _complexity_findings(
 def _profiles(sims: dict[str, Condition]) -> Finding:
     """Fig. 18's per-generation profiles: more complex targets lower at every generation."""
     mu = np.array([s.errors.mean(axis=0) for s in sims.values()])  # (targets, G + 1)
-    ordered = [bool(np.all(np.diff(mu[:, g]) < 0)) for g in range(mu.shape[1])]
-    k = sum(ordered)
-    return Finding(
+    gens = mu.shape[1]
+    evidence = [e for g in range(gens) for e in falling([s.errors[:, g] for s in sims.values()])]
+    k = sum(bool(np.all(np.diff(mu[:, g]) < 0)) for g in range(gens))
+    return judged(
         "Fig. 18",
         "complex targets are closer from the first generations on (per-generation profiles)",
         "earlier matches for more active shapes; lower error throughout",
-        f"mean error falls with complexity in {k} of {len(ordered)} generations (0–10); gen 0: "
-        + " > ".join(f"{v:.2f}" for v in mu[:, 0]),
-        "holds" if k == len(ordered) else "partly" if k >= len(ordered) / 2 else "differs",
-        rule="order: μ_g falls with complexity in every generation; partly: in at least half",
+        f"mean error falls with complexity in {k} of {gens} generations (0–10, point "
+        "estimates); gen 0: " + " > ".join(f"{v:.2f}" for v in mu[:, 0]),
+        evidence,
+        "chain, paired per run, per generation: μ_g falls target by target (paired t 95% "
+        f"CIs); every generation holds, at least half ({(gens + 1) // 2}) partly",
+        parts=partial(chain_verdict, groups=gens, partly_at=(gens + 1) // 2),
         value=float(k),
-        value_label="generations in order",
+        value_label="generations in order (point estimates)",
     )
 
 
@@ -276,10 +317,11 @@ class SelectionPressure:
 
 def selection_pressure(runner: ConditionRunner) -> SelectionPressure:
     targets = paper_targets(runner.rig)
-    rows, ds = [], {}
+    rows, ds, pairs = [], {}, []
     for t in (T1, "target 3", T2):
         e = runner.condition(t, targets[t])
         c = runner.condition(f"classical {t}", targets[t], ConditionSpec(variant="classical"))
+        pairs.append((c.final_errors, e.final_errors))
         d = cohen_d(c.final_errors, e.final_errors)
         p = stats.mannwhitneyu(c.final_errors, e.final_errors).pvalue
         ds[t] = d
@@ -302,14 +344,15 @@ def selection_pressure(runner: ConditionRunner) -> SelectionPressure:
         )
         if part
     )
-    finding = Finding(
+    finding = judged(
         "Selection pressure",
         "fitness ranking does not improve convergence: its absence is no bottleneck",
         "accuracy unaffected",
         "d (classical − EmoGen) " + ", ".join(f"{t}: {d:+.2f}" for t, d in ds.items()),
-        parts_verdict([negligible_verdict(d) for d in ds.values()]),
-        note,
-        rule="negligible, per target: |d| < 0.2 holds, < 0.5 partly",
+        [Evidence(Equivalence(margin_sd=0.2), pair) for pair in pairs],
+        "tost, paired per run, per target: μ10 classical − EmoGen within ±0.2 pooled SD; "
+        "parts joined: all hold → holds, some → partly",
+        note=note,
         value=float(max(abs(d) for d in ds.values())),
         value_label="largest |d|",
     )

@@ -3,16 +3,18 @@ and accuracy of ED(α′), vrtx_rms(F) and CD(α) (Table I, Figs. 8–9)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
 from emogen.analysis import paper
 from emogen.analysis.paper_targets import count_active, paper_targets
+from emogen.analysis.replication.baselines import Chance, matched_correct, permutation_chance
 from emogen.analysis.replication.conditions import Condition, ConditionRunner, ConditionSpec
 from emogen.analysis.replication.findings import Finding, pm
 from emogen.analysis.replication.geometry import FaceGeometry
+from emogen.analysis.replication.table_i_findings import table_i_findings
 from emogen.analysis.separability import Separability, gmm_separability
 
 METRIC_NAMES = {
@@ -70,7 +72,7 @@ class TheoreticalMetrics:
     summary: pd.DataFrame
     accuracy: pd.DataFrame
     findings: list[Finding]
-    chance: tuple[float, float] = (float("nan"), float("nan"))  # 2 PCs, 90% variance
+    chance: dict[str, Chance] = field(default_factory=dict)  # per metric, 2 PCs
 
 
 def _separability(sims: dict[str, Condition], n_pca: float, seed: int) -> Separability:
@@ -107,6 +109,7 @@ def theoretical_metrics(runner: ConditionRunner, geometry: FaceGeometry) -> Theo
             {
                 "metric": METRIC_NAMES[m],
                 "accuracy": sep.accuracy,
+                "matched accuracy": float(matched_correct(sep.labels, sep.predicted).mean()),
                 "paper accuracy": paper.TABLE_I_ACCURACY[m],
                 "one cluster per target": sep.one_to_one,
                 "ARI": sep.ari,
@@ -132,132 +135,15 @@ def theoretical_metrics(runner: ConditionRunner, geometry: FaceGeometry) -> Theo
             for (m, t) in rms
         ]
     )
-    findings = _both_readings(sims, seps, seps90) + _accuracy_findings(sims, rms, geometry)
-    chance = (chance_accuracy(sims["cd"]["target 2"].final, 2, seed),
-              chance_accuracy(sims["cd"]["target 2"].final, 0.9, seed))  # fmt: skip
-    return TheoreticalMetrics(sims, seps, seps90, summary, accuracy, findings, chance)
-
-
-def chance_accuracy(faces: np.ndarray, n_pca: float, seed: int) -> float:
-    """The accuracy the same GMM reading reaches on ONE distribution split at random into
-    three labelled groups: the chance baseline of Table I's accuracies."""
     rng = np.random.default_rng(seed)
-    labels = rng.permutation(np.arange(len(faces)) % 3)
-    groups = ("a", "b", "c")
-    means = np.stack([faces[labels == k].mean(axis=0) for k in range(3)])
-    sep = gmm_separability(faces, labels, groups, targets=means, n_pca=n_pca, seed=seed)
-    return float(sep.accuracy)
+    chance = {m: permutation_chance(sep.labels, sep.predicted, rng) for m, sep in seps.items()}
+    said = "; ".join(f"{METRIC_NAMES[m]}: {c.text()}" for m, c in chance.items())
+    findings = table_i_findings(sims, seps, seps90, said) + _accuracy_findings(sims, rms, geometry)
+    return TheoreticalMetrics(sims, seps, seps90, summary, accuracy, findings, chance)
 
 
 def _nose_ratio(geometry: FaceGeometry, w: np.ndarray) -> float:
     return geometry.gene_ratio(w, "noseSneer", over="jawOpen")
-
-
-def _separability_findings(
-    sims: dict[str, dict[str, Condition]], seps: dict[str, Separability]
-) -> list[Finding]:
-    cd, vr, ed = seps["cd"], seps["vertex_rms"], seps["ed"]
-    found = [
-        Finding(
-            "Table I",
-            "CD(α) gives near-perfect separability of the three targets",
-            "97.8% classified to their target",
-            f"{cd.accuracy:.1%} (one cluster per target: {'yes' if cd.one_to_one else 'no'})",
-            "holds"
-            if cd.accuracy >= 0.9 and cd.one_to_one
-            else "partly"
-            if cd.accuracy >= 0.7
-            else "differs",
-            rule="threshold: ≥ 90% with one cluster per target holds, ≥ 70% partly",
-            value=cd.accuracy,
-            value_label="CD accuracy",
-        )
-    ]
-    others = [m for m in seps if m != "cd"]
-    margin = cd.accuracy - max(seps[m].accuracy for m in others)
-    cd_first = margin > 0
-    vr_over_ed = vr.accuracy > ed.accuracy
-    found.append(
-        Finding(
-            "Table I",
-            "CD(α) separates best of the three theoretical metrics",
-            "CD 97.8% > vrtx_rms 69.5% > ED 20.6%",
-            ", ".join(
-                f"{METRIC_NAMES[m]} {seps[m].accuracy:.1%}" for m in ("cd", "vertex_rms", "ed")
-            ),
-            "holds" if cd_first and vr_over_ed else "partly" if cd_first else "differs",
-            rule="order: CD > vrtx_rms > ED; partly when only CD's first place holds",
-            value=margin,
-            value_label="CD's lead in accuracy",
-        )
-    )
-    t2_ok = vr.per_group_accuracy["target 2"] >= 0.9
-    v_mu = [sims["vertex_rms"][t].stats()[0] for t in TABLE_I_TARGETS]
-    c_mu = [sims["cd"][t].stats()[0] for t in TABLE_I_TARGETS]
-    t13 = np.mean([vr.per_group_accuracy["target 1"], vr.per_group_accuracy["target 3"]])
-    found.append(
-        Finding(
-            "Table I",
-            "vrtx_rms(F) finds target 2 but confuses targets 1 and 3",
-            "target 2 99.4%; targets 1, 3: 39%, 70%",
-            f"target 2 {vr.per_group_accuracy['target 2']:.0%}; targets 1, 3: "
-            f"{vr.per_group_accuracy['target 1']:.0%}, {vr.per_group_accuracy['target 3']:.0%}",
-            "holds" if t2_ok and t13 < 0.9 else "partly" if t13 < 0.9 else "differs",
-            (
-                ""
-                if t2_ok
-                else "nor target 2: selecting by geometry, vertex RMS leaves the final faces "
-                f"scattered in blendshape space (final CD {min(v_mu):.2f}–{max(v_mu):.2f}, CD-driven "
-                f"{min(c_mu):.2f}–{max(c_mu):.2f})"
-            ),
-            rule="threshold: target 2 ≥ 90% and targets 1, 3 < 90%; partly: the confusion only",
-            value=float(vr.per_group_accuracy["target 2"]),
-            value_label="vrtx_rms target 2 accuracy",
-        )
-    )
-    lumped = ed.cluster_of_group["target 1"] == ed.cluster_of_group["target 3"]
-    ed13 = np.mean([ed.per_group_accuracy["target 1"], ed.per_group_accuracy["target 3"]])
-    cd13 = np.mean([cd.per_group_accuracy["target 1"], cd.per_group_accuracy["target 3"]])
-    found.append(
-        Finding(
-            "Table I",
-            "ED(α′) cannot separate targets 1 and 3 (one cluster for both)",
-            "targets 1 and 3 lumped; an unnamed cluster splits target 2",
-            f"lumped: {'yes' if lumped else 'no'}; targets 1, 3 classified {ed13:.0%} (CD: {cd13:.0%})",
-            "holds" if lumped else "partly" if ed13 < cd13 - 0.05 else "differs",
-            rule="threshold: lumped holds; partly when ED classifies targets 1, 3 ≥ 5 points "
-            "below CD",
-            value=float(ed13),
-            value_label="ED targets 1, 3 accuracy",
-        )
-    )
-    return found
-
-
-def _both_readings(
-    sims: dict[str, dict[str, Condition]],
-    seps: dict[str, Separability],
-    seps90: dict[str, Separability],
-) -> list[Finding]:
-    """Table I's findings in 2 PCA components (Fig. 8's reading) and in 90% of the variance:
-    the paper does not state the dimension of its GMM (its Fig. 8 shows two components), so a
-    verdict that changes with it is inconclusive."""
-    two = _separability_findings(sims, seps)
-    ninety = _separability_findings(sims, seps90)
-    out = []
-    for a, b in zip(two, ninety, strict=True):
-        verdict = a.verdict if a.verdict == b.verdict else "inconclusive"
-        out.append(
-            replace(
-                a,
-                ours=f"2 PCs: {a.ours}; 90% variance: {b.ours}",
-                verdict=verdict,
-                note=(a.note + " " if a.note else "")
-                + f"verdict 2 PCs: {a.verdict}, 90% variance: {b.verdict} (the paper's GMM "
-                "dimension is not stated; Fig. 8 shows 2 PCs)",
-            )
-        )
-    return out
 
 
 def _accuracy_findings(

@@ -61,12 +61,18 @@ def write_theoretical(r: Report, res: TheoreticalMetrics, figures: FaceFigures) 
         "Share of samples in their own target's cluster, and final CD error (μ ± σ)",
     )
     r.paragraph(
-        f"**Chance baseline:** the same GMM reading on ONE distribution (CD's target-2 final "
-        f"faces) split at random into three labelled groups scores {res.chance[0]:.1%} in 2 "
-        f"PCA components and {res.chance[1]:.1%} in 90% of the variance — an accuracy near "
-        "these says nothing about separability (a cluster-to-group assignment always finds "
-        "some agreement). The paper does not state its GMM's dimension; its Fig. 8 shows two "
-        "components: a Table I verdict that changes between the two readings is inconclusive."
+        "**Chance baseline:** 'matched accuracy' matches clusters to targets one to one "
+        "(Hungarian; two targets in one cluster leave one wrong). With the target labels "
+        "permuted over the same clusters — no relation between target and cluster — it gives "
+        + "; ".join(
+            f"{METRIC_NAMES[m]} {c.accuracy_mean:.1%} (95th percentile {c.accuracy_95:.1%}), "
+            f"ARI {c.ari_mean:+.3f} ({c.ari_95:+.3f})"
+            for m, c in res.chance.items()
+        )
+        + f" ({next(iter(res.chance.values())).permutations} permutations, 2 PCA components): "
+        "a third of the samples is 'correct' by chance. The paper does not state its GMM's "
+        "dimension; its Fig. 8 shows two components: a Table I verdict that changes between "
+        "the two readings is inconclusive."
     )
     sims = res.conditions
     stats = figures.heatmaps(

@@ -121,9 +121,12 @@ def write_closing(
     report.paragraph(
         f"{len(paper)} findings of the paper, each judged on {k} independent seed"
         f"{'s' if k > 1 else ''} ({provenance['seeds']}) by its written rule: {tally}. A "
-        "finding whose verdict differs between seeds is **inconclusive**; 'effect over seeds' "
-        "is the mean of the finding's effect size over the seeds ± the half-width of its 95% "
-        f"t-interval ({k} seeds). Tables and figures above are the first seed's. Our own "
+        "finding with an interval is decided on the runs of all seeds pooled (paired where "
+        "conditions share their runs' generators): 'pooled interval' shows the estimate, its "
+        "CI and the test, and 'per seed' each seed's own verdict as a robustness check. A "
+        "finding without one keeps the seeds' common verdict, **inconclusive** when they "
+        "disagree. 'Effect over seeds' is the mean of the finding's effect size over the seeds "
+        f"± the half-width of its 95% t-interval ({k} seeds). Tables and figures above are the first seed's. Our own "
         "checks (not paper findings) are listed apart and are not in the tally."
     )
     report.insert_paragraph(
@@ -147,6 +150,15 @@ def write_closing(
         "Every finding, with the paper's numbers and ours",
         data=_records(paper),
     )
+    changed = _changed(paper)
+    if len(changed):
+        report.heading("Verdicts that changed with issue #30", level=3)
+        report.paragraph(
+            f"{len(changed)} of {len(paper)} verdicts differ from the report before verdicts "
+            "were decided on intervals and equivalence tests (3 seeds, rules on point "
+            "estimates, seeds' agreement)."
+        )
+        report.table(changed, "verdict_changes", "Every verdict that changed, and why")
     if ours:
         report.heading("Our own checks (outside the tally)", level=3)
         report.table(
@@ -166,6 +178,26 @@ def write_closing(
     report.bullets([f"{key}: `{value}`" for key, value in provenance.items()])
     timing = pd.DataFrame({"experiment": list(timings), "seconds": list(timings.values())})
     report.table(timing, "timings", "Seconds per experiment (all seeds)")
+
+
+def _changed(combined: list[Combined]) -> pd.DataFrame:
+    """Findings whose verdict differs from :data:`~.previous.BEFORE`, with the reason."""
+    from emogen.analysis.replication.previous import BEFORE, WHY
+
+    rows = []
+    for k, c in enumerate(combined, start=1):
+        f = c.finding
+        old = BEFORE.get(f.key)
+        if old is None or old == c.verdict:
+            continue
+        why = WHY.get(f.claim) or (
+            "decided on the pooled runs' interval" if c.interval else "the seeds' verdicts"
+        )
+        rows.append(
+            {"finding": k, "section": f.section, "claim": f.claim, "before": old,
+             "now": c.verdict, "why": why}
+        )  # fmt: skip
+    return pd.DataFrame(rows, columns=["finding", "section", "claim", "before", "now", "why"])
 
 
 def _rules_table() -> pd.DataFrame:
@@ -189,6 +221,7 @@ def _records(combined: list[Combined]) -> pd.DataFrame:
             "effect_mean": c.mean if has else None,
             "effect_ci_half_width": c.half_width if has and np.isfinite(c.half_width) else None,
             "effect_measure": f.value_label if has else None,
+            "pooled_interval": c.interval or None,
             "rule": f.rule,
             "verdict": c.verdict,
             "n_seeds": len(c.seed_verdicts),
@@ -208,6 +241,7 @@ def _rows(combined: list[Combined]) -> pd.DataFrame:
                 "paper": c.finding.paper,
                 "ours (first seed)": c.finding.ours,
                 "effect over seeds": c.effect,
+                "pooled interval": c.interval or "–",
                 "rule": c.finding.rule,
                 "per seed": " / ".join(c.seed_verdicts),
                 "verdict": f"**{c.verdict}**",

@@ -1,0 +1,137 @@
+"""Known-answer calibration of ``latent_spread_test`` as ``emogen analyse`` uses it.
+
+Under H0 every face of a group evolved toward ONE shared target by choosers with choice noise
+T; the test (its latent target fitted from the group's mean, as in analyse) must flag such a
+group at a rate of at most α. K independent groups per cell: the flagged count is
+Binomial(K, p), its share has standard error sqrt(α(1 − α)/K); a cell passes when the share is
+≤ α + 2 SE. Power: groups whose participants each evolve their own target (the shared target
+with every active gene scaled by 1 + N(0, sd), clipped at 0) must be flagged.
+
+    python -m benchmarks.spread_calibration --groups 40 --sizes 20 80 240 --out grid.csv
+
+Cells: sparse (one gene), medium (four genes) and dense (the happy face's building blocks)
+targets × group sizes × T; G = 10 generations with the paper's selections.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+ALPHA = 0.05
+TARGETS: dict[str, dict[str, float]] = {
+    "sparse": {"jawOpen": 1.0},
+    "medium": {"browInnerUp": 0.7, "eyeWide": 0.5, "jawOpen": 0.4, "mouthFrown": 0.3},
+    "dense": {
+        "mouthSmile": 0.9,
+        "cheekRaiser": 0.7,
+        "cheekSquint": 0.6,
+        "eyeSquint": 0.45,
+        "mouthDimple": 0.35,
+        "mouthUpperUp": 0.3,
+        "jawOpen": 0.25,
+    },
+}
+#: the test's settings in a cell: analyse's defaults but smaller pools (a grid of many groups)
+TEST_KW: dict[str, int] = {"draws": 400, "refine_runs": 200, "pool_runs": 400, "iterations": 2}
+
+
+def group_faces(
+    rig: object, target: np.ndarray, n: int, temperature: float, spread: float, seed: int
+) -> np.ndarray:
+    """n final faces: each participant's own target (``spread`` 0: the shared one) run once."""
+    from emogen.analysis.elites import final_faces_simulator
+
+    rng = np.random.default_rng(seed)
+    cfg = _config(temperature)
+    out = []
+    for i in range(n):
+        own = np.clip(target * (1 + spread * rng.standard_normal(target.shape)), 0, None)
+        sim = final_faces_simulator(cfg, rig, seed * 1000 + i)  # type: ignore[arg-type]
+        out.append(sim(own if spread > 0 else target, 1)[0])
+    return np.stack(out)
+
+
+def _config(temperature: float) -> object:
+    from emogen.config import GAConfig, SimulationConfig
+
+    return SimulationConfig(
+        target={"jawOpen": 1.0}, ga=GAConfig(generations=10), noise_temperature=temperature
+    )
+
+
+def cell(
+    rig: object,
+    name: str,
+    n: int,
+    temperature: float,
+    groups: int,
+    spread: float = 0.0,
+    seed: int = 0,
+) -> dict[str, object]:
+    """One cell of the grid: the share of ``groups`` groups flagged, with its SE."""
+    from emogen.analysis.elites import final_faces_simulator
+    from emogen.analysis.noise import latent_spread_test
+
+    target = np.asarray(rig.weights_from_names(TARGETS[name]), dtype=np.float64)  # type: ignore[attr-defined]
+    null = final_faces_simulator(_config(temperature), rig, 90_000 + seed)  # type: ignore[arg-type]
+    flagged, excess = [], []
+    t0 = time.perf_counter()
+    for k in range(groups):
+        s = seed * 10_000 + k
+        if spread > 0:
+            faces = group_faces(rig, target, n, temperature, spread, s)
+        else:  # one shared target: n runs of one simulator (each run its own generator)
+            faces = final_faces_simulator(_config(temperature), rig, 50_000 + s)(target, n)  # type: ignore[arg-type]
+        test, _ = latent_spread_test(faces, null, rng=np.random.default_rng(s), **TEST_KW)  # type: ignore[arg-type]
+        flagged.append(test.exceeds)
+        excess.append(test.mean_error - test.noise_mean)
+    rate = float(np.mean(flagged))
+    se = float(np.sqrt(ALPHA * (1 - ALPHA) / groups))
+    return {
+        "target": name,
+        "n": n,
+        "T": temperature,
+        "participant spread": spread,
+        "groups": groups,
+        "flagged": rate,
+        "SE at α": se,
+        "within α + 2 SE": rate <= ALPHA + 2 * se if spread == 0 else None,
+        "mean excess spread": float(np.mean(excess)),
+        "seconds": time.perf_counter() - t0,
+    }
+
+
+def main() -> None:
+    import emogen
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--groups", type=int, default=40)
+    ap.add_argument("--sizes", type=int, nargs="+", default=[20, 80, 240])
+    ap.add_argument("--targets", nargs="+", default=list(TARGETS))
+    ap.add_argument("--temperatures", type=float, nargs="+", default=[0.05])
+    ap.add_argument("--power-spread", type=float, default=0.0)
+    ap.add_argument("--out", type=Path, default=None)
+    a = ap.parse_args()
+    rig = emogen.load_model(os.environ["EMOGEN_MODEL"]).rig
+    rows = []
+    for name in a.targets:
+        for n in a.sizes:
+            for t in a.temperatures:
+                rows.append(cell(rig, name, n, t, a.groups))
+                if a.power_spread > 0:
+                    rows.append(cell(rig, name, n, t, a.groups, a.power_spread, seed=1))
+                print(pd.DataFrame(rows[-1:]).to_string(index=False), flush=True)
+    table = pd.DataFrame(rows)
+    print(table.to_string(index=False))
+    if a.out:
+        table.to_csv(a.out, index=False)
+
+
+if __name__ == "__main__":
+    main()
