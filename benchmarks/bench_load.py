@@ -306,7 +306,8 @@ def main() -> None:
     cfg.pause = (float(lo), float(hi or lo))
     os.environ.setdefault("EMOGEN_MODEL", str(model_path()))
     print(f"study server load: {os.cpu_count()} cores, study {BENCH_STUDY['emotions']} × "
-          f"G={BENCH_STUDY['ga']['generations']} (12 selections + 2 ratings per participant), "
+          f"G={BENCH_STUDY['ga']['generations']} (12 selections + 2 ratings per participant"
+          f"{', then 8 faces to categorise' if cfg.study == 'mixed' else ''}), "
           f"pause {cfg.pause[0]:g}–{cfg.pause[1]:g} s, arrivals over {cfg.ramp:g} s")  # fmt: skip
     print(HEADER, flush=True)
     results: list[dict[str, Any]] = []

@@ -104,6 +104,17 @@ def test_a_mixed_study_shows_own_faces_and_stores_every_answer(mixed: StudyServi
     assert list(trials["block_name"].unique()) == ["make", "label"]
 
 
+def test_the_researcher_sees_a_categorise_trial_as_such(mixed: StudyService) -> None:
+    """The dashboard's step of a session at a categorise trial: no generation of a GA."""
+    from emogen.study.progress import progress_as_shown
+
+    _token, state = at_categorise(mixed, "C-dash")
+    line = next(x for x in progress_as_shown(mixed.store) if x["participant_id"] == "C-dash")
+    trials = state["progress"]["trials"]
+    assert line["step"] == f"trial {state['progress']['trial'] + 1} of {trials} · categorise"
+    assert line["generation_shown"] is None
+
+
 def test_others_faces_come_from_completed_sessions_balanced_over_labels(
     mixed: StudyService,
 ) -> None:

@@ -186,3 +186,24 @@ def test_orders_random_latin_and_fixed() -> None:
     assert rows[0].order == (0, 1, 3, 2) and rows[4].order == rows[0].order
     fixed = study_from_dict({**base, "order": "fixed"})
     assert trial_order(fixed, slot=3, rng=np.random.default_rng(0)).order == (0, 1, 2, 3)
+
+
+def test_the_default_instructions_say_what_each_task_asks() -> None:
+    """A study with a categorise block says how to answer it; one without keeps the GA's text
+    (and so its config hash); a study's own instructions are kept as written."""
+    from emogen.study.config import DEFAULT_INSTRUCTIONS, study_from_dict
+
+    flat = study_from_dict({"name": "a", "emotions": ["happy", "sad"]})
+    assert flat.instructions == DEFAULT_INSTRUCTIONS
+    both = study_from_dict({"name": "b", "emotions": ["happy", "sad"],
+                            "blocks": [{"task": "evolve"}, {"task": "categorise", "random": 2}]})  # fmt: skip
+    assert both.instructions.startswith(DEFAULT_INSTRUCTIONS)
+    assert "one face at a time" in both.instructions and "Continue" in both.instructions
+    only = study_from_dict({"name": "c", "emotions": ["happy", "sad"],
+                            "blocks": [{"task": "categorise", "random": 2}]})  # fmt: skip
+    assert "ten faces" not in only.instructions and "one face at a time" in only.instructions
+    own = study_from_dict({"name": "d", "emotions": ["happy", "sad"], "instructions": "Mine.",
+                           "blocks": [{"task": "categorise", "random": 2}]})  # fmt: skip
+    assert own.instructions == "Mine."
+    again = study_from_dict(both.model_dump(mode="json"))  # the stored config reads back alike
+    assert again.instructions == both.instructions

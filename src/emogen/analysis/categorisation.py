@@ -84,7 +84,8 @@ def categorisation_section(
         report.paragraph("The study has categorise trials, but none has been answered yet.")
         summary["categorisation"] = {"n_answers": 0}
         return
-    known = answered[answered["intended"].notna()]
+    fallback = answered["fallback"].fillna(False).astype(bool)
+    known = answered[answered["intended"].notna() & ~fallback]
     by_source = (
         known.assign(hit=(known["label"] == known["intended"]).astype(float))
         .groupby("source")
@@ -97,9 +98,10 @@ def categorisation_section(
     )
     report.paragraph(
         f"{len(answered)} answers of {answered['participant_id'].nunique()} participants; "
-        f"{len(answered) - len(known)} of faces made for no named emotion (random faces, or "
-        "file rows without a label) have no right answer and are not in the accuracies. "
-        "Pooled accuracies below describe the answers; the test is over participants."
+        f"{len(answered) - len(known)} of them are to faces with no right answer (random "
+        "faces, file rows without a label) or to stand-ins for others' faces (fallback): "
+        "those are not in the accuracies. The pooled accuracies describe the answers; the test "
+        "below is over participants."
     )
     report.table(by_source, "categorisation_by_source", "Accuracy by face source (pooled)")
     per = accuracy_by_source(responses)

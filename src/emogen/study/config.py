@@ -66,6 +66,24 @@ DEFAULT_INSTRUCTIONS = (
     "the arrow keys move between faces, Enter or Space selects, B makes a face the best one."
 )
 
+#: What the default instructions add for a categorise block (and say alone without the GA).
+CATEGORISE_INSTRUCTIONS = (
+    "you will see one face at a time. Choose the emotion it shows (the number keys 1–9 choose "
+    "too); where you are asked, also say how intense the expression is and how sure you are, "
+    "then press “Continue”."
+)
+
+
+def _default_instructions(blocks: Any) -> str | None:
+    """The default instructions of a study of these ``[[blocks]]`` tables, where they differ
+    from the GA's (None: the GA's text; a study without categorise blocks keeps its hash)."""
+    tasks = [b.get("task", "evolve") if isinstance(b, dict) else None for b in blocks or ()]
+    if "categorise" not in tasks:
+        return None
+    if "evolve" not in tasks:
+        return "In this study " + CATEGORISE_INSTRUCTIONS
+    return DEFAULT_INSTRUCTIONS + "\n\nIn another part of the study " + CATEGORISE_INSTRUCTIONS
+
 
 class RatingConfig(_Strict):
     """The satisfaction rating of each trial's final face."""
@@ -202,7 +220,16 @@ class StudyConfig(_Strict):
     def _consent_says_user_agent(cls, data: Any) -> Any:
         collects = isinstance(data, dict) and data.get("collect_user_agent") is True
         if collects and data.get("consent", DEFAULT_CONSENT) == DEFAULT_CONSENT:
-            return {**data, "consent": DEFAULT_CONSENT_USER_AGENT}
+            data = {**data, "consent": DEFAULT_CONSENT_USER_AGENT}
+        return data
+
+    @model_validator(mode="before")
+    @classmethod
+    def _instructions_say_the_tasks(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "instructions" not in data:
+            text = _default_instructions(data.get("blocks"))
+            if text is not None:
+                return {**data, "instructions": text}
         return data
 
     @model_validator(mode="after")

@@ -25,8 +25,11 @@ def _generations(config_json: str) -> int:
     return int(json.loads(config_json).get("ga", {}).get("generations", 0))
 
 
-def shown_step(line: dict[str, Any], generations: int, trial_status: str | None) -> dict[str, Any]:
-    """The participant's numbers of one :func:`session_progress` line (a new dict)."""
+def shown_step(
+    line: dict[str, Any], generations: int, trial_status: str | None, task: str = "evolve"
+) -> dict[str, Any]:
+    """The participant's numbers of one :func:`session_progress` line (a new dict); ``task``:
+    the current trial's (a categorise trial has no generation: "… · categorise")."""
     trials = int(line["trials"])
     trial = min(int(line["trial"]), trials)  # a finished session has moved past its last trial
     out = {**line, "trial": trial, "generations_shown": generations + 1, "generation_shown": None}
@@ -34,6 +37,8 @@ def shown_step(line: dict[str, Any], generations: int, trial_status: str | None)
         out["step"] = "instructions"
     elif line["stage"] == "done":
         out["step"] = "done"
+    elif task != "evolve":
+        out["step"] = f"trial {trial} of {trials} · {task}"
     elif trial_status == "rating":
         out["step"] = f"trial {trial} of {trials} · rating"
     else:
@@ -45,7 +50,7 @@ def shown_step(line: dict[str, Any], generations: int, trial_status: str | None)
 
 def progress_as_shown(store: Store, study_id: int | None = None) -> list[dict[str, Any]]:
     """:func:`session_progress` with ``step`` ("trial 2 of 6 · generation 3 of 11", "… · rating",
-    "instructions", "done"), ``generation_shown`` (from 1; none outside a generation) and
+    "… · categorise", "instructions", "done"), ``generation_shown`` (from 1; none outside a generation) and
     ``generations_shown`` (G + 1) as the participant's page shows them."""
     lines = session_progress(store, study_id)
     with store.read() as db:
@@ -53,7 +58,7 @@ def progress_as_shown(store: Store, study_id: int | None = None) -> list[dict[st
             sid: _generations(cfg)
             for sid, cfg in db.execute(select(StudyRow.id, StudyRow.config_json))
         }
-        query = select(SessionRow.id, TrialRow.status).join(
+        query = select(SessionRow.id, TrialRow.status, TrialRow.task).join(
             TrialRow,
             and_(
                 TrialRow.session_id == SessionRow.id, TrialRow.position == SessionRow.current_trial
@@ -61,9 +66,13 @@ def progress_as_shown(store: Store, study_id: int | None = None) -> list[dict[st
         )
         if study_id is not None:
             query = query.where(SessionRow.study_id == study_id)
-        status = {sid: str(st) for sid, st in db.execute(query)}
+        current = {sid: (str(st), str(task)) for sid, st, task in db.execute(query)}
     return [
-        shown_step(line, generations.get(line["study_id"], 0), status.get(line["session_id"]))
+        shown_step(
+            line,
+            generations.get(line["study_id"], 0),
+            *current.get(line["session_id"], (None, "evolve")),
+        )
         for line in lines
     ]
 
