@@ -1,4 +1,4 @@
-"""A study of three blocks — two evolve blocks (two emotions on one identity each) and a
+"""A study of three blocks — two evolve blocks (four emotions on one identity each) and a
 categorise block (the participant's own faces, other participants' and random ones) — completed
 in Debian's Chromium (Playwright) on a desktop (3D viewer, keyboard) and a phone (3D viewer,
 touch-sized clicks), and the categorise screen with the server's images (no WebGL).
@@ -20,6 +20,7 @@ from typing import Any
 
 import httpx
 import numpy as np
+import pandas as pd
 import pytest
 from benchmarks.bench_study import ServerProcess, write_study_toml
 
@@ -47,15 +48,16 @@ BLOCKS_STUDY: dict[str, Any] = {
     "ga": {"generations": 1, "min_selections": 1, "max_selections": 3},
     "completion": {"code": "BLOCKS-OK"},
     "blocks": [
-        {"task": "evolve", "name": "make_female", "emotions": ["happy", "sad"],
-         "identities": ["female-medium"], "order": "fixed"},
-        {"task": "evolve", "name": "make_male", "emotions": ["angry", "fearful"],
-         "identities": ["male-medium"], "order": "fixed"},
+        {"task": "evolve", "name": "make_female", "identities": ["female-medium"],
+         "order": "fixed"},
+        {"task": "evolve", "name": "make_male", "identities": ["male-medium"],
+         "order": "fixed"},
         {"task": "categorise", "name": "recognise", "own": True, "others": 2, "random": 2,
          "none_option": True, "intensity": True, "confidence": True},
     ],
 }  # fmt: skip
-N_CATEGORISE = 4 + 2 + 2
+N_EVOLVE = 4 * 2  # four emotions on each of two identities
+N_CATEGORISE = N_EVOLVE + 2 + 2
 
 
 @pytest.fixture(scope="module")
@@ -141,7 +143,7 @@ def test_a_study_of_evolve_and_categorise_blocks_runs_to_completion(
     page = start(browser, srv, size, pid, has_touch=not keyboard, is_mobile=not keyboard)
     wait_ready(page, "trial")
     assert page.evaluate("window.emogenStudy.display") == "webgl"
-    evolve_trials(page, 4)
+    evolve_trials(page, N_EVOLVE)
     answered: list[dict[str, Any]] = []
     for k in range(N_CATEGORISE):
         wait_ready(page, "categorise")
@@ -150,50 +152,43 @@ def test_a_study_of_evolve_and_categorise_blocks_runs_to_completion(
         labels = labels_shown(page)
         assert labels == [*view["labels"], "none"]  # in the order drawn, "none of these" last
         assert page.inner_text("#prompt") == "Which emotion does this face show?"
-        assert f"Trial {5 + k} of 12" in page.inner_text("#progress")
+        total = N_EVOLVE + N_CATEGORISE
+        assert f"Trial {N_EVOLVE + 1 + k} of {total}" in page.inner_text("#progress")
         assert "Part 3 of 3" in page.inner_text("#progress")
         assert page.is_hidden("#intensity-set") and page.is_hidden("#confidence-set")
         assert page.is_disabled("#answer")
-        pick = (k % 4) + 1
+        pick = (k % 5) + 1  # "none of these" (5th) too: it asks no intensity
+        rated = labels[pick - 1] != "none"
         if k == 0:
             check_categorise_layout(page)
         if keyboard:
             page.keyboard.press(str(pick))
         else:
             page.click(f"#label-buttons button:nth-child({pick})")
-        assert (
-            page.get_attribute(f"#label-buttons button:nth-child({pick})", "aria-pressed") == "true"
-        )
-        assert page.is_visible("#intensity-set") and page.is_visible("#confidence-set")
+        button = page.locator(f"#label-buttons button:nth-child({pick})")
+        assert button.get_attribute("aria-pressed") == "true"
+        assert page.is_visible("#intensity-set") == rated and page.is_visible("#confidence-set")
         assert page.is_disabled("#answer")  # the ratings are still missing
-        assert "how intense it is and how sure you are" in page.inner_text("#categorise-status")
-        intensity, confidence = 1 + k % 7, 7 - k % 7
+        asked = "how intense it is and how sure you are" if rated else "how sure you are"
+        assert f"Now say {asked}," in page.inner_text("#categorise-status")
+        intensity, confidence = (1 + k % 7 if rated else None), 7 - k % 7
+        intensity_scale = page.locator("#intensity-scale")
         if k == 1:  # a reload keeps the answer given so far (until it is sent)
-            page.locator("#intensity-scale").get_by_label(str(intensity), exact=True).check()
+            intensity_scale.get_by_label(str(intensity), exact=True).check()
             page.reload()
             wait_ready(page, "categorise")
-            assert (
-                page.get_attribute(f"#label-buttons button:nth-child({pick})", "aria-pressed")
-                == "true"
-            )
-            assert (
-                page.locator("#intensity-scale")
-                .get_by_label(str(intensity), exact=True)
-                .is_checked()
-            )
+            assert button.get_attribute("aria-pressed") == "true"
+            assert intensity_scale.get_by_label(str(intensity), exact=True).is_checked()
         if keyboard:  # in a scale, the number keys give the rating
-            page.locator("#intensity-scale input").first.focus()
-            page.keyboard.press(str(intensity))
+            if rated:
+                intensity_scale.locator("input").first.focus()
+                page.keyboard.press(str(intensity))
             page.locator("#confidence-scale input").first.focus()
             page.keyboard.press(str(confidence))
-            assert (
-                page.locator(f"#label-buttons button:nth-child({pick})").get_attribute(
-                    "aria-pressed"
-                )
-                == "true"
-            )
+            assert button.get_attribute("aria-pressed") == "true"  # the label stays
         else:
-            page.locator("#intensity-scale").get_by_label(str(intensity), exact=True).check()
+            if rated:
+                intensity_scale.get_by_label(str(intensity), exact=True).check()
             page.locator("#confidence-scale").get_by_label(str(confidence), exact=True).check()
         assert page.is_enabled("#answer")
         if k == 0:
@@ -223,11 +218,13 @@ def test_a_study_of_evolve_and_categorise_blocks_runs_to_completion(
     responses = tables["responses"].query("session_id == @session_id").sort_values("trial")
     assert responses["trial"].tolist() == [a["trial"] for a in answered]
     assert responses["label"].tolist() == [a["label"] for a in answered]
-    assert responses["intensity"].tolist() == [a["intensity"] for a in answered]
+    given = [None if pd.isna(x) else int(x) for x in responses["intensity"]]
+    assert given == [a["intensity"] for a in answered]  # none with "none of these"
+    assert (responses["label"] == "none").sum() == N_CATEGORISE // 5
     assert responses["confidence"].tolist() == [a["confidence"] for a in answered]
     assert (responses["client_response_ms"] > 0).all() and (responses["load_ms"] > 0).all()
     assert sorted(responses["source"].value_counts().items()) == [
-        ("other", 2), ("own", 4), ("random", 2)
+        ("other", 2), ("own", N_EVOLVE), ("random", 2)
     ]  # fmt: skip
     assert not responses["fallback"].any()  # a completed session was there to draw from
     w_cols = [c for c in responses.columns if c.startswith("w_")]
@@ -262,12 +259,12 @@ def test_the_categorise_screen_with_server_images(
     assert page.evaluate("window.emogenStudy.display") == "png"
     pngs: list[str] = []
     page.on("response", lambda r: pngs.append(r.url) if ".png" in r.url and r.ok else None)
-    evolve_trials(page, 4)
+    evolve_trials(page, N_EVOLVE)
     seen: list[str] = []
     for k in range(3):
         wait_ready(page, "categorise")
         src = page.get_attribute("#categorise-slot img", "src")
-        assert src is not None and f"?trial={4 + k}&attempt=0" in src, src
+        assert src is not None and f"?trial={N_EVOLVE + k}&attempt=0" in src, src
         assert page.evaluate("document.querySelector('#categorise-slot img').naturalWidth") > 0
         seen.append(page.evaluate(
             "(() => { const i = document.querySelector('#categorise-slot img');"
@@ -284,7 +281,7 @@ def test_the_categorise_screen_with_server_images(
     # every evolve generation's images were fetched for their own trial, not taken from cache
     grid_pngs = [u for u in pngs if "/faces/" in u and "trial=" in u]
     trials = {u.split("trial=")[1].split("&")[0] for u in grid_pngs}
-    assert {"0", "1", "2", "3", "4", "5", "6"} <= trials, sorted(trials)
+    assert {str(t) for t in range(N_EVOLVE + 3)} <= trials, sorted(trials)
     # a face of another trial is not found (the URL names the trial)
     token = page.url.split("/s/")[1].split("?")[0]
     stale = httpx.get(f"{srv.url}/api/s/{token}/faces/0.png?trial=0&attempt=0", timeout=30)
