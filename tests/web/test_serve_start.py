@@ -20,7 +20,10 @@ from tests.study.conftest import SMALL_STUDY
 def fake_app() -> Any:
     config = study_from_dict(SMALL_STUDY)
     store = SimpleNamespace(describe=lambda: "sqlite:///x.sqlite", dispose=lambda: None)
-    return SimpleNamespace(state=SimpleNamespace(config=config, store=store, researcher_token=None))
+    service = SimpleNamespace(n_trials=config.n_trials)  # the banner says how many trials
+    return SimpleNamespace(
+        state=SimpleNamespace(config=config, store=store, service=service, researcher_token=None)
+    )
 
 
 def free_port() -> int:

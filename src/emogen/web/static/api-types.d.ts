@@ -137,6 +137,10 @@ export interface paths {
         /**
          * Face Png
          * @description A face of the current trial rendered on the server (for browsers without WebGL).
+         *
+         *     Face ids count from 0 in every trial and attempt, so the page names both (``?trial=&attempt=``):
+         *     the URL, and so the browser's cached image, is then that trial's face only; a face of a trial
+         *     or attempt that is not the current one is not found.
          */
         get: operations["face_png_api_s__token__faces__face_id__png_get"];
         put?: never;
@@ -943,7 +947,10 @@ export interface operations {
     };
     face_png_api_s__token__faces__face_id__png_get: {
         parameters: {
-            query?: never;
+            query?: {
+                trial?: number | null;
+                attempt?: number | null;
+            };
             header?: never;
             path: {
                 /** @description The session's secret token (from the session link). */
