@@ -26,6 +26,9 @@ def test_power_command(ict_dir: Path, tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     summary = json.loads((out / "power.json").read_text())
     assert summary["n_required"] is not None and 4 <= summary["n_required"] <= 12
+    lo, hi = summary["n_required_ci95"]  # the upper end may lie beyond the simulated n
+    assert lo <= summary["n_required"] and (hi is None or summary["n_required"] <= hi)
+    assert summary["n_required_method"] in ("fit", "interpolation")
     assert summary["prototype_cd"] > 0.15
     curve = pd.read_csv(out / "power.csv")
     assert list(curve.columns) == ["n", "power", "se", "fitted", "false_positive", "fp_se"]

@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from emogen.analysis.power_required import Required, required_n
 from emogen.config import SimulationConfig
 from emogen.errors import ConfigError
 
@@ -62,8 +63,10 @@ class PowerResult:
     """curve: n, simulated power, its standard error, the fitted curve, and the false-positive
     rate of the same test on null experiments (``false_positive``, ``fp_se``). ``n_required``:
     the smallest n whose *fitted* power reaches the target (None: not within max_n) — the fit
-    smooths the Monte Carlo noise of single points; ``n_observed``: the smallest simulated n
-    whose own estimate reached it."""
+    smooths the Monte Carlo noise of single points — or, where the fit misfits the simulated
+    points, their interpolation (``required``: which, the fit check, a 95% interval;
+    :mod:`emogen.analysis.power_required`); ``n_observed``: the smallest simulated n whose own
+    estimate reached it."""
 
     curve: pd.DataFrame
     n_required: int | None
@@ -74,6 +77,7 @@ class PowerResult:
     n_observed: int | None = None
     fit: tuple[float, float] | None = None
     effect_ed: float = float("nan")
+    required: Required | None = None  # n_required with its fit check and 95% interval
 
     @property
     def max_false_positive(self) -> float:
@@ -277,6 +281,7 @@ def power_analysis(
             "statistic": statistic,
             "participants": "fresh per simulated experiment",
         },
+        rng,
     )
 
 
@@ -289,6 +294,7 @@ def _result(
     max_n: int,
     settings: dict[str, object] | None,
     opts: dict[str, object],
+    rng: np.random.Generator,
 ) -> PowerResult:
     from emogen.metrics import cosine_distance
 
@@ -308,17 +314,14 @@ def _result(
         }
     )
     observed = next((n for n in ns if rates[n][0] >= target_power), None)
-    required = None
-    if fit is not None:
-        a_, b_ = fit
-        x = (np.log((target_power - alpha) / (1 - target_power)) - a_) / b_
-        n_fit = int(np.ceil(np.exp(x)))
-        required = max(n_fit, _smallest_testable(alpha)) if n_fit <= max_n else None
+    required = required_n(
+        np.array(ns), pw, replicates, target=target_power, alpha=alpha, max_n=max_n, rng=rng
+    )
     ma = drawn[0].reshape(-1, drawn[0].shape[-1]).mean(0)
     mb = drawn[1].reshape(-1, drawn[1].shape[-1]).mean(0)
     return PowerResult(
         curve,
-        required,
+        required.n,
         target_power,
         alpha,
         float(cosine_distance(ma, mb)),
@@ -326,6 +329,7 @@ def _result(
         observed,
         fit,
         float(np.linalg.norm(ma - mb)),
+        required,
     )
 
 
