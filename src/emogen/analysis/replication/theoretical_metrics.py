@@ -14,7 +14,7 @@ from emogen.analysis.replication.baselines import Chance, matched_correct, permu
 from emogen.analysis.replication.conditions import Condition, ConditionRunner, ConditionSpec
 from emogen.analysis.replication.findings import Finding, pm
 from emogen.analysis.replication.geometry import FaceGeometry
-from emogen.analysis.replication.intervals import Evidence, judged
+from emogen.analysis.replication.intervals import Equivalence, Evidence, judged
 from emogen.analysis.replication.mean_faces import MeanFaceTest
 from emogen.analysis.replication.table_i_findings import table_i_findings
 from emogen.analysis.separability import Separability, gmm_separability
@@ -200,6 +200,26 @@ def _accuracy_findings(
             value_label="|CD ratio − 0.6|",
         ),
         _jaw_finding(sims, geometry),
+        judged(
+            "Fig. 9",
+            "ED(α′) and CD(α) perform similarly in mean accuracy (final CD error)",
+            "ED and CD similar in mean accuracy",
+            "μ10 CD / ED: "
+            + ", ".join(
+                f"{t} {sims['cd'][t].stats()[0]:.3f} / {sims['ed'][t].stats()[0]:.3f}"
+                for t in TABLE_I_TARGETS
+            ),
+            [
+                Evidence(
+                    Equivalence(margin_sd=0.2),
+                    (sims["ed"][t].final_errors, sims["cd"][t].final_errors),
+                )
+                for t in TABLE_I_TARGETS
+            ],
+            "tost, paired per run, per target: μ10 ED − CD within ±0.2 pooled SD; parts "
+            "joined: all hold → holds, some → partly",
+            value_label="μ10 ED − CD, first target",
+        ),
     ]
 
 
