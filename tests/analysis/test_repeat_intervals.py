@@ -11,6 +11,8 @@ import pytest
 from emogen.analysis.repeatability import repeatability_bins
 from emogen.analysis.replication.repeat_intervals import (
     BinContrast,
+    BinShares,
+    bin_pairs,
     close_pairs,
     first_bin_share,
 )
@@ -107,3 +109,54 @@ def test_bin_contrast_refuses_bad_input() -> None:
         BinContrast("rank", +1)
     with pytest.raises(ValueError, match="4 rows of runs"):
         BinContrast("slope", -1)(np.zeros(3), np.zeros((3, 2)), np.zeros(3))
+
+
+def test_bin_pairs_give_the_repeatability_bins() -> None:
+    rng = np.random.default_rng(11)
+    faces = np.concatenate([_faces(rng, 15, True), _faces(rng, 15, False)])
+    group = np.zeros(len(faces), dtype=int)
+    bins, same = bin_pairs(faces, group)
+    shares = [first_bin_share(b, same, np.ones((1, len(faces))))[0] for b in bins]
+    np.testing.assert_allclose(shares, repeatability_bins(faces))
+
+
+def _two(tight_a: bool, tight_b: bool) -> list[np.ndarray]:
+    rng = np.random.default_rng(12)
+    group = np.repeat([1, 2], 20)
+    return [group, _faces(rng, 40, tight_a), _faces(rng, 40, tight_b)]
+
+
+@pytest.mark.parametrize(
+    ("kind", "level", "weaker", "rows", "verdict"),
+    [
+        ("first_at_least", 50, 0, (True,), "holds"),
+        ("first_at_least", 50, 0, (False,), "differs"),
+        ("first_above", 0, 0, (True, False), "holds"),
+        ("first_above", 0, 0, (False, True), "differs"),
+        ("first_above", 0, 0, (True, True), "inconclusive"),
+        ("tvd_below", 10, 20, (True, True), "holds"),
+        ("tvd_below", 10, 20, (True, False), "differs"),
+        ("tvd_below", 0.5, 150, (True, False), "partly"),
+    ],
+)
+def test_bin_shares_reach_each_verdict(
+    kind: str, level: float, weaker: float, rows: tuple[bool, ...], verdict: str
+) -> None:
+    arrays = _two(rows[0], rows[-1])[: 1 + len(rows)]
+    got = BinShares(kind, level, weaker, resamples=100)(*arrays)
+    assert got.verdict == verdict, got.text()
+
+
+def test_bin_shares_inconclusive_and_refusals() -> None:
+    """A mixed row (half tight): its first-bin share near a level set at its own value."""
+    rng = np.random.default_rng(13)
+    mixed = np.concatenate([_faces(rng, 20, True), _faces(rng, 20, False)])
+    group = np.ones(40, dtype=int)
+    level = repeatability_bins(mixed)[0] * 100
+    assert BinShares("first_at_least", level, resamples=100)(group, mixed).verdict == (
+        "inconclusive"
+    )
+    with pytest.raises(ValueError, match="kind must be one of"):
+        BinShares("median")
+    with pytest.raises(ValueError, match="needs a group array and the rows"):
+        BinShares("tvd_below", 10, 20)(group, mixed)

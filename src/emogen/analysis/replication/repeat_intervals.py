@@ -30,17 +30,21 @@ FIRST_BIN = BIN_EDGES[1]
 KINDS = ("slope", "matched")
 
 
-def close_pairs(faces: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(pairs with CD < 0.25, pairs at all) as 0/1 matrices over runs of one group, diagonal
-    included (the quadratic forms below take it out)."""
+def pair_cd(faces: np.ndarray) -> np.ndarray:
+    """CD of every pair of faces (runs × runs): 1 with one neutral face, 0 with two."""
     f = np.asarray(faces, dtype=np.float64)
     norms = np.linalg.norm(f, axis=1)
     zero = norms == 0
     unit = np.divide(f, norms[:, None], out=np.zeros_like(f), where=~zero[:, None])
     cd = np.clip(1.0 - unit @ unit.T, 0.0, 2.0)
-    cd = np.where(zero[:, None] | zero[None, :], np.where(zero[:, None] & zero[None], 0, 1), cd)
+    return np.where(zero[:, None] | zero[None, :], np.where(zero[:, None] & zero[None], 0, 1), cd)
+
+
+def close_pairs(faces: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(pairs with CD < 0.25, pairs at all) as 0/1 matrices over runs of one group, diagonal
+    included (the quadratic forms below take it out)."""
     same = group[:, None] == group[None, :]
-    return ((cd < FIRST_BIN) & same).astype(np.float64), same.astype(np.float64)
+    return ((pair_cd(faces) < FIRST_BIN) & same).astype(np.float64), same.astype(np.float64)
 
 
 def first_bin_share(close: np.ndarray, same: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -105,3 +109,71 @@ class BinContrast:
         unit = "points per unit bias" if self.kind == "slope" else "first-bin points"
         said = f"bootstrap over runs within seeds, {unit}, n = {len(group)}"
         return Decision(ci_verdict(lo, hi, self.sign), float(est[0]), lo, hi, 0.95, said)
+
+
+SHARE_KINDS = ("first_at_least", "first_above", "tvd_below")
+
+
+def bin_pairs(faces: np.ndarray, group: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+    """Per repeatability bin, its pairs as a 0/1 matrix over runs of one group (the last bin
+    closed and open-ended), and the pairs at all."""
+    same = group[:, None] == group[None, :]
+    index = np.searchsorted(np.asarray(BIN_EDGES[1:-1]), pair_cd(faces), side="right")
+    bins = [((index == k) & same).astype(np.float64) for k in range(len(BIN_EDGES) - 1)]
+    return bins, same.astype(np.float64)
+
+
+@dataclass(frozen=True)
+class BinShares:
+    """Table III's bins of one or two rows, bootstrapped over runs within seeds (95%
+    percentile interval). ``arrays``: the group (seed) of each run, then one or two rows of
+    final faces (runs × S):
+
+    * ``first_at_least`` — the first-bin share (points) of the row against ``level``: **holds**
+      when the interval lies at or above it, **differs** when below, else **inconclusive**;
+    * ``first_above`` — first-bin share of row 1 − row 2 (points), rule ``ci`` with sign +1;
+    * ``tvd_below`` — the total variation distance of the two rows' bins (points): **holds**
+      when the interval's upper end is below ``level``, **partly** below ``weaker``,
+      **differs** when its lower end is at or above ``weaker``, else **inconclusive**."""
+
+    kind: str
+    level: float = 0.0
+    weaker: float = 0.0
+    seed: int = 0
+    resamples: int = 400
+
+    def __post_init__(self) -> None:
+        if self.kind not in SHARE_KINDS:
+            raise ValueError(f"kind must be one of {SHARE_KINDS}; got {self.kind!r}")
+
+    def __call__(self, *arrays: np.ndarray) -> Decision:
+        group = np.asarray(arrays[0])
+        rows = arrays[1:]
+        if len(rows) != (1 if self.kind == "first_at_least" else 2):
+            raise ValueError(f"{self.kind} needs a group array and the rows it compares")
+        w = _counts(group, self.resamples, np.random.default_rng(self.seed))
+        shares = []
+        for faces in rows:
+            bins, same = bin_pairs(faces, group)
+            shares.append(np.stack([100 * first_bin_share(b, same, w) for b in bins], axis=1))
+        if self.kind == "first_at_least":
+            est = shares[0][:, 0]
+        elif self.kind == "first_above":
+            est = shares[0][:, 0] - shares[1][:, 0]
+        else:
+            est = 0.5 * np.abs(shares[0] - shares[1]).sum(axis=1)
+        lo, hi = (float(q) for q in np.quantile(est[1:], [0.025, 0.975]))
+        if self.kind == "first_at_least":
+            verdict = (
+                "holds" if lo >= self.level else "differs" if hi < self.level else "inconclusive"
+            )
+        elif self.kind == "first_above":
+            verdict = ci_verdict(lo, hi, +1)
+        elif hi < self.level:
+            verdict = "holds"
+        else:
+            verdict = (
+                "partly" if hi < self.weaker else "differs" if lo >= self.weaker else "inconclusive"
+            )
+        said = f"bootstrap over runs within seeds, {self.kind}, points, n = {len(group)}"
+        return Decision(verdict, float(est[0]), lo, hi, 0.95, said)
