@@ -11,6 +11,7 @@ import pandas as pd
 from emogen.analysis import paper
 from emogen.analysis.paper_targets import TARGET_1
 from emogen.analysis.repeatability import BIN_LABELS, repeatability_bins
+from emogen.analysis.replication.baselines import chance_faces
 from emogen.analysis.replication.conditions import Condition, ConditionRunner, ConditionSpec
 from emogen.analysis.replication.findings import Finding
 from emogen.analysis.replication.intervals import Direction, Evidence, judged
@@ -95,7 +96,16 @@ def bias_repeatability(runner: ConditionRunner) -> BiasRepeatability:
         shares=shares,
         bias=biases,
         table=pd.DataFrame(rows),
-        findings=_findings(shares, biases, conds, runner.settings.seed),
+        findings=_findings(shares, biases, conds, runner.settings.seed, _chance_bins(runner)),
+    )
+
+
+def _chance_bins(runner: ConditionRunner) -> str:
+    """The bins of faces with no target behind them (chance), in words."""
+    rng = np.random.default_rng(runner.settings.seed * 1000 + 3)
+    bins = repeatability_bins(chance_faces(runner.rig, 500, rng)) * 100
+    return "chance (500 faces as protocol initialisation draws them, no target): bins " + (
+        " / ".join(f"{b:.1f}" for b in bins) + " %"
     )
 
 
@@ -104,6 +114,7 @@ def _findings(
     biases: dict[Row, float],
     conds: dict[Row, Condition],
     seed: int,
+    chance: str,
 ) -> list[Finding]:
     best_fixed = min((("fixed", o, "average") for o in (1, 3)), key=lambda k: biases[k])
     fixed_avg = biases[best_fixed]
@@ -153,6 +164,7 @@ def _findings(
             "level and ci, bootstrap over runs within seeds (95%): the highest-bias fixed row's "
             "first-bin share ≥ 50% and above each protocol row's; parts joined: all hold → "
             "holds, some → partly",
+            note=chance,
             value=float(first_fixed),
             value_label="first-bin % at the highest fixed bias",
         ),
@@ -172,6 +184,7 @@ def _findings(
             "threshold on a bootstrap interval over runs within seeds (95%): the TVD of the two "
             "fixed sets' bins (target 1) below 10 points holds, below 20 partly, at or above 20 "
             "differs",
+            note=chance,
             value=tvd,
             value_label="TVD, points",
         ),
