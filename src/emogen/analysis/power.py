@@ -44,7 +44,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from emogen.analysis.power_required import Required, required_n
+from emogen.analysis.power_required import (
+    Required,
+    fit_power_curve,
+    fitted_power,
+    required_n,
+)
 from emogen.config import SimulationConfig
 from emogen.errors import ConfigError
 
@@ -331,49 +336,3 @@ def _result(
         float(np.linalg.norm(ma - mb)),
         required,
     )
-
-
-def _smallest_testable(alpha: float) -> int:
-    """Smallest n per group whose permutation test can reach p <= alpha: 2 / C(2n, n) <= alpha."""
-    from math import comb
-
-    n = 2
-    while 2 / comb(2 * n, n) > alpha:
-        n += 1
-    return n
-
-
-def fitted_power(n: np.ndarray, fit: tuple[float, float] | None, alpha: float) -> np.ndarray:
-    """α + (1 − α) · sigmoid(a + b log n), the fitted power curve (NaN without a fit)."""
-    if fit is None:
-        return np.full(len(n), np.nan)
-    a, b = fit
-    return np.asarray(alpha + (1 - alpha) / (1 + np.exp(-(a + b * np.log(n)))))
-
-
-def fit_power_curve(
-    n: np.ndarray, power: np.ndarray, replicates: int, alpha: float
-) -> tuple[float, float] | None:
-    """Binomial maximum-likelihood fit of power(n) = α + (1 − α) sigmoid(a + b log n) to the
-    simulated powers (each from ``replicates`` experiments), over the n whose permutation test
-    can reach α. None when fewer than two such n, or when the fit does not rise with n."""
-    from scipy.optimize import minimize
-
-    keep = n >= _smallest_testable(alpha)
-    x, k = np.log(n[keep]), np.round(power[keep] * replicates)
-    if len(x) < 2:
-        return None
-
-    def nll(theta: np.ndarray) -> float:
-        p = alpha + (1 - alpha) / (1 + np.exp(-(theta[0] + theta[1] * x)))
-        p = np.clip(p, 1e-9, 1 - 1e-9)
-        return float(-(k * np.log(p) + (replicates - k) * np.log(1 - p)).sum())
-
-    res = minimize(
-        nll,
-        np.array([-3.0, 1.0]),
-        method="Nelder-Mead",
-        options={"xatol": 1e-6, "fatol": 1e-9, "maxiter": 4000},
-    )
-    a, b = (float(v) for v in res.x)
-    return (a, b) if b > 0 else None

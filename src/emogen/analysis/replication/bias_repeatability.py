@@ -117,12 +117,10 @@ def _findings(
     chance: str,
 ) -> list[Finding]:
     best_fixed = min((("fixed", o, "average") for o in (1, 3)), key=lambda k: biases[k])
-    fixed_avg = biases[best_fixed]
-    prot_avg = biases[("protocol", None, "average")]
+    fixed_avg, prot_avg = biases[best_fixed], biases[("protocol", None, "average")]
     prot_bias = conds[("protocol", None, "average")].best_initial
     fixed_bias = conds[best_fixed].best_initial
-    fixed_keys = [k for k in shares if k[0] == "fixed"]
-    prot_keys = [k for k in shares if k[0] == "protocol"]
+    fixed_keys, prot_keys = ([k for k in shares if k[0] == i] for i in ("fixed", "protocol"))
     most = min(fixed_keys, key=lambda k: biases[k])
     first_fixed = shares[most][0]
     a, b = shares[("fixed", 1, "target 1")], shares[("fixed", 3, "target 1")]
