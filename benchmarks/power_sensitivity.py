@@ -9,6 +9,12 @@ method (the logistic fit where it fits the simulated points, else interpolation;
 
     EMOGEN_MODEL=… python -m benchmarks.power_sensitivity --sds 0.05 0.1 0.2 \
         --temperatures 0.02 0.05 0.1 --replicates 100 --out grid.csv --figure grid.png
+    python -m benchmarks.power_sensitivity --sds 0.1 --temperatures 0.05 --blunted 0.7
+
+``--blunted`` asks the intensity question (blunted expressions): group B's happy face at a
+lower intensity, which the CD statistic cannot see; the test then uses ``statistic="ed"``.
+``--observer ed`` makes the simulated participants choose by ED too: a CD chooser ignores the
+intensity of its own prototype, so its faces carry none of the effect.
 """
 
 from __future__ import annotations
@@ -19,29 +25,63 @@ import time
 from itertools import product
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
+from emogen.analysis.power import PowerResult
 from emogen.model.rig import Rig
 
 
-def cell(rig: Rig, sd: float, temperature: float, a: argparse.Namespace) -> dict[str, object]:
-    """One cell: the power curve at participant spread ``sd`` and choice noise ``temperature``."""
-    from emogen.analysis.replication.analysis_tools import brow_power
+def blunted_power(
+    rig: Rig, scale: float, sd: float, temperature: float, a: argparse.Namespace
+) -> PowerResult:
+    """Group B's happy face is group A's at ``scale`` intensity (blunted): CD cannot see it, so
+    the test compares the groups' mean faces by Euclidean distance (``statistic="ed"``)."""
+    from emogen.analysis.paper_targets import HAPPY
+    from emogen.analysis.power import GroupSampler, power_analysis
+    from emogen.config import SimulationConfig
 
-    t0 = time.perf_counter()
-    _, res = brow_power(
-        rig,
-        participant_sd=sd,
-        temperature=temperature,
-        seed=a.seed,
+    w = np.asarray(rig.weights_from_names(dict(HAPPY)), dtype=np.float64)
+    cfg = SimulationConfig.model_validate(
+        {"target": dict(HAPPY), "noise_temperature": temperature, "metric": a.observer}
+    )
+    a_, b_ = (GroupSampler(cfg, rig, p, a.seed + k, sd) for k, p in enumerate((w, scale * w)))
+    return power_analysis(
+        a_,
+        b_,
         max_n=a.max_n,
         replicates=a.replicates,
         permutations=a.permutations,
+        statistic="ed",
+        seed=a.seed,
     )
+
+
+def cell(rig: Rig, sd: float, temperature: float, a: argparse.Namespace) -> dict[str, object]:
+    """One cell: the power curve at participant spread ``sd`` and choice noise ``temperature``
+    (browInnerUp added, CD statistic; or with ``--blunted`` a weaker happy face, ED)."""
+    from emogen.analysis.replication.analysis_tools import brow_power
+
+    t0 = time.perf_counter()
+    if a.blunted:
+        res = blunted_power(rig, a.blunted, sd, temperature, a)
+    else:
+        _, res = brow_power(
+            rig,
+            participant_sd=sd,
+            temperature=temperature,
+            seed=a.seed,
+            max_n=a.max_n,
+            replicates=a.replicates,
+            permutations=a.permutations,
+        )
     req = res.required
     if req is None:
         raise RuntimeError("power_analysis did not read a required n")
     row: dict[str, object] = {
+        "difference": f"happy ×{a.blunted} (ED test, {a.observer} observer)"
+        if a.blunted
+        else "browInnerUp 0.4 (CD)",
         "participant sd": sd,
         "T": temperature,
         "n required": req.n,
@@ -93,6 +133,18 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--figure", type=Path, default=None)
+    ap.add_argument(
+        "--blunted",
+        type=float,
+        default=0.0,
+        help="group B = group A's happy face at this intensity, tested by ED (0: browInnerUp, CD)",
+    )
+    ap.add_argument(
+        "--observer",
+        default="cd",
+        choices=["cd", "ed"],
+        help="the simulated participants' choice metric with --blunted (cd is blind to intensity)",
+    )
     a = ap.parse_args()
     rig = emogen.load_model(os.environ["EMOGEN_MODEL"]).rig
     cells = product(a.sds, a.temperatures)
