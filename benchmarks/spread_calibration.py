@@ -8,6 +8,8 @@ Binomial(K, p), its share has standard error sqrt(α(1 − α)/K); a cell passes
 with every active gene scaled by 1 + N(0, sd), clipped at 0) must be flagged.
 
     python -m benchmarks.spread_calibration --groups 40 --sizes 20 80 240 --out grid.csv
+    python -m benchmarks.spread_calibration --targets medium --sizes 80 \
+        --temperatures 0.05 --assumed-temperatures 0 0.025 0.05 0.1   # sensitivity to T
 
 Cells: sparse (one gene), medium (four genes) and dense (the happy face's building blocks)
 targets × group sizes × T; G = 10 generations with the paper's selections.
@@ -73,14 +75,18 @@ def cell(
     groups: int,
     spread: float = 0.0,
     seed: int = 0,
+    assumed: float | None = None,
 ) -> dict[str, object]:
-    """One cell of the grid: the share of ``groups`` groups flagged, with its SE."""
+    """One cell of the grid: the share of ``groups`` groups flagged, with its SE. ``assumed``:
+    the choice noise the test's null simulates (default: the groups' own T) — the test's
+    sensitivity to a wrong assumption about T."""
     from emogen.analysis.elites import final_faces_simulator
     from emogen.analysis.noise import latent_spread_test
 
     target = np.asarray(rig.weights_from_names(TARGETS[name]), dtype=np.float64)  # type: ignore[attr-defined]
-    null = final_faces_simulator(_config(temperature), rig, 90_000 + seed)  # type: ignore[arg-type]
-    flagged, excess = [], []
+    t_null = temperature if assumed is None else assumed
+    null = final_faces_simulator(_config(t_null), rig, 90_000 + seed)  # type: ignore[arg-type]
+    flagged, excess, covered = [], [], []
     t0 = time.perf_counter()
     for k in range(groups):
         s = seed * 10_000 + k
@@ -90,19 +96,22 @@ def cell(
             faces = final_faces_simulator(_config(temperature), rig, 50_000 + s)(target, n)  # type: ignore[arg-type]
         test, _ = latent_spread_test(faces, null, rng=np.random.default_rng(s), **TEST_KW)  # type: ignore[arg-type]
         flagged.append(test.exceeds)
-        excess.append(test.mean_error - test.noise_mean)
+        excess.append(test.excess)
+        covered.append(test.excess_lo <= 0 <= test.excess_hi)
     rate = float(np.mean(flagged))
     se = float(np.sqrt(ALPHA * (1 - ALPHA) / groups))
     return {
         "target": name,
         "n": n,
         "T": temperature,
+        "assumed T": t_null,
         "participant spread": spread,
         "groups": groups,
         "flagged": rate,
         "SE at α": se,
         "within α + 2 SE": rate <= ALPHA + 2 * se if spread == 0 else None,
         "mean excess spread": float(np.mean(excess)),
+        "excess CI covers 0": float(np.mean(covered)),
         "seconds": time.perf_counter() - t0,
     }
 
@@ -116,6 +125,13 @@ def main() -> None:
     ap.add_argument("--targets", nargs="+", default=list(TARGETS))
     ap.add_argument("--temperatures", type=float, nargs="+", default=[0.05])
     ap.add_argument("--power-spread", type=float, default=0.0)
+    ap.add_argument(
+        "--assumed-temperatures",
+        type=float,
+        nargs="+",
+        default=None,
+        help="choice noise the null assumes (default: each cell's own T)",
+    )
     ap.add_argument("--out", type=Path, default=None)
     a = ap.parse_args()
     rig = emogen.load_model(os.environ["EMOGEN_MODEL"]).rig
@@ -123,10 +139,12 @@ def main() -> None:
     for name in a.targets:
         for n in a.sizes:
             for t in a.temperatures:
-                rows.append(cell(rig, name, n, t, a.groups))
+                for assumed in a.assumed_temperatures or [None]:
+                    rows.append(cell(rig, name, n, t, a.groups, assumed=assumed))
+                    print(pd.DataFrame(rows[-1:]).to_string(index=False), flush=True)
                 if a.power_spread > 0:
                     rows.append(cell(rig, name, n, t, a.groups, a.power_spread, seed=1))
-                print(pd.DataFrame(rows[-1:]).to_string(index=False), flush=True)
+                    print(pd.DataFrame(rows[-1:]).to_string(index=False), flush=True)
     table = pd.DataFrame(rows)
     print(table.to_string(index=False))
     if a.out:

@@ -58,3 +58,20 @@ def test_bad_inputs_are_named() -> None:
         permutation_chance(
             np.zeros(3, dtype=int), np.zeros(3, dtype=int), np.random.default_rng(), 0
         )
+
+
+def test_chance_faces_are_initial_faces_without_a_target(ict_model) -> None:
+    from emogen.analysis.repeatability import repeatability_bins
+    from emogen.analysis.replication.baselines import chance_faces
+
+    rig = ict_model.rig
+    faces = chance_faces(rig, 60, np.random.default_rng(4))
+    assert faces.shape == (60, len(rig.shape_names))
+    np.testing.assert_array_equal(faces, chance_faces(rig, 60, np.random.default_rng(4)))
+    genes = rig.contract(faces, True)
+    active = (genes > 0).sum(axis=1)
+    assert active.min() >= 1 and active.max() <= 8  # 3–8 drawn genes (emotion faces: capped)
+    # unrelated faces rarely pair up in the first repeatability bin
+    assert repeatability_bins(faces)[0] < 0.3
+    with pytest.raises(ValueError, match="count must be ≥ 1; got 0"):
+        chance_faces(rig, 0, np.random.default_rng(0))

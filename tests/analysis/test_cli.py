@@ -26,6 +26,9 @@ def test_power_command(ict_dir: Path, tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     summary = json.loads((out / "power.json").read_text())
     assert summary["n_required"] is not None and 4 <= summary["n_required"] <= 12
+    lo, hi = summary["n_required_ci95"]  # the upper end may lie beyond the simulated n
+    assert lo <= summary["n_required"] and (hi is None or summary["n_required"] <= hi)
+    assert summary["n_required_method"] in ("fit", "interpolation")
     assert summary["prototype_cd"] > 0.15
     curve = pd.read_csv(out / "power.csv")
     assert list(curve.columns) == ["n", "power", "se", "fitted", "false_positive", "fp_se"]
@@ -59,15 +62,20 @@ def test_analyse_command_reports_a_bad_folder(ict_dir: Path, tmp_path: Path) -> 
     assert result.exit_code == 2 and "neither a study export" in result.output
 
 
-def test_replicate_one_section(ict_dir: Path, tmp_path: Path) -> None:
-    out = tmp_path / "rep"
+def _section(ict_dir: Path, out: Path, words: str, runs: int) -> tuple[pd.DataFrame, str]:
+    """``emogen replicate --quick --only WORDS --no-render --runs RUNS``: (findings, output)."""
     result = runner.invoke(
         analysis_app,
         ["replicate", "--quick", "--out", str(out), "--model", str(ict_dir), "--only",
-         "activation", "--no-render", "--runs", "40"],
+         words, "--no-render", "--runs", str(runs)],
     )  # fmt: skip
     assert result.exit_code == 0, result.output
-    findings = pd.read_csv(out / "tables" / "findings.csv")
+    return pd.read_csv(out / "tables" / "findings.csv"), result.output
+
+
+def test_replicate_one_section(ict_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "rep"
+    findings, output = _section(ict_dir, out, "activation", 40)
     assert len(findings) == 5 and set(findings["section"]) == {"Table IV"}
     verdicts = findings["verdict"]  # the machine table: plain values, one per cell
     assert verdicts.isin(["holds", "partly", "differs", "inconclusive"]).all()
@@ -85,12 +93,24 @@ def test_replicate_one_section(ict_dir: Path, tmp_path: Path) -> None:
     assert pooled.all() and "paired t, n = 120" in compromise["pooled_interval"]
     sigma0 = findings[findings["paper"].str.startswith("0.370")].iloc[0]
     assert "paired bootstrap of the SD difference, n = 120" in sigma0["pooled_interval"]
-    assert "Table IV" in result.output and "paper findings:" in result.output
+    assert "Table IV" in output and "paper findings:" in output
     readme = (out / "README.md").read_text()
     assert "9,592" in readme
     # --quick has its own seeds (not a prefix of the full run's seed 1); the run is recorded
     assert "seeds: `101, 102, 103`" in readme and "model hash: `" in readme
     assert "git commit: `" in readme and "command: `emogen replicate --quick --runs 40" in readme
+
+
+def test_replicate_table_iii_reads_both_ways(ict_dir: Path, tmp_path: Path) -> None:
+    findings, _ = _section(ict_dir, tmp_path / "rep3", "repeatability", 30)
+    assert set(findings["section"]) == {"Table III"}
+    slope = findings[findings["paper_finding"].str.startswith("protocol repeatability")].iloc[0]
+    # two matched-bias parts in first-bin points, two within-initialisation slopes
+    assert slope["pooled_interval"].count("first-bin points, n = 90") == 2
+    assert slope["pooled_interval"].count("points per unit bias, n = 90") == 2
+    assert "matched bias" in slope["ours_first_seed"] and "readings" in slope["rule"]
+    bias = findings[findings["paper_finding"].str.startswith("protocol initialisation")].iloc[0]
+    assert bias["pooled_interval"].count("paired t, n = 90") == 2
 
 
 @pytest.mark.slow

@@ -29,6 +29,7 @@ from emogen.analysis.replication.verdicts import (
     noninferior_verdict,
     number_verdict,
     parts_verdict,
+    readings_parts_verdict,
     readings_verdict,
     tost_verdict,
 )
@@ -326,3 +327,22 @@ def test_rule_chain_refuses_uneven_groups() -> None:
         chain_verdict([H, H, H], 2)
     with pytest.raises(ValueError, match="partly_at must be 1…2; got 3"):
         chain_verdict([H, H], 2, 3)
+
+
+@pytest.mark.parametrize(
+    ("verdicts", "verdict"),
+    [
+        ([H, H, H, H], "holds"),
+        ([H, U, H, D], "partly"),
+        ([D, D, D, U], "differs"),
+        ([H, H, D, D], "inconclusive"),  # the readings disagree
+        ([U, U, U, U], "inconclusive"),
+    ],
+)
+def test_rule_readings_of_parts(verdicts: list[str], verdict: str) -> None:
+    assert readings_parts_verdict(verdicts) == verdict
+
+
+def test_rule_readings_of_parts_needs_two_readings() -> None:
+    with pytest.raises(ValueError, match="first must be 1…1; got 2"):
+        readings_parts_verdict([H, H])

@@ -105,3 +105,34 @@ def test_latent_target_search_avoids_the_dense_mean_false_alarm() -> None:
     mixture = np.concatenate([simulate(t, 20), simulate(np.r_[0.0, 1.0, np.zeros(S - 2)], 20)])
     res2, _ = latent_spread_test(mixture, simulate, group="two targets", rng=rng, pool_runs=400)
     assert res2.exceeds and "consistent" in res2.method
+
+
+def test_excess_spread_interval_brackets_zero_only_within_noise() -> None:
+    """The excess (observed − the null's mean) and its interval: the null's 2.5–97.5%
+    spread inverted around the observed value (the same null drawn again from the same seed)."""
+    t1 = np.r_[np.ones(3), np.zeros(S - 3)]
+    t2 = np.r_[np.zeros(3), np.ones(3), np.zeros(S - 6)]
+    pool = fake_ga(t1, 2000, np.random.default_rng(5))
+    noise = GANoise.from_errors(proxy_errors(pool), "fake", pool)
+    same = fake_ga(t1, 40, np.random.default_rng(6))
+    mixed = np.concatenate([same[:20], fake_ga(t2, 20, np.random.default_rng(7))])
+    for group, exceeds in ((same, False), (mixed, True)):
+        res = spread_test(group, noise, draws=500, rng=np.random.default_rng(8))
+        null = null_mean_proxy_errors(pool, len(group), draws=500, rng=np.random.default_rng(8))
+        observed = proxy_errors(group).mean()
+        assert res.excess == pytest.approx(observed - null.mean())
+        assert res.excess_lo == pytest.approx(observed - np.quantile(null, 0.975))
+        assert res.excess_hi == pytest.approx(observed - np.quantile(null, 0.025))
+        assert (res.excess_lo > 0) == exceeds and res.exceeds == exceeds
+    assert "excess [95% CI]" in res.row() and res.record()["excess_ci_low"] == res.excess_lo
+
+
+def test_excess_spread_of_the_t_fallback_is_the_t_interval() -> None:
+    rng = np.random.default_rng(9)
+    group = fake_ga(np.r_[np.ones(3), np.zeros(S - 3)], 30, rng)
+    err = proxy_errors(group)
+    res = spread_test(group, GANoise(0.02, 0.01, 500, "paper-like"), rng=rng)
+    half = 2.045229642132703 * err.std(ddof=1) / np.sqrt(30)  # t(0.975, 29)
+    assert res.excess == pytest.approx(err.mean() - 0.02)
+    assert res.excess_lo == pytest.approx(err.mean() - half - 0.02)
+    assert res.excess_hi == pytest.approx(err.mean() + half - 0.02)

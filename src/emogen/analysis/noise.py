@@ -11,6 +11,10 @@ final face to the group's mean. The same statistic is computed on GA noise: rand
 the same size n drawn from the final faces of simulated runs with one consistent target (the
 pool) give its null distribution — so the comparison is like for like (a mean estimated from n
 faces is closer to them when n is small). One-sided p = (1 + #{null ≥ observed}) / (1 + draws).
+The size of the effect is the **excess spread**, observed − the null's mean, reported with a
+95% interval: the null's 2.5–97.5% spread inverted around the observed value (the group's
+statistic taken to vary as the null's does, shifted), so a group shows how much, not only
+whether, its spread exceeds the noise.
 
 **Which target to simulate** (:func:`latent_spread_test`). GA noise depends on the target: a
 sparse target (one shape) is matched far less consistently than a dense one. The group's mean
@@ -125,6 +129,11 @@ class SpreadTest:
     method: str
     alpha: float
     exceeds: bool
+    #: mean proxy error − the null's mean, with its 95% interval (the null's sampling
+    #: spread inverted around the observed value: a location shift of the null)
+    excess: float = float("nan")
+    excess_lo: float = float("nan")
+    excess_hi: float = float("nan")
 
     def row(self) -> dict[str, object]:
         return {
@@ -134,6 +143,7 @@ class SpreadTest:
             "sd": round(self.sd_error, 4),
             "noise (same n)": round(self.noise_mean, 4),
             "noise 95th pct": round(self.noise_q95, 4),
+            "excess [95% CI]": f"{self.excess:+.4f} [{self.excess_lo:+.4f}, {self.excess_hi:+.4f}]",
             "p": float(f"{self.p_value:.3g}"),
             "method": self.method,
             "exceeds noise": self.exceeds,
@@ -148,6 +158,9 @@ class SpreadTest:
             "sd_proxy_error": self.sd_error,
             "noise_mean_same_n": self.noise_mean,
             "noise_q95_same_n": self.noise_q95,
+            "excess": self.excess,
+            "excess_ci_low": self.excess_lo,
+            "excess_ci_high": self.excess_hi,
             "p": self.p_value,
             "method": self.method,
             "exceeds_noise": self.exceeds,
@@ -180,6 +193,7 @@ def spread_test(
             )
         null = null_mean_proxy_errors(noise.pool, len(f), draws=draws, rng=rng)
         p = float((1 + np.sum(null >= observed)) / (1 + draws))
+        q_lo, q_hi = (float(q) for q in np.quantile(null, [0.025, 0.975]))
         return SpreadTest(
             group,
             len(f),
@@ -192,10 +206,15 @@ def spread_test(
             f"simulated null ({draws} subsets of {len(noise.pool)} runs)",
             alpha,
             p < alpha,
+            observed - float(null.mean()),
+            observed - q_hi,
+            observed - q_lo,
         )
     t = stats.ttest_1samp(err, noise.mean, alternative="greater")
     p = float(t.pvalue)
     q95 = noise.mean + 1.645 * noise.sd / np.sqrt(len(f))
+    two_sided = stats.ttest_1samp(err, noise.mean)  # its 95% interval of the mean error
+    lo, hi = (float(v) - noise.mean for v in two_sided.confidence_interval(0.95))
     return SpreadTest(
         group,
         len(f),
@@ -208,6 +227,9 @@ def spread_test(
         f"one-sample t-test against μ = {noise.mean:g} ({noise.source})",
         alpha,
         p < alpha,
+        observed - noise.mean,
+        lo,
+        hi,
     )
 
 

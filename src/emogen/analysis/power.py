@@ -44,6 +44,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
+from emogen.analysis.power_required import (
+    Required,
+    fit_power_curve,
+    fitted_power,
+    required_n,
+)
 from emogen.config import SimulationConfig
 from emogen.errors import ConfigError
 
@@ -62,8 +68,10 @@ class PowerResult:
     """curve: n, simulated power, its standard error, the fitted curve, and the false-positive
     rate of the same test on null experiments (``false_positive``, ``fp_se``). ``n_required``:
     the smallest n whose *fitted* power reaches the target (None: not within max_n) — the fit
-    smooths the Monte Carlo noise of single points; ``n_observed``: the smallest simulated n
-    whose own estimate reached it."""
+    smooths the Monte Carlo noise of single points — or, where the fit misfits the simulated
+    points, their interpolation (``required``: which, the fit check, a 95% interval;
+    :mod:`emogen.analysis.power_required`); ``n_observed``: the smallest simulated n whose own
+    estimate reached it."""
 
     curve: pd.DataFrame
     n_required: int | None
@@ -74,6 +82,7 @@ class PowerResult:
     n_observed: int | None = None
     fit: tuple[float, float] | None = None
     effect_ed: float = float("nan")
+    required: Required | None = None  # n_required with its fit check and 95% interval
 
     @property
     def max_false_positive(self) -> float:
@@ -277,6 +286,7 @@ def power_analysis(
             "statistic": statistic,
             "participants": "fresh per simulated experiment",
         },
+        rng,
     )
 
 
@@ -289,6 +299,7 @@ def _result(
     max_n: int,
     settings: dict[str, object] | None,
     opts: dict[str, object],
+    rng: np.random.Generator,
 ) -> PowerResult:
     from emogen.metrics import cosine_distance
 
@@ -308,17 +319,14 @@ def _result(
         }
     )
     observed = next((n for n in ns if rates[n][0] >= target_power), None)
-    required = None
-    if fit is not None:
-        a_, b_ = fit
-        x = (np.log((target_power - alpha) / (1 - target_power)) - a_) / b_
-        n_fit = int(np.ceil(np.exp(x)))
-        required = max(n_fit, _smallest_testable(alpha)) if n_fit <= max_n else None
+    required = required_n(
+        np.array(ns), pw, replicates, target=target_power, alpha=alpha, max_n=max_n, rng=rng
+    )
     ma = drawn[0].reshape(-1, drawn[0].shape[-1]).mean(0)
     mb = drawn[1].reshape(-1, drawn[1].shape[-1]).mean(0)
     return PowerResult(
         curve,
-        required,
+        required.n,
         target_power,
         alpha,
         float(cosine_distance(ma, mb)),
@@ -326,50 +334,5 @@ def _result(
         observed,
         fit,
         float(np.linalg.norm(ma - mb)),
+        required,
     )
-
-
-def _smallest_testable(alpha: float) -> int:
-    """Smallest n per group whose permutation test can reach p <= alpha: 2 / C(2n, n) <= alpha."""
-    from math import comb
-
-    n = 2
-    while 2 / comb(2 * n, n) > alpha:
-        n += 1
-    return n
-
-
-def fitted_power(n: np.ndarray, fit: tuple[float, float] | None, alpha: float) -> np.ndarray:
-    """α + (1 − α) · sigmoid(a + b log n), the fitted power curve (NaN without a fit)."""
-    if fit is None:
-        return np.full(len(n), np.nan)
-    a, b = fit
-    return np.asarray(alpha + (1 - alpha) / (1 + np.exp(-(a + b * np.log(n)))))
-
-
-def fit_power_curve(
-    n: np.ndarray, power: np.ndarray, replicates: int, alpha: float
-) -> tuple[float, float] | None:
-    """Binomial maximum-likelihood fit of power(n) = α + (1 − α) sigmoid(a + b log n) to the
-    simulated powers (each from ``replicates`` experiments), over the n whose permutation test
-    can reach α. None when fewer than two such n, or when the fit does not rise with n."""
-    from scipy.optimize import minimize
-
-    keep = n >= _smallest_testable(alpha)
-    x, k = np.log(n[keep]), np.round(power[keep] * replicates)
-    if len(x) < 2:
-        return None
-
-    def nll(theta: np.ndarray) -> float:
-        p = alpha + (1 - alpha) / (1 + np.exp(-(theta[0] + theta[1] * x)))
-        p = np.clip(p, 1e-9, 1 - 1e-9)
-        return float(-(k * np.log(p) + (replicates - k) * np.log(1 - p)).sum())
-
-    res = minimize(
-        nll,
-        np.array([-3.0, 1.0]),
-        method="Nelder-Mead",
-        options={"xatol": 1e-6, "fatol": 1e-9, "maxiter": 4000},
-    )
-    a, b = (float(v) for v in res.x)
-    return (a, b) if b > 0 else None

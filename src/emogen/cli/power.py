@@ -131,6 +131,9 @@ def _write(out: Path, res: PowerResult, power: float, alpha: float) -> None:
     summary = {
         "n_required": res.n_required,
         "n_observed": res.n_observed,
+        "n_required_ci95": [res.required.lo, res.required.hi] if res.required else None,
+        "n_required_method": res.required.method if res.required else None,
+        "fit_chi2_p": res.required.fit_p if res.required else None,
         "fit_logit_intercept_slope": res.fit,
         "power": power,
         "alpha": alpha,
@@ -154,9 +157,10 @@ def _lines(res: PowerResult, power: float, alpha: float, max_participants: int) 
     if res.n_required is None:
         lines.append(f"power {power} not reached within {max_participants} participants per group")
     else:
+        said = res.required.text() if res.required else f"{res.n_required} (fit)"
         lines.append(
-            f"{res.n_required} participants per group reach power {power} (α = {alpha}; fitted "
-            f"curve; smallest simulated n at or above it: {res.n_observed})"
+            f"{said} participants per group reach power {power} (α = {alpha}; smallest "
+            f"simulated n at or above it: {res.n_observed})"
         )
     return lines
 

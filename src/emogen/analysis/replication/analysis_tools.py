@@ -19,6 +19,7 @@ from emogen.analysis.replication.findings import Finding
 from emogen.analysis.separability import Separability, gmm_separability
 from emogen.config import SimulationConfig
 from emogen.metrics import cosine_distance
+from emogen.model.rig import Rig
 
 
 @dataclass(frozen=True, eq=False)
@@ -103,23 +104,47 @@ class PowerStudy:
     result: PowerResult
 
 
-def power_study(runner: ConditionRunner) -> PowerStudy:
-    s = runner.settings
+def brow_power(
+    rig: Rig,
+    *,
+    participant_sd: float,
+    temperature: float,
+    seed: int,
+    max_n: int,
+    replicates: int,
+    permutations: int,
+) -> tuple[float, PowerResult]:
+    """The power analysis of two happy groups differing by browInnerUp 0.4: (CD between the
+    prototypes, the result) under the assumed participant spread and choice noise T."""
     a = dict(HAPPY)
     b = dict(HAPPY) | {"browInnerUp": 0.4}
-    wa, wb = runner.weights(a), runner.weights(b)
-    sd = 0.1
-    cfg = SimulationConfig(target=a, noise_temperature=s.participant_noise)
+    wa, wb = (np.asarray(rig.weights_from_names(p), dtype=np.float64) for p in (a, b))
+    cfg = SimulationConfig(target=a, noise_temperature=temperature)
     samplers = [
-        GroupSampler(cfg, runner.rig, w, s.seed + k, participant_sd=sd)
+        GroupSampler(cfg, rig, w, seed + k, participant_sd=participant_sd)
         for k, w in enumerate((wa, wb))
     ]
     res = power_analysis(
         samplers[0],
         samplers[1],
+        max_n=max_n,
+        replicates=replicates,
+        permutations=permutations,
+        seed=seed,
+    )
+    return float(cosine_distance(wa, wb)), res
+
+
+def power_study(runner: ConditionRunner) -> PowerStudy:
+    s = runner.settings
+    sd = 0.1
+    cd, res = brow_power(
+        runner.rig,
+        participant_sd=sd,
+        temperature=s.participant_noise,
+        seed=s.seed,
         max_n=s.power_max_n,
         replicates=s.power_replicates,
         permutations=s.power_permutations,
-        seed=s.seed,
     )
-    return PowerStudy(float(cosine_distance(wa, wb)), sd, res)
+    return PowerStudy(cd, sd, res)

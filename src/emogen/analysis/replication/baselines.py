@@ -1,5 +1,9 @@
 """What chance gives: baselines for the replication's findings.
 
+Where a finding reads final faces (repeatability bins, the intensity line, the nose ratio), its
+chance level is the same statistic on faces with no target behind them: faces as protocol
+initialisation draws them (:func:`chance_faces`).
+
 Table I's accuracies are read against the same clusters with the target labels permuted (a
 permutation distribution of the Hungarian-matched accuracy and of the adjusted Rand index):
 with no relation between target and cluster, how many samples would a one-to-one matching of
@@ -9,9 +13,13 @@ clusters to targets still call correct?
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+
+if TYPE_CHECKING:
+    from emogen.model.rig import Rig
 
 
 def contingency(labels: np.ndarray, predicted: np.ndarray) -> np.ndarray:
@@ -84,3 +92,19 @@ def permutation_chance(
         float(np.quantile(ari, 0.95)),
         permutations,
     )
+
+
+def chance_faces(rig: Rig, count: int, rng: np.random.Generator) -> np.ndarray:
+    """What chance gives where a finding reads final faces: ``count`` faces (count, S) as
+    protocol initialisation draws them (one non-neutral face of each of ``count`` fresh
+    generation-0 populations, full weights) — faces with no target behind them."""
+    from emogen.ga.init import NEUTRAL, protocol_init
+
+    if count < 1:
+        raise ValueError(f"count must be ≥ 1; got {count}")
+    faces = []
+    for _ in range(count):
+        genes, labels = protocol_init(rig, rng=rng)
+        keep = np.flatnonzero(labels != NEUTRAL)
+        faces.append(genes[rng.choice(keep)])
+    return np.asarray(rig.expand(np.stack(faces)))

@@ -15,6 +15,7 @@ from scipy import stats
 from emogen.analysis import paper
 from emogen.analysis.noise import GANoise, pooled_noise
 from emogen.analysis.paper_targets import paper_targets
+from emogen.analysis.replication.baselines import chance_faces
 from emogen.analysis.replication.conditions import Condition, ConditionRunner, ConditionSpec
 from emogen.analysis.replication.findings import Finding, cohen_d, graded, pm
 from emogen.analysis.replication.geometry import FaceGeometry
@@ -223,12 +224,18 @@ def complexity_noise(runner: ConditionRunner, geometry: FaceGeometry) -> Complex
         )
     parts = [GANoise.from_errors(sims[t].final_errors, t) for t in (T2, "dense happy")]
     noise = pooled_noise(parts, "mean of target 2 and the dense happy target")
-    findings = _complexity_findings(sims, noise, fits)
+    rng = np.random.default_rng(runner.settings.seed * 1000 + 18)
+    chance_mean = chance_faces(runner.rig, 500, rng).mean(axis=0)
+    chance = {t: geometry.intensity_fit(chance_mean, s.target)[1] for t, s in sims.items()}
+    findings = _complexity_findings(sims, noise, fits, chance)
     return ComplexityNoise(sims, pd.DataFrame(rows), noise, findings)
 
 
 def _complexity_findings(
-    sims: dict[str, Condition], noise: GANoise, fits: dict[str, tuple[float, float]]
+    sims: dict[str, Condition],
+    noise: GANoise,
+    fits: dict[str, tuple[float, float]],
+    chance: dict[str, float],
 ) -> list[Finding]:
     mus = [s.stats()[0] for s in sims.values()]
     sds = [s.stats()[1] for s in sims.values()]
@@ -275,6 +282,8 @@ def _complexity_findings(
             + ", ".join(f"{t} {res:.2f}" for t, (_, res) in fits.items())
             + f"; dense intensity ×{scale:.2f}",
             graded(on_line and 0.8 <= scale <= 1.25, on_line),
+            "chance (the mean of 500 faces as protocol initialisation draws them): residual "
+            + ", ".join(f"{t} {r:.2f}" for t, r in chance.items()),
             rule="threshold: every residual < 0.35 and dense intensity ×0.8–1.25; partly: the "
             "former",
             value=max(r for _, r in fits.values()),

@@ -121,4 +121,19 @@ WHY: dict[str, str] = {
     "per target (paired) instead of Cohen's d's point estimate",
     "CD(α) gives near-perfect separability of the three targets": "Hungarian-matched "
     "accuracy with a Wilson CI on the pooled samples",
+    "more initial activations make the bias more consistent (σ0 falls)": "each link of the "
+    "fall a paired bootstrap CI of the SD difference on the pooled runs (rule 'chain'): it "
+    "holds for target 1; target 2's first link (1–3 vs 3–8) is within noise",
+    "three selections: fixed init's σ10 rises; protocol's μ10 and σ10 fall (marginally)": "the "
+    "pooled runs' paired intervals: protocol's σ10 rises slightly (the paper's fall is "
+    "reversed), the other parts are within noise",
+    "protocol initialisation hardly reaches a high bias: a fixed set can bias far more": "paired "
+    "t on the pooled runs: the best fixed set biases more, but by far less than 'far more' "
+    "(half the paper's gap, 0.085): partly",
+    "protocol repeatability is less sensitive to bias: fewer identical results as bias grows": ""
+    "both readings on bootstrap intervals: at matched bias (fixed row against protocol moved "
+    "along its own slope) the data favour the paper; within initialisation (the paper's "
+    "arithmetic) they do not; the readings disagree",
+    "for a mixed target β_m, ED(β) is better by CD": "Welch CI over the 5 matches of each "
+    "metric, pooled over the seeds' training sets",
 }

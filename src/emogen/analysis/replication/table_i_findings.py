@@ -25,6 +25,8 @@ Inner = Callable[[list[str]], str]
 CONFUSED, CONFUSED_WEAKER = 0.10, 0.05
 #: 'lumped': a one-to-one matching of a lump leaves ≥ 50% of the two targets' samples wrong
 LUMPED, LUMPED_WEAKER = 0.40, 0.30
+#: 'an unnamed cluster splits target 2': at least this share of target 2 outside its cluster
+SPLIT, SPLIT_WEAKER = 0.20, 0.10
 
 
 def _targets_of(sep: Separability, *names: str) -> np.ndarray:
@@ -55,6 +57,7 @@ def _parts(seps: dict[str, Separability]) -> dict[str, tuple[list[Evidence], Inn
     v, e = seps["vertex_rms"], seps["ed"]
     t2 = _targets_of(v, "target 2")
     ed13 = _targets_of(e, "target 1", "target 3")
+    ed2 = _targets_of(e, "target 2")
     swapped = _swapped(v)
     return {
         "cd": (
@@ -86,6 +89,12 @@ def _parts(seps: dict[str, Separability]) -> dict[str, tuple[list[Evidence], Inn
             f"targets 1, 3 wrongly matched {1 - _share(e, 'target 1', 'target 3'):.0%} "
             f"(CD: {1 - _share(seps['cd'], 'target 1', 'target 3'):.0%}); one cluster for both: "
             f"{'yes' if e.cluster_of_group['target 1'] == e.cluster_of_group['target 3'] else 'no'}",
+        ),
+        "split": (
+            [Evidence(Share(SPLIT, SPLIT_WEAKER), (1 - _correct(e)[ed2],))],
+            partial(main_part_verdict, n_main=1),
+            f"target 2 outside its matched cluster {1 - _share(e, 'target 2'):.0%} (CD: "
+            f"{1 - _share(seps['cd'], 'target 2'):.0%})",
         ),
     }
 
@@ -121,6 +130,12 @@ CLAIMS = {
         f"level: targets 1, 3 wrongly matched ≥ {LUMPED:.0%} holds (a lump leaves ≥ 50%), "
         f"≥ {LUMPED_WEAKER:.0%} partly, wholly below differs",
     ),
+    "split": (
+        "ED(α′) splits target 2: an unnamed cluster takes part of it",
+        "an unnamed cluster splits target 2",
+        f"level: target 2 outside its matched cluster ≥ {SPLIT:.0%} holds, ≥ {SPLIT_WEAKER:.0%} "
+        "partly, wholly below differs",
+    ),
 }
 
 
@@ -130,7 +145,7 @@ def table_i_findings(
     seps90: dict[str, Separability],
     chance: str = "",
 ) -> list[Finding]:
-    """Table I's four findings, each decided in both readings."""
+    """Table I's five findings, each decided in both readings."""
     two, ninety = _parts(seps), _parts(seps90)
     out = []
     for key, (claim, paper, rule) in CLAIMS.items():

@@ -231,6 +231,15 @@ def readings_verdict(first: str, second: str) -> str:
     return first if first == second else "inconclusive"
 
 
+def readings_parts_verdict(verdicts: list[str], first: int = 2) -> str:
+    """Two readings of one claim, each of several parts: the first ``first`` verdicts are
+    the first reading's parts, the rest the second's; each reading joined by
+    :func:`parts_verdict`, the two by :func:`readings_verdict`."""
+    if not 0 < first < len(verdicts):
+        raise ValueError(f"first must be 1…{len(verdicts) - 1}; got {first}")
+    return readings_verdict(parts_verdict(verdicts[:first]), parts_verdict(verdicts[first:]))
+
+
 def compromise_verdict(verdicts: list[str], targets: int = 2, others: int = 2) -> str:
     """Rule 'compromise': a setting is a compromise of two criteria when no other setting
     beats it on both (it is not dominated) and it beats each other setting on at least one.

@@ -150,15 +150,7 @@ def write_closing(
         "Every finding, with the paper's numbers and ours",
         data=_records(paper),
     )
-    changed = _changed(paper)
-    if len(changed):
-        report.heading("Verdicts that changed with issue #30", level=3)
-        report.paragraph(
-            f"{len(changed)} of {len(paper)} verdicts differ from the report before verdicts "
-            "were decided on intervals and equivalence tests (3 seeds, rules on point "
-            "estimates, seeds' agreement)."
-        )
-        report.table(changed, "verdict_changes", "Every verdict that changed, and why")
+    _write_changed(report, paper)
     if ours:
         report.heading("Our own checks (outside the tally)", level=3)
         report.table(
@@ -178,6 +170,19 @@ def write_closing(
     report.bullets([f"{key}: `{value}`" for key, value in provenance.items()])
     timing = pd.DataFrame({"experiment": list(timings), "seconds": list(timings.values())})
     report.table(timing, "timings", "Seconds per experiment (all seeds)")
+
+
+def _write_changed(report: Report, paper: list[Combined]) -> None:
+    """The closing note: every verdict that changed with issue #30, and why."""
+    changed = _changed(paper)
+    if len(changed):
+        report.heading("Verdicts that changed with issue #30", level=3)
+        report.paragraph(
+            f"{len(changed)} of {len(paper)} verdicts differ from the report before verdicts "
+            "were decided on intervals and equivalence tests (3 seeds, rules on point "
+            "estimates, seeds' agreement)."
+        )
+        report.table(changed, "verdict_changes", "Every verdict that changed, and why")
 
 
 def _changed(combined: list[Combined]) -> pd.DataFrame:

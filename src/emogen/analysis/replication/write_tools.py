@@ -89,13 +89,23 @@ def write_power(r: Report, res: PowerStudy, s: ReplicateSettings) -> None:
         ),
         "Power curve; dashed: 80%.",
     )
-    r.paragraph(
-        f"**{power.n_required} participants per group** reach 80% power on the fitted curve "
-        f"(logistic in log n, binomial maximum likelihood); the smallest simulated n whose own "
-        f"estimate reached it: {power.n_observed}."
-        if power.n_required is not None
-        else f"80% power is not reached within {s.power_max_n} participants per group."
-    )
+    req = power.required
+    if power.n_required is None or req is None:
+        r.paragraph(f"80% power is not reached within {s.power_max_n} participants per group.")
+    else:
+        how = (
+            "on the fitted curve (logistic in log n, binomial maximum likelihood; its χ² "
+            f"goodness of fit against the simulated points: p = {req.fit_p:.2g})"
+            if req.method == "fit"
+            else "by interpolating the simulated points in log n (the logistic fit misfits "
+            f"them: χ² p = {req.fit_p:.2g})"
+        )
+        hi = "beyond the simulated n" if req.hi is None else req.hi
+        r.paragraph(
+            f"**{power.n_required} participants per group** (95% CI {req.lo}–{hi}, a "
+            f"parametric bootstrap of the simulated points) reach 80% power {how}. The "
+            f"smallest simulated n whose own estimate reached it: {power.n_observed}."
+        )
     fp = power.curve["false_positive"]
     r.paragraph(
         f"False-positive rate over the curve: {fp.min():.3f}–{fp.max():.3f} (mean "
