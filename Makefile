@@ -39,7 +39,9 @@ lint: setup
 	npx --no-install eslint .
 	npx --no-install tsc -p tsconfig.json
 
+# The CPU and BLAS kernel first: floating-point results can differ in the last bits between them.
 test: lint
+	$(BIN)/python scripts/platform_report.py
 	node --test tests/web/js/
 	$(BIN)/python -m pytest -q
 

@@ -12,8 +12,10 @@ ones docs/study.md shows (docs/images/devices_<w>x<h>.jpg).
 
 from __future__ import annotations
 
+import itertools
 import os
 import re
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -204,6 +206,37 @@ def test_a_lost_connection_is_said_at_once_and_retried_until_the_server_answers(
     assert "Generation 2 of 2" in page.inner_text("#progress")
     assert "Connection lost" not in page.inner_text("#message")
     page.context.close()
+
+
+def test_a_crowded_start_waits_as_the_server_asks_and_gets_in(
+    browser: Any, site: ServerProcess
+) -> None:
+    """A room starting at once behind one address: the server answers 429 with Retry-After (here
+    twice, then lets the request through); the page says so, waits that long and gets in."""
+    context = browser.new_context(viewport={"width": 1366, "height": 768})
+    page = context.new_page()
+    page.on("pageerror", lambda e: pytest.fail(f"page error: {e}"))
+    tries: list[float] = []
+
+    def limit(route: Any) -> None:
+        tries.append(time.monotonic())
+        if len(tries) <= 2:
+            route.fulfill(status=429, headers={"Retry-After": "2"}, content_type="application/json",
+                          body='{"detail": "too many new sessions from this address"}')  # fmt: skip
+        else:
+            route.continue_()
+
+    page.route("**/api/sessions", limit)
+    page.goto(f"{site.url}/?PROLIFIC_PID=dev-crowded")
+    page.get_by_role("button", name="I agree").click()
+    wait_for(page, "document.querySelector('#message').innerText.includes('Many people')", 3000)
+    said = page.inner_text("#message")
+    assert re.fullmatch(r"Many people are starting at once — you will be in in [2-4] s\.", said)
+    assert page.is_disabled("#agree")
+    wait_ready(page, "instructions")
+    assert len(tries) == 3
+    assert all(b - a >= 1.95 for a, b in itertools.pairwise(tries)), tries
+    context.close()
 
 
 def test_back_stays_in_the_study(browser: Any, site: ServerProcess) -> None:

@@ -29,8 +29,8 @@ def serve_command(
         str | None,
         typer.Option(
             "--session-limit",
-            help="New sessions per client address, e.g. '20/min' (default), "
-            "'5/min,burst=10' or 'off'.",
+            help="New sessions per client address: '30/min,burst=100' (default: a room of "
+            "60 behind one address starts at once), '20/min', '5/min,burst=10' or 'off'.",
         ),
     ] = None,
     hsts: Annotated[

@@ -273,6 +273,14 @@ def _echo_report(report: Any) -> None:
         f"session {report.session_id}: {report.populations} populations, {report.faces} faces "
         f"replayed{labelled}: {verdict}"
     )
+    deviation = getattr(report, "weight_deviation", 0.0)
+    if report.faces or stimuli:
+        from emogen.study.rounding import WEIGHT_TOLERANCE
+
+        typer.echo(
+            f"  largest weight deviation {deviation:.3g} (floating-point rounding up to "
+            f"{WEIGHT_TOLERANCE:g} counts as equal; ids, parents, operators and genes exactly)"
+        )
     if not report.model_hash_matches:
         typer.echo("  the model differs from the one the session was recorded with")
     for m in report.mismatches[:20]:

@@ -3,7 +3,8 @@ and check every categorise trial's face against its source (:mod:`emogen.study.r
 
 For each trial the GA engine is rebuilt from the trial's seed and driven through the recorded
 selections and restarts in the order they happened; every population it makes is compared with
-the one stored (face ids, parent ids, operators, genes and full weights, exactly).
+the one stored: face ids, parent ids, operators and genes exactly, full weights within
+floating-point rounding (:mod:`emogen.study.rounding`; the largest deviation is reported).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from emogen.study.config import StudyConfig
 from emogen.study.context import accepted_hashes
 from emogen.study.errors import SessionNotFound
 from emogen.study.replay_stimuli import check_stimulus
+from emogen.study.rounding import WEIGHT_TOLERANCE, weight_deviation, within_rounding
 from emogen.study.weights import StudyCorrectors, full_weights
 
 if TYPE_CHECKING:
@@ -49,6 +51,15 @@ class ReplayReport:
     #: categorise trials' faces checked (:mod:`emogen.study.replay_stimuli`)
     stimuli: int = 0
     mismatches: list[str] = field(default_factory=list)
+    #: largest deviation of a replayed weight from the stored one, relative to max(1, |w|)
+    #: (:func:`emogen.study.rounding.weight_deviation`): 0 on the recording machine, rounding
+    #: (≤ WEIGHT_TOLERANCE) on another CPU
+    weight_deviation: float = 0.0
+
+    def add(self, problems: list[str], deviation: float) -> None:
+        """Record a check's problems and its largest weight deviation."""
+        self.mismatches += problems
+        self.weight_deviation = max(self.weight_deviation, deviation)
 
     @property
     def ok(self) -> bool:
@@ -62,6 +73,8 @@ class ReplayReport:
             "populations": self.populations,
             "faces": self.faces,
             "stimuli": self.stimuli,
+            "weight_deviation": self.weight_deviation,
+            "weight_tolerance": WEIGHT_TOLERANCE,
             "mismatches": self.mismatches,
         }
 
@@ -91,15 +104,22 @@ class StoredFaces:
         )
 
 
-def compare_population(where: str, stored: StoredFaces, engine: Engine) -> tuple[int, list[str]]:
+def compare_population(
+    where: str, stored: StoredFaces, engine: Engine
+) -> tuple[int, list[str], float]:
     """Ask ``engine`` for its next population and compare it with ``stored``, face by face
-    (ids, parents, operators, genes and full weights, exactly): (faces, problems)."""
+    (ids, parents, operators and genes exactly; full weights within rounding):
+    (faces, problems, largest weight deviation)."""
     pop = engine.ask()
     n = len(stored.ids)
     if n != len(pop):
-        return 0, [f"{where}: stored {n} faces, replay made {len(pop)}"]
+        return 0, [f"{where}: stored {n} faces, replay made {len(pop)}"], 0.0
     weights = full_weights(pop)
+    if stored.weights.shape != weights.shape:
+        return 0, [f"{where}: stored {stored.weights.shape[1]} weights a face, "
+                   f"replay made {weights.shape[1]}"], 0.0  # fmt: skip
     problems = []
+    worst = 0.0
     for i in range(n):
         what = []
         if int(stored.ids[i]) != int(pop.ids[i]):
@@ -110,11 +130,13 @@ def compare_population(where: str, stored: StoredFaces, engine: Engine) -> tuple
             what.append(f"operator {stored.operators[i]} vs {pop.operators[i]}")
         if not np.array_equal(stored.genes[i], pop.genes[i]):
             what.append("genes")
-        if not np.array_equal(stored.weights[i], weights[i]):
-            what.append("weights")
+        deviation = weight_deviation(stored.weights[i], weights[i])
+        worst = max(worst, deviation)
+        if not within_rounding(deviation):
+            what.append(f"weights differ by up to {deviation:.3g} (tolerance {WEIGHT_TOLERANCE:g})")
         if what:
             problems.append(f"{where}, position {i}: " + ", ".join(what))
-    return n, problems
+    return n, problems, worst
 
 
 def study_of_session(store: Store, session_id: int) -> StudyConfig:
@@ -160,9 +182,9 @@ def replay_session(
         ).all()
         for trial in trials:
             if trial.task == "categorise":
-                n, problems = check_stimulus(db, trial, config, rig, correctors)
+                n, problems, deviation = check_stimulus(db, trial, config, rig, correctors)
                 report.stimuli += n
-                report.mismatches += problems
+                report.add(problems, deviation)
                 continue
             _replay_trial(db, trial, config, rig, correctors, report)
     return report
@@ -206,10 +228,10 @@ def _replay_trial(
                     f"{engine.generation}"
                 )
                 break
-            n, problems = compare_population(where, StoredFaces.of_row(p), engine)
+            n, problems, deviation = compare_population(where, StoredFaces.of_row(p), engine)
             report.populations += 1
             report.faces += n
-            report.mismatches += problems
+            report.add(problems, deviation)
             if p.id in sels:
                 s = sels[p.id]
                 engine.tell(s.elite_face_id, json.loads(s.other_face_ids))

@@ -4,7 +4,8 @@ The export's ``study`` table carries each study's resolved config (``config_json
 gene and weight column names; ``trials`` the trial seeds and GA streams; ``faces`` every face
 shown; ``selections`` and ``restarts`` what the participant did. Each trial's engine is rebuilt
 from its seed and driven through the exported selections and restarts; every population it makes
-is compared with the exported faces (ids, parents, operators, genes and weights, exactly).
+is compared with the exported faces (ids, parents, operators and genes exactly, weights within
+floating-point rounding: :mod:`emogen.study.rounding`).
 """
 
 from __future__ import annotations
@@ -153,10 +154,10 @@ def _replay_trial(report: ReplayReport, config: StudyConfig, rig: Rig,
                     f"{engine.generation}"
                 )
                 return
-            n, problems = compare_population(where, faces[key], engine)
+            n, problems, deviation = compare_population(where, faces[key], engine)
             report.populations += 1
             report.faces += n
-            report.mismatches += problems
+            report.add(problems, deviation)
             if key in sels:
                 engine.tell(*sels[key])
             elif key in restarts:

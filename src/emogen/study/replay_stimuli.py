@@ -1,11 +1,11 @@
 """Replay of a session's categorise trials: every stored face checked against where it came from.
 
 * the labels' order: drawn again from the trial's recorded seed (exact);
-* an own or other face: its weights and genes are those of the face it names (the session,
-  trial and face id recorded), as stored there (exact: the same database);
+* an own or other face: its genes are those of the face it names (the session, trial and face
+  id recorded), as stored there (exact), and its weights within rounding of that face's;
 * a random face: its genes expanded by the rig and corrected again (the shape weights and
-  correctives within :data:`TOLERANCE` of those stored: a few units of floating-point rounding
-  on another CPU pass, a real change — a wrong gene, another correction — does not);
+  correctives within floating-point rounding of those stored, :mod:`emogen.study.rounding`: a
+  few ULPs on another CPU pass, a real change — a wrong gene, another correction — does not);
 * a file face: its shape weights are the row of the block's face table, when that file is
   readable here (else counted as not checked).
 
@@ -26,45 +26,45 @@ from emogen.errors import EmoGenError
 from emogen.model.face_table import read_face_table
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
+from emogen.study.rounding import WEIGHT_TOLERANCE, weight_deviation, within_rounding
 from emogen.study.tables import FaceRow, PopulationRow, StimulusRow, TrialRow
 from emogen.study.weights import StudyCorrectors
 from emogen.tasks.blocks import CategoriseBlock
 from emogen.tasks.sources import label_order
 
-#: Largest difference of a recomputed weight from the stored one that counts as equal (weights
-#: are in [0, 1]; CPU rounding differs by ~1e-16, a changed face by far more).
-TOLERANCE = 1e-9
+Checked = tuple[list[str], float]  # problems, largest weight deviation
 
 
 def check_stimulus(
     db: Session, trial: TrialRow, config: StudyConfig, rig: Rig, correctors: StudyCorrectors
-) -> tuple[int, list[str]]:
-    """(faces checked, problems) of a categorise trial's stored face."""
+) -> tuple[int, list[str], float]:
+    """(faces checked, problems, largest weight deviation) of a categorise trial's stored face."""
     stim = db.scalar(select(StimulusRow).where(StimulusRow.trial_id == trial.id))
     where = f"trial {trial.position + 1} ({stim.source if stim else 'no'} face)"
     if stim is None:
-        return 0, []  # the block not reached yet
+        return 0, [], 0.0  # the block not reached yet
     blocks = config.study_blocks()
     block = blocks[trial.block] if trial.block < len(blocks) else None
     if not isinstance(block, CategoriseBlock):
-        return 0, [f"{where}: block {trial.block + 1} of the config is not a categorise block"]
+        return 0, [f"{where}: block {trial.block + 1} of the config is not a categorise block"], 0.0
     problems = []
     expected = label_order(block.labels or (), np.random.default_rng(int(trial.seed)))
     if json.loads(stim.labels) != expected:
         problems.append(f"{where}: labels offered {stim.labels}, the seed gives {expected}")
     weights = np.asarray(json.loads(stim.weights), dtype=np.float64)
+    checked: Checked = [], 0.0
     if stim.source_face_id is not None:
-        problems += _made_face(db, stim, weights, where)
+        checked = _made_face(db, stim, weights, where)
     elif stim.genes is not None:
         genes = np.asarray(json.loads(stim.genes), dtype=np.float64)[None, :]
         shapes = rig.expand(genes, config.ga.eye_motion)
-        problems += _compare(where, weights, _corrected(shapes, stim.identity, correctors))
+        checked = _compare(where, weights, _corrected(shapes, stim.identity, correctors))
     elif stim.source_row is not None:
-        problems += _file_face(block, stim, rig, weights, where)
-    return 1, problems
+        checked = _file_face(block, stim, rig, weights, where)
+    return 1, problems + checked[0], checked[1]
 
 
-def _made_face(db: Session, stim: StimulusRow, weights: np.ndarray, where: str) -> list[str]:
+def _made_face(db: Session, stim: StimulusRow, weights: np.ndarray, where: str) -> Checked:
     made = db.execute(
         select(FaceRow.weights, FaceRow.genes)
         .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
@@ -79,24 +79,28 @@ def _made_face(db: Session, stim: StimulusRow, weights: np.ndarray, where: str) 
     ).first()
     if made is None:
         return [f"{where}: its source face (session {stim.source_session_id}, trial "
-                f"{(stim.source_trial or 0) + 1}, face {stim.source_face_id}) is not stored"]  # fmt: skip
-    same = json.loads(made[0]) == weights.tolist() and made[1] == stim.genes
-    return [] if same else [f"{where}: weights or genes differ from its source face"]
+                f"{(stim.source_trial or 0) + 1}, face {stim.source_face_id}) is not stored"], 0.0  # fmt: skip
+    if made[1] != stim.genes:
+        return [f"{where}: genes differ from its source face"], 0.0
+    problems, worst = _compare(where, weights, np.asarray(json.loads(made[0]), dtype=np.float64))
+    return [
+        p.replace("weights differ", "weights differ from its source face") for p in problems
+    ], worst
 
 
 def _file_face(
     block: CategoriseBlock, stim: StimulusRow, rig: Rig, weights: np.ndarray, where: str
-) -> list[str]:
+) -> Checked:
     path = block.others_fallback if stim.source == "other" else block.file
     if path is None or not Path(path).is_file():
-        return []  # the table is not here: the stored face stands
+        return [], 0.0  # the table is not here: the stored face stands
     try:
         table = read_face_table(Path(path), rig, label_columns=("label", "emotion", "identity"))
     except EmoGenError as exc:
-        return [f"{where}: cannot read its face table: {exc}"]
+        return [f"{where}: cannot read its face table: {exc}"], 0.0
     row = int(stim.source_row or 0)
     if row >= len(table.weights):
-        return [f"{where}: row {row + 1} is beyond the {len(table.weights)} rows of {path}"]
+        return [f"{where}: row {row + 1} is beyond the {len(table.weights)} rows of {path}"], 0.0
     return _compare(where, weights[: table.weights.shape[1]], table.weights[row])
 
 
@@ -109,10 +113,12 @@ def _corrected(shapes: np.ndarray, identity: str, correctors: StudyCorrectors) -
     return np.concatenate([face, np.asarray(extra, dtype=np.float64).reshape(-1)])
 
 
-def _compare(where: str, stored: np.ndarray, replayed: np.ndarray) -> list[str]:
+def _compare(where: str, stored: np.ndarray, replayed: np.ndarray) -> Checked:
     if stored.shape != replayed.shape:
-        return [f"{where}: {stored.size} weights stored, replay made {replayed.size}"]
-    worst = float(np.max(np.abs(stored - replayed), initial=0.0))
-    if worst > TOLERANCE:
-        return [f"{where}: weights differ by up to {worst:.3g} (tolerance {TOLERANCE:g})"]
-    return []
+        return [f"{where}: {stored.size} weights stored, replay made {replayed.size}"], 0.0
+    worst = weight_deviation(stored, replayed)
+    if not within_rounding(worst):
+        return [
+            f"{where}: weights differ by up to {worst:.3g} (tolerance {WEIGHT_TOLERANCE:g})"
+        ], worst
+    return [], worst

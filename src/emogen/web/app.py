@@ -33,9 +33,10 @@ from emogen.web.schemas import MAX_BODY_BYTES
 
 HERE = Path(__file__).resolve().parent
 RESEARCHER_TOKEN_ENV = "EMOGEN_RESEARCHER_TOKEN"
-#: New sessions per client address: 20 at once, then 20 a minute (a lab behind one address
-#: still fits; a script making hundreds does not).
-SESSION_LIMIT = RateLimit(burst=20, per_minute=20)
+#: New sessions per client address: 100 at once, then 30 a minute (one every 2 s). A computer
+#: room of 60 behind one address (a university NAT) starts within seconds, two rooms within a
+#: minute; a script gets 100, then one every 2 s — 1,900 in an hour, not unlimited.
+SESSION_LIMIT = RateLimit(burst=100, per_minute=30)
 #: Wrong researcher tokens per client address: 10, then one every 6 s.
 RESEARCHER_FAILURE_LIMIT = RateLimit(burst=10, per_minute=10)
 

@@ -100,7 +100,7 @@ def run_server(
     """Load the study, open (and migrate) the database, serve until interrupted.
 
     No access log: session links carry their secret token in the path. ``session_limit`` is a
-    :meth:`RateLimit.parse` text (default 20/min per client address; counted per worker
+    :meth:`RateLimit.parse` text (default 30/min, burst 100 per client address; counted per worker
     process); ``hsts`` sends HSTS; ``workers``: worker processes (default: the cores).
     """
     import uvicorn

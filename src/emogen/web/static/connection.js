@@ -1,6 +1,7 @@
 // The link to the study server, free of the DOM (unit-tested with `node --test`): which answers
-// are worth retrying, how long to wait before the next try (exponential backoff, capped), and
-// what the page says meanwhile. api.js drives these; session.js shows `statusText`.
+// are worth retrying, how long to wait before the next try (exponential backoff, capped; after a
+// 429, what the server's Retry-After asks), and what the page says meanwhile. api.js drives
+// these; session.js and landing.js show `statusText`.
 
 /**
  * The backoff: the n-th retry (0-based) waits `baseMs * 2**n`, never more than `capMs`.
@@ -10,7 +11,9 @@
 /**
  * The link as the page knows it. `attempt` counts the failures in a row; `retryAt` is when the
  * next try starts (ms, the same clock as `now` in the functions below).
- * @typedef {{ kind: "offline" | "busy", attempt: number, retryAt: number }} Trouble
+ * `crowded`: the server limits new sessions per address and many people behind this one (a
+ * computer room) are starting at once (429).
+ * @typedef {{ kind: "offline" | "busy" | "crowded", attempt: number, retryAt: number }} Trouble
  * @typedef {{ kind: "online" } | Trouble} Link
  */
 
@@ -57,6 +60,39 @@ export function failed(link, status, now, policy = BACKOFF) {
 }
 
 /**
+ * The wait a 429's `Retry-After` header asks for, in ms: delta-seconds ("12") or an HTTP date
+ * (IMF-fixdate, counted from `now`); null when the header is absent or unreadable.
+ * @param {string | null | undefined} header
+ * @param {number} now
+ */
+export function retryAfterMs(header, now) {
+  const text = (header ?? "").trim();
+  if (text === "") return null;
+  if (/^\d+$/.test(text)) return Number(text) * 1000;
+  if (!/^[A-Za-z]{3}, /.test(text)) return null; // an HTTP date: "Thu, 26 Nov 2026 12:00:07 GMT"
+  const at = Date.parse(text);
+  return Number.isNaN(at) ? null : Math.max(0, at - now);
+}
+
+/**
+ * The link after a 429 at time `now`: wait what the server asked (`waitMs`, from Retry-After;
+ * else the backoff), plus a share of it drawn by `random` (at most `capMs` more), so that a
+ * room's pages, all told the same wait, do not come back in the same instant.
+ * @param {Link} link
+ * @param {number | null} waitMs
+ * @param {number} now
+ * @param {() => number} [random]
+ * @param {Backoff} [policy]
+ * @returns {Trouble}
+ */
+export function crowded(link, waitMs, now, random = Math.random, policy = BACKOFF) {
+  const attempt = link.kind === "online" ? 0 : link.attempt + 1;
+  const wait = waitMs ?? retryDelay(attempt, policy);
+  const spread = Math.min(wait, policy.capMs) * random();
+  return { kind: "crowded", attempt, retryAt: now + wait + Math.round(spread) };
+}
+
+/**
  * What the page says about the link at time `now` ("" when there is nothing to say).
  * @param {Link} link
  * @param {number} now
@@ -64,6 +100,10 @@ export function failed(link, status, now, policy = BACKOFF) {
 export function statusText(link, now) {
   if (link.kind === "online") return "";
   const seconds = Math.ceil((link.retryAt - now) / 1000);
+  if (link.kind === "crowded") {
+    const when = seconds > 0 ? `you will be in in ${seconds} s.` : "getting you in now…";
+    return `Many people are starting at once — ${when}`;
+  }
   const what = link.kind === "offline" ? "Connection lost" : "The study server is busy";
   const when = seconds > 0 ? `retrying in ${seconds} s…` : "retrying now…";
   return `${what} — ${when} Your choices are kept.`;

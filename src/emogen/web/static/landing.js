@@ -1,5 +1,6 @@
 // Consent page: take the participant id from the URL, start (or resume) the session.
 import { api } from "./api.js";
+import { statusText } from "./connection.js";
 
 const body = document.body;
 const study = body.dataset.study;
@@ -22,6 +23,25 @@ function remembered() {
   }
 }
 
+/** @type {import("./connection.js").Link} */
+let link = { kind: "online" };
+/** @type {ReturnType<typeof setInterval> | undefined} */
+let ticker;
+
+/** While the server asks this address to wait (a room starting at once): a countdown. */
+function paintLink() {
+  message.textContent = statusText(link, Date.now());
+  body.dataset.link = link.kind;
+}
+
+/** @param {import("./connection.js").Link} next */
+function onLink(next) {
+  link = next;
+  clearInterval(ticker);
+  if (link.kind !== "online") ticker = setInterval(paintLink, 250);
+  paintLink();
+}
+
 agree.addEventListener("click", async () => {
   agree.disabled = true;
   message.textContent = "";
@@ -29,6 +49,8 @@ agree.addEventListener("click", async () => {
     const created = await api("/api/sessions", {
       method: "POST",
       body: { participant_id: participant || null, resume_token: remembered() },
+      waitIfCrowded: true,
+      onLink,
     });
     try {
       localStorage.setItem(storageKey, created.token);
