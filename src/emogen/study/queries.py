@@ -6,7 +6,7 @@ import json
 from datetime import datetime
 from typing import NamedTuple
 
-from sqlalchemy import Connection, bindparam, func, select
+from sqlalchemy import bindparam, func, select
 from sqlalchemy.orm import Session, selectinload
 
 from emogen.study.errors import SessionNotFound, StepConflict
@@ -20,9 +20,6 @@ from emogen.study.tables import (
     StudyRow,
     TrialRow,
 )
-
-#: What a query runs on: the ORM session, or (cheaper, for a step's plain rows) its connection.
-Executor = Session | Connection
 
 _BY_TOKEN = select(SessionRow).where(SessionRow.token == bindparam("token"))
 _BY_TOKEN_LOCKED = _BY_TOKEN.with_for_update()
@@ -126,7 +123,7 @@ class StepTaken(NamedTuple):
     request_hash: str
 
 
-def step_with_key(db: Executor, session_id: int, key: str) -> StepTaken | None:
+def step_with_key(db: Session, session_id: int, key: str) -> StepTaken | None:
     """The session's step with this key, if it was taken (a plain row, no ORM object: every
     step asks)."""
     found = db.execute(_STEP_WITH_KEY, {"session_id": session_id, "key": key}).first()

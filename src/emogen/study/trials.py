@@ -10,7 +10,6 @@ from sqlalchemy.orm import Session
 from emogen.ga.engine import Engine, Population
 from emogen.ga.state import collision_solver_of_state, state_data
 from emogen.study.context import StudyContext
-from emogen.study.queries import Executor
 from emogen.study.tables import (
     FaceRow,
     PopulationRow,
@@ -65,7 +64,7 @@ class TrialEngines:
         return shown
 
 
-def store_population(db: Executor, trial: TrialRow, population: Population) -> ShownPopulation:
+def store_population(db: Session, trial: TrialRow, population: Population) -> ShownPopulation:
     """Store a population about to be shown; returns it as the view shows it.
 
     Plain inserts (the population's id returned by the insert), not ORM objects: nothing reads

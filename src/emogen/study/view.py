@@ -163,17 +163,12 @@ def _rating(db: Session, config: StudyConfig, row: TrialRow) -> RatingView:
     }
 
 
-def _current_trial(
-    db: Session,
-    sess: SessionRow,
-    shown: ShownPopulation | None,
-    trial: TrialRow | None,
-) -> TrialRow | None:
-    """The session's current trial: the one a step has just left (``trial``) or shown a
-    population of (no query), or the one read."""
-    for row in (trial, None if shown is None else shown.trial):
-        if row is not None and row.session_id == sess.id and row.position == sess.current_trial:
-            return row
+def _current_trial(db: Session, sess: SessionRow, shown: ShownPopulation | None) -> TrialRow | None:
+    """The session's current trial: the one a step has just shown a population of (no query),
+    or the one read."""
+    row = None if shown is None else shown.trial
+    if row is not None and row.session_id == sess.id and row.position == sess.current_trial:
+        return row
     return trial_at(db, sess.id, sess.current_trial)
 
 
@@ -182,10 +177,9 @@ def session_state(
     config: StudyConfig,
     sess: SessionRow,
     shown: ShownPopulation | None = None,
-    trial: TrialRow | None = None,
 ) -> SessionState:
-    """The session as the participant sees it now (``shown``: a population just stored;
-    ``trial``: the current trial's row as a step has just left it)."""
+    """The session as the participant sees it now (``shown``: a population a step has just
+    stored, with its trial's row)."""
     trials = n_trials(sess)
     generations = config.ga.generations
     blocks = len(config.study_blocks())
@@ -220,7 +214,7 @@ def session_state(
         state["progress"]["generation"] = generations
         state["progress"]["block"] = blocks - 1
         return state
-    row = _current_trial(db, sess, shown, trial) if stage == "trial" else None
+    row = _current_trial(db, sess, shown) if stage == "trial" else None
     if row is None:
         return state
     status: TrialStatus = row.status  # type: ignore[assignment]  # a stored TrialStatus

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 from datetime import datetime
 
 from sqlalchemy import bindparam, insert, update
+from sqlalchemy.orm import Session
 
-from emogen.study.queries import Executor
 from emogen.study.tables import SessionRow, StepRow, as_utc, core_table, utcnow
 
 #: The step's own rows: its key (idempotency) and the session's last-step time.
@@ -19,7 +19,7 @@ _TOUCH_SESSION = (
 )
 
 
-def record_step(ex: Executor, session_id: int, kind: str, key: str, digest: str) -> datetime:
+def record_step(ex: Session, session_id: int, kind: str, key: str, digest: str) -> datetime:
     """Record the step under its key and touch the session; returns the time."""
     now = utcnow()
     ex.execute(
