@@ -89,7 +89,7 @@ def marker(i: int) -> str:
     return MARKERS[(i // len(COLOURS) + i) % len(MARKERS)] if i >= len(COLOURS) else MARKERS[0]
 
 
-def _figure(width: float, height: float) -> Figure:
+def new_figure(width: float, height: float) -> Figure:
     from matplotlib.figure import Figure
 
     return Figure(figsize=(width, height), dpi=DPI, layout="constrained")
@@ -145,7 +145,7 @@ def save_image(path: Path, image: np.ndarray) -> Path:
     return path
 
 
-def _save(fig: Figure, path: Path) -> Path:
+def save_figure(fig: Figure, path: Path) -> Path:
     """The figure at ``path`` (its suffix replaced by each format's); returns the PNG's path."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -169,7 +169,7 @@ def generation_distributions(
     """Per-generation error distributions (violins, mean ± sd marked), one panel per entry of
     ``panels`` (label → errors (n_samples, G + 1)), like the paper's Figs. 11–18."""
     rows, cols = _panels(len(panels))
-    fig = _figure(3.3 * cols, 2.6 * rows)
+    fig = new_figure(3.3 * cols, 2.6 * rows)
     axes = fig.subplots(rows, cols, squeeze=False, sharey=True)
     for ax, (label, errors) in zip(axes.ravel(), panels.items(), strict=False):
         e = np.asarray(errors, dtype=np.float64)
@@ -204,12 +204,12 @@ def generation_distributions(
         ax.set_visible(False)
     if title:
         fig.suptitle(title, fontsize=10)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def kl_curves(series: dict[str, np.ndarray], path: Path, *, title: str = "") -> Path:
     """KL(P_g ‖ P_{g−1}) against g, one line per entry (Figs. 15 and 17)."""
-    fig = _figure(5.2 + 2.2 * -(-len(series) // 12), 3.2)
+    fig = new_figure(5.2 + 2.2 * -(-len(series) // 12), 3.2)
     ax = fig.subplots()
     for i, (label, kl) in enumerate(series.items()):
         g = np.arange(1, len(kl) + 1)
@@ -222,7 +222,7 @@ def kl_curves(series: dict[str, np.ndarray], path: Path, *, title: str = "") -> 
     legend_outside(ax, len(series))
     if title:
         ax.set_title(title, fontsize=10)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def _ellipse(ax: Axes, mean: np.ndarray, cov: np.ndarray, edge: str) -> None:
@@ -254,7 +254,7 @@ def separability(sep: Separability, path: Path, *, title: str = "") -> Path:
     from matplotlib.lines import Line2D
 
     n = len(sep.groups)
-    fig = _figure(5.2 + 1.2 * max(1, -(-n // 10)), 4.2)
+    fig = new_figure(5.2 + 1.2 * max(1, -(-n // 10)), 4.2)
     ax = fig.subplots()
     z = sep.coords
     y2 = z[:, 1] if z.shape[1] > 1 else np.zeros(len(z))
@@ -288,14 +288,14 @@ def separability(sep: Separability, path: Path, *, title: str = "") -> Path:
     ax.set_title(
         title or f"GMM in {sep.n_pca} PCA components (accuracy {sep.accuracy:.0%})", fontsize=9
     )
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def bins(table: pd.DataFrame, path: Path, *, title: str = "") -> Path:
     """Stacked bars of repeatability bins (rows of ``table``, columns the bins in %)."""
     import matplotlib
 
-    fig = _figure(6.0, 0.3 * len(table) + 1.6)
+    fig = new_figure(6.0, 0.3 * len(table) + 1.6)
     ax = fig.subplots()
     left = np.zeros(len(table))
     shades = matplotlib.colormaps["cividis"](np.linspace(0.05, 0.95, len(table.columns)))
@@ -310,14 +310,14 @@ def bins(table: pd.DataFrame, path: Path, *, title: str = "") -> Path:
     fig.legend(fontsize=7, ncol=4, loc="outside lower center", frameon=False)
     if title:
         ax.set_title(title, fontsize=9)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def final_distributions(
     samples: dict[str, np.ndarray], path: Path, *, xlabel: str = "final error [CD]", title: str = ""
 ) -> Path:
     """Overlaid histograms of final errors, one per entry (Fig. 18 / Table V)."""
-    fig = _figure(5.2 + 2.6 * -(-len(samples) // 12), 3.2)
+    fig = new_figure(5.2 + 2.6 * -(-len(samples) // 12), 3.2)
     ax = fig.subplots()
     top = max(float(np.nanmax(s)) for s in samples.values()) if samples else 1.0
     edges = np.linspace(0, max(top, 1e-3) * 1.02, 40).tolist()
@@ -339,13 +339,13 @@ def final_distributions(
     ax.grid(alpha=0.3)
     if title:
         ax.set_title(title, fontsize=9)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def power_curve(
     curve: pd.DataFrame, path: Path, *, target: float, n_required: int | None, title: str = ""
 ) -> Path:
-    fig = _figure(5.0, 3.2)
+    fig = new_figure(5.0, 3.2)
     ax = fig.subplots()
     ax.errorbar(
         curve["n"], curve["power"], yerr=curve["se"], fmt="o", ms=3, capsize=2, label="simulated",
@@ -372,12 +372,12 @@ def power_curve(
     ax.grid(alpha=0.3, which="both")
     if title:
         ax.set_title(title, fontsize=9)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def spread(rows: pd.DataFrame, path: Path, *, title: str = "") -> Path:
     """Mean proxy error per group against the GA noise expected at the same n (95th pct)."""
-    fig = _figure(6.2, 0.3 * len(rows) + 1.5)
+    fig = new_figure(6.2, 0.3 * len(rows) + 1.5)
     ax = fig.subplots()
     y = np.arange(len(rows))
     ax.barh(
@@ -393,4 +393,4 @@ def spread(rows: pd.DataFrame, path: Path, *, title: str = "") -> Path:
     ax.grid(alpha=0.3, axis="x")
     if title:
         ax.set_title(title, fontsize=9)
-    return _save(fig, path)
+    return save_figure(fig, path)
