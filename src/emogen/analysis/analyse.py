@@ -38,6 +38,7 @@ from emogen.analysis import plots
 from emogen.analysis.analyse_faces import prototypes_section, separability_section
 from emogen.analysis.analyse_noise import noise_section
 from emogen.analysis.analyse_options import AnalysisOptions
+from emogen.analysis.analyse_people import people_sections
 from emogen.analysis.categorisation import categorisation_section
 from emogen.analysis.data import Dataset, load_dataset
 from emogen.analysis.distributions import generation_summary, kl_per_generation
@@ -88,6 +89,8 @@ def analyse(
     prototypes_section(ds, report, summary, opts, model)
     _ratings(ds, report, summary)
     categorisation_section(ds.responses, report, summary)
+    if ds.kind == "study":
+        people_sections(ds.source, report, summary, opts, model, step)
     step("writing the report")
     if ds.has_weights:
         tidy.write_csv(

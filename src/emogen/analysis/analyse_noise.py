@@ -79,7 +79,7 @@ def noise_section(
     candidates: list[dict[str, object]] = []
     candidate_records: list[dict[str, object]] = []
     for g in ds.groups:
-        fw = ds.final_weights(g)
+        fw = ds.final_weights(g, one_per_participant=ds.kind == "study")
         if len(fw) < 2:
             notes.append(f"{g}: fewer than 2 final faces")
             continue
@@ -143,8 +143,15 @@ def noise_section(
 
 def _method_text(ds: Dataset, opts: AnalysisOptions, model: FaceModel | None) -> str:
     """The section's paragraph: what the test compares, and against what."""
+    unit = (
+        "Unit: the participant — one final face per participant (the same one on every run), "
+        "so repeated trials never count as more people. "
+        if ds.kind == "study"
+        else "Unit: the simulated run. "
+    )
     return (
-        "Spread of a group = mean CD of its final faces to their mean (the proxy target). GA "
+        unit
+        + "Spread of a group = mean CD of its final faces to their mean (the proxy target). GA "
         "noise = the same statistic on random subsets of equal size from the final faces of "
         "simulated runs with one consistent target, the data's GA settings and the choosers' "
         "choice noise T (a softmax chooser, CD units: the simulation's own, or given with "

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 from emogen.config import GAConfig
 
@@ -20,3 +21,7 @@ class AnalysisOptions:
     # the participants' choice noise T (softmax, CD units) the GA-noise null simulates; None:
     # a simulation's own recorded T, and for a study an explicit, reported assumption of T = 0
     choice_noise: float | None = None
+    # a participant table (CSV/Parquet: participant_id + e.g. group) joined to a study's faces
+    participants: Path | None = None
+    # the participant table's column whose groups are compared
+    group_column: str = "group"

@@ -74,9 +74,14 @@ class Dataset:
         e = self.elites
         return e[(e["generation"] == self.generations) & e["complete"]]
 
-    def final_weights(self, group: str) -> np.ndarray:
+    def final_weights(self, group: str, one_per_participant: bool = False) -> np.ndarray:
+        """(n, S) the group's final faces; ``one_per_participant``: one of each participant's
+        (independent samples where participants repeated the group)."""
         f = self.final
-        return f.loc[f["group"] == group, list(self.columns)].to_numpy(dtype=np.float64)
+        f = f[f["group"] == group]
+        if one_per_participant:
+            f = f.drop_duplicates("participant", keep="first")
+        return f[list(self.columns)].to_numpy(dtype=np.float64)
 
     def errors(self, group: str) -> np.ndarray:
         """(n_samples, G + 1) elite errors of a group (NaN where a sample stopped early)."""

@@ -130,7 +130,7 @@ def _bootstrap(
         if len(members) == 2:
             ed[b] = np.linalg.norm(xb[cb == 0].mean(0) - xb[cb == 1].mean(0))
     q = [2.5, 97.5]
-    return {"r2": tuple(np.percentile(r2, q)), "ed": tuple(np.percentile(ed, q))}  # type: ignore[dict-item]
+    return {"r2": tuple(np.percentile(r2, q)), "ed": tuple(np.percentile(ed, q))}
 
 
 def groups_section(

@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from emogen.analysis.report import Report
     from emogen.model.face import FaceModel
 
-#: Fewer participants give bootstrap intervals that cover far less than they claim.
+#: Fewer participants: no interval (the jackknife's t approximation is untested below 10).
 MIN_FOR_INTERVAL = 10
 
 COLUMNS = [
@@ -37,10 +37,10 @@ COLUMNS = [
 
 
 def reliability_table(
-    people: People, model: FaceModel | None, *, rng: np.random.Generator, draws: int = 2000
+    people: People, model: FaceModel | None, *, rng: np.random.Generator
 ) -> pd.DataFrame:
     """One row per emotion × identity × space with ≥ 2 participants who made it twice or more:
-    ICC with its 95% BCa interval (participants resampled), variance components, mean within-
+    ICC with its 95% jackknife interval over participants, variance components, mean within-
     and between-person distances (over participants) and the split-half statistics."""
     spaces = [s for s in SPACES if s != "vertex_rms" or model is not None]
     points = {s: features(people, s, model) for s in spaces}
@@ -56,9 +56,7 @@ def reliability_table(
             x = points[space][idx]
             comp = components(x, who)
             lo, hi = (
-                icc_interval(x, who, rng=rng, draws=draws)
-                if comp.participants >= MIN_FOR_INTERVAL
-                else (np.nan, np.nan)
+                icc_interval(x, who) if comp.participants >= MIN_FOR_INTERVAL else (np.nan, np.nan)
             )
             dist = distances(x, who, space)
             half = split_half(x, who, cell["repetition"].to_numpy(), rng=rng)
@@ -112,8 +110,8 @@ def reliability_section(
                  data=table)  # fmt: skip
     report.figure(
         _forest(table, report.figures / "reliability_icc.png"),
-        "ICC (share of the faces' variance that is the person) with 95% BCa intervals over "
-        "participants, per emotion × identity and space.",
+        "ICC (share of the faces' variance that is the person) with 95% jackknife intervals "
+        "over participants, per emotion × identity and space.",
     )
     ed = table[table["space"] == "ed"]
     summary["reliability"] = {
@@ -129,9 +127,9 @@ def _method(opts: AnalysisOptions, model: FaceModel | None) -> str:
         "Unit: the participant. For each emotion on each identity, the faces of participants "
         "who made it at least twice: ICC = σ²_b / (σ²_b + σ²_w), the one-way random-effects "
         "ICC(1) summed over the space's dimensions (= 1 − E d²within / E d²between), ANOVA "
-        "estimates; 95% BCa intervals from 2000 bootstrap draws of participants (seed "
-        f"{opts.seed}; none with fewer than {MIN_FOR_INTERVAL} participants, where a bootstrap "
-        "interval covers far less than it claims). Spaces: ED (genes), CD (unit-length "
+        "estimates; 95% jackknife-t intervals over participants (leave one participant out; "
+        f"none with fewer than {MIN_FOR_INTERVAL} participants). Split-half permutations: seed "
+        f"{opts.seed}. Spaces: ED (genes), CD (unit-length "
         "corrected weights: ‖u − v‖² = 2·CD)"
         + (
             ", vertex RMS (cm, shapes and correctives blended linearly)"

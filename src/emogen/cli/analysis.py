@@ -78,6 +78,20 @@ def analyse_command(
     ] = 2,
     alpha: Annotated[float, typer.Option("--alpha", help="Level of the GA-noise test.")] = 0.05,
     choice_noise: ChoiceNoiseOpt = None,
+    participants: Annotated[
+        Path | None,
+        typer.Option(
+            "--participants",
+            help="Participant table (CSV or Parquet): a participant_id column and any others "
+            "(e.g. group = clinical/control), joined to a study's faces and answers.",
+        ),
+    ] = None,
+    group_column: Annotated[
+        str,
+        typer.Option(
+            "--group-column", help="The participant table's column whose groups are compared."
+        ),
+    ] = "group",
     seed: SeedOpt = 1,
     render: RenderOpt = True,
     model_path: ModelOpt = None,
@@ -100,6 +114,10 @@ def analyse_command(
     plots.check_formats(figure_format or ["png", "svg"])  # a bad --format before any work
 
     dataset = load_dataset(data)  # fails fast on a folder that is not data
+    if participants is not None:  # a wrong participant table before any work
+        from emogen.analysis.analyse_people import check_participants
+
+        check_participants(dataset, participants, group_column)
     check_out_folder(out, force=force)
     ga = None
     if config is not None:
@@ -115,6 +133,8 @@ def analyse_command(
         alpha=alpha,
         ga=ga,
         choice_noise=choice_noise,
+        participants=participants,
+        group_column=group_column,
     )
     with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         analyse(dataset, tmp, model=model, options=options, progress=stage_printer(progress))
