@@ -52,7 +52,8 @@ async function scopedCss() {
     .replace(/^(\s*)body\[/gm, "$1&[");
   const own = `
   & { min-height: 0; text-align: left; width: 100%; }
-  & .bar { grid-template-columns: minmax(8rem, 12rem) 1fr; }
+  & .bar:has(#gen-progress:empty) { grid-template-columns: minmax(0, 1fr); }
+  & .bar:has(#gen-progress:empty) .progress { display: none; }
   & .emogen-main { position: relative; }
   & .text-page h2 { margin-top: 1rem; }`;
   const { code } = await esbuild.transform(`.emogen-trial {\n${nested}\n${own}\n}`, {

@@ -62,7 +62,7 @@ export async function request(base, path, options = {}) {
           "origin",
         );
       }
-      throw new TrialFailure(`the study server ${base} cannot be reached (${err.message})`, "unreachable");
+      throw new TrialFailure(`the study server ${base} cannot be reached`, "unreachable");
     }
     throw new TrialFailure(`the study server ${base} answered ${err.status}: ${err.message}`, "server", err.status);
   }

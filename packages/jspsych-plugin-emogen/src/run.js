@@ -10,7 +10,7 @@ import { createFaceDisplay } from "../../../src/emogen/web/static/faces.js";
 import { createCategorise } from "../../../src/emogen/web/static/tasks/categorise.js";
 import { createEvolve } from "../../../src/emogen/web/static/tasks/evolve.js";
 import { STATUS_LINES, TASK_VIEWS } from "../../../src/emogen/web/static/tasks/markup.js";
-import { fillScale, loadProgressText } from "../../../src/emogen/web/static/tasks/shell.js";
+import { createDrawFaces, fillScale } from "../../../src/emogen/web/static/tasks/shell.js";
 import { createViewerDisplay } from "../../../src/emogen/web/static/viewer-adapter.js";
 import { TrialFailure, participantFromUrl, request, session, studyInfo } from "./connect.js";
 import { emptyData, recordStep, withRecord } from "./record.js";
@@ -27,7 +27,7 @@ const SHELL = `
     <section id="view-failed" class="view text-page" hidden>
       <h2>This part of the experiment could not run</h2>
       <p id="failed-reason"></p>
-      <p class="muted">Your answers so far are kept. Press Continue to go on with the experiment.</p>
+      <p class="muted">The researcher's data say what happened. Press Continue to go on with the experiment.</p>
       <div class="actions-row"><button id="failed-continue" class="primary" type="button">Continue</button></div>
     </section>
     ${STATUS_LINES}
@@ -79,12 +79,6 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
     ui.said = text || "";
     if (ui.link.kind === "online") $("message").textContent = ui.said;
   };
-  const onLoadProgress = (done, total, unit) => {
-    $("load-text").textContent = loadProgressText(done, total, unit);
-    if (total > 0) $("load-bar").value = Math.min(1, done / total);
-    else $("load-bar").removeAttribute("value");
-    $("load-status").hidden = false;
-  };
   const call = (path, options = {}) =>
     request(base, `/api/s/${data.token}${path}`, { retries: params.retries, onLink, ...options });
 
@@ -93,18 +87,7 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
     ready: () => ui.ready,
     stage: () => ui.stage,
     fillScale,
-    async drawFaces(slots, faces, identity) {
-      ui.loading = true;
-      const timer = setTimeout(() => ($("load-status").hidden = false), 150);
-      try {
-        const where = { trial: ui.state.progress.trial, attempt: ui.state.trial.attempt };
-        await ui.display.show(slots, faces, identity, onLoadProgress, where);
-      } finally {
-        clearTimeout(timer);
-        ui.loading = false;
-        $("load-status").hidden = true;
-      }
-    },
+    drawFaces: createDrawFaces($, ui),
     facesShown() {
       ui.shownAt = performance.now();
       ui.loadMs = Math.max(0, Math.round(ui.shownAt - ui.receivedAt));
@@ -236,8 +219,9 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
 
   /** The reason said in the page until Continue (or ``failure_wait_ms``, if set). */
   function showFailure(reason) {
-    $("failed-reason").textContent = `The study server could not be used: ${reason}.`;
+    $("failed-reason").textContent = `${reason.charAt(0).toUpperCase()}${reason.slice(1)}.`;
     $("prompt").textContent = "";
+    $("gen-progress").textContent = "";
     show("failed");
     ui.state = null;
     if (!loaded) onLoad();

@@ -10,7 +10,7 @@ import * as selection from "./selection.js";
 import { createCategorise } from "./tasks/categorise.js";
 import { createEvolve } from "./tasks/evolve.js";
 import { STATUS_LINES, TASK_VIEWS } from "./tasks/markup.js";
-import { fillScale, loadProgressText } from "./tasks/shell.js";
+import { createDrawFaces, fillScale } from "./tasks/shell.js";
 
 const token = document.body.dataset.token;
 const $ = (id) => document.getElementById(id);
@@ -78,29 +78,9 @@ function onLink(link) {
 const call = (path, options = {}) => api(path, { retries: Infinity, onLink, ...options });
 
 // ---- loading progress ------------------------------------------------------------------------
-function onLoadProgress(done, total, unit) {
-  $("load-text").textContent = loadProgressText(done, total, unit);
-  const bar = $("load-bar");
-  if (total > 0) bar.value = Math.min(1, done / total);
-  else bar.removeAttribute("value"); // indeterminate
-  $("load-status").hidden = false;
+const drawFaces = createDrawFaces($, ui, (done, total, unit) => {
   document.body.dataset.loaded = `${done}/${total} ${unit}`;
-}
-
-async function drawFaces(slots, faces, identity) {
-  ui.loading = true;
-  $("load-text").textContent = "Loading faces…";
-  $("load-bar").removeAttribute("value");
-  const timer = setTimeout(() => ($("load-status").hidden = false), 150);
-  try {
-    const where = { trial: ui.state.progress.trial, attempt: ui.state.trial.attempt };
-    await ui.display.show(slots, faces, identity, onLoadProgress, where);
-  } finally {
-    clearTimeout(timer);
-    ui.loading = false;
-    $("load-status").hidden = true;
-  }
-}
+});
 
 // ---- progress -------------------------------------------------------------------------------
 function renderProgress(state) {
