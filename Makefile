@@ -10,10 +10,12 @@ EMOGEN_MODEL ?= $(if $(wildcard $(SHARED_MODEL)),$(SHARED_MODEL),)
 export EMOGEN_MODEL
 OUT ?= out
 VIEWER := src/emogen/web/static/build/.built
+PLUGIN_DIR := packages/jspsych-plugin-emogen
+PLUGIN := $(PLUGIN_DIR)/dist/.built
 
 .PHONY: setup system test lint demo demo-analyse bench clean
 
-setup: system $(VENV)/.installed node_modules/.installed $(VIEWER)
+setup: system $(VENV)/.installed node_modules/.installed $(VIEWER) $(PLUGIN)
 
 system:
 	bash scripts/install-system-deps.sh
@@ -32,6 +34,10 @@ $(VIEWER): node_modules/.installed $(wildcard src/emogen/web/viewer/* src/emogen
 	npm run build
 	touch $@
 
+# The jsPsych plugin: the study page's own modules and viewer, bundled for other sites' pages.
+$(PLUGIN): node_modules/.installed $(wildcard $(PLUGIN_DIR)/build.mjs $(PLUGIN_DIR)/src/* src/emogen/web/static/*.js src/emogen/web/static/tasks/* src/emogen/web/static/study.css src/emogen/web/viewer/* src/emogen/web/viewer_entry.js src/emogen/render/look.json src/emogen/render/shaders/*)
+	node $(PLUGIN_DIR)/build.mjs
+
 lint: setup
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
@@ -42,7 +48,7 @@ lint: setup
 # The CPU and BLAS kernel first: floating-point results can differ in the last bits between them.
 test: lint
 	$(BIN)/python scripts/platform_report.py
-	node --test tests/web/js/
+	node --test tests/web/js/ $(PLUGIN_DIR)/tests/
 	$(BIN)/python -m pytest -q
 
 demo: setup

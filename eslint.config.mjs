@@ -4,7 +4,7 @@ import js from "@eslint/js";
 import globals from "globals";
 
 export default [
-  { ignores: ["node_modules/**", "src/emogen/web/static/build/**", "**/*.d.ts", ".venv/**"] },
+  { ignores: ["node_modules/**", "src/emogen/web/static/build/**", "**/*.d.ts", ".venv/**", "packages/*/dist/**"] },
   js.configs.recommended,
   {
     files: ["src/emogen/web/**/*.js"],
@@ -13,6 +13,11 @@ export default [
   {
     files: ["**/*.mjs"],
     languageOptions: { ecmaVersion: 2022, sourceType: "module", globals: globals.node },
+  },
+  {
+    // the jsPsych plugin runs in the page; its node tests in a jsdom page
+    files: ["packages/*/src/**/*.js", "packages/*/tests/**/*.mjs"],
+    languageOptions: { ecmaVersion: 2022, sourceType: "module", globals: { ...globals.browser, ...globals.node } },
   },
   {
     rules: {

@@ -13,7 +13,6 @@ ones docs/study.md shows (docs/images/categorise_<w>x<h>.jpg).
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -30,16 +29,12 @@ from emogen.study.storage import Store
 from tests.study.drive import run_to_end
 from tests.web.test_devices import inside_viewport, no_horizontal_overflow
 from tests.web.test_study_browser import CSP_PROBE, browser, viewer_bundle, wait_for, wait_ready
+from tests.web.viewer_site import screenshot_folder
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 _ = (browser, viewer_bundle)  # fixtures, requested by name
 
-REPO = Path(__file__).resolve().parents[2]
-SCREENSHOTS = (
-    REPO / "docs" / "images"
-    if os.environ.get("EMOGEN_UPDATE_SCREENSHOTS") == "1"
-    else Path("/tmp/emogen-blocks-screenshots")
-)
+SCREENSHOTS = screenshot_folder("blocks")
 BLOCKS_STUDY: dict[str, Any] = {
     "name": "blocks",
     "emotions": ["happy", "sad", "angry", "fearful"],

@@ -12,6 +12,7 @@ study server will.
 from __future__ import annotations
 
 import http.server
+import os
 import shutil
 import subprocess
 import threading
@@ -34,6 +35,16 @@ SHARED = [
 #: The identity the site serves (a preset of emogen.appearance.identities).
 IDENTITY = "generic"
 CHROMIUM = "/usr/bin/chromium"
+
+
+def screenshot_folder(name: str) -> Path:
+    """Where a browser test's screenshots go: docs/images with ``EMOGEN_UPDATE_SCREENSHOTS=1``
+    (the pictures the docs show), else /tmp/emogen-<name>-screenshots."""
+    if os.environ.get("EMOGEN_UPDATE_SCREENSHOTS") == "1":
+        return REPO / "docs" / "images"
+    return Path(f"/tmp/emogen-{name}-screenshots")
+
+
 CHROMIUM_ARGS = [
     "--headless",
     "--no-sandbox",

@@ -27,12 +27,13 @@ import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
-from pydantic import Field, field_serializer, field_validator, model_validator
+from pydantic import AfterValidator, Field, field_serializer, field_validator, model_validator
 
 from emogen.appearance.identities import PRESETS, Identity, identity_from_dict
 from emogen.config import GAConfig, _Strict, read_toml, validate_config
 from emogen.errors import ConfigError, EmoGenError
 from emogen.model.rig import Rig
+from emogen.study.origins import check_origin
 from emogen.study.texts import (
     DEFAULT_CONSENT,
     DEFAULT_CONSENT_USER_AGENT,
@@ -124,6 +125,9 @@ class StudyConfig(_Strict):
     #: ``[[blocks]]``: the study's blocks in order, each running one task (``evolve`` or
     #: ``categorise``, :mod:`emogen.tasks.blocks`); none: one evolve block of the keys above.
     blocks: tuple[Block, ...] = ()
+    #: Web origins whose pages may call the participant API (jsPsych plugin, docs/jspsych.md):
+    #: exact ``scheme://host[:port]``; none by default. Not part of the config hash.
+    embed_origins: tuple[Annotated[str, AfterValidator(check_origin)], ...] = ()
 
     @field_validator("name")
     @classmethod
@@ -318,6 +322,7 @@ class StudyConfig(_Strict):
             del data["collect_user_agent"]
         if not data["blocks"]:  # nor studies of one evolve block (written before blocks)
             del data["blocks"]
+        del data["embed_origins"]  # where it may be embedded is no part of what people do
         return json.dumps(data, sort_keys=True, separators=(",", ":"))
 
 

@@ -23,6 +23,7 @@ from emogen.study.enrolment import PARTICIPANT_ID, checked_participant, create_s
 from emogen.study.errors import SessionNotFound
 from emogen.study.progress import participant_token
 from emogen.study.queries import current_face, session_by_token
+from emogen.study.records import StudyInfo, TrialRecord, study_info, trial_record
 from emogen.study.steps import Payload, SessionSteps, request_hash
 from emogen.study.storage import Store
 from emogen.study.trials import TrialEngines
@@ -154,6 +155,16 @@ class StudyService:
                 intensity=intensity, confidence=confidence,
                 timing=Timing(response_ms, load_ms)),
         )  # fmt: skip
+
+    def study_info(self) -> StudyInfo:
+        """The study's blocks and weight names (for a page that embeds the study)."""
+        return study_info(self.ctx)
+
+    def trial_record(self, token: str, position: int) -> TrialRecord:
+        """Trial ``position`` of the caller's session as recorded: session id, seeds, final face."""
+        with self.store.read() as db:
+            sess = session_by_token(db, token, self.ctx.study_id)
+            return trial_record(db, self.ctx, sess, position)
 
     def participant_token(self, participant_id: str) -> str:
         """The token of the participant's session in this study (404 when there is none)."""

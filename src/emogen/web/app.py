@@ -25,6 +25,7 @@ from emogen.study.config import StudyConfig, load_study_config
 from emogen.study.sessions import StudyService
 from emogen.study.storage import Store, resolve_database_url
 from emogen.web.assets import ModelGLBs
+from emogen.web.embed import add_cors
 from emogen.web.errors import install_error_handlers
 from emogen.web.faces import FacePNGs
 from emogen.web.limits import BodyLimit, add_response_headers
@@ -59,7 +60,7 @@ def _lifespan(store: Store) -> Any:
 
 
 def _routes(app: FastAPI, store: Store, config: StudyConfig) -> None:
-    from emogen.web import assets, participant, researcher
+    from emogen.web import assets, embed, participant, researcher
 
     @app.get("/healthz", include_in_schema=False)
     def healthz() -> dict[str, Any]:
@@ -67,6 +68,7 @@ def _routes(app: FastAPI, store: Store, config: StudyConfig) -> None:
         return {"ok": True, "study": config.name, "version": __version__}
 
     app.include_router(participant.router)
+    app.include_router(embed.router)
     app.include_router(assets.router)
     app.include_router(researcher.router)
     app.mount("/static", StaticFiles(directory=str(HERE / "static")), name="static")
@@ -130,6 +132,7 @@ def create_app(
     app.state.session_buckets = TokenBuckets(session_limit)
     app.state.researcher_failures = TokenBuckets(researcher_failure_limit)
     app.state.export_lock = asyncio.Lock()  # one dashboard export at a time
+    add_cors(app, config.embed_origins)  # innermost: preflights get the security headers too
     add_response_headers(app, hsts=hsts)
     app.add_middleware(BodyLimit, max_bytes=MAX_BODY_BYTES)
     install_error_handlers(app)

@@ -231,6 +231,27 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/s/{token}/trials/{position}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Get Trial Record
+         * @description A trial of the session as recorded: the researcher's session id, the trial's and the
+         *     session's seeds (decimal strings), and, once done, its final face's id and weights.
+         */
+        get: operations["get_trial_record_api_s__token__trials__position__get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/sessions": {
         parameters: {
             query?: never;
@@ -253,6 +274,26 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/study": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Get Study
+         * @description The study's name, blocks (task and trials of each) and the names of a face's weights.
+         */
+        get: operations["get_study_api_study_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
 }
 export type webhooks = Record<string, never>;
 export interface components {
@@ -261,6 +302,20 @@ export interface components {
         Begin: {
             /** Key */
             key: string;
+        };
+        /**
+         * BlockInfo
+         * @description A block of the study: its position (0-based), name, task and number of trials.
+         */
+        BlockInfo: {
+            /** Block */
+            block: number;
+            /** Name */
+            name: string;
+            /** Task */
+            task: string;
+            /** Trials */
+            trials: number;
         };
         /**
          * Categorisation
@@ -532,6 +587,57 @@ export interface components {
              */
             stage: "instructions" | "trial" | "done";
             trial: components["schemas"]["TrialView"] | null;
+        };
+        /**
+         * StudyInfo
+         * @description The study as an embedding page needs it: its blocks, and the names of a face's weights
+         *     (shapes, then correctives: the order of every ``weights`` list).
+         */
+        StudyInfo: {
+            /** Blocks */
+            blocks: components["schemas"]["BlockInfo"][];
+            /** Name */
+            name: string;
+            /** Participant Param */
+            participant_param: string;
+            /** Title */
+            title: string;
+            /** Weight Names */
+            weight_names: string[];
+        };
+        /**
+         * TrialRecord
+         * @description One trial of a session as recorded: where it is, its seeds and its final face (an evolve
+         *     trial's last elite; a categorise trial's face), the face only once the trial is done.
+         */
+        TrialRecord: {
+            /** Attempt */
+            attempt: number;
+            /** Block */
+            block: number;
+            /** Block Name */
+            block_name: string;
+            /** Emotion */
+            emotion: string;
+            final_face: components["schemas"]["FaceView"] | null;
+            /** Identity */
+            identity: string;
+            /** Participant Id */
+            participant_id: string;
+            /** Seed */
+            seed: string;
+            /** Session Id */
+            session_id: number;
+            /** Session Seed */
+            session_seed: string;
+            /** Status */
+            status: string;
+            /** Study */
+            study: string;
+            /** Task */
+            task: string;
+            /** Trial */
+            trial: number;
         };
         /**
          * TrialView
@@ -1283,6 +1389,66 @@ export interface operations {
             };
         };
     };
+    get_trial_record_api_s__token__trials__position__get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description The session's secret token (from the session link). */
+                token: string;
+                position: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["TrialRecord"];
+                };
+            };
+            /** @description No session with this token, or no such face now. */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The request does not fit the session now (stale page, reused step key). */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The request's values break a rule (the message names the value). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["InvalidRequest"];
+                };
+            };
+            /** @description The server is busy or shutting down; try again in a moment. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+        };
+    };
     create_session_api_sessions_post: {
         parameters: {
             query?: never;
@@ -1341,6 +1507,35 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The server is busy or shutting down; try again in a moment. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+        };
+    };
+    get_study_api_study_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["StudyInfo"];
                 };
             };
             /** @description The server is busy or shutting down; try again in a moment. */

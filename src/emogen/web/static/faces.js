@@ -1,6 +1,7 @@
 // Face display: the 3D viewer (three.js, WebGL) when available, else PNGs rendered by the server.
 //
-//   const display = await createFaceDisplay({ token });
+//   const display = await createFaceDisplay({ token });   // the study's own page
+//   const display = await createFaceDisplay({ token, base, loadViewer });  // another site's page
 //   await display.show(slots, faces, identity, onProgress, where);
 //   // slots: elements; faces: [{id, weights}]; where: {trial, attempt} the faces belong to
 //
@@ -19,8 +20,9 @@ function webglAvailable() {
 }
 
 class PngDisplay {
-  constructor(token) {
+  constructor(token, base = "") {
     this.token = token;
+    this.base = base;
     this.kind = "png";
   }
 
@@ -52,29 +54,37 @@ class PngDisplay {
           slot.classList.add("failed");
           resolve(false);
         };
-        img.src = `/api/s/${this.token}/faces/${face.id}.png${query}`;
+        img.src = `${this.base}/api/s/${this.token}/faces/${face.id}.png${query}`;
       }).then(loaded);
     });
     return Promise.all(loads);
   }
+
+  dispose() {}
 }
 
-async function loadViewer() {
-  if (document.body.dataset.viewer !== "yes" || !webglAvailable()) return null;
-  try {
-    const mod = await import("/static/viewer-adapter.js");
-    return await mod.createViewerDisplay();
-  } catch (err) {
-    console.warn("3D viewer unavailable, using server images:", err);
-    return null;
-  }
+async function loadOwnViewer() {
+  if (document.body.dataset.viewer !== "yes") return null;
+  const mod = await import("/static/viewer-adapter.js");
+  return mod.createViewerDisplay();
 }
 
-export async function createFaceDisplay({ token }) {
+/**
+ * The face display of session ``token``: the 3D viewer unless ``?render=png`` or WebGL 2 is
+ * missing. ``base``: the study server's origin when the page is another site's (the jsPsych
+ * plugin), "" on the server's own pages; ``loadViewer``: how that page gets the 3D viewer (the
+ * study's page imports it from /static when the server has it built).
+ * @param {{ token: string, base?: string, loadViewer?: () => Promise<any> }} options
+ */
+export async function createFaceDisplay({ token, base = "", loadViewer = loadOwnViewer }) {
   const forced = new URLSearchParams(location.search).get("render");
-  if (forced !== "png") {
-    const viewer = await loadViewer();
-    if (viewer) return viewer;
+  if (forced !== "png" && webglAvailable()) {
+    try {
+      const viewer = await loadViewer();
+      if (viewer) return viewer;
+    } catch (err) {
+      console.warn("3D viewer unavailable, using server images:", err);
+    }
   }
-  return new PngDisplay(token);
+  return new PngDisplay(token, base);
 }

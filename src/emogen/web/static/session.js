@@ -9,9 +9,14 @@ import { createFaceDisplay } from "./faces.js";
 import * as selection from "./selection.js";
 import { createCategorise } from "./tasks/categorise.js";
 import { createEvolve } from "./tasks/evolve.js";
+import { STATUS_LINES, TASK_VIEWS } from "./tasks/markup.js";
+import { createDrawFaces, fillScale } from "./tasks/shell.js";
 
 const token = document.body.dataset.token;
 const $ = (id) => document.getElementById(id);
+// the task components' screens (shared with the jsPsych plugin), before the components start
+$("view-instructions").insertAdjacentHTML("afterend", TASK_VIEWS);
+$("main").insertAdjacentHTML("beforeend", STATUS_LINES);
 const views = ["loading", "instructions", "trial", "rating", "categorise", "done"];
 
 const ui = {
@@ -73,39 +78,9 @@ function onLink(link) {
 const call = (path, options = {}) => api(path, { retries: Infinity, onLink, ...options });
 
 // ---- loading progress ------------------------------------------------------------------------
-function megabytes(bytes) {
-  return (bytes / 1e6).toFixed(1);
-}
-
-function onLoadProgress(done, total, unit) {
-  const text =
-    unit === "faces"
-      ? `Loading faces: ${done} of ${total}…`
-      : total > 0
-        ? `Loading the 3D faces: ${megabytes(done)} of ${megabytes(total)} MB…`
-        : `Loading the 3D faces: ${megabytes(done)} MB…`;
-  $("load-text").textContent = text;
-  const bar = $("load-bar");
-  if (total > 0) bar.value = Math.min(1, done / total);
-  else bar.removeAttribute("value"); // indeterminate
-  $("load-status").hidden = false;
+const drawFaces = createDrawFaces($, ui, (done, total, unit) => {
   document.body.dataset.loaded = `${done}/${total} ${unit}`;
-}
-
-async function drawFaces(slots, faces, identity) {
-  ui.loading = true;
-  $("load-text").textContent = "Loading faces…";
-  $("load-bar").removeAttribute("value");
-  const timer = setTimeout(() => ($("load-status").hidden = false), 150);
-  try {
-    const where = { trial: ui.state.progress.trial, attempt: ui.state.trial.attempt };
-    await ui.display.show(slots, faces, identity, onLoadProgress, where);
-  } finally {
-    clearTimeout(timer);
-    ui.loading = false;
-    $("load-status").hidden = true;
-  }
-}
+});
 
 // ---- progress -------------------------------------------------------------------------------
 function renderProgress(state) {
@@ -127,22 +102,6 @@ function renderProgress(state) {
 }
 
 // ---- what the task components share ---------------------------------------------------------
-/** A rating scale's radio buttons 1 … points, named ``name``. */
-function fillScale(scale, name, points) {
-  scale.replaceChildren();
-  for (let v = 1; v <= points; v++) {
-    const label = document.createElement("label");
-    const input = document.createElement("input");
-    input.type = "radio";
-    input.name = name;
-    input.value = String(v);
-    const text = document.createElement("span");
-    text.textContent = String(v);
-    label.append(input, text);
-    scale.appendChild(label);
-  }
-}
-
 /** The faces of the current screen are drawn: the response-time clock starts now. */
 function facesShown() {
   ui.shownAt = performance.now();

@@ -34,25 +34,44 @@ async function fetchGlb(url, onProgress) {
   return new Blob(chunks, { type: "model/gltf-binary" });
 }
 
+// Each identity's GLB is read once per page: every container (the grid, the rating view; each
+// trial of the jsPsych plugin) builds its FaceGrid from the same bytes. A failed read is
+// forgotten, so the next show tries again.
+/** @type {Map<string, Promise<Blob>>} */
+const glbs = new Map();
+
+function glbOnce(url, onProgress) {
+  let got = glbs.get(url);
+  if (!got) {
+    got = fetchGlb(url, onProgress);
+    glbs.set(url, got);
+    got.catch(() => glbs.delete(url));
+  }
+  return got;
+}
+
+function release(grid) {
+  grid.renderer.dispose();
+  grid.renderer.forceContextLoss(); // the browser's WebGL contexts are few: give this one back
+  grid.canvas.remove();
+}
+
 const nextFrame = () => new Promise((resolve) => requestAnimationFrame(() => resolve()));
 
 class ViewerDisplay {
-  constructor() {
+  /** @param {string} base the study server's origin ("" on its own pages) */
+  constructor(base) {
     this.kind = "webgl";
+    this.base = base;
     this.grids = new Map(); // container -> {url, count, ready: Promise<FaceGrid>}
   }
 
   gridFor(container, slots, url, onProgress) {
     const entry = this.grids.get(container);
     if (entry && entry.url === url && entry.count === slots.length) return entry.ready;
-    if (entry) {
-      entry.ready.then((old) => {
-        old.renderer.dispose();
-        old.canvas.remove();
-      }, () => {});
-    }
+    if (entry) entry.ready.then(release, () => {});
     const grid = new FaceGrid(container, slots);
-    const ready = fetchGlb(url, onProgress).then(async (blob) => {
+    const ready = glbOnce(url, onProgress).then(async (blob) => {
       const local = URL.createObjectURL(blob);
       try {
         await grid.load(local);
@@ -66,10 +85,15 @@ class ViewerDisplay {
     // a failed load (a lost connection) is tried afresh next time
     ready.catch(() => {
       if (this.grids.get(container) === entry2) this.grids.delete(container);
-      grid.renderer.dispose();
-      grid.canvas.remove();
+      release(grid);
     });
     return ready;
+  }
+
+  /** Every grid's WebGL context given back (the page's screens are gone: a plugin trial ended). */
+  dispose() {
+    for (const entry of this.grids.values()) entry.ready.then(release, () => {});
+    this.grids.clear();
   }
 
   /**
@@ -80,7 +104,7 @@ class ViewerDisplay {
    */
   async show(slots, faces, identity = "generic", onProgress = () => {}) {
     const container = slots[0].closest("[data-viewer-container]");
-    const url = `/api/model/${encodeURIComponent(identity)}.glb`;
+    const url = `${this.base}/api/model/${encodeURIComponent(identity)}.glb`;
     const grid = await this.gridFor(container, slots, url, onProgress);
     const n = grid.shapeNames.length;
     grid.setFaces(faces.map((f) => f.weights.slice(0, n)));
@@ -89,6 +113,7 @@ class ViewerDisplay {
   }
 }
 
-export async function createViewerDisplay() {
-  return webgl2Available() ? new ViewerDisplay() : null;
+/** @param {{ base?: string }} [options] ``base``: the study server's origin on another site's page */
+export async function createViewerDisplay({ base = "" } = {}) {
+  return webgl2Available() ? new ViewerDisplay(base) : null;
 }

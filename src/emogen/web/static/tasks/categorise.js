@@ -164,7 +164,7 @@ export function createCategorise(page) {
   });
 
   // Number keys choose a label; in a rating scale, they give that rating (not while typing
-  // in a field, nor with a modifier held).
+  // in a field, nor with a modifier held). ``page.signal`` (the plugin's trial) removes it.
   document.addEventListener("keydown", (event) => {
     if (page.stage() !== "categorise" || event.ctrlKey || event.metaKey || event.altKey) return;
     const target = event.target;
@@ -183,7 +183,7 @@ export function createCategorise(page) {
     if (label === null) return;
     event.preventDefault();
     chooseLabel(label);
-  });
+  }, { signal: page.signal });
 
   return { views: ["categorise"], render, paint };
 }

@@ -219,7 +219,7 @@ export function createEvolve(page) {
 
   $("rating-form").addEventListener("submit", (event) => {
     event.preventDefault();
-    const checked = document.querySelector('input[name="rating"]:checked');
+    const checked = $("rating-scale").querySelector('input[name="rating"]:checked');
     if (!checked || ui.busy) return;
     page.step("rating", {
       key: ui.key,

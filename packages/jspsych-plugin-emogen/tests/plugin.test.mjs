@@ -1,0 +1,213 @@
+// The plugin under jsPsych's own test utilities (@jspsych/test-utils) in a jsdom page, against
+// a scripted study server (test/fake-server.mjs): an evolve and a categorise trial end to end
+// with their data, one session for both; each wrong use (a study without the block, the server
+// gone mid-trial, an origin the server does not allow) ends the trial as data with its reason,
+// said in the page; simulate() in data-only mode.
+import "./dom.mjs";
+import assert from "node:assert/strict";
+import { beforeEach, test } from "node:test";
+import { clickTarget, simulateTimeline, startTimeline } from "@jspsych/test-utils";
+import { ParameterType } from "jspsych";
+import EmogenPlugin from "../src/index.js";
+import { forgetSessions } from "../src/connect.js";
+import { distance, uniform } from "../src/observer.js";
+import { SERVER, fakeServer } from "./fake-server.mjs";
+
+/** Waits (up to 5 s) until ``check()`` is true. */
+async function until(check, what) {
+  for (let i = 0; i < 500; i++) {
+    if (check()) return;
+    await new Promise((r) => setTimeout(r, 10));
+  }
+  assert.fail(`waited 5 s for ${what}`);
+}
+
+const root = () => document.querySelector(".emogen-trial");
+const ready = (stage) => () =>
+  root() && root().dataset.emogenStage === stage && root().dataset.emogenReady === "true";
+
+let fake;
+beforeEach(() => {
+  document.body.innerHTML = ""; // an earlier test's page gone
+  forgetSessions();
+  sessionStorage.clear();
+  fake = fakeServer();
+  globalThis.fetch = fake.fetch;
+});
+
+async function chooseAndNext(first, second) {
+  await until(ready("trial"), "the faces");
+  const cells = [...document.querySelectorAll("#grid > .cell")];
+  await clickTarget(cells[first].querySelector(".face"));
+  await clickTarget(cells[second].querySelector(".face"));
+  await clickTarget(document.querySelector("#next"));
+}
+
+test("info declares every parameter and data field with a jsPsych type", () => {
+  const { parameters, data, name } = EmogenPlugin.info;
+  assert.equal(name, "emogen");
+  assert.equal(parameters.server.default, undefined); // required
+  assert.deepEqual(parameters.task.options, ["evolve", "categorise"]);
+  const types = new Set(Object.values(ParameterType));
+  for (const field of [...Object.values(parameters), ...Object.values(data)]) assert.ok(types.has(field.type));
+});
+
+test("an evolve and a categorise trial run on one session; their data are what was chosen", async () => {
+  const { getData, expectFinished, displayElement } = await startTimeline([
+    { type: EmogenPlugin, server: `${SERVER}/`, task: "evolve" },
+    { type: EmogenPlugin, server: SERVER, task: "categorise" },
+  ]);
+  await chooseAndNext(2, 5); // generation 1: faces 2 (best) and 5
+  await until(() => document.querySelector("#gen-progress").textContent === "Generation 2 of 2", "generation 2");
+  await chooseAndNext(0, 9);
+  await until(ready("rating"), "the rating");
+  const five = document.querySelector('#rating-scale input[value="5"]');
+  five.checked = true;
+  five.dispatchEvent(new Event("change", { bubbles: true }));
+  await clickTarget(document.querySelector("#rate"));
+  await until(ready("categorise"), "the categorise face");
+  assert.deepEqual([...displayElement.querySelectorAll("#label-buttons button")].map((b) => b.dataset.label), ["sad", "happy"]);
+  await clickTarget(displayElement.querySelector('#label-buttons button[data-label="happy"]'));
+  await until(() => getData().count() === 2, "both trials' data");
+  await expectFinishedOk(expectFinished);
+
+  const [evolve, categorise] = getData().values();
+  assert.equal(fake.sessions, 1); // one session for both trials
+  assert.equal(fake.log.filter((r) => r.path.endsWith("/begin")).length, 1);
+  assert.equal(fake.participant, "node-participant"); // PROLIFIC_PID from the page's URL
+  assert.equal(evolve.success, true);
+  assert.equal(evolve.reason, null);
+  assert.equal(evolve.session_id, 7);
+  assert.equal(evolve.participant_id, "node-participant");
+  assert.equal(evolve.seed, "12345678901234567890"); // exact: a string
+  assert.deepEqual(evolve.generations.map((g) => [g.generation, g.elite, g.others]), [[0, 2, [5]], [1, 10, [19]]]);
+  assert.deepEqual(evolve.generations[1].shown, [10, 11, 12, 13, 14, 15, 16, 17, 18, 19]);
+  const sent = fake.log.filter((r) => r.path.endsWith("/select")).map((r) => r.body);
+  assert.deepEqual(evolve.generations.map((g) => g.rt), sent.map((b) => b.response_ms));
+  assert.equal(evolve.rating, 5);
+  assert.deepEqual(evolve.final_weights, [0.3, 0.7, 0.5]);
+  assert.equal(evolve.display, "png");
+  assert.ok(evolve.first_faces_ms >= 0 && evolve.rt >= evolve.first_faces_ms);
+  assert.equal(categorise.success, true);
+  assert.equal(categorise.label, "happy");
+  assert.deepEqual(categorise.labels, ["sad", "happy"]);
+  assert.equal(categorise.trial, 1);
+  assert.ok(!("token" in evolve) || evolve.token === undefined); // the session's secret stays out
+  const jspsychOwn = ["trial_type", "trial_index", "plugin_version", "time_elapsed"];
+  for (const key of Object.keys(evolve).filter((k) => !jspsychOwn.includes(k))) {
+    assert.ok(key in EmogenPlugin.info.data, `data field '${key}' is declared in info.data`);
+  }
+});
+
+async function expectFinishedOk(expectFinished) {
+  const { expect } = await import("./expect.mjs");
+  globalThis.expect = expect;
+  await expectFinished();
+}
+
+async function failedTrial(params, what) {
+  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, retries: 0, ...params }]);
+  await until(() => root() && root().dataset.emogenStage === "failed", what);
+  const shown = document.querySelector("#failed-reason").textContent;
+  await clickTarget(document.querySelector("#failed-continue"));
+  await until(() => getData().count() === 1, "the failed trial's data");
+  return { data: getData().values()[0], shown };
+}
+
+test("a study without that block: the trial fails with its reason, in the page and the data", async () => {
+  fake = fakeServer({ blocks: ["evolve"] });
+  globalThis.fetch = fake.fetch;
+  const { data, shown } = await failedTrial({ task: "categorise" }, "the failure");
+  assert.equal(data.success, false);
+  assert.equal(data.failure, "block");
+  assert.match(data.reason, /study 'fake' has no categorise block \(its blocks: block1 \(evolve\)\)/);
+  assert.equal(shown, `T${data.reason.slice(1)}.`); // said in the page as recorded
+  assert.equal(fake.sessions, 0); // nothing made for nothing
+});
+
+test("the next trial of another task: fails, saying so", async () => {
+  const { data } = await failedTrial({ task: "categorise" }, "the failure");
+  assert.equal(data.failure, "block");
+  assert.match(data.reason, /next trial \(trial 1 of 2\) is a evolve trial, not categorise/);
+});
+
+test("the server gone mid-trial: the trial ends as failed, what was done kept", async () => {
+  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, retries: 0 }]);
+  await chooseAndNext(1, 2);
+  await until(() => document.querySelector("#gen-progress").textContent === "Generation 2 of 2", "generation 2");
+  await until(ready("trial"), "the faces");
+  fake.down = true;
+  await chooseAndNext(3, 4);
+  await until(() => root().dataset.emogenStage === "failed", "the failure");
+  assert.match(document.querySelector("#failed-reason").textContent, /cannot be reached/);
+  await clickTarget(document.querySelector("#failed-continue"));
+  await until(() => getData().count() === 1, "the data");
+  const data = getData().values()[0];
+  assert.equal(data.success, false);
+  assert.equal(data.failure, "unreachable");
+  assert.match(data.reason, /the study server https:\/\/study\.example\.org cannot be reached/);
+  assert.equal(data.generations.length, 1); // the first generation was recorded by the server
+  assert.equal(data.generations[0].elite, 1);
+});
+
+test("an origin the server does not allow: the reason names the origin and the setting", async () => {
+  fake.refuseOrigin = true;
+  const { data, shown } = await failedTrial({}, "the failure");
+  assert.equal(data.failure, "origin");
+  assert.match(data.reason, /does not allow pages of https:\/\/experiments\.example\.org .*embed_origins/);
+  assert.ok(shown.includes("embed_origins"));
+});
+
+test("failure_wait_ms ends a failed trial by itself", async () => {
+  fake.down = true;
+  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, retries: 0, failure_wait_ms: 20 }]);
+  await until(() => getData().count() === 1, "the data");
+  assert.equal(getData().values()[0].failure, "unreachable");
+});
+
+test("a server address that is not one: failure without a request", async () => {
+  const { getData } = await startTimeline([{ type: EmogenPlugin, server: "study.example.org" }]);
+  await until(() => getData().count() === 1, "the data");
+  assert.match(getData().values()[0].reason, /'server' must be the study server's address/);
+  assert.equal(fake.log.length, 0);
+});
+
+test("simulate data-only: an observer near its target, no server, repeatable", async () => {
+  const target = [0.9, 0.1, 0.6, 0.0, 0.3];
+  const run = async (seed) => {
+    const options = { simulation_options: { target, seed, generations: 8, chosen: 3 } };
+    const { getData } = await simulateTimeline([{ type: EmogenPlugin, server: SERVER, ...options }], "data-only");
+    await until(() => getData().count() === 1, "the simulated data");
+    const data = { ...getData().values()[0] };
+    delete data.time_elapsed; // jsPsych's clock aside
+    return data;
+  };
+  const data = await run(3);
+  assert.equal(fake.log.length, 0);
+  assert.equal(data.simulated, true);
+  assert.equal(data.success, true);
+  assert.equal(data.generations.length, 9);
+  for (const g of data.generations) {
+    assert.equal(g.shown.length, 10);
+    assert.ok(g.shown.includes(g.elite) && g.others.every((o) => g.shown.includes(o)));
+  }
+  // independent reference: faces drawn as the stand-in GA draws its first ones, 2000 of them
+  const random = uniform(99);
+  const typical = Array.from({ length: 2000 }, () =>
+    distance(target.map(() => (random() < 0.3 ? random() : 0)), target),
+  ).sort((a, b) => a - b);
+  assert.ok(distance(data.final_weights, target) < typical[100], "the final face is nearer than 95% of random faces");
+  assert.deepEqual(await run(3), data);
+  assert.notDeepEqual((await run(4)).final_weights, data.final_weights);
+});
+
+test("simulate data-only categorise: the label of the nearest prototype", async () => {
+  const { getData } = await simulateTimeline([{
+    type: EmogenPlugin, server: SERVER, task: "categorise",
+    simulation_options: { labels: ["happy", "sad"], prototypes: { happy: [1, 0], sad: [0, 1] }, face: [0.2, 0.9] },
+  }], "data-only");
+  await until(() => getData().count() === 1, "the data");
+  const data = getData().values()[0];
+  assert.equal(data.label, "sad");
+  assert.deepEqual(data.final_weights, [0.2, 0.9]);
+});

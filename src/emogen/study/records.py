@@ -1,0 +1,122 @@
+"""What a page embedding the study (the jsPsych plugin) reads besides the session's state: the
+study's blocks, and a trial's record as the server keeps it — the researcher's session id, the
+seeds, the final face — so the embedding experiment's own data carry them too.
+
+Seeds go out as decimal strings: they are 64-bit integers, past what a JavaScript number holds
+exactly.
+"""
+
+from __future__ import annotations
+
+import json
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+from typing_extensions import TypedDict
+
+from emogen.study.context import StudyContext
+from emogen.study.errors import SessionNotFound
+from emogen.study.queries import final_face, trial_at
+from emogen.study.tables import SessionRow, StimulusRow, TrialRow
+from emogen.tasks.protocol import FaceView
+
+
+class BlockInfo(TypedDict):
+    """A block of the study: its position (0-based), name, task and number of trials."""
+
+    block: int
+    name: str
+    task: str
+    trials: int
+
+
+class StudyInfo(TypedDict):
+    """The study as an embedding page needs it: its blocks, and the names of a face's weights
+    (shapes, then correctives: the order of every ``weights`` list)."""
+
+    name: str
+    title: str
+    participant_param: str
+    blocks: list[BlockInfo]
+    weight_names: list[str]
+
+
+class TrialRecord(TypedDict):
+    """One trial of a session as recorded: where it is, its seeds and its final face (an evolve
+    trial's last elite; a categorise trial's face), the face only once the trial is done."""
+
+    session_id: int
+    participant_id: str
+    study: str
+    trial: int
+    block: int
+    block_name: str
+    task: str
+    status: str
+    emotion: str
+    identity: str
+    attempt: int
+    seed: str
+    session_seed: str
+    final_face: FaceView | None
+
+
+def study_info(ctx: StudyContext) -> StudyInfo:
+    """The study's blocks (names as in the exports: ``block<k>`` where none is given)."""
+    config = ctx.config
+    counts: dict[int, int] = {}
+    for c in ctx.conditions:
+        counts[c.block] = counts.get(c.block, 0) + 1
+    tasks = [b.task for b in config.study_blocks()]
+    blocks: list[BlockInfo] = [
+        {"block": k, "name": name, "task": tasks[k], "trials": counts.get(k, 0)}
+        for k, name in enumerate(block_names(ctx))
+    ]
+    return {
+        "name": config.name,
+        "title": config.title,
+        "participant_param": config.participant_param,
+        "blocks": blocks,
+        "weight_names": list(ctx.weight_names),
+    }
+
+
+def block_names(ctx: StudyContext) -> list[str]:
+    """Each block's name as the exports give it (``block<k>``, from 1, where none is given)."""
+    return [b.name or f"block{k + 1}" for k, b in enumerate(ctx.config.study_blocks())]
+
+
+def _face(db: Session, row: TrialRow) -> FaceView | None:
+    if row.status != "done":
+        return None
+    if row.task == "categorise":
+        found = db.execute(
+            select(StimulusRow.weights).where(StimulusRow.trial_id == row.id)
+        ).scalar_one_or_none()
+        return None if found is None else {"id": 0, "weights": json.loads(found)}
+    face = final_face(db, row)
+    return None if face is None else {"id": face.face_id, "weights": json.loads(face.weights)}
+
+
+def trial_record(db: Session, ctx: StudyContext, sess: SessionRow, position: int) -> TrialRecord:
+    """Trial ``position`` of the session as recorded (404 when the session has no such trial)."""
+    row = trial_at(db, sess.id, position)
+    if row is None:
+        raise SessionNotFound(f"this session has no trial {position}")
+    names = block_names(ctx)
+    return {
+        "session_id": sess.id,
+        "participant_id": sess.participant_id,
+        "study": ctx.config.name,
+        "trial": row.position,
+        "block": row.block,
+        "block_name": names[row.block] if row.block < len(names) else f"block{row.block + 1}",
+        "task": row.task,
+        "status": row.status,
+        "emotion": row.emotion,
+        "identity": row.identity,
+        "attempt": row.attempt,
+        "seed": str(row.seed),
+        "session_seed": str(sess.seed),
+        "final_face": _face(db, row),
+    }
