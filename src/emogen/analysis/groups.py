@@ -167,5 +167,7 @@ def groups_section(
     report.bullets([f"Skipped {n}" for n in notes])
     if rows:
         table = pd.DataFrame(rows)
-        report.table(table, "groups", f"Groups ('{column}') per emotion: location and dispersion")
+        report.table(
+            table, "participant_groups", f"Groups ('{column}') per emotion: location and dispersion"
+        )
         summary["groups"] = rows
