@@ -1,0 +1,124 @@
+"""``emogen analyse`` on a real (simulated) study export: the analyses of participants, with a
+participant table, and what it says when the design cannot support one."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from emogen.cli.app import app
+from emogen.study.config import study_from_dict
+from emogen.study.export import export_tables, write_export
+from emogen.study.simulate import SimulationPlan, simulate_study
+from emogen.study.storage import Store
+from emogen.tasks.simulated import SimulatedDesign
+
+STUDY: dict[str, Any] = {
+    "name": "people",
+    "seed": 5,
+    "emotions": ["happy", "sad"],
+    "identities": ["generic"],
+    "repetitions": 2,
+    "ga": {"generations": 4, "min_selections": 1, "max_selections": 5},
+}
+
+
+def _export(root: Path, model: Any, n: int, study: dict[str, Any]) -> Path:
+    url = f"sqlite:///{root / 'study.sqlite'}"
+    plan = SimulationPlan(study_from_dict(study), url, seed=1, participants=n,
+                          design=SimulatedDesign(), shuffle_prototypes=False)  # fmt: skip
+    simulate_study(plan, model=model)
+    store = Store(url)
+    try:
+        write_export(export_tables(store), root / "export")
+    finally:
+        store.dispose()
+    return root / "export"
+
+
+@pytest.fixture(scope="module")
+def export(ict_model, tmp_path_factory: pytest.TempPathFactory) -> Path:  # type: ignore[no-untyped-def]
+    return _export(tmp_path_factory.mktemp("people"), ict_model, 12, STUDY)
+
+
+def _analyse(export: Path, out: Path, *extra: str) -> Any:
+    return CliRunner().invoke(app, ["analyse", str(export), "--out", str(out), "--no-render",
+                                    "--noise-runs", "20", *extra])  # fmt: skip
+
+
+def test_reliability_and_groups_with_the_participant_as_unit(
+    export: Path, ict_dir: Path, tmp_path: Path
+) -> None:
+    table = tmp_path / "participants.csv"
+    ids = [f"sim-{i + 1:04d}" for i in range(12)]
+    pd.DataFrame({"participant_id": ids, "group": ["a", "b"] * 6, "age": range(20, 32)}).to_csv(
+        table, index=False
+    )
+    out = tmp_path / "report"
+    result = _analyse(export, out, "--participants", str(table), "--model", str(ict_dir))
+    assert result.exit_code == 0, result.output
+    rel = pd.read_csv(out / "tables" / "reliability.csv")
+    assert set(rel["space"]) == {"ed", "cd", "vertex_rms"}
+    assert (rel["participants"] == 12).all() and (rel["faces"] == 24).all()
+    # the ICC in ED space by a plain computation on the exported faces
+    faces = pd.read_parquet(export / "faces.parquet")
+    trials = pd.read_parquet(export / "trials.parquet")
+    for emotion in ("happy", "sad"):
+        done = trials[(trials["emotion"] == emotion) & (trials["status"] == "done")]
+        g, who = [], []
+        for t in done.itertuples():
+            f = faces[(faces["session_id"] == t.session_id) & (faces["trial"] == t.trial)
+                      & (faces["face_id"] == t.final_face_id)]  # fmt: skip
+            f = f[f["attempt"] == f["attempt"].max()]
+            f = f[f["generation"] == f["generation"].max()]
+            g.append(f[[c for c in f.columns if c.startswith("g_")]].to_numpy(dtype=float)[0])
+            who.append(t.participant_id)
+        x, who_a = np.array(g), np.array(who)
+        means = {p: x[who_a == p].mean(0) for p in set(who)}
+        ssw = sum(np.sum((x[who_a == p] - m) ** 2) for p, m in means.items())
+        sst = np.sum((x - x.mean(0)) ** 2)
+        s2w = ssw / (24 - 12)
+        s2b = ((sst - ssw) / 11 - s2w) / 2
+        row = rel[(rel["emotion"] == emotion) & (rel["space"] == "ed")].iloc[0]
+        assert row["icc"] == pytest.approx(s2b / (s2b + s2w))
+        assert row["icc_low"] < row["icc"] < row["icc_high"]
+    groups = pd.read_csv(out / "tables" / "participant_groups.csv")
+    assert list(groups["emotion"]) == ["happy", "sad"] and (groups["participants"] == 12).all()
+    readme = (out / "README.md").read_text()
+    assert "Unit: the participant" in readme and "one final face per participant" in readme
+    assert json.loads((out / "analysis.json").read_text())["participants"] == 12
+
+
+def test_a_wrong_participant_table_is_refused_before_any_work(export: Path, tmp_path: Path) -> None:
+    short = tmp_path / "short.csv"
+    pd.DataFrame({"participant_id": ["sim-0001"], "group": ["a"]}).to_csv(short, index=False)
+    result = _analyse(export, tmp_path / "r1", "--participants", str(short))
+    assert result.exit_code == 2
+    assert "lacks 11 participant(s)" in result.output and "'sim-0002'" in result.output
+    assert not (tmp_path / "r1").exists()
+    nogroup = tmp_path / "nogroup.csv"
+    pd.DataFrame({"participant_id": [f"sim-{i + 1:04d}" for i in range(12)]}).to_csv(
+        nogroup, index=False
+    )
+    result = _analyse(export, tmp_path / "r2", "--participants", str(nogroup))
+    assert result.exit_code == 2 and "no column 'group'" in result.output
+    result = _analyse(export, tmp_path / "r3", "--participants", str(tmp_path / "absent.csv"))
+    assert result.exit_code == 2 and "does not exist" in result.output
+
+
+def test_one_repetition_says_why_there_is_no_reliability(
+    ict_model: Any, ict_dir: Path, tmp_path: Path
+) -> None:
+    export = _export(tmp_path, ict_model, 4, STUDY | {"repetitions": 1})
+    out = tmp_path / "report"
+    result = _analyse(export, out, "--model", str(ict_dir))
+    assert result.exit_code == 0, result.output
+    readme = (out / "README.md").read_text()
+    assert "No reliability: every participant made each emotion on each identity once" in readme
+    assert not (out / "tables" / "reliability.csv").exists()
