@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from emogen import columns as tidy
+from emogen.analysis.people import sessions_of
 from emogen.analysis.validate import check_simulation, check_study
 from emogen.errors import ConfigError, DataError
 from emogen.metrics import cosine_distance
@@ -110,15 +111,16 @@ def _read(folder: Path, name: str, required: bool = True) -> pd.DataFrame | None
     return None
 
 
-def load_dataset(path: Path) -> Dataset:
-    """A study export or simulation output folder (see the module docstring)."""
+def load_dataset(path: Path, exclude: frozenset[str] = frozenset()) -> Dataset:
+    """A study export or simulation output folder (see the module docstring); ``exclude``: ids
+    of a study's participants left out of everything (an exclusion rule's verdict)."""
     folder = Path(path)
     if not folder.is_dir():
         raise ConfigError(
             f"DATA must be a folder (a study export or simulation output); got {folder}"
         )
     if all(any((folder / f"{t}{s}").is_file() for s in (".parquet", ".csv")) for t in STUDY_TABLES):
-        return load_study(folder)
+        return load_study(folder, exclude)
     sims = simulation_folders(folder)
     if sims:
         return load_simulations(folder, sims)
@@ -164,9 +166,16 @@ def _study_tables(
     return trials, faces, selections, ratings
 
 
-def load_study(folder: Path) -> Dataset:
+def load_study(folder: Path, exclude: frozenset[str] = frozenset()) -> Dataset:
     trials, faces, selections, ratings = _study_tables(folder)
     responses = _read(folder, "responses", required=False)
+    if exclude:
+        gone = sessions_of(trials, exclude)
+        trials = trials[~trials["session_id"].isin(gone)].reset_index(drop=True)
+        faces, selections = (t[~t["session_id"].isin(gone)] for t in (faces, selections))
+        ratings, responses = (
+            None if t is None else t[~t["session_id"].isin(gone)] for t in (ratings, responses)
+        )
     notes: list[str] = []
     wcols = [c for c in faces.columns if str(c).startswith("w_")]
     columns = tuple(str(c)[2:] for c in wcols)

@@ -226,3 +226,9 @@ def _durations(done: pd.DataFrame, faces: pd.DataFrame) -> pd.Series:
     end = pd.to_datetime(d["finished_at"], utc=True, errors="coerce")
     start = pd.to_datetime(d["first_shown"], utc=True, errors="coerce")
     return (end - start).dt.total_seconds()
+
+
+def sessions_of(trials: pd.DataFrame, participants: frozenset[str]) -> set[object]:
+    """The session ids of ``participants`` in a trials table (to drop them from every table)."""
+    mine = trials["participant_id"].astype(str).isin(participants)
+    return set(trials.loc[mine, "session_id"])
