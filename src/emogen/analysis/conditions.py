@@ -19,7 +19,7 @@ Y[i, e, d] is a gene vector. Participants missing a cell are left out (and count
   ``(1 + #{F* ≥ F}) / (1 + B)``; exact enumeration when (k!)^n ≤ B.
 * Effect size: partial η² = SS_effect / (SS_effect + SS_error) (the share of the
   within-participant variation the conditions explain; ≈ 1/n under H0 by chance alone), and
-  its bootstrap bias-corrected value with a bias-corrected percentile CI over participants.
+  its bootstrap bias-corrected value with a basic bootstrap CI over participants.
 """
 
 from __future__ import annotations
@@ -113,19 +113,20 @@ def within_permutation_test(
 def _eta_ci(
     y: np.ndarray, eta: float, *, level: float, draws: int, rng: np.random.Generator
 ) -> tuple[float, float, float]:
-    """Bootstrap bias-corrected partial η² and its CI, resampling participants: a resample
-    repeats participants, which inflates SS_effect, so the bootstrap distribution sits above η²
-    (by about the noise's share, ~1/n); the bias (median of the resamples − η²) is subtracted from
-    the estimate and from both percentile bounds (Efron & Tibshirani 1993, ch. 10; the median
-    bias, as the resamples are skewed near 0)."""
+    """Bootstrap bias-corrected partial η² and its basic (reverse-percentile) bootstrap CI,
+    resampling participants (Davison & Hinkley 1997, §5.2): a resample repeats participants,
+    which inflates SS_effect, so the resamples sit above η² (by about the noise's share, ~1/n);
+    the corrected value 2η² − median(η²*) and the interval [2η² − q_hi, 2η² − q_lo] both move
+    down by that bias (clipped at 0)."""
     yc = y - y.mean(axis=1, keepdims=True)
     n = len(yc)
     etas = np.empty(draws)
     for b in range(draws):
         e, t = _sums(yc[rng.integers(0, n, n)])
         etas[b] = float(e / t) if t > 0 else 0.0
+    q_lo, q_hi = np.quantile(etas, [(1 - level) / 2, (1 + level) / 2])
+    lo, hi = 2 * eta - q_hi, 2 * eta - q_lo
     bias = float(np.median(etas)) - eta
-    lo, hi = np.quantile(etas, [(1 - level) / 2, (1 + level) / 2]) - bias
     return max(0.0, eta - bias), max(0.0, float(lo)), max(0.0, float(hi))
 
 
@@ -216,7 +217,7 @@ def conditions_section(
         "independent and, under H0, the conditions exchangeable within a participant (no order "
         "effect tied to the condition: the block order is counterbalanced). Effect: partial η² "
         "(within-participant sum of squares explained) and its bootstrap bias-corrected value "
-        f"with a {1 - opts.alpha:.0%} CI over participants ({draws} resamples). Not a mixed "
+        f"with a {1 - opts.alpha:.0%} basic bootstrap CI over participants ({draws} resamples). Not a mixed "
         f"model. {left_out} participant(s) without every cell left out."
     )
     report.table(table, "conditions_tests", "Emotion, identity and interaction effects on the "
