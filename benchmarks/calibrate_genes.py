@@ -1,0 +1,144 @@
+"""Calibration of the per-gene and condition tests of #28 (items 5–6) over 100 simulated
+studies each; prints the figures reported in docs/analysis.md.
+
+    PYTHONPATH=src python benchmarks/calibrate_genes.py [--studies 100]
+
+* per-gene FWER (max-T) and FDR (BH, share of studies with any false discovery — under the
+  complete null FDR = FWER) on null data: groups without a shift; emotions that share a
+  prototype (one emotion's repetitions 0 and 1 labelled as two emotions);
+* power: a planted group shift of +0.3 and +0.6 on browInnerUp (happy) found on that gene;
+* condition tests: identity and interaction at α on null; identity power on a planted shift;
+* position-bias test: per-participant rejection rate under uniform picks.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+from dataclasses import replace
+
+import numpy as np
+
+import emogen
+from emogen.analysis.conditions import condition_tests
+from emogen.analysis.genes import GeneTestOptions, emotion_gene_tests, group_gene_tests
+from emogen.analysis.quality import position_bias
+from emogen.analysis.simulated_study import PeopleDesign, as_people, simulate_people
+from emogen.tasks.simulated import SimulatedDesign
+
+ALPHA = 0.05
+OPTS = GeneTestOptions(permutations=2000, bootstrap=200)
+NULL = PeopleDesign(
+    emotions=("happy", "sad"), identities=("female-medium",), participants=40, repetitions=2,
+    categorise=False, groups=("a", "b"), participant=SimulatedDesign(spread=0.1),
+)  # fmt: skip
+
+
+def rate(hits: int, n: int) -> str:
+    p = hits / n
+    return f"{p:.3f} ± {math.sqrt(p * (1 - p) / n):.3f} (SE; {hits}/{n})"
+
+
+def same_prototype(people):  # type: ignore[no-untyped-def]
+    f = people.faces[people.faces["emotion"] == "happy"].copy()
+    f["emotion"] = np.where(f["repetition"] == 0, "A", "B")
+    return replace(people, faces=f)
+
+
+def genes(rig, studies: int) -> None:  # type: ignore[no-untyped-def]
+    g_fwer = g_fdr = e_fwer = e_fdr = 0
+    power = {0.3: 0, 0.6: 0}
+    wrong = {0.3: 0, 0.6: 0}
+    for s in range(studies):
+        people = as_people(simulate_people(NULL, rig, seed=1000 + s))
+        rng = np.random.default_rng(s)
+        g = group_gene_tests(people, OPTS, rng=rng)
+        e = emotion_gene_tests(same_prototype(people), OPTS, rng=rng)
+        g_fwer += bool(g["significant_maxt"].any())
+        g_fdr += bool(g["significant_bh"].any())
+        e_fwer += bool(e["significant_maxt"].any())
+        e_fdr += bool(e["significant_bh"].any())
+        for amount in power:
+            planted = replace(NULL, shifts={"b": {"happy": {"browInnerUp": amount}}})
+            pp = as_people(simulate_people(planted, rig, seed=5000 + s))
+            t = group_gene_tests(pp, OPTS, rng=rng)
+            hit = t[t["significant_maxt"]]
+            power[amount] += bool(
+                ((hit["gene"] == "browInnerUp") & (hit["emotion"] == "happy")).any()
+            )
+            wrong[amount] += bool(
+                ((hit["gene"] != "browInnerUp") | (hit["emotion"] != "happy")).any()
+            )
+    print(
+        f"genes: {NULL.participants} participants (20/group), 2 emotions, 2 repetitions, "
+        f"{len(g) // 2} genes"
+    )
+    print(
+        f"  groups, no shift:   FWER (max-T) {rate(g_fwer, studies)}; any BH discovery {rate(g_fdr, studies)}"
+    )
+    print(
+        f"  emotions, same prototype: FWER (max-T) {rate(e_fwer, studies)}; any BH discovery {rate(e_fdr, studies)}"
+    )
+    for amount in power:
+        print(
+            f"  planted +{amount} browInnerUp (happy, group b): found (max-T) {rate(power[amount], studies)}; "
+            f"another gene/emotion rejected {rate(wrong[amount], studies)}"
+        )
+
+
+def conditions(rig, studies: int) -> None:  # type: ignore[no-untyped-def]
+    base = PeopleDesign(emotions=("happy", "sad"), participants=20, repetitions=1,
+                        categorise=False, participant=SimulatedDesign(spread=0.1))  # fmt: skip
+    shift = {"mouthSmile": 0.3, "browInnerUp": 0.3, "eyeWide": 0.3}
+    planted = replace(base, identity_shifts={"male-medium": {"happy": shift, "sad": shift}})
+    null = {"identity": 0, "emotion × identity": 0}
+    found = 0
+    for s in range(studies):
+        rng = np.random.default_rng(s)
+        t = condition_tests(as_people(simulate_people(base, rig, seed=2000 + s)),
+                            permutations=1000, bootstrap=50, level=0.95, rng=rng).set_index("effect")  # fmt: skip
+        for k in null:
+            null[k] += bool(t.loc[k, "p_perm"] < ALPHA)
+        t = condition_tests(as_people(simulate_people(planted, rig, seed=7000 + s)),
+                            permutations=1000, bootstrap=50, level=0.95, rng=rng).set_index("effect")  # fmt: skip
+        found += bool(t.loc["identity", "p_perm"] < ALPHA)
+    print(f"conditions: {base.participants} participants, 2 emotions × 2 identities")
+    for k, v in null.items():
+        print(f"  {k}, null: rejection rate {rate(v, studies)}")
+    print(f"  identity, planted +0.3 on 3 genes: power {rate(found, studies)}")
+
+
+def positions(studies: int) -> None:
+    rng = np.random.default_rng(9)
+    rejected = total = 0
+    import pandas as pd
+
+    for _ in range(max(1, studies // 10)):
+        rows = [(f"p{p}", p, t, 0, 0, int(pos)) for p in range(50) for t in range(24)
+                for pos in rng.choice(10, size=3, replace=False)]  # fmt: skip
+        picks = pd.DataFrame(rows, columns=["participant_id", "session_id", "trial", "attempt",
+                                            "generation", "position"])  # fmt: skip
+        table, _ = position_bias(picks, 10, draws=1000, rng=rng)
+        rejected += int((table["p_mc"] < ALPHA).sum())
+        total += len(table)
+    print(
+        f"position bias, uniform picks (24 generations × 3 picks): per-participant rejection {rate(rejected, total)}"
+    )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--studies", type=int, default=100)
+    a = ap.parse_args()
+    rig = emogen.load_model(os.environ["EMOGEN_MODEL"]).rig
+    start = time.perf_counter()
+    genes(rig, a.studies)
+    conditions(rig, a.studies)
+    positions(a.studies)
+    print(f"({time.perf_counter() - start:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()

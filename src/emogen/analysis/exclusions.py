@@ -1,0 +1,171 @@
+"""A stated, pre-registrable exclusion rule, applied before every analysis of people.
+
+:class:`ExclusionRule` holds the thresholds (a ``None`` switches a criterion off); write its
+values into the pre-registration. :func:`apply_exclusions` computes each participant's quality
+measures (over all their sessions), flags the criteria they meet, and returns the people without
+the excluded ones plus a table of everyone with the reasons.
+
+The defaults are chosen so that a participant who chooses faces by their content (the simulated
+participants of ``emogen study simulate``) is essentially never excluded — each chance criterion
+has a per-participant false-alarm probability below ~10⁻³ under uniformly placed faces — while a
+participant who clicks without looking (always the same tile, at a glance) is:
+
+* ``min_median_rt_ms`` = 300: the median time to choose among ten faces below 300 ms is faster
+  than looking at them (only where a response time is recorded: see
+  :mod:`emogen.analysis.quality`);
+* ``max_same_tile_share`` = 0.75 (with ``min_events`` = 8): the elite of generation 0 — a
+  shuffled population, so position-neutral — on one tile in more than 75 % of the trials
+  (uniform over 10 tiles: P(≥ 6 of 8 on one tile) ≈ 2·10⁻⁴);
+* ``max_keep_tile0_share`` = 0.9 (with ``min_elites`` = 20): the elite on tile 0 in > 90 % of
+  all generations — tile 0 holds the carried elite from generation 1 on, so this participant
+  (almost) never changed their face (simulated participants: 22–34 %);
+* ``min_finished_share`` = 0.75: fewer than 75 % of the participant's GA trials finished.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+import pandas as pd
+
+from emogen.analysis.people import People
+from emogen.analysis.quality import selection_positions
+from emogen.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class ExclusionRule:
+    """Thresholds of the exclusion rule (see the module docstring); ``None``: not applied."""
+
+    min_median_rt_ms: float | None = 300.0
+    max_same_tile_share: float | None = 0.75
+    min_events: int = 8
+    max_keep_tile0_share: float | None = 0.9
+    min_elites: int = 20
+    min_finished_share: float | None = 0.75
+
+    def __post_init__(self) -> None:
+        for name in ("max_same_tile_share", "max_keep_tile0_share", "min_finished_share"):
+            v = getattr(self, name)
+            if v is not None and not 0 <= v <= 1:
+                raise ConfigError(f"exclusion rule {name} must be a share in [0, 1]; got {v}")
+
+    def describe(self) -> list[str]:
+        """The rule in words, one line per criterion applied."""
+        out = []
+        if self.min_median_rt_ms is not None:
+            out.append(f"median selection response time < {self.min_median_rt_ms:g} ms")
+        if self.max_same_tile_share is not None:
+            out.append(
+                f"generation-0 elite on one tile in > {self.max_same_tile_share:.0%} of trials "
+                f"(judged with >= {self.min_events} trials)"
+            )
+        if self.max_keep_tile0_share is not None:
+            out.append(
+                f"elite on tile 0 (the carried elite) in > {self.max_keep_tile0_share:.0%} of "
+                f"generations (judged with >= {self.min_elites} generations)"
+            )
+        if self.min_finished_share is not None:
+            out.append(f"< {self.min_finished_share:.0%} of GA trials finished")
+        return out
+
+
+def participant_measures(people: People) -> pd.DataFrame:
+    """One row per participant: ``median_rt_ms``, ``g0_events``, ``g0_top_tile_share``,
+    ``elites``, ``elite_tile0_share``, ``finished_share`` (NaN where not recorded)."""
+    t = people.trials
+    done = (t["status"] == "done").groupby(t["participant_id"].astype(str)).mean()
+    out = pd.DataFrame({"finished_share": done})
+    out.index.name = "participant_id"
+    sel = selection_positions(people)
+    cols = ["median_rt_ms", "g0_events", "g0_top_tile_share", "elites", "elite_tile0_share"]
+    if sel is None:
+        return out.assign(**{str(c): np.nan for c in cols}).reset_index()[
+            ["participant_id", *cols, "finished_share"]
+        ]
+    out["median_rt_ms"] = sel.groupby("participant_id")["rt_ms"].median()
+    elite = sel[sel["role"] == "elite"] if "role" in sel.columns else sel
+    elite = elite[elite["position"].notna()]
+    g0 = elite[elite["generation"] == 0]
+    out["g0_events"] = g0.groupby("participant_id").size()
+    top = g0.groupby(["participant_id", "position"]).size().groupby("participant_id").max()
+    out["g0_top_tile_share"] = top / out["g0_events"]
+    out["elites"] = elite.groupby("participant_id").size()
+    out["elite_tile0_share"] = (elite["position"] == 0).groupby(elite["participant_id"]).mean()
+    return out.reset_index()[["participant_id", *cols, "finished_share"]]
+
+
+def _flags(m: pd.DataFrame, rule: ExclusionRule) -> pd.DataFrame:
+    """Boolean flags per criterion (False where the measure is missing or too thin)."""
+    f = pd.DataFrame({"participant_id": m["participant_id"]})
+    f["fast"] = (
+        m["median_rt_ms"].lt(rule.min_median_rt_ms) if rule.min_median_rt_ms is not None else False
+    )
+    enough = m["g0_events"].fillna(0) >= rule.min_events
+    f["one_tile"] = (
+        enough & m["g0_top_tile_share"].gt(rule.max_same_tile_share)
+        if rule.max_same_tile_share is not None
+        else False
+    )
+    many = m["elites"].fillna(0) >= rule.min_elites
+    f["keeps_tile0"] = (
+        many & m["elite_tile0_share"].gt(rule.max_keep_tile0_share)
+        if rule.max_keep_tile0_share is not None
+        else False
+    )
+    f["incomplete"] = (
+        m["finished_share"].lt(rule.min_finished_share)
+        if rule.min_finished_share is not None
+        else False
+    )
+    return f
+
+
+REASONS = {
+    "fast": "median response time {median_rt_ms:.0f} ms",
+    "one_tile": "generation-0 elite on one tile in {g0_top_tile_share:.0%} of trials",
+    "keeps_tile0": "elite on tile 0 in {elite_tile0_share:.0%} of generations",
+    "incomplete": "finished {finished_share:.0%} of GA trials",
+}
+
+
+def apply_exclusions(people: People, rule: ExclusionRule) -> tuple[People, pd.DataFrame]:
+    """``people`` without the participants ``rule`` excludes, and one row per participant:
+    the measures of :func:`participant_measures`, a boolean per criterion, ``excluded`` and
+    ``reasons`` (text; empty when kept)."""
+    m = participant_measures(people)
+    flags = _flags(m, rule)
+    table = m.merge(flags, on="participant_id")
+    crit = list(REASONS)
+    table["excluded"] = table[crit].any(axis=1)
+    table["reasons"] = [
+        "; ".join(REASONS[c].format(**{str(k): v for k, v in row.items()}) for c in crit if row[c])
+        for row in table.to_dict("records")
+    ]
+    out = set(table.loc[table["excluded"], "participant_id"].astype(str))
+    return drop_participants(people, out), table
+
+
+def drop_participants(people: People, ids: set[str]) -> People:
+    """``people`` without the participants ``ids`` in any of its tables."""
+    if not ids:
+        return people
+
+    def keep(df: pd.DataFrame) -> pd.DataFrame:
+        if df.empty or "participant_id" not in df.columns:
+            return df
+        return df[~df["participant_id"].astype(str).isin(ids)].reset_index(drop=True)
+
+    def maybe(df: pd.DataFrame | None) -> pd.DataFrame | None:
+        return None if df is None else keep(df)
+
+    return replace(
+        people,
+        faces=keep(people.faces),
+        trials=keep(people.trials),
+        selections=keep(people.selections),
+        responses=maybe(people.responses),
+        ratings=maybe(people.ratings),
+        sessions=maybe(people.sessions),
+    )

@@ -1,0 +1,41 @@
+"""The report sections of items 5–6 on a simulated study: tables written, summary numbers, and
+one plain line (no error) where the design cannot support an analysis."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+from emogen.analysis.analyse_options import AnalysisOptions
+from emogen.analysis.conditions import conditions_section
+from emogen.analysis.genes_report import genes_section
+from emogen.analysis.quality_report import quality_section
+from emogen.analysis.report import Report
+from emogen.analysis.simulated_study import PeopleDesign, as_people, simulate_people
+
+
+def _text(report: Report) -> str:
+    return " ".join(str(getattr(b, "text", "")) for b in report.blocks)
+
+
+def test_sections_on_a_simulated_study(ict_model, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    design = PeopleDesign(participants=12, repetitions=1, categorise=False, groups=("a", "b"))
+    people = as_people(simulate_people(design, ict_model.rig, seed=1))
+    report, summary = Report("t", tmp_path), {}
+    opts = AnalysisOptions()
+    for section in (quality_section, genes_section, conditions_section):
+        section(people, report, summary, opts, None)
+    for name in ("genes_facs", "genes_emotion_tests", "genes_group_tests", "conditions_tests",
+                 "quality_sessions", "quality_exclusions"):  # fmt: skip
+        assert (tmp_path / "tables" / f"{name}.csv").is_file(), name
+    assert (tmp_path / "figures" / "genes_emotions.png").is_file()
+    assert summary["quality"]["excluded"] == 0
+    assert summary["genes"]["emotion_maxt"] > 0
+    assert "no selections table" in _text(report)  # as_people has none: no position test
+    one = replace(people, faces=people.faces[people.faces["emotion"] == "happy"])
+    one = replace(one, faces=one.faces[one.faces["identity"] == "female-medium"])
+    report2, summary2 = Report("t", tmp_path / "one"), {}
+    genes_section(one, report2, summary2, opts, None)
+    conditions_section(one, report2, summary2, opts, None)
+    text = _text(report2)
+    assert "has one emotion" in text and "one emotion and one identity" in text
