@@ -122,3 +122,14 @@ def test_one_repetition_says_why_there_is_no_reliability(
     readme = (out / "README.md").read_text()
     assert "No reliability: every participant made each emotion on each identity once" in readme
     assert not (out / "tables" / "reliability.csv").exists()
+
+
+def test_wrong_exclusion_changes_are_named(export: Path, tmp_path: Path) -> None:
+    result = _analyse(export, tmp_path / "r", "--exclusion", "min_rt=5")
+    assert result.exit_code == 2 and "KEY one of min_median_rt_ms" in result.output
+    assert "'min_rt=5'" in result.output
+    result = _analyse(export, tmp_path / "r", "--exclusion", "min_median_rt_ms=fast")
+    assert result.exit_code == 2 and "min_median_rt_ms needs a number or 'none'" in result.output
+    result = _analyse(export, tmp_path / "r", "--exclusion", "max_same_tile_share=2")
+    assert result.exit_code == 2 and "must be a share in [0, 1]; got 2.0" in result.output
+    assert not (tmp_path / "r").exists()

@@ -38,7 +38,7 @@ from emogen.analysis import plots
 from emogen.analysis.analyse_faces import prototypes_section, separability_section
 from emogen.analysis.analyse_noise import noise_section
 from emogen.analysis.analyse_options import AnalysisOptions
-from emogen.analysis.analyse_people import people_sections
+from emogen.analysis.analyse_people import people_sections, prepare_people, quality_first
 from emogen.analysis.categorisation import categorisation_section
 from emogen.analysis.data import Dataset, load_dataset
 from emogen.analysis.distributions import generation_summary, kl_per_generation
@@ -74,10 +74,16 @@ def analyse(
     opts = options or AnalysisOptions()
     step = progress or (lambda _name: None)
     ds = data if isinstance(data, Dataset) else load_dataset(Path(data))
+    prepared = prepare_people(ds.source, opts) if ds.kind == "study" else None
+    if prepared is not None and prepared.excluded:  # every analysis without them
+        ds = load_dataset(ds.source, exclude=prepared.excluded)
     report = Report(f"EmoGen analysis: {ds.source.name}", Path(out))
     summary: dict[str, Any] = {"source": str(ds.source), "kind": ds.kind, "groups": list(ds.groups)}
     step("overview and error distributions")
     _overview(ds, report, summary)
+    if prepared is not None:
+        step("quality and exclusions")
+        quality_first(prepared, report, summary, opts)
     _errors(ds, report, summary)
     step("repeatability")
     _repeatability(ds, report, summary)
@@ -89,8 +95,8 @@ def analyse(
     prototypes_section(ds, report, summary, opts, model)
     _ratings(ds, report, summary)
     categorisation_section(ds.responses, report, summary)
-    if ds.kind == "study":
-        people_sections(ds.source, report, summary, opts, model, step)
+    if prepared is not None:
+        people_sections(prepared, report, summary, opts, model, step)
     step("writing the report")
     if ds.has_weights:
         tidy.write_csv(

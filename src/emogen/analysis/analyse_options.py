@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
+from emogen.analysis.exclusions import ExclusionRule
 from emogen.config import GAConfig
 
 
@@ -25,3 +26,5 @@ class AnalysisOptions:
     participants: Path | None = None
     # the participant table's column whose groups are compared
     group_column: str = "group"
+    # the exclusion rule applied before every analysis of a study (None: nobody excluded)
+    exclusions: ExclusionRule | None = field(default_factory=ExclusionRule)

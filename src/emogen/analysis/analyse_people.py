@@ -1,16 +1,24 @@
 """``emogen analyse``'s analyses of people (study exports): the participant is the unit.
 
 Read from the export as :class:`~emogen.analysis.people.People` (one row per final face), with
-the participant table joined when given (``--participants``); each section states its unit,
-model and assumptions, and says in one line why when the design cannot support it.
+the participant table joined when given (``--participants``). The exclusion rule
+(:mod:`emogen.analysis.exclusions`, stated in the report) is applied **before every analysis**:
+:func:`prepare_people` returns the people kept, and ``emogen analyse`` reloads the GA data
+without the excluded participants. Each section states its unit, model and assumptions, and says
+in one line why when the design cannot support it.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from emogen.analysis.conditions import conditions_section
+from emogen.analysis.exclusions import apply_exclusions
+from emogen.analysis.genes_report import genes_section
 from emogen.analysis.groups import groups_section
 from emogen.analysis.people import load_people, read_participant_table
+from emogen.analysis.quality_report import quality_section
 from emogen.analysis.reliability_report import reliability_section
 from emogen.errors import ConfigError, EmoGenError
 
@@ -25,12 +33,36 @@ if TYPE_CHECKING:
     from emogen.model.face import FaceModel
 
 
+@dataclass(frozen=True, eq=False)
+class Prepared:
+    """Everyone (for the quality section), the people kept, who was excluded, and why there
+    are no people (``problem``) when the export cannot give them."""
+
+    everyone: People | None
+    kept: People | None
+    excluded: frozenset[str]
+    problem: str = ""
+
+
 def people_for(source: Path, opts: AnalysisOptions) -> People:
     """The export's people, the participant table joined (errors name what is wrong)."""
     people = load_people(source)
     if opts.participants is not None:
         people = people.with_participants(read_participant_table(opts.participants))
     return people
+
+
+def prepare_people(source: Path, opts: AnalysisOptions) -> Prepared:
+    """The study's people with the exclusion rule applied (none: ``opts.exclusions`` None)."""
+    try:
+        everyone = people_for(source, opts)
+    except EmoGenError as exc:
+        return Prepared(None, None, frozenset(), str(exc))
+    if opts.exclusions is None or everyone.faces.empty:
+        return Prepared(everyone, everyone, frozenset())
+    kept, table = apply_exclusions(everyone, opts.exclusions)
+    out = frozenset(table.loc[table["excluded"], "participant_id"].astype(str))
+    return Prepared(everyone, kept, out)
 
 
 def check_participants(ds: Dataset, table: Path, group_column: str) -> None:
@@ -47,28 +79,43 @@ def check_participants(ds: Dataset, table: Path, group_column: str) -> None:
     load_people(ds.source).with_participants(frame)
 
 
+def quality_first(
+    prepared: Prepared, report: Report, summary: dict[str, Any], opts: AnalysisOptions
+) -> None:
+    """Quality and exclusions: reported before the analyses they apply to."""
+    if prepared.everyone is None or prepared.everyone.faces.empty:
+        return
+    quality_section(prepared.everyone, report, summary, opts, None, rule=opts.exclusions)
+    if prepared.excluded:
+        report.paragraph(
+            f"**{len(prepared.excluded)} participant(s) excluded by the rule above** "
+            f"({', '.join(sorted(prepared.excluded))}): every section below is without them."
+        )
+
+
 def people_sections(
-    source: Path,
+    prepared: Prepared,
     report: Report,
     summary: dict[str, Any],
     opts: AnalysisOptions,
     model: FaceModel | None,
     step: Callable[[str], None],
 ) -> None:
-    try:
-        people = people_for(source, opts)
-    except EmoGenError as exc:
-        report.heading("Analyses of participants")
-        report.paragraph(f"No analyses of participants: {exc}")
-        return
-    summary["participants"] = people.n_participants
-    if people.faces.empty:
+    people = prepared.kept
+    if people is None or people.faces.empty:
         report.heading("Analyses of participants")
         report.paragraph(
-            "No analyses of participants: no GA trial is finished yet (they need final faces)."
+            "No analyses of participants: "
+            + (prepared.problem or "no GA trial is finished yet (they need final faces).")
         )
         return
-    step("reliability")
-    reliability_section(people, report, summary, opts, model)
+    summary["participants"] = people.n_participants
+    for name, section in (
+        ("reliability", reliability_section),
+        ("per-gene inference", genes_section),
+        ("conditions (emotion × identity)", conditions_section),
+    ):
+        step(name)
+        section(people, report, summary, opts, model)
     step("groups of participants")
     groups_section(people, report, summary, opts, opts.group_column)

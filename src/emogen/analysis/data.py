@@ -139,9 +139,9 @@ def _group_labels(trials: pd.DataFrame) -> pd.Series:
 
 
 def _study_tables(
-    folder: Path,
-) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame, pd.DataFrame | None]:
-    """(trials, faces, selections, ratings) of a study export, their columns checked."""
+    folder: Path, exclude: frozenset[str]
+) -> tuple[pd.DataFrame, pd.DataFrame, pd.DataFrame, pd.DataFrame | None, pd.DataFrame | None]:
+    """A study export's tables, checked, without the ``exclude``d participants' sessions."""
     trials = _read(folder, "trials")
     faces = _read(folder, "faces")
     selections = _read(folder, "selections")
@@ -163,19 +163,19 @@ def _study_tables(
     if "task" in trials.columns:  # the GA's trials; categorise trials are the responses table
         trials = trials[trials["task"] == "evolve"].reset_index(drop=True)
     check_study(folder, {"trials": trials, "faces": faces, "selections": selections})
-    return trials, faces, selections, ratings
+    responses = _read(folder, "responses", required=False)
+    gone = sessions_of(trials, exclude) if exclude else set()
+    trials, faces, selections = (
+        t[~t["session_id"].isin(gone)] for t in (trials, faces, selections)
+    )
+    ratings, responses = (
+        t if t is None else t[~t["session_id"].isin(gone)] for t in (ratings, responses)
+    )
+    return trials.reset_index(drop=True), faces, selections, ratings, responses
 
 
 def load_study(folder: Path, exclude: frozenset[str] = frozenset()) -> Dataset:
-    trials, faces, selections, ratings = _study_tables(folder)
-    responses = _read(folder, "responses", required=False)
-    if exclude:
-        gone = sessions_of(trials, exclude)
-        trials = trials[~trials["session_id"].isin(gone)].reset_index(drop=True)
-        faces, selections = (t[~t["session_id"].isin(gone)] for t in (faces, selections))
-        ratings, responses = (
-            None if t is None else t[~t["session_id"].isin(gone)] for t in (ratings, responses)
-        )
+    trials, faces, selections, ratings, responses = _study_tables(folder, exclude)
     notes: list[str] = []
     wcols = [c for c in faces.columns if str(c).startswith("w_")]
     columns = tuple(str(c)[2:] for c in wcols)

@@ -24,6 +24,7 @@ participant who clicks without looking (always the same tile, at a glance) is:
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -169,3 +170,26 @@ def drop_participants(people: People, ids: set[str]) -> People:
         ratings=maybe(people.ratings),
         sessions=maybe(people.sessions),
     )
+
+
+def rule_from_options(changes: list[str]) -> ExclusionRule:
+    """The default rule with ``KEY=VALUE`` changes (``none`` turns a criterion off)."""
+    fields = {f.name: f for f in dataclasses.fields(ExclusionRule)}
+    values: dict[str, object] = {}
+    for change in changes:
+        key, sep, raw = change.partition("=")
+        key, raw = key.strip(), raw.strip()
+        if not sep or key not in fields:
+            raise ConfigError(
+                f"--exclusion must be KEY=VALUE with KEY one of {', '.join(fields)}; got {change!r}"
+            )
+        if raw.lower() == "none":
+            if key in ("min_events", "min_elites"):
+                raise ConfigError(f"--exclusion {key} needs a number; got {raw!r}")
+            values[key] = None
+            continue
+        try:
+            values[key] = int(raw) if key in ("min_events", "min_elites") else float(raw)
+        except ValueError:
+            raise ConfigError(f"--exclusion {key} needs a number or 'none'; got {raw!r}") from None
+    return ExclusionRule(**values)  # type: ignore[arg-type]

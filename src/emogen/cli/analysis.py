@@ -48,6 +48,64 @@ RenderOpt = Annotated[
     bool, typer.Option("--render/--no-render", help="Render mean faces and heatmaps (OpenGL).")
 ]
 
+ConfigOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--config",
+        help="Study TOML: its [ga] settings for the GA-noise simulation (default: inferred "
+        "from the data).",
+    ),
+]
+
+NoiseRunsOpt = Annotated[
+    int,
+    typer.Option(
+        "--noise-runs", callback=at_least(1), help="Simulated runs per group for the GA noise."
+    ),
+]
+
+GmmDimsOpt = Annotated[
+    float,
+    typer.Option(
+        "--gmm-dims", help="PCA components for the GMM (an integer, or a variance share < 1)."
+    ),
+]
+
+AlphaOpt = Annotated[float, typer.Option("--alpha", help="Level of the GA-noise test.")]
+
+ParticipantsOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--participants",
+        help="Participant table (CSV or Parquet): a participant_id column and any others "
+        "(e.g. group = clinical/control), joined to a study's faces and answers.",
+    ),
+]
+
+GroupColumnOpt = Annotated[
+    str,
+    typer.Option(
+        "--group-column", help="The participant table's column whose groups are compared."
+    ),
+]
+
+ExclusionOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--exclusion",
+        help="Change one threshold of the exclusion rule, KEY=VALUE (VALUE 'none' turns "
+        "that criterion off), e.g. min_median_rt_ms=500; repeatable. See docs/analysis.md.",
+    ),
+]
+
+ExclusionsOpt = Annotated[
+    bool,
+    typer.Option(
+        "--exclusions/--no-exclusions",
+        help="Apply the exclusion rule before every analysis of a study (default) or not.",
+    ),
+]
+
 
 @friendly_errors
 def analyse_command(
@@ -56,42 +114,15 @@ def analyse_command(
         typer.Argument(help="A study export folder (emogen study export) or simulation output."),
     ],
     out: Annotated[Path, typer.Option("--out", "-o", help="Report folder.")],
-    config: Annotated[
-        Path | None,
-        typer.Option(
-            "--config",
-            help="Study TOML: its [ga] settings for the GA-noise simulation (default: inferred "
-            "from the data).",
-        ),
-    ] = None,
-    noise_runs: Annotated[
-        int,
-        typer.Option(
-            "--noise-runs", callback=at_least(1), help="Simulated runs per group for the GA noise."
-        ),
-    ] = 500,
-    gmm_dims: Annotated[
-        float,
-        typer.Option(
-            "--gmm-dims", help="PCA components for the GMM (an integer, or a variance share < 1)."
-        ),
-    ] = 2,
-    alpha: Annotated[float, typer.Option("--alpha", help="Level of the GA-noise test.")] = 0.05,
+    config: ConfigOpt = None,
+    noise_runs: NoiseRunsOpt = 500,
+    gmm_dims: GmmDimsOpt = 2,
+    alpha: AlphaOpt = 0.05,
     choice_noise: ChoiceNoiseOpt = None,
-    participants: Annotated[
-        Path | None,
-        typer.Option(
-            "--participants",
-            help="Participant table (CSV or Parquet): a participant_id column and any others "
-            "(e.g. group = clinical/control), joined to a study's faces and answers.",
-        ),
-    ] = None,
-    group_column: Annotated[
-        str,
-        typer.Option(
-            "--group-column", help="The participant table's column whose groups are compared."
-        ),
-    ] = "group",
+    participants: ParticipantsOpt = None,
+    group_column: GroupColumnOpt = "group",
+    exclusion: ExclusionOpt = None,
+    exclusions: ExclusionsOpt = True,
     seed: SeedOpt = 1,
     render: RenderOpt = True,
     model_path: ModelOpt = None,
@@ -113,6 +144,9 @@ def analyse_command(
 
     plots.check_formats(figure_format or ["png", "svg"])  # a bad --format before any work
 
+    from emogen.analysis.exclusions import rule_from_options
+
+    rule = rule_from_options(exclusion or []) if exclusions else None
     dataset = load_dataset(data)  # fails fast on a folder that is not data
     if participants is not None:  # a wrong participant table before any work
         from emogen.analysis.analyse_people import check_participants
@@ -135,6 +169,7 @@ def analyse_command(
         choice_noise=choice_noise,
         participants=participants,
         group_column=group_column,
+        exclusions=rule,
     )
     with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         analyse(dataset, tmp, model=model, options=options, progress=stage_printer(progress))
