@@ -1,0 +1,259 @@
+"""The report section on perceptive fields (:mod:`emogen.analysis.fields`): the face space,
+the fields and their bandwidth, their overlap between participants, whether a participant's
+field is their own (split halves), clusters of participants, and maps."""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from emogen.analysis import field_maps
+from emogen.analysis.analyse_options import AnalysisOptions
+from emogen.analysis.field_clusters import Clustering, cluster_fields
+from emogen.analysis.fields import (
+    Fields,
+    bhattacharyya,
+    face_space,
+    field_individuality,
+    overlaps,
+    perceptive_fields,
+)
+from emogen.analysis.people import People
+from emogen.analysis.report import Report
+from emogen.errors import EmoGenError
+
+if TYPE_CHECKING:
+    from emogen.model.face import FaceModel
+
+log = logging.getLogger(__name__)
+
+#: Fewest participants with fields for the between-participant analyses.
+MIN_PARTICIPANTS = 6
+
+
+def fields_section(
+    people: People,
+    report: Report,
+    summary: dict[str, Any],
+    opts: AnalysisOptions,
+    model: FaceModel | None,
+) -> None:
+    """Perceptive fields of every participant per emotion, their overlap and clusters."""
+    report.heading("Perceptive fields")
+    counts = people.faces.groupby(["participant_id", "emotion"]).size()
+    if people.n_participants < MIN_PARTICIPANTS or counts.max() < 2:
+        report.paragraph(
+            f"Skipped: perceptive fields need at least {MIN_PARTICIPANTS} participants with two "
+            f"or more final faces of an emotion; this study has {people.n_participants} "
+            f"participant(s) with at most {counts.max()} face(s) per emotion."
+        )
+        return
+    rng = np.random.default_rng(opts.seed)
+    space = face_space(people)
+    fields = perceptive_fields(people, space)
+    out: dict[str, Any] = {"components": space.k, "variance": float(space.explained.sum())}
+    _describe(fields, counts, report, out)
+    matrices = _overlaps(fields, report, rng, out)
+    _individuality(people, fields, report, opts, out)
+    clustering = _clusters(fields, report, opts, rng, out)
+    order = list(clustering.participants) if clustering else []
+    if clustering is not None and clustering.structure:
+        order = [p for _, p in sorted(zip(clustering.labels, clustering.participants, strict=True))]
+    order += sorted({p for m in matrices.values() for p in m.index} - set(order))
+    report.figure(
+        field_maps.field_heatmaps(fields, report.figures / "fields_pc_maps.png"),
+        "Where each emotion's fields lie: the population field (every participant's field "
+        "weighing the same) on the face space's first two components, relative density; white "
+        "dots: each participant's field centre.",
+    )
+    report.figure(
+        field_maps.overlap_heatmaps(matrices, order, report.figures / "fields_overlap.png"),
+        "Overlap of every pair of participants' fields, per emotion (participants ordered by "
+        "cluster when there are clusters, else by id).",
+    )
+    _sheets(people, report, opts, model)
+    summary["fields"] = out
+
+
+def _describe(fields: Fields, counts: pd.Series, report: Report, out: dict[str, Any]) -> None:
+    sp = fields.space
+    n_min, n_med = int(counts.min()), float(counts.median())
+    report.paragraph(
+        f"Face space: the study's own PCA of all {sum(len(x) for x in fields.points.values())} "
+        f"final faces' genes; the first {sp.k} components, {100 * sp.explained.sum():.0f} % of "
+        "the gene variance, unwhitened (distances are gene distances within that subspace). A "
+        "participant's field of an emotion is a Gaussian kernel density estimate of their "
+        "final faces of it in this space (after 'Expression perceptive fields', Communications "
+        "Psychology 2024). Participants made "
+        f"{n_min}–{int(counts.max())} faces per emotion (median {n_med:g}): far too few for a "
+        "bandwidth of their own, so one bandwidth per emotion is shared by every participant's "
+        "field and chosen by leave-one-out cross-validated likelihood pooled over all "
+        "participants' fields. A field therefore says where a participant's faces lie and how "
+        "they spread, smoothed by the study's typical within-participant scatter; with so few "
+        "faces it cannot resolve a multimodal field of one person."
+    )
+    rows = []
+    for e in fields.emotions:
+        cv = fields.cv[e]
+        edge = bool(len(cv)) and bool(cv["chosen"].iloc[0] or cv["chosen"].iloc[-1])
+        rows.append(
+            {"emotion": e, "n_fields": len(fields.participants(e)), "components": sp.k,
+             "bandwidth": fields.bandwidth[e], "at_grid_edge": edge}
+        )  # fmt: skip
+    report.table(
+        pd.DataFrame(rows), "fields_bandwidth", "Bandwidth (kernel SD, gene units) per emotion"
+    )
+    report.table(fields.table(), "fields_fields", "Each participant's field: size, centre, spread")
+    out["bandwidth"] = {r["emotion"]: r["bandwidth"] for r in rows}
+
+
+def _overlaps(
+    fields: Fields, report: Report, rng: np.random.Generator, out: dict[str, Any]
+) -> dict[str, pd.DataFrame]:
+    matrices, long = {}, []
+    for e in fields.emotions:
+        m = overlaps(fields, e)
+        matrices[e] = m
+        who = list(m.index)
+        pts = [fields.points[(p, e)] for p in who]
+        bc, mn = bhattacharyya(pts, fields.bandwidth[e], rng=rng)
+        i, j = np.triu_indices(len(who), 1)
+        long.append(pd.DataFrame({
+            "emotion": e, "participant_a": np.array(who)[i], "participant_b": np.array(who)[j],
+            "overlap": m.to_numpy()[i, j], "bhattacharyya": bc[i, j], "overlap_min": mn[i, j],
+        }))  # fmt: skip
+    table = pd.concat(long, ignore_index=True)
+    shown = table.groupby("emotion")[["overlap", "bhattacharyya", "overlap_min"]].agg(
+        ["mean", "median"]
+    )
+    shown.columns = [" ".join(map(str, c)) for c in shown.columns.to_list()]
+    report.paragraph(
+        "Overlap of two participants' fields p, q: the normalised probability-product kernel "
+        "∫pq/√(∫p²∫q²) (Jebara, Kondor & Howard 2004), exact for Gaussian kernel densities, 1 "
+        "for identical fields and 0 for disjoint ones; beside it the Bhattacharyya coefficient "
+        "∫√(pq) and ∫min(p, q), by Monte Carlo (256 draws per field, SE < 0.05). The overlap "
+        "is descriptive: each pair is a pair of participants, no test."
+    )
+    report.table(shown.reset_index(), None, "Overlap between participants' fields, per emotion "
+                 "(every pair in tables/fields_overlap.csv)")  # fmt: skip
+    _write_only(report, table, "fields_overlap")
+    out["mean_overlap"] = table.groupby("emotion")["overlap"].mean().to_dict()
+    return matrices
+
+
+def _write_only(report: Report, table: pd.DataFrame, name: str) -> None:
+    """A machine table under tables/ without showing it in the report (too many rows)."""
+    from emogen import columns as tidy
+
+    path = report.out / "tables" / f"{name}.csv"
+    tidy.write_csv(tidy.machine_table(table), path)
+    report.tables[name] = path
+
+
+def _individuality(
+    people: People, fields: Fields, report: Report, opts: AnalysisOptions, out: dict[str, Any]
+) -> None:
+    ind = field_individuality(people, fields)
+    if ind.empty:
+        report.paragraph(
+            "No split-half test of whether fields are the participant's own: it needs at least "
+            "four faces per participant and emotion (two per half) from three participants."
+        )
+        return
+    rows = []
+    for e, part in ind.groupby("emotion"):
+        diff = (part["self"] - part["others"]).to_numpy()
+        res = stats.ttest_1samp(diff, 0.0)
+        ci = res.confidence_interval(1 - opts.alpha)
+        rows.append(
+            {"emotion": e, "n_participants": len(part), "self_overlap": part["self"].mean(),
+             "others_overlap": part["others"].mean(), "difference": diff.mean(),
+             "ci_low": ci.low, "ci_high": ci.high, "t": res.statistic, "p": res.pvalue,
+             "identified": part["identified"].mean(),
+             "chance_identified": float((1 / part["n_candidates"]).mean())}
+        )  # fmt: skip
+    table = pd.DataFrame(rows)
+    report.paragraph(
+        "Are fields the participant's own? Each participant's faces of an emotion are split "
+        "into two halves (alternately, ordered by identity and repetition); the field of one "
+        "half is compared with the field of their other half (self) and with everyone else's "
+        "other halves (others, mean). Unit: participant; test: paired t-test of self − others "
+        f"over participants, {100 * (1 - opts.alpha):.0f} % CI (assumes the differences are "
+        "roughly normal or the sample large; participants independent). 'identified': share "
+        "of participants whose own other half overlaps best (chance 1 / participants)."
+    )
+    report.table(table, "fields_individuality", "Split-half overlap: self against others")
+    _write_only(report, ind, "fields_individuality_participants")
+    out["individuality"] = table.set_index("emotion")[["difference", "p", "identified"]].to_dict(
+        orient="index"
+    )
+
+
+def _clusters(
+    fields: Fields,
+    report: Report,
+    opts: AnalysisOptions,
+    rng: np.random.Generator,
+    out: dict[str, Any],
+) -> Clustering | None:
+    try:
+        c = cluster_fields(fields, rng=rng, alpha=opts.alpha)
+    except EmoGenError as exc:
+        report.paragraph(f"No clustering of participants: {exc}.")
+        return None
+    report.paragraph(
+        f"Clusters of participants by their fields over all emotions ({len(c.participants)} "
+        "participants with a field of every emotion): distance d² = 2 − 2·overlap averaged "
+        "over emotions, spectral clustering of the mean overlap into 2 … "
+        f"{max(c.silhouettes, default=2)} clusters, the number by the largest mean silhouette. "
+        "Test (unit: participant): is that silhouette larger than in studies of one population "
+        "— field centres redrawn from one Gaussian with the observed mean and covariance, each "
+        f"participant's own scatter kept ({c.n_null} such studies; after SigClust, Liu et al. "
+        "2008)? Assumes one population would look Gaussian in the face space. Silhouettes of "
+        "fields are small in absolute terms (fields in many dimensions barely overlap); judge "
+        f"them against the null. Seed {opts.seed}."
+    )
+    sil = pd.DataFrame({"k": list(c.silhouettes), "silhouette": list(c.silhouettes.values())})
+    report.table(sil, "fields_silhouettes", "Mean silhouette per number of clusters")
+    verdict = (
+        f"Structure: {c.k} clusters (best silhouette {c.silhouette:.3f}, p = {c.p_value:.3f} "
+        f"< α = {opts.alpha})."
+        if c.structure
+        else f"No structure: the best silhouette ({c.silhouette:.3f} at k = {c.k}) is not "
+        f"larger than in one-population studies (p = {c.p_value:.3f} ≥ α = {opts.alpha}); no "
+        "clusters are reported."
+    )
+    report.paragraph(verdict)
+    table = c.table()
+    if c.structure:
+        report.table(table.groupby("cluster").size().rename("participants").reset_index(),
+                     None, "Participants per cluster")  # fmt: skip
+    _write_only(report, table, "fields_clusters")
+    out["clusters"] = {"structure": c.structure, "k": c.k if c.structure else 1,
+                       "silhouette": c.silhouette, "p": c.p_value}  # fmt: skip
+    return c
+
+
+def _sheets(people: People, report: Report, opts: AnalysisOptions, model: FaceModel | None) -> None:
+    if model is None or not opts.render:
+        report.paragraph("Contact sheets of the participants' faces skipped (no face model, or "
+                         "--no-render).")  # fmt: skip
+        return
+    try:
+        sheets, missing = field_maps.contact_sheets(
+            people, model, report.figures, size=min(opts.render_size, 160)
+        )
+    except EmoGenError as exc:
+        log.warning("rendering failed: %s", exc)
+        report.paragraph(f"Contact sheets failed: {exc}")
+        return
+    if missing:
+        report.paragraph(f"Not rendered (identity unknown to the export and the presets): "
+                         f"{', '.join(missing)}.")  # fmt: skip
+    for e, path in sheets.items():
+        report.figure(path, f"{e}: every participant's mean final face per identity, on the "
+                      "identity (shape and appearance) they made it on; (n) faces averaged.")  # fmt: skip
