@@ -15,8 +15,10 @@ from typing import TYPE_CHECKING, Any
 
 from emogen.analysis.conditions import conditions_section
 from emogen.analysis.exclusions import apply_exclusions
+from emogen.analysis.fields_report import fields_section
 from emogen.analysis.genes_report import genes_section
 from emogen.analysis.groups import groups_section
+from emogen.analysis.identity import identity_section
 from emogen.analysis.people import load_people, read_participant_table
 from emogen.analysis.quality_report import quality_section
 from emogen.analysis.reliability_report import reliability_section
@@ -114,6 +116,8 @@ def people_sections(
         ("reliability", reliability_section),
         ("per-gene inference", genes_section),
         ("conditions (emotion × identity)", conditions_section),
+        ("perceptive fields", fields_section),
+        ("identity effects", identity_section),
     ):
         step(name)
         section(people, report, summary, opts, model)
