@@ -116,8 +116,10 @@ def test_analyse_a_study_export(export: Path, ict_dir: Path, tmp_path: Path) -> 
     assert (out / "index.html").is_file() and (out / "README.md").is_file()
     summary = json.loads((out / "analysis.json").read_text())
     assert summary["kind"] == "study" and summary["groups"] == ["happy", "sad"]
-    # 8 complete participants per emotion, plus the one who quit (incomplete)
-    assert summary["samples"] == {"happy": 9, "sad": 8}
+    # 8 complete participants per emotion; the one who quit (incomplete) is excluded by the
+    # default rule (fewer than 75% of GA trials finished), before every analysis
+    assert summary["samples"] == {"happy": 8, "sad": 8}
+    assert "P-quit" in (out / "README.md").read_text().split("excluded by the rule above")[1][:200]
     elites = pd.read_csv(out / "tables" / "elites.csv")
     assert elites["complete"].sum() == 2 * PARTICIPANTS * 4  # generations 0..3 of 16 trials
     # after a restart only the last attempt counts: still 4 generations for that trial
