@@ -13,6 +13,7 @@ from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.categorisation import categorisation_section
 from emogen.analysis.report import Report
 from emogen.analysis.simulated_study import PeopleDesign, as_people, simulate_people
+from tests.rlike import dictionary_section, undocumented
 
 DESIGN = PeopleDesign(participants=12, repetitions=1, identities=("female-medium",))
 
@@ -46,6 +47,11 @@ def test_the_section_of_a_study_with_a_categorise_block(people, tmp_path: Path) 
     # the CSV holds every row of a long table the report shows the head of
     long = pd.read_csv(tmp_path / "tables" / "categorisation_hit_rates.csv")
     assert len(long) == 12 * 4
+    # every column of every table is in docs/data.md
+    for path in (tmp_path / "tables").glob("categorisation_*.csv"):
+        columns = list(pd.read_csv(path, nrows=1).columns)
+        assert not undocumented(columns, "Analysis tables: categorisation"), path.name
+        assert f"`{path.stem}`" in dictionary_section("Analysis tables: categorisation")
 
 
 def test_no_categorise_block_is_one_line(ict_model: Any, tmp_path: Path) -> None:

@@ -277,6 +277,12 @@ def _own_distance_model(
         f"{g['odds_ratio_ref']:.3g}); contrast own − ref {g['contrast']:+.2f}, 95% CI "
         f"[{g['ci_low']:+.2f}, {g['ci_high']:+.2f}], z = {g['z']:.2f}, p = {g['p']:.3g} "
         f"(working correlation {g['correlation']:+.3f})."
+        + (
+            f" With {g['n_participants']} participants the sandwich SE runs small: read this "
+            "p with the two-stage test and the control below."
+            if g["n_participants"] < 30
+            else ""
+        )
     )
     report.paragraph(
         "Robustness — two-stage (per participant a conditional logit of the chosen label on "
