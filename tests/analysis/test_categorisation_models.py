@@ -28,10 +28,10 @@ def study(rig):  # type: ignore[no-untyped-def]
     return as_people(simulate_people(PeopleDesign(**SMALL), rig, seed=11))
 
 
-def test_conditional_logit_matches_statsmodels(rng_data: int = 3) -> None:
+def test_conditional_logit_matches_statsmodels() -> None:
     from statsmodels.discrete.conditional_models import ConditionalLogit
 
-    rng = np.random.default_rng(rng_data)
+    rng = np.random.default_rng(3)
     n, labels = 300, 4
     x = rng.normal(size=(n, labels, 2))
     avail = rng.uniform(size=(n, labels)) < 0.85
