@@ -1,5 +1,8 @@
 """Categorisation of faces by the participants who made them (the ``responses`` table of a study
-export): accuracy on one's own faces against accuracy on other participants' faces.
+export): accuracy on one's own faces against accuracy on other participants' faces, and the
+report section of every categorisation analysis (:mod:`emogen.analysis.recognition`: confusion
+matrices, unbiased hit rates, accuracy by source; :mod:`emogen.analysis.categorisation_models`:
+labels predicted by the distance to one's own faces).
 
 Binetti et al. (2022, PNAS 119:e2201380119) found participants' categorisation of test faces
 explained by how close each face lay to the faces they had made themselves; the simplest form of
@@ -18,10 +21,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
+from emogen.analysis import recognition as rec
+from emogen.analysis.analyse_options import AnalysisOptions
+from emogen.analysis.people import People
 from emogen.errors import DataError
 
 if TYPE_CHECKING:
     from emogen.analysis.report import Report
+    from emogen.model.face import FaceModel
+
+#: Shuffles (derangements of participants) of the report's shuffled-prototype control.
+SHUFFLES = 199
 
 
 def accuracy_by_source(responses: pd.DataFrame) -> pd.DataFrame:
@@ -72,42 +82,144 @@ def own_advantage(responses: pd.DataFrame, confidence: float = 0.95) -> dict[str
 
 
 def categorisation_section(
-    responses: pd.DataFrame | None, report: Report, summary: dict[str, Any]
+    people: People | pd.DataFrame | None,
+    report: Report,
+    summary: dict[str, Any],
+    opts: AnalysisOptions | None = None,
+    model: FaceModel | None = None,
 ) -> None:
-    """The report's section on a study's categorise answers: accuracy by face source, and own-
-    against other-face accuracy with the participant as the unit (nothing without answers)."""
-    if responses is None or responses.empty or "label" not in responses.columns:
+    """The report's section on a study's categorise answers (``summary["categorisation"]``).
+
+    ``people``: the study (:class:`People`: every analysis), or only its responses table (the
+    older call: no own-distance model, which needs the final faces; nothing at all is written
+    without answers, as a GA dataset has none). ``model`` is not used (faces are compared in
+    gene space)."""
+    opts = opts or AnalysisOptions()
+    full = people if isinstance(people, People) else None
+    responses = full.responses if full is not None else people
+    if not isinstance(responses, pd.DataFrame) or responses.empty or "label" not in responses:
+        if full is not None:
+            report.heading("Categorisation of faces")
+            report.paragraph("No categorisation analysis: the study has no categorise block.")
+            summary["categorisation"] = {"n_answers": 0, "note": "no categorise block"}
         return
-    answered = responses[responses["label"].notna()]
     report.heading("Categorisation of faces")
+    answered = rec.answered(responses)
     if answered.empty:
-        report.paragraph("The study has categorise trials, but none has been answered yet.")
-        summary["categorisation"] = {"n_answers": 0}
-        return
-    fallback = answered["fallback"].fillna(False).astype(bool)
-    known = answered[answered["intended"].notna() & ~fallback]
-    by_source = (
-        known.assign(hit=(known["label"] == known["intended"]).astype(float))
-        .groupby("source")
-        .agg(
-            participants=("participant_id", "nunique"),
-            answers=("hit", "size"),
-            accuracy=("hit", "mean"),
+        report.paragraph(
+            "No categorisation analysis: the study's categorise trials are unanswered."
         )
+        summary["categorisation"] = {"n_answers": 0, "note": "no answers"}
+        return
+    out: dict[str, Any] = {"n_answers": len(answered),
+                           "n_participants": int(answered["participant_id"].nunique())}  # fmt: skip
+    summary["categorisation"] = out
+    _overview(responses, answered, report, out)
+    _confusion(responses, report)
+    _hit_rates(responses, report, out, opts)
+    _sources(responses, report, out, opts)
+    if full is None:
+        report.paragraph(
+            "Own-distance model: not fitted here (it needs the study's final faces, which "
+            "this call did not receive)."
+        )
+        return
+    _own_distance_model(full, report, out, opts)
+
+
+def _long(report: Report, table: pd.DataFrame, name: str, caption: str, shown: int = 8) -> None:
+    """A long table: its first rows in the report, every row in ``tables/<name>.csv``."""
+    more = len(table) > shown
+    note = f" (first {shown} of {len(table)} rows; all in tables/{name}.csv)" if more else ""
+    report.table(table.head(shown), name, caption + note, data=table)
+
+
+def _overview(
+    responses: pd.DataFrame, answered: pd.DataFrame, report: Report, out: dict[str, Any]
+) -> None:
+    known = answered[answered["intended"].notna()]
+    by_source = (
+        answered.assign(hit=(answered["label"] == answered["intended"]).astype(float)
+                        .where(answered["intended"].notna()))
+        .groupby("source")
+        .agg(participants=("participant_id", "nunique"), answers=("label", "size"),
+             accuracy=("hit", "mean"))
         .reset_index()
-    )
+    )  # fmt: skip
     report.paragraph(
-        f"{len(answered)} answers of {answered['participant_id'].nunique()} participants; "
+        f"{len(answered)} answers of {out['n_participants']} participants; "
         f"{len(answered) - len(known)} of them are to faces with no right answer (random "
         "faces, file rows without a label) or to stand-ins for others' faces (fallback): "
-        "those are not in the accuracies. The pooled accuracies describe the answers; the test "
-        "below is over participants."
+        "those are not in the accuracies. The pooled accuracies and confusion matrices "
+        "describe the answers; every test below is over participants."
     )
     report.table(by_source, "categorisation_by_source", "Accuracy by face source (pooled)")
-    per = accuracy_by_source(responses)
-    report.table(per, "categorisation_participants", "Accuracy per participant")
+    _long(report, accuracy_by_source(responses), "categorisation_participants",
+          "Accuracy on own and others' faces per participant")  # fmt: skip
+
+
+def _confusion(responses: pd.DataFrame, report: Report) -> None:
+    from emogen.analysis.categorisation_figures import confusion_figure
+
+    table = rec.confusion_table(responses)
+    report.table(
+        table, "categorisation_confusion",
+        "Confusion matrices (intended × label; counts and row proportions), over all faces "
+        "with an intended emotion and per face source; random faces: the labels given to them",
+    )  # fmt: skip
+    if table.empty:
+        return
+    path = confusion_figure(table, report.figures / "categorisation_confusion.png")
+    report.figure(
+        path, "Confusion matrices: share of each intended emotion's faces given each label "
+        "(cell: count), per face source; random faces have no intended emotion (one row: "
+        "their labels).",
+    )  # fmt: skip
+
+
+def _hit_rates(
+    responses: pd.DataFrame, report: Report, out: dict[str, Any], opts: AnalysisOptions
+) -> None:
+    hu = rec.unbiased_hit_rates(responses)
+    if hu.empty:
+        report.paragraph("Unbiased hit rates: no answer to a face with an intended emotion.")
+        return
+    tests = rec.hu_tests(hu, opts.alpha)
+    _long(report, hu, "categorisation_hit_rates",
+          "Unbiased hit rate Hu and chance pc per participant × emotion")  # fmt: skip
+    report.table(tests, "categorisation_hit_rate_tests",
+                 "Hu against chance per emotion (over participants)")  # fmt: skip
+    out["hit_rates"] = tests.to_dict(orient="records")
+    above = ", ".join(tests.loc[tests["above_chance"], "emotion"]) or "none"
+    report.paragraph(
+        "Unbiased hit rates (Wagner 1993): per participant and emotion, Hu = hits² / (faces of "
+        "the emotion × uses of its label) and chance pc = (faces / N) × (uses / N), over the "
+        "participant's answers to faces with an intended emotion (own, others', file). Test: "
+        "per emotion, a one-sample t over participants (the participant is the unit) of "
+        "arcsin√Hu − arcsin√pc, Holm-corrected over emotions at α = "
+        f"{opts.alpha}; assumes independent participants and a roughly normal mean difference "
+        f"after the arcsine transform. Above chance: {above}."
+    )
+
+
+def _sources(
+    responses: pd.DataFrame, report: Report, out: dict[str, Any], opts: AnalysisOptions
+) -> None:
+    per = rec.accuracy_per_participant(responses)
+    pairs = rec.source_comparisons(per, opts.alpha)
+    _long(report, per, "categorisation_accuracy", "Accuracy per participant and face source")
+    if not pairs.empty:
+        report.table(pairs, "categorisation_source_tests",
+                     "Accuracy between face sources (paired over participants)")  # fmt: skip
+        report.paragraph(
+            "Accuracy by source: each participant's share of correct answers per source "
+            "(own, others', file faces; fallback and random faces have no right answer); "
+            "each pair of sources compared by a paired t over the participants with both "
+            "(the participant is the unit; CI of the mean difference; Holm-corrected over "
+            "pairs; assumes independent participants and a roughly normal mean difference)."
+        )
     adv = own_advantage(responses)
-    summary["categorisation"] = {"n_answers": len(answered), "own_advantage": adv}
+    out["own_advantage"] = adv
     if np.isnan(adv["ci_low"]):
         report.paragraph(f"Own- against other-face accuracy: {adv['note']}.")
         return
@@ -118,3 +230,85 @@ def categorisation_section(
         f"{adv['difference']:+.3f}, 95% CI [{adv['ci_low']:+.3f}, {adv['ci_high']:+.3f}], "
         f"t = {adv['t']:.2f}, p = {adv['p']:.3g}."
     )
+
+
+def _own_distance_model(
+    people: People, report: Report, out: dict[str, Any], opts: AnalysisOptions
+) -> None:
+    from emogen.analysis import categorisation_models as cm
+    from emogen.analysis.categorisation_figures import own_distance_figure
+
+    res = cm.own_distance(people, rng=np.random.default_rng(opts.seed), n_shuffles=SHUFFLES)
+    report.heading("Own faces predict labels (Binetti et al. 2022)", level=3)
+    if isinstance(res, str):
+        report.paragraph(f"No own-distance model: {res}.")
+        out["own_distance"] = {"note": res}
+        return
+    g, two, ctl = res.gee, res.two_stage, res.control
+    out["own_distance"] = {"gee": g, "two_stage": two,
+                           "control": {k: v for k, v in ctl.items() if k != "control"}}  # fmt: skip
+    _long(report, res.table, "categorisation_model_long",
+          "The own-distance model's long table (answer × offered label)")  # fmt: skip
+    _long(report, res.slopes, "categorisation_model_slopes",
+          "Per-participant slopes (two-stage model, first stage)")  # fmt: skip
+    report.paragraph(
+        f"For each answer to a face the participant did not make (others' and random faces: "
+        f"{g['n_answers']} answers of {g['n_participants']} participants), d_own is the gene-"
+        "space Euclidean distance from the test face to the mean of the participant's own "
+        "final faces of each offered label, and d_ref the same distance to the faces of a "
+        "reference participant (a random derangement of participants: nobody is their own "
+        f"reference; seed {opts.seed}; answers to faces the reference made are left out). "
+        "Own faces are not test faces here: one's other faces of an emotion were made toward "
+        "the same internal face, so they would predict an own face's label even without any "
+        "labeller effect. Everyone's faces of an emotion lie near the population's, so d_own "
+        "alone predicts labels without individual prototypes; the individual effect is d_own "
+        "beyond d_ref — the contrast of the two slopes (negative: one's own faces predict "
+        "one's labels better)."
+    )
+    report.paragraph(
+        "Primary test — GEE (binomial, logit link; the long table of answer × offered label, "
+        "chosen 0/1, on d_own, d_ref and one intercept per label; exchangeable working "
+        "correlation within participant, robust sandwich SE: the participant is the unit; "
+        "assumes a logit-linear effect of distance, independent participants, enough of them "
+        f"for the sandwich, ≥ 30 or so): slope on d_own {g['slope_own']:+.2f} "
+        f"[{g['ci_low_own']:+.2f}, {g['ci_high_own']:+.2f}] per unit distance (odds ratio "
+        f"{g['odds_ratio_own']:.3g} per unit, {np.exp(g['slope_own'] / 10):.3g} per 0.1), on d_ref {g['slope_ref']:+.2f} "
+        f"[{g['ci_low_ref']:+.2f}, {g['ci_high_ref']:+.2f}] (odds ratio "
+        f"{g['odds_ratio_ref']:.3g}); contrast own − ref {g['contrast']:+.2f}, 95% CI "
+        f"[{g['ci_low']:+.2f}, {g['ci_high']:+.2f}], z = {g['z']:.2f}, p = {g['p']:.3g} "
+        f"(working correlation {g['correlation']:+.3f})."
+        + (
+            f" With {g['n_participants']} participants the sandwich SE runs small: read this "
+            "p with the two-stage test and the control below."
+            if g["n_participants"] < 30
+            else ""
+        )
+    )
+    report.paragraph(
+        "Robustness — two-stage (per participant a conditional logit of the chosen label on "
+        f"d_own and d_ref, ridge {cm.RIDGE} on both slopes alike; then over participants, the "
+        "unit): mean contrast "
+        f"{two['mean_contrast']:+.2f}, 95% CI [{two['ci_low']:+.2f}, {two['ci_high']:+.2f}], "
+        f"t = {two['t']:.2f}, p = {two['p_t']:.3g}; Wilcoxon signed-rank p = "
+        f"{two['p_wilcoxon']:.3g} (n = {two['n_participants']}; assumes independent "
+        "participants; the Wilcoxon test a symmetric distribution of contrasts)."
+    )
+    report.paragraph(
+        "Shuffled-prototype control — a permutation over participants: the pooled "
+        "conditional-logit slope on distance to one's own faces (label intercepts; answers "
+        f"to others' and random faces) is {ctl['slope_own']:+.2f}; with each participant's "
+        f"faces replaced by another participant's ({ctl['n_shuffles']} random derangements, "
+        f"seed {opts.seed}; answers to faces of the stand-in left out) it is "
+        f"{ctl['control_mean']:+.2f} on average (95% of shuffles in "
+        f"[{ctl['control_low']:+.2f}, {ctl['control_high']:+.2f}]); one-sided p = "
+        f"{ctl['p']:.3g} (own faces closer to the labels than another's; assumes participants "
+        "exchangeable under the null)."
+    )
+    path = own_distance_figure(res, report.figures / "categorisation_own_distance.png")
+    report.figure(
+        path, "A: per participant, the share of answers whose label is the offered emotion "
+        "with the nearest mean face among one's own faces (y) and among the reference "
+        "participant's (x); above the diagonal, one's own faces predict one's labels better "
+        "(descriptive). B: the shuffled control's slopes (derangements of participants) and "
+        "the slope with one's own faces.",
+    )  # fmt: skip

@@ -1,0 +1,375 @@
+"""Categorisation predicted by the distance of a test face to the participant's own faces
+(Binetti et al. 2022, PNAS 119:e2201380119): P(label = e) as a function of d_e, the distance from
+the test face to the participant's own final faces of emotion e.
+
+**Distances.** Gene space (the GA's search space, ``g_*`` in [0, 1]), Euclidean, from the test
+face's genes to the mean genes of the participant's final faces of e (every identity and
+repetition pooled). File faces have no genes and are not in the model.
+
+**Which answers.** Answers to faces the participant did *not* make (``other`` and ``random``
+faces, fallbacks included; answers ``none`` left out). Own faces are left out because the
+participant's other repetitions of an emotion were made toward the same internal face as the test
+face: their distance predicts the label of an own face even when the labelling owes nothing to
+the labeller's own prototypes (a maker effect, not a labeller effect) — leaving the test face out
+of its own mean does not remove that.
+
+**The null and the competing covariate.** Distance to one's own faces of e predicts the label e
+even without any individual prototype, because everyone's faces of e lie near the population's
+prototype of e. The test of the individual effect therefore sets own distance against the same
+distance to another participant's faces: each participant i is given a reference participant
+σ(i) (σ a random derangement: nobody is their own reference), d_ref,e the distance to σ(i)'s
+final faces of e, and answers to faces σ(i) made are left out. Without an individual effect own
+and reference faces are exchangeable, so the two slopes have the same distribution: the test is
+the contrast β_own − β_ref = 0 (negative: one's own faces predict one's labels better).
+
+**Models.**
+
+* primary, population-averaged: a GEE on the long table (answer × offered label, chosen 0/1,
+  d_own, d_ref, one intercept per label), binomial family, logit link, exchangeable working
+  correlation within participant, robust (sandwich) standard errors over participants
+  (statsmodels ``GEE``; Liang & Zeger 1986);
+* robustness, two-stage: per participant a conditional logit (McFadden 1974) of the chosen label
+  on d_own and d_ref with a small ridge penalty (the same on both slopes, so the null stays
+  symmetric; it keeps a participant whose labels are perfectly separated finite), then a one-
+  sample t and a Wilcoxon signed-rank test of the per-participant contrasts over participants;
+* shuffled-prototype control, a permutation over participants: the pooled conditional-logit
+  slope on own distance against the same slope with every participant's own faces replaced by
+  another participant's (``n_shuffles`` random derangements; answers to faces made by the
+  stand-in left out); one-sided p = (1 + #{shuffled ≤ own}) / (1 + n_shuffles).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from emogen.analysis.people import People
+
+#: Ridge penalty (per unit of slope², on the log-likelihood) of the per-participant fits.
+RIDGE = 0.05
+
+
+@dataclass(frozen=True, eq=False)
+class ModelAnswers:
+    """The answers the model reads, as arrays. participants: everyone with final faces (the
+    index space of ``who``, ``maker`` and a reference); means: (participants, emotions, genes)
+    mean genes of each one's final faces of each emotion (NaN where none); who, maker: (answers,)
+    the answerer and the face's maker (-1: nobody's, a random face); genes: (answers, genes);
+    offered: (answers, emotions) the labels offered; chosen: (answers,) the label's index."""
+
+    participants: tuple[str, ...]
+    emotions: tuple[str, ...]
+    means: np.ndarray
+    who: np.ndarray
+    maker: np.ndarray
+    genes: np.ndarray
+    offered: np.ndarray
+    chosen: np.ndarray
+    source: np.ndarray
+    trial: np.ndarray
+
+
+def model_answers(people: People) -> ModelAnswers | str:
+    """The answers to faces the participant did not make, with their genes; or why none."""
+    r = people.responses
+    if r is None or r.empty or "label" not in r.columns:
+        return "the study has no categorise block"
+    genes = list(people.genes)
+    missing = sorted({"participant_id", "source", *genes} - set(r.columns))
+    if missing:
+        return f"the responses table lacks column(s) {missing[:3]}"
+    emotions = people.emotions
+    r = r[r["label"].isin(emotions) & r["source"].isin(["other", "random"])]
+    r = r[np.isfinite(r[genes].to_numpy(dtype=np.float64)).all(axis=1)]
+    if r.empty:
+        return "no answer names an emotion for a face of another participant or a random face"
+    ids = tuple(sorted(people.faces["participant_id"].astype(str).unique()))
+    index = {p: i for i, p in enumerate(ids)}
+    who = r["participant_id"].astype(str).map(index)
+    r, who = r[who.notna()], who[who.notna()]
+    maker_col = r["source_participant_id"] if "source_participant_id" in r.columns else None
+    maker = (
+        maker_col.astype(str).map(index).fillna(-1).to_numpy(dtype=np.int64)
+        if maker_col is not None
+        else np.full(len(r), -1)
+    )
+    maker[r["source"].to_numpy() != "other"] = -1
+    offered = _offered(r, emotions)
+    means = np.full((len(ids), len(emotions), len(genes)), np.nan)
+    f = people.faces.assign(participant_id=people.faces["participant_id"].astype(str))
+    for (pid, emotion), rows in f.groupby(["participant_id", "emotion"])[genes]:
+        means[index[pid], emotions.index(str(emotion))] = rows.to_numpy(dtype=np.float64).mean(0)
+    return ModelAnswers(
+        participants=ids, emotions=emotions, means=means, who=who.to_numpy(dtype=np.int64),
+        maker=maker, genes=r[genes].to_numpy(dtype=np.float64), offered=offered,
+        chosen=r["label"].map({e: k for k, e in enumerate(emotions)}).to_numpy(dtype=np.int64),
+        source=r["source"].astype(str).to_numpy(),
+        trial=(r["trial"] if "trial" in r.columns else pd.Series(np.arange(len(r))))
+        .to_numpy(dtype=np.int64),
+    )  # fmt: skip
+
+
+def _offered(r: pd.DataFrame, emotions: tuple[str, ...]) -> np.ndarray:
+    """(answers, emotions) which labels each answer offered (every emotion without ``labels``)."""
+    if "labels" not in r.columns:
+        return np.ones((len(r), len(emotions)), dtype=bool)
+    sets = [set(str(s).split("|")) if isinstance(s, str) else set(emotions) for s in r["labels"]]
+    return np.array([[e in s for e in emotions] for s in sets], dtype=bool).reshape(len(r), -1)
+
+
+def derangement(n: int, rng: np.random.Generator) -> np.ndarray:
+    """A random permutation of range(n) with no fixed point (n >= 2)."""
+    while True:
+        p = rng.permutation(n)
+        if not np.any(p == np.arange(n)):
+            return p
+
+
+def distances(ans: ModelAnswers, reference: np.ndarray) -> np.ndarray:
+    """(answers, emotions) gene ED from each test face to the mean face of each emotion of the
+    answerer's ``reference`` participant (``reference = arange``: their own faces)."""
+    centres = ans.means[reference[ans.who]]  # (answers, emotions, genes)
+    return np.asarray(np.linalg.norm(ans.genes[:, None, :] - centres, axis=2))
+
+
+def usable(
+    ans: ModelAnswers, *dists: np.ndarray, reference: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(answers,) which answers a model can use and (answers, emotions) which labels: offered,
+    with finite distances, the chosen label among them, >= 2 labels; a face the ``reference``
+    participant made is left out."""
+    avail = ans.offered.copy()
+    for d in dists:
+        avail &= np.isfinite(d)
+    keep = avail[np.arange(len(ans.chosen)), ans.chosen] & (avail.sum(axis=1) >= 2)
+    if reference is not None:
+        keep &= ans.maker != reference[ans.who]
+    return keep, avail
+
+
+def long_table(ans: ModelAnswers, reference: np.ndarray) -> pd.DataFrame:
+    """The model's long table: one row per usable answer × offered label (see docs/data.md)."""
+    own = distances(ans, np.arange(len(ans.participants)))
+    ref = distances(ans, reference)
+    keep, avail = usable(ans, own, ref, reference=reference)
+    n, e = np.nonzero(avail & keep[:, None])
+    ids = np.array(ans.participants, dtype=object)
+    return pd.DataFrame({
+        "participant_id": ids[ans.who[n]], "answer": n.astype(np.int64),
+        "trial": ans.trial[n],
+        "source": ans.source[n], "reference_participant_id": ids[reference[ans.who[n]]],
+        "label": np.array(ans.emotions, dtype=object)[e],
+        "chosen": (ans.chosen[n] == e).astype(np.int64),
+        "d_own": own[n, e], "d_ref": ref[n, e],
+    })  # fmt: skip
+
+
+def conditional_logit(
+    x: np.ndarray, avail: np.ndarray, chosen: np.ndarray, ridge: float = 0.0, iters: int = 50
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """McFadden's conditional logit by Newton's method: x (answers, labels, k) features, avail
+    (answers, labels) the labels offered, chosen (answers,). Returns (beta, information, scores):
+    the estimate, the (penalised) observed information, and each answer's score at the estimate
+    (for sandwich variances)."""
+    n, _, k = x.shape
+    beta = np.zeros(k)
+    rows = np.arange(n)
+    for _ in range(iters):
+        eta = np.where(avail, x @ beta, -np.inf)
+        p = np.exp(eta - eta.max(axis=1, keepdims=True))
+        p /= p.sum(axis=1, keepdims=True)
+        mean = np.einsum("nl,nlk->nk", p, np.where(avail[..., None], x, 0.0))
+        scores = x[rows, chosen] - mean
+        centred = np.where(avail[..., None], x - mean[:, None, :], 0.0)
+        info = np.einsum("nl,nlk,nlj->kj", p, centred, centred) + ridge * np.eye(k)
+        grad = scores.sum(axis=0) - ridge * beta
+        step = np.linalg.solve(info, grad)
+        beta = beta + step
+        if np.max(np.abs(step)) < 1e-9:
+            break
+    return beta, info, scores
+
+
+def label_dummies(avail: np.ndarray) -> np.ndarray:
+    """(answers, labels, labels − 1) alternative-specific constants (first label the base)."""
+    n, e = avail.shape
+    d = np.zeros((n, e, e - 1))
+    for k in range(1, e):
+        d[:, k, k - 1] = 1.0
+    return d
+
+
+def cluster_covariance(info: np.ndarray, scores: np.ndarray, groups: np.ndarray) -> np.ndarray:
+    """Sandwich covariance with scores summed within clusters (participants), with the small-
+    sample factor G / (G − 1)."""
+    sums = pd.DataFrame(scores).groupby(groups).sum().to_numpy()
+    g = len(sums)
+    bread = np.linalg.inv(info)
+    return np.asarray(bread @ (sums.T @ sums) @ bread * g / max(g - 1, 1))
+
+
+def shuffled_control(
+    ans: ModelAnswers, *, n_shuffles: int, rng: np.random.Generator
+) -> dict[str, Any]:
+    """The pooled conditional-logit slope on own distance (with label constants) against the
+    same slope with each participant's faces replaced by a derangement's (module docstring)."""
+    n_people = len(ans.participants)
+
+    def slope(reference: np.ndarray) -> float:
+        d = distances(ans, reference)
+        keep, avail = usable(ans, d, reference=reference)
+        x = np.concatenate([d[..., None], label_dummies(avail)], axis=2)[keep]
+        beta, _info, _s = conditional_logit(x, avail[keep], ans.chosen[keep])
+        return float(beta[0])
+
+    observed = slope(np.arange(n_people))
+    control = np.array([slope(derangement(n_people, rng)) for _ in range(n_shuffles)])
+    return {
+        "test": "permutation over participants (own faces replaced by another's, derangements)",
+        "slope_own": observed,
+        "control_mean": float(control.mean()),
+        "control_low": float(np.quantile(control, 0.025)),
+        "control_high": float(np.quantile(control, 0.975)),
+        "n_shuffles": n_shuffles,
+        "p": float((1 + np.sum(control <= observed)) / (1 + n_shuffles)),
+        "control": control,
+    }
+
+
+def gee_contrast(table: pd.DataFrame, confidence: float = 0.95) -> dict[str, Any]:
+    """The primary test: binomial GEE (logit link, exchangeable within participant, robust SE)
+    of chosen on d_own, d_ref and label constants; the slopes, their odds ratios per unit
+    distance, and the contrast β_own − β_ref with its CI and Wald p (normal reference)."""
+    import statsmodels.api as sm
+    from scipy import stats
+
+    labels = sorted(table["label"].unique())
+    cols: list[np.ndarray] = [table["d_own"].to_numpy(float), table["d_ref"].to_numpy(float)]
+    cols.append(np.ones(len(table)))
+    cols += [(table["label"] == lab).to_numpy(dtype=float) for lab in labels[1:]]
+    x = np.column_stack(cols)
+    model = sm.GEE(
+        table["chosen"].to_numpy(dtype=float), x, groups=table["participant_id"].to_numpy(),
+        family=sm.families.Binomial(), cov_struct=sm.cov_struct.Exchangeable(),
+    )  # fmt: skip
+    fit = model.fit(maxiter=100)
+    beta, cov = np.asarray(fit.params), np.asarray(fit.cov_params())
+    z = stats.norm.ppf(0.5 + confidence / 2)
+    diff = float(beta[0] - beta[1])
+    se_diff = float(np.sqrt(cov[0, 0] + cov[1, 1] - 2 * cov[0, 1]))
+    out: dict[str, Any] = {"unit": "participant (clusters of the GEE)", "confidence": confidence}
+    for k, name in enumerate(("own", "ref")):
+        se = float(np.sqrt(cov[k, k]))
+        out[f"slope_{name}"] = float(beta[k])
+        out[f"se_{name}"] = se
+        out[f"ci_low_{name}"], out[f"ci_high_{name}"] = beta[k] - z * se, beta[k] + z * se
+        out[f"odds_ratio_{name}"] = float(np.exp(beta[k]))
+    out.update(
+        contrast=diff, se_contrast=se_diff, ci_low=diff - z * se_diff, ci_high=diff + z * se_diff,
+        z=diff / se_diff, p=float(2 * stats.norm.sf(abs(diff / se_diff))),
+        correlation=float(np.asarray(fit.cov_struct.dep_params)),
+        n_participants=int(table["participant_id"].nunique()),
+        n_answers=int(table.groupby(["participant_id", "answer"]).ngroups),
+    )  # fmt: skip
+    return out
+
+
+def per_participant_slopes(table: pd.DataFrame, ridge: float = RIDGE) -> pd.DataFrame:
+    """The two-stage model's first stage: per participant, a ridge-penalised conditional logit
+    of the chosen label on d_own and d_ref (no label constants)."""
+    rows = []
+    for pid, part in table.groupby("participant_id", sort=True):
+        x, avail, chosen = _arrays(part, ("d_own", "d_ref"))
+        beta, _info, _s = conditional_logit(x, avail, chosen, ridge=ridge)
+        rows.append({"participant_id": pid, "n_answers": len(chosen),
+                     "slope_own": beta[0], "slope_ref": beta[1],
+                     "contrast": beta[0] - beta[1]})  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def _arrays(
+    part: pd.DataFrame, features: tuple[str, ...]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A long table's answers as (answers, labels, k) features, availability and choices."""
+    labels = sorted(part["label"].unique())
+    answers = np.unique(part["answer"].to_numpy())
+    n_idx = np.searchsorted(answers, part["answer"].to_numpy())
+    e_idx = np.searchsorted(labels, part["label"].to_numpy())
+    x = np.zeros((len(answers), len(labels), len(features)))
+    avail = np.zeros((len(answers), len(labels)), dtype=bool)
+    x[n_idx, e_idx] = part[list(features)].to_numpy(dtype=np.float64)
+    avail[n_idx, e_idx] = True
+    chosen = np.zeros(len(answers), dtype=np.int64)
+    hit = part["chosen"].to_numpy() == 1
+    chosen[n_idx[hit]] = e_idx[hit]
+    return x, avail, chosen
+
+
+def two_stage(slopes: pd.DataFrame, confidence: float = 0.95) -> dict[str, Any]:
+    """The second stage: one-sample t (with CI) and Wilcoxon signed-rank test of the per-
+    participant contrasts (own − reference slope) over participants."""
+    from scipy import stats
+
+    c = slopes["contrast"].to_numpy(dtype=float)
+    out: dict[str, Any] = {"unit": "participant", "n_participants": len(c),
+                           "mean_contrast": float(c.mean()) if len(c) else float("nan"),
+                           "median_contrast": float(np.median(c)) if len(c) else float("nan")}  # fmt: skip
+    if len(c) < 3 or np.allclose(c, c[0]):
+        return {**out, "t": float("nan"), "p_t": float("nan"), "p_wilcoxon": float("nan"),
+                "ci_low": float("nan"), "ci_high": float("nan")}  # fmt: skip
+    t = stats.ttest_1samp(c, 0.0)
+    ci = t.confidence_interval(confidence)
+    return {**out, "t": float(t.statistic), "p_t": float(t.pvalue),
+            "ci_low": float(ci.low), "ci_high": float(ci.high),
+            "p_wilcoxon": float(stats.wilcoxon(c).pvalue)}  # fmt: skip
+
+
+#: The fewest participants with usable answers the own-distance model is fitted on.
+MIN_PARTICIPANTS = 6
+
+
+@dataclass(frozen=True, eq=False)
+class OwnDistance:
+    """The own-distance model of a study: the long table, the per-participant slopes, and the
+    three tests (GEE contrast, two-stage, shuffled-prototype control) as dicts."""
+
+    table: pd.DataFrame
+    slopes: pd.DataFrame
+    gee: dict[str, Any]
+    two_stage: dict[str, Any]
+    control: dict[str, Any]
+
+
+def own_distance(
+    people: People, *, rng: np.random.Generator, n_shuffles: int = 199, confidence: float = 0.95
+) -> OwnDistance | str:
+    """The own-distance model of ``people`` (module docstring), or one line why it cannot be
+    fitted. The reference participants are one derangement drawn from ``rng``; the shuffled
+    control draws ``n_shuffles`` more."""
+    ans = model_answers(people)
+    if isinstance(ans, str):
+        return ans
+    if len(ans.participants) < MIN_PARTICIPANTS:
+        return (
+            f"{len(ans.participants)} participants made faces; the own-distance model needs "
+            f"at least {MIN_PARTICIPANTS}"
+        )
+    reference = derangement(len(ans.participants), rng)
+    table = long_table(ans, reference)
+    people_n = table["participant_id"].nunique()
+    if people_n < MIN_PARTICIPANTS:
+        return (
+            f"{people_n} participants answered faces they did not make (other participants' or "
+            f"random faces); the own-distance model needs at least {MIN_PARTICIPANTS}"
+        )
+    slopes = per_participant_slopes(table)
+    return OwnDistance(
+        table=table,
+        slopes=slopes,
+        gee=gee_contrast(table, confidence),
+        two_stage=two_stage(slopes, confidence),
+        control=shuffled_control(ans, n_shuffles=n_shuffles, rng=rng),
+    )
