@@ -133,3 +133,37 @@ def test_wrong_exclusion_changes_are_named(export: Path, tmp_path: Path) -> None
     result = _analyse(export, tmp_path / "r", "--exclusion", "max_same_tile_share=2")
     assert result.exit_code == 2 and "must be a share in [0, 1]; got 2.0" in result.output
     assert not (tmp_path / "r").exists()
+
+
+def test_a_pilot_where_no_trial_finished_is_reported_not_a_traceback(
+    export: Path, ict_dir: Path, tmp_path: Path
+) -> None:
+    import shutil
+
+    pilot = tmp_path / "pilot"
+    shutil.copytree(export, pilot)
+    trials = pd.read_parquet(pilot / "trials.parquet")
+    trials["status"] = "started"
+    trials["final_face_id"] = None
+    trials.to_parquet(pilot / "trials.parquet")
+    out = tmp_path / "report"
+    result = _analyse(pilot, out, "--model", str(ict_dir))
+    assert result.exit_code == 0, result.output
+    readme = (out / "README.md").read_text()
+    assert "No errors: no group has a complete sample" in readme
+    assert "None: no GA trial is finished" in readme
+
+
+def test_a_study_of_categorise_blocks_only_is_analysed(
+    ict_model: Any, ict_dir: Path, tmp_path: Path
+) -> None:
+    """A stimulus-validation study (raters label random faces): no GA trial at all."""
+    study = {"name": "validation", "seed": 3, "emotions": ["happy", "sad"], "identities": ["generic"],
+             "blocks": [{"task": "categorise", "random": 6}]}  # fmt: skip
+    export = _export(tmp_path, ict_model, 3, study)
+    out = tmp_path / "report"
+    result = _analyse(export, out, "--model", str(ict_dir))
+    assert result.exit_code == 0, result.output
+    readme = (out / "README.md").read_text()
+    assert "None: the export has no GA trial" in readme
+    assert "## Categorisation of faces" in readme

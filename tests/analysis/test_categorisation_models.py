@@ -132,5 +132,6 @@ def test_too_few_participants_is_one_line(rig) -> None:  # type: ignore[no-untyp
     none = as_people(simulate_people(PeopleDesign(participants=8, repetitions=1, categorise=False,
                                                   identities=("female-medium",)), rig, seed=2))  # fmt: skip
     assert (
-        cm.own_distance(none, rng=np.random.default_rng(0)) == "the study has no categorise block"
+        cm.own_distance(none, rng=np.random.default_rng(0))
+        == "no categorise answers (no categorise block, or nobody has reached it yet)"
     )

@@ -60,7 +60,9 @@ def test_no_categorise_block_is_one_line(ict_model: Any, tmp_path: Path) -> None
     people = as_people(simulate_people(design, ict_model.rig, seed=1))
     report, summary = Report("t", tmp_path), {}  # type: ignore[var-annotated]
     categorisation_section(people, report, summary, AnalysisOptions(), None)
-    assert paragraphs(report) == ["No categorisation analysis: the study has no categorise block."]
+    assert paragraphs(report) == [
+        "No categorisation analysis: no categorise answers (the study has no categorise block, or nobody has reached it yet)."
+    ]
     assert summary["categorisation"]["n_answers"] == 0
 
 

@@ -15,8 +15,10 @@ Sections (each skipped, with a note saying why, when the data cannot support it)
 6. prototypes: each participant's mean final face per group, group means, renders and
    heatmaps (the mean face against the target, or against the neutral face);
 7. ratings (studies);
-8. categorisation (studies with categorise blocks): accuracy by face source and own- against
-   other-face accuracy over participants (:mod:`emogen.analysis.categorisation`).
+8. the analyses of participants (studies; :mod:`emogen.analysis.analyse_people`): quality and
+   the exclusion rule first, then categorisation (confusion matrices, unbiased hit rates,
+   accuracy by source, the own-distance model), reliability, per-gene inference, conditions,
+   perceptive fields, identity effects and groups of participants.
 
 Everything lands in ``OUT``: ``index.html`` and ``README.md``, ``figures/*.png``,
 ``tables/*.csv`` and ``analysis.json`` (the headline numbers).
@@ -39,7 +41,6 @@ from emogen.analysis.analyse_faces import prototypes_section, separability_secti
 from emogen.analysis.analyse_noise import noise_section
 from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.analyse_people import people_sections, prepare_people, quality_first
-from emogen.analysis.categorisation import categorisation_section
 from emogen.analysis.data import Dataset, load_dataset
 from emogen.analysis.distributions import generation_summary, kl_per_generation
 from emogen.analysis.repeatability import BIN_LABELS, repeatability_bins
@@ -84,17 +85,15 @@ def analyse(
     if prepared is not None:
         step("quality and exclusions")
         quality_first(prepared, report, summary, opts)
-    _errors(ds, report, summary)
-    step("repeatability")
-    _repeatability(ds, report, summary)
-    step("separability (PCA + GMM)")
-    separability_section(ds, report, summary, opts)
-    step(f"GA noise ({opts.noise_runs} simulated runs per group)")
-    noise_section(ds, report, summary, opts, model)
-    step("prototypes and renders")
-    prototypes_section(ds, report, summary, opts, model)
+    if ds.groups:
+        _ga_sections(ds, report, summary, opts, model, step)
+    else:
+        report.heading("The GA's faces")
+        report.paragraph(
+            "None: the export has no GA trial (error distributions, repeatability, "
+            "separability, GA noise and prototypes need them)."
+        )
     _ratings(ds, report, summary)
-    categorisation_section(ds.responses, report, summary)
     if prepared is not None:
         people_sections(prepared, report, summary, opts, model, step)
     step("writing the report")
@@ -106,6 +105,26 @@ def analyse(
     (report.out / "analysis.json").write_text(json.dumps(summary, indent=2, default=_json) + "\n")
     html_path, md_path = report.write()
     return AnalysisResult(report.out, html_path, md_path, summary)
+
+
+def _ga_sections(
+    ds: Dataset,
+    report: Report,
+    summary: dict[str, Any],
+    opts: AnalysisOptions,
+    model: FaceModel | None,
+    step: Callable[[str], None],
+) -> None:
+    """The sections on the GA's faces: errors, repeatability, separability, noise, prototypes."""
+    _errors(ds, report, summary)
+    step("repeatability")
+    _repeatability(ds, report, summary)
+    step("separability (PCA + GMM)")
+    separability_section(ds, report, summary, opts)
+    step(f"GA noise ({opts.noise_runs} simulated runs per group)")
+    noise_section(ds, report, summary, opts, model)
+    step("prototypes and renders")
+    prototypes_section(ds, report, summary, opts, model)
 
 
 def _json(o: object) -> object:

@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from emogen.analysis.categorisation import categorisation_section
 from emogen.analysis.conditions import conditions_section
 from emogen.analysis.exclusions import apply_exclusions
 from emogen.analysis.fields_report import fields_section
@@ -104,11 +105,17 @@ def people_sections(
     step: Callable[[str], None],
 ) -> None:
     people = prepared.kept
-    if people is None or people.faces.empty:
+    if people is None:
         report.heading("Analyses of participants")
+        report.paragraph(f"No analyses of participants: {prepared.problem}")
+        return
+    step("categorisation")
+    categorisation_section(people, report, summary, opts, model)
+    if people.faces.empty:
+        report.heading("Analyses of the faces participants made")
         report.paragraph(
-            "No analyses of participants: "
-            + (prepared.problem or "no GA trial is finished yet (they need final faces).")
+            "None: no GA trial is finished (reliability, per-gene inference, conditions, "
+            "perceptive fields, identity and group comparisons need final faces)."
         )
         return
     summary["participants"] = people.n_participants

@@ -100,8 +100,11 @@ def categorisation_section(
     if not isinstance(responses, pd.DataFrame) or responses.empty or "label" not in responses:
         if full is not None:
             report.heading("Categorisation of faces")
-            report.paragraph("No categorisation analysis: the study has no categorise block.")
-            summary["categorisation"] = {"n_answers": 0, "note": "no categorise block"}
+            report.paragraph(
+                "No categorisation analysis: no categorise answers (the study has no categorise "
+                "block, or nobody has reached it yet)."
+            )
+            summary["categorisation"] = {"n_answers": 0, "note": "no categorise answers"}
         return
     report.heading("Categorisation of faces")
     answered = rec.answered(responses)

@@ -76,7 +76,7 @@ def model_answers(people: People) -> ModelAnswers | str:
     """The answers to faces the participant did not make, with their genes; or why none."""
     r = people.responses
     if r is None or r.empty or "label" not in r.columns:
-        return "the study has no categorise block"
+        return "no categorise answers (no categorise block, or nobody has reached it yet)"
     genes = list(people.genes)
     missing = sorted({"participant_id", "source", *genes} - set(r.columns))
     if missing:

@@ -160,9 +160,10 @@ def _study_tables(
             raise ConfigError(f"{folder}/{name}: missing columns {missing} (see docs/study.md)")
     if trials is None or faces is None or selections is None:  # for the type checker
         raise ConfigError(f"{folder}: incomplete study export")
+    other = bool("task" in trials.columns and (trials["task"] != "evolve").any())
     if "task" in trials.columns:  # the GA's trials; categorise trials are the responses table
         trials = trials[trials["task"] == "evolve"].reset_index(drop=True)
-    check_study(folder, {"trials": trials, "faces": faces, "selections": selections})
+    check_study(folder, {"trials": trials, "faces": faces, "selections": selections}, other)
     responses = _read(folder, "responses", required=False)
     gone = sessions_of(trials, exclude) if exclude else set()
     trials, faces, selections = (

@@ -157,7 +157,7 @@ def load_people(folder: Path) -> People:
     trials = _typed_trials(trials.reset_index(drop=True))
     genes = tuple(c for c in faces.columns if str(c).startswith("g_"))
     weights = tuple(c for c in faces.columns if str(c).startswith("w_"))
-    if not genes:
+    if not genes and len(faces):
         raise DataError(f"{folder}/faces has no gene (g_*) columns: export the study again")
     final = _final_faces(trials, faces, genes, weights)
     return People(

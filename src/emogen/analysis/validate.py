@@ -100,13 +100,18 @@ def check_numbers(
             raise DataError(f"{where}: column '{c}' row {bad[0] + 1}: {problem}")
 
 
-def check_study(folder: object, tables: dict[str, pd.DataFrame]) -> None:
-    """The trials, faces and selections tables of a study export (columns already present)."""
-    check_nonempty(
-        tables["trials"],
-        f"{folder}/trials",
-        "no trials to analyse (export again once participants have done trials)",
-    )
+def check_study(
+    folder: object, tables: dict[str, pd.DataFrame], other_trials: bool = False
+) -> None:
+    """The trials, faces and selections tables of a study export (columns already present);
+    ``other_trials``: the study has trials of other tasks (categorise), so no GA trial is
+    needed."""
+    if not other_trials:
+        check_nonempty(
+            tables["trials"],
+            f"{folder}/trials",
+            "no trials to analyse (export again once participants have done trials)",
+        )
     for name, keys in STUDY_KEYS.items():
         check_whole(tables[name], keys, f"{folder}/{name}")
     for name, labels in STUDY_LABELS.items():
