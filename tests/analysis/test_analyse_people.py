@@ -92,7 +92,29 @@ def test_reliability_and_groups_with_the_participant_as_unit(
     assert list(groups["emotion"]) == ["happy", "sad"] and (groups["participants"] == 12).all()
     readme = (out / "README.md").read_text()
     assert "Unit: the participant" in readme and "one final face per participant" in readme
-    assert json.loads((out / "analysis.json").read_text())["participants"] == 12
+    summary = json.loads((out / "analysis.json").read_text())
+    assert summary["participants"] == 12
+    # the methods block: version, model hash, the study's config hash, command, seed
+    methods = summary["methods"]
+    study = pd.read_parquet(export / "study.parquet")
+    assert methods["study_config_hashes"] == sorted(set(study["study_config_hash"]))
+    assert methods["model_matches"] and methods["seed"] == 1
+    assert "**Methods.** EmoGen" in readme and methods["model"]["hash"] in readme
+    # 48 faces, a 2-group mixture in 2 dimensions has 11 parameters: fewer than 5 faces each
+    assert "Warning: 48 faces for a 2-component mixture with 11 parameters" in readme
+    # every face table the report writes reads in every command that reads faces
+    from emogen.cli.correct import read_weights_csv as correct_reads
+    from emogen.model import load_model
+    from emogen.render.weights import read_weights_csv as render_reads
+
+    model = load_model(ict_dir)
+    protos = out / "tables" / "prototypes.csv"
+    w, _ = render_reads(protos, model.rig)
+    w2, _ = correct_reads(protos, model)
+    table = pd.read_csv(protos)
+    assert len(w) == len(table) == 24 and np.allclose(w, w2)
+    shapes = [c for c in table.columns if c.removeprefix("w_") in model.rig.shape_names]
+    assert np.allclose(w, table[shapes].to_numpy())
 
 
 def test_a_wrong_participant_table_is_refused_before_any_work(export: Path, tmp_path: Path) -> None:

@@ -40,13 +40,21 @@ from emogen.analysis import plots
 from emogen.analysis.analyse_faces import prototypes_section, separability_section
 from emogen.analysis.analyse_noise import noise_section
 from emogen.analysis.analyse_options import AnalysisOptions
-from emogen.analysis.analyse_people import people_sections, prepare_people, quality_first
+from emogen.analysis.analyse_people import (
+    group_identities,
+    people_sections,
+    prepare_people,
+    quality_first,
+)
 from emogen.analysis.data import Dataset, load_dataset
 from emogen.analysis.distributions import generation_summary, kl_per_generation
+from emogen.analysis.methods import methods_record, methods_text
+from emogen.analysis.people import read_table
 from emogen.analysis.repeatability import BIN_LABELS, repeatability_bins
 from emogen.analysis.report import Report
 
 if TYPE_CHECKING:
+    from emogen.appearance.identities import Identity
     from emogen.model.face import FaceModel
 
 __all__ = ["AnalysisOptions", "AnalysisResult", "analyse"]
@@ -80,13 +88,17 @@ def analyse(
         ds = load_dataset(ds.source, exclude=prepared.excluded)
     report = Report(f"EmoGen analysis: {ds.source.name}", Path(out))
     summary: dict[str, Any] = {"source": str(ds.source), "kind": ds.kind, "groups": list(ds.groups)}
+    study = read_table(ds.source, "study", required=False) if ds.kind == "study" else None
+    summary["methods"] = methods_record(ds, opts, model, study)
+    report.paragraph(methods_text(summary["methods"]))
     step("overview and error distributions")
     _overview(ds, report, summary)
     if prepared is not None:
         step("quality and exclusions")
         quality_first(prepared, report, summary, opts)
     if ds.groups:
-        _ga_sections(ds, report, summary, opts, model, step)
+        identities = group_identities(prepared) if model is not None and opts.render else {}
+        _ga_sections(ds, report, summary, opts, model, step, identities)
     else:
         report.heading("The GA's faces")
         report.paragraph(
@@ -114,6 +126,7 @@ def _ga_sections(
     opts: AnalysisOptions,
     model: FaceModel | None,
     step: Callable[[str], None],
+    identities: dict[str, Identity],
 ) -> None:
     """The sections on the GA's faces: errors, repeatability, separability, noise, prototypes."""
     _errors(ds, report, summary)
@@ -124,7 +137,7 @@ def _ga_sections(
     step(f"GA noise ({opts.noise_runs} simulated runs per group)")
     noise_section(ds, report, summary, opts, model)
     step("prototypes and renders")
-    prototypes_section(ds, report, summary, opts, model)
+    prototypes_section(ds, report, summary, opts, model, identities)
 
 
 def _json(o: object) -> object:

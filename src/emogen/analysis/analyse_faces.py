@@ -19,6 +19,7 @@ from emogen.analysis.separability import gmm_separability
 from emogen.errors import EmoGenError
 
 if TYPE_CHECKING:
+    from emogen.appearance.identities import Identity
     from emogen.model.face import FaceModel
 
 log = logging.getLogger(__name__)
@@ -86,6 +87,7 @@ def separability_section(
         )
         report.table(corr, "correspondence", "Cluster-to-target correspondence")
     report.bullets([f"Note: {n}" for n in sep.notes])
+    _mixture_warning(report, len(x), len(ds.groups), sep.n_pca, ds.kind)
     report.figure(
         plots.separability(sep, report.figures / "separability.png"),
         "Final faces in the first two PCA components; GMM components (1σ, 2σ), group "
@@ -99,13 +101,34 @@ def separability_section(
     }
 
 
+def _mixture_warning(report: Report, n: int, k: int, d: int, kind: str) -> None:
+    """Say loudly when the mixture has too many parameters for the faces, and that the
+    clustering is descriptive (faces, not participants, are its points)."""
+    params = k * (d + d * (d + 1) // 2) + (k - 1)
+    if n < 5 * params:
+        report.paragraph(
+            f"**Warning: {n} faces for a {k}-component mixture with {params} parameters** (a "
+            f"full covariance per component in {d} dimensions): fewer than 5 faces per "
+            "parameter, so the clusters are unstable; read them as a description at most."
+        )
+    if kind == "study":
+        report.paragraph(
+            "This clustering describes faces (a participant's repeated faces are several "
+            "points); it is not a test. The participant-level tests are in the analyses of "
+            "participants below."
+        )
+
+
 def prototypes_section(
     ds: Dataset,
     report: Report,
     summary: dict[str, Any],
     opts: AnalysisOptions,
     model: FaceModel | None,
+    identities: dict[str, Identity] | None = None,
 ) -> None:
+    """Participants' prototypes, group means and their renders; ``identities``: the identity
+    each group was made on (a study's), to draw its mean face as participants saw it."""
     report.heading("Prototypes and mean faces")
     if not ds.has_weights or ds.final.empty:
         report.paragraph("Skipped: needs final faces with weights.")
@@ -138,14 +161,21 @@ def prototypes_section(
 
     try:
         mw = {g: model_weights(m, cols, model) for g, m in means.items()}
+        on = [(identities or {}).get(g) for g in mw]
         sheet = face_sheet(
             model,
             np.stack(list(mw.values())),
             list(mw),
             report.figures / "mean_faces.png",
             size=opts.render_size,
+            identities=on,
         )
-        report.figure(sheet, "Mean final face of each group.")
+        drawn = (
+            " on the identity it was made on (shape and appearance, as participants saw it)"
+            if any(i is not None for i in on)
+            else ""
+        )
+        report.figure(sheet, f"Mean final face of each group{drawn}.")
         neutral = np.zeros(model.n_shapes)
         if ds.targets:
             panels = [Panel(g, mw[g], model_weights(ds.targets[g], cols, model)) for g in mw]

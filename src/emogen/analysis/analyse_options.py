@@ -28,3 +28,5 @@ class AnalysisOptions:
     group_column: str = "group"
     # the exclusion rule applied before every analysis of a study (None: nobody excluded)
     exclusions: ExclusionRule | None = field(default_factory=ExclusionRule)
+    # the command line that made the report (the methods block; default: this process's)
+    command: str | None = None

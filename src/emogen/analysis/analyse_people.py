@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     from emogen.analysis.data import Dataset
     from emogen.analysis.people import People
     from emogen.analysis.report import Report
+    from emogen.appearance.identities import Identity
     from emogen.model.face import FaceModel
 
 
@@ -130,3 +131,19 @@ def people_sections(
         section(people, report, summary, opts, model)
     step("groups of participants")
     groups_section(people, report, summary, opts, opts.group_column)
+
+
+def group_identities(prepared: Prepared | None) -> dict[str, Identity]:
+    """The identity (shape and appearance) each GA group was made on, by group label
+    (``emotion`` or ``emotion / identity``), to draw mean faces as participants saw them."""
+    from emogen.analysis.field_maps import study_identities
+
+    people = prepared.kept if prepared is not None else None
+    if people is None or people.faces.empty:
+        return {}
+    idents = study_identities(people)
+    several = len(people.identity_names) > 1
+    pairs = people.faces[["emotion", "identity"]].drop_duplicates().itertuples(index=False)
+    return {
+        (f"{e} / {i}" if several else str(e)): idents[str(i)] for e, i in pairs if str(i) in idents
+    }

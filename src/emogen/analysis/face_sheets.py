@@ -9,6 +9,7 @@ not re-applied), with the gaze rotation, as the renderer draws them.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -20,6 +21,7 @@ from emogen.analysis import plots
 from emogen.errors import ShapeError
 
 if TYPE_CHECKING:
+    from emogen.appearance.identities import Identity
     from emogen.model.face import FaceModel
 
 
@@ -103,10 +105,39 @@ def face_sheet(
     *,
     size: int = 256,
     columns: int = 4,
+    identities: Sequence[Identity | None] | None = None,
 ) -> Path:
-    """A contact sheet of faces (prototypes, mean faces) with labels and the licence notice."""
+    """A contact sheet of faces (prototypes, mean faces) with labels and the licence notice;
+    ``identities``: the identity (shape and appearance) each face is drawn on, as participants
+    saw it (None: the model's own head)."""
+    from emogen.render.images import contact_sheet
+
+    images, background = render_on_identities(model, weights, identities, size=size)
+    sheet = contact_sheet(images, labels, columns=columns, background=background)
+    return plots.save_image(path, sheet)
+
+
+def render_on_identities(
+    model: FaceModel,
+    weights: np.ndarray,
+    identities: Sequence[Identity | None] | None,
+    *,
+    size: int,
+) -> tuple[np.ndarray, Sequence[float] | None]:
+    """(n, size, size, 3) images of faces ``weights`` (n, S), each on its identity (one
+    renderer per identity), and the look's background colour."""
     from emogen.render import Renderer
 
-    with Renderer(model, size=size) as r:
-        sheet = r.sheet(np.asarray(weights, dtype=np.float32), labels, columns=columns)
-    return plots.save_image(path, sheet)
+    w = np.asarray(weights, dtype=np.float32)
+    per_face = identities if identities is not None else [None] * len(w)
+    images = np.zeros((len(w), size, size, 3), dtype=np.uint8)
+    background: Sequence[float] | None = None
+    for key in dict.fromkeys(id(i) for i in per_face):
+        rows = np.array([j for j, i in enumerate(per_face) if id(i) == key])
+        ident = per_face[int(rows[0])]
+        m = model if ident is None else model.with_identity(ident.shape)
+        appearance = None if ident is None else ident.appearance
+        with Renderer(m, size=size, appearance=appearance) as r:
+            images[rows] = r.render(w[rows])
+            background = r.look.background_srgb
+    return images, background

@@ -131,8 +131,7 @@ def contact_sheets(
     """One contact sheet per emotion of every participant's mean face per identity, rendered on
     that identity (shape and appearance), labelled ``participant · identity (n faces)``.
     Returns the sheets by emotion and the identities that could not be resolved."""
-    from emogen.analysis.face_sheets import model_weights
-    from emogen.render import Renderer
+    from emogen.analysis.face_sheets import model_weights, render_on_identities
     from emogen.render.images import contact_sheet
 
     means = mean_faces(people)
@@ -141,16 +140,8 @@ def contact_sheets(
     means = means[means["identity"].isin(list(idents))].reset_index(drop=True)
     shapes = [c.removeprefix("w_") for c in people.weights]
     weights = model_weights(means[list(people.weights)].to_numpy(), shapes, model)
-    images = np.zeros((len(means), size, size, 3), dtype=np.uint8)
-    background = None
-    for name, ident in idents.items():
-        rows = np.flatnonzero(means["identity"].to_numpy() == name)
-        if not len(rows):
-            continue
-        m = model.with_identity(ident.shape)
-        with Renderer(m, size=size, appearance=ident.appearance) as r:
-            images[rows] = r.render(weights[rows].astype(np.float32))
-            background = r.look.background_srgb
+    per_face = [idents[str(i)] for i in means["identity"]]
+    images, background = render_on_identities(model, weights, per_face, size=size)
     sheets = {}
     for e, part in means.groupby("emotion", sort=True):
         labels = [f"{p} · {i} ({n})" for p, i, n in

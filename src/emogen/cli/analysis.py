@@ -7,6 +7,7 @@ holds all three, for tests and for ``python -m emogen.cli.analysis``.
 
 from __future__ import annotations
 
+import shlex
 import sys
 import time
 from pathlib import Path
@@ -170,6 +171,11 @@ def analyse_command(
         participants=participants,
         group_column=group_column,
         exclusions=rule,
+        command=(
+            shlex.join(["emogen", *sys.argv[1:]])
+            if sys.argv[1:2] == ["analyse"]
+            else f"emogen analyse {shlex.quote(str(data))} --out {shlex.quote(str(out))} …"
+        ),
     )
     with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         analyse(dataset, tmp, model=model, options=options, progress=stage_printer(progress))

@@ -28,8 +28,12 @@ def read_weights_csv(path: Path, model: FaceModel) -> tuple[np.ndarray, pd.DataF
     outside [0, 1] is an error naming it (:func:`emogen.model.face_table.read_face_table`).
     """
     from emogen.model.face_table import read_face_table
+    from emogen.render.weights import LABEL_COLUMNS
 
-    table = read_face_table(path, model.rig, what="input CSV", others="error", unit_range=True)
+    table = read_face_table(
+        path, model.rig, what="input CSV", others="error", unit_range=True,
+        label_columns=LABEL_COLUMNS,
+    )  # fmt: skip
     return table.weights, table.frame
 
 

@@ -16,7 +16,10 @@ One set of rules for every command that reads faces (``render --weights``, ``cor
 ``simulate --target-file``, ``--training``, analysis inputs):
 
 * a column that is no shape or gene name is an error naming it and the closest known name when
-  the table holds weights only; in a table with bookkeeping columns (``others="ignore"``) a
+  the table holds weights only — except EmoGen's own bookkeeping columns (``group``,
+  ``participant``, ``emotion``, …) and corrective weights (``w_corr_…``, derived from the
+  shapes and recomputed), which every reader passes over, so that every table EmoGen writes
+  (an analysis report's ``prototypes.csv`` included) reads everywhere; in a table with bookkeeping columns (``others="ignore"``) a
   column that looks like a misspelt shape or gene (``jawOpn``) is still an error, never
   dropped quietly;
 * a weight must be a finite number in [0, 1]; an empty cell is an error (or no weight, where
@@ -243,8 +246,19 @@ def _cell_text(cell: object) -> str:
 BOOKKEEPING = frozenset(
     {"run", "generation", "slot", "operator", "distance", "error", "rank", "run_seed", "seed",
      "study", "session_id", "participant_id", "trial", "attempt", "face_id", "role", "emotion",
-     "identity", "label", "name"}
+     "identity", "label", "name", "group", "participant", "sample", "n_trials", "block_name",
+     "repetition", "source"}
 )  # fmt: skip
+
+
+def derived_column(name: str) -> bool:
+    """EmoGen's own columns beside weights (:data:`BOOKKEEPING`) and the corrective weights it
+    writes (``w_corr_…``, ``w_collision_…``: derived from the shapes, recomputed by every command
+    that corrects):
+    read past, never weights and never errors, in every face table."""
+    return name in BOOKKEEPING or name.startswith(
+        ("w_corr_", "corr_", "w_collision_", "collision_")
+    )
 
 
 def _check_other_column(
@@ -260,7 +274,7 @@ def _check_other_column(
         squash = {re.sub(r"[^a-z0-9]", "", k.lower()): k for k in known}
         key = re.sub(r"[^a-z0-9]", "", name.lower())
         close = [squash[key]] if key in squash else []
-    if others == "ignore" and (not close or name in BOOKKEEPING):
+    if derived_column(name) or (others == "ignore" and not close):
         return
     hint = f"did you mean '{close[0]}'? " if close else ""
     allowed = f" or {'/'.join(label_columns)}" if label_columns else ""
