@@ -25,14 +25,15 @@ from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, TrialRow, dumps, utcnow
 from emogen.study.view import SessionState, session_state
 
-PARTICIPANT_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:@+-]{0,127}$")
+#: Matched whole (``fullmatch``): ``$`` would also match before a trailing newline.
+PARTICIPANT_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9._:@+-]{0,127}")
 
 
 def checked_participant(participant_id: str | None) -> tuple[str, str]:
     """(participant id, its source): the URL's id checked, or a generated one when none came."""
     if participant_id is None or participant_id == "":
         return "anon-" + secrets.token_hex(8), "generated"
-    if not PARTICIPANT_ID.match(participant_id):
+    if not PARTICIPANT_ID.fullmatch(participant_id):
         raise ConfigError(
             f"participant id must be 1-128 letters, digits or ._:@+- (starting with a letter "
             f"or digit); got {participant_id[:40]!r}"

@@ -139,8 +139,8 @@ def current_face(
     trial: int | None = None,
     attempt: int | None = None,
 ) -> tuple[str, str] | None:
-    """(weights JSON, identity) of a face in the session's current trial, if there is one (a
-    categorise trial's one face has id ``categorise_face``); None also when ``trial`` or
+    """(weights JSON, identity) of a face of the generation the session shows now, if there is
+    one (a categorise trial's one face has id ``categorise_face``); None also when ``trial`` or
     ``attempt`` is given and is not the current trial's position or attempt."""
     if trial is not None and trial != sess.current_trial:
         return None
@@ -156,14 +156,24 @@ def current_face(
         if stim is None or face_id != categorise_face:
             return None
         return str(stim[0]), str(stim[1])
+    # only what the page shows now: the generation shown, or while the trial waits for its
+    # rating its final face; an earlier generation's faces are not served (404, as documented)
+    if current.status == "rating":
+        if face_id != current.final_face_id:
+            return None
+        shown = PopulationRow.generation <= current.generation
+    else:
+        shown = PopulationRow.generation == current.generation
     found = db.execute(
         select(FaceRow.weights)
         .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
         .where(
             PopulationRow.trial_id == current.id,
+            PopulationRow.attempt == current.attempt,
+            shown,
             FaceRow.face_id == face_id,
-            *(() if attempt is None else (PopulationRow.attempt == attempt,)),
         )
+        .order_by(PopulationRow.generation.desc())
         .limit(1)
     ).first()
     return None if found is None else (str(found[0]), current.identity)
