@@ -37,6 +37,15 @@ def serve_command(
         bool,
         typer.Option("--hsts", help="Send Strict-Transport-Security (only behind HTTPS)."),
     ] = False,
+    running_sessions: Annotated[
+        str,
+        typer.Option(
+            "--running-sessions",
+            help="When the config's design changed (not only its texts) while sessions begun "
+            "under the earlier design are unfinished: 'refuse' to start (default) or 'end' them "
+            "(their participants are told the study changed).",
+        ),
+    ] = "refuse",
     workers: Annotated[
         int | None,
         typer.Option(
@@ -47,11 +56,13 @@ def serve_command(
     ] = None,
 ) -> None:
     """Run a participant study: prints the URL to open; Ctrl-C stops it."""
-    from emogen.errors import ResourceError
+    from emogen.errors import ConfigError, ResourceError
     from emogen.study.config import demo_study_path, load_study_config
     from emogen.web.app import viewer_built
     from emogen.web.server import run_server
 
+    if running_sessions not in ("refuse", "end"):
+        raise ConfigError(f"--running-sessions must be 'refuse' or 'end'; got {running_sessions!r}")
     path = config if config is not None else demo_study_path()
     load_study_config(path)  # a bad config is named first
     if not viewer_built():
@@ -70,4 +81,5 @@ def serve_command(
         session_limit=session_limit,
         hsts=hsts,
         workers=workers,
+        running_sessions=running_sessions,
     )

@@ -38,13 +38,19 @@ _STEP_WITH_KEY = select(StepRow.kind, StepRow.request_hash).where(
 
 
 NO_SESSION = "no session with this link; check the address"
+ENDED_SESSION = (
+    "this session was ended when the researcher changed the study's design; thank you for "
+    "your time — please contact the researcher"
+)
 
 
-def _of_study(sess: SessionRow | None, study_id: int) -> SessionRow:
-    """The session found by its token, if it is one of this study's."""
+def _of_study(sess: SessionRow | None, study_ids: tuple[int, ...]) -> SessionRow:
+    """The session found by its token, if it is one of this study's (or its design's)."""
     if sess is None:
         raise SessionNotFound(NO_SESSION)
-    if sess.study_id != study_id:
+    if sess.stage == "ended":
+        raise StepConflict(ENDED_SESSION)
+    if sess.study_id not in study_ids:
         raise StepConflict(
             "this session belongs to another version of the study config than the one the "
             "server runs now; ask the researcher"
@@ -52,9 +58,12 @@ def _of_study(sess: SessionRow | None, study_id: int) -> SessionRow:
     return sess
 
 
-def session_by_token(db: Session, token: str, study_id: int, *, lock: bool = False) -> SessionRow:
-    """The session of this token in this study (locked for update if asked)."""
-    return _of_study(db.scalar(_BY_TOKEN_LOCKED if lock else _BY_TOKEN, {"token": token}), study_id)
+def session_by_token(
+    db: Session, token: str, study_ids: tuple[int, ...], *, lock: bool = False
+) -> SessionRow:
+    """The session of this token in these study rows (locked for update if asked)."""
+    found = db.scalar(_BY_TOKEN_LOCKED if lock else _BY_TOKEN, {"token": token})
+    return _of_study(found, study_ids)
 
 
 def lock_study(db: Session, study_id: int) -> None:
@@ -62,17 +71,32 @@ def lock_study(db: Session, study_id: int) -> None:
     db.get(StudyRow, study_id, with_for_update=True)
 
 
-def session_of_participant(db: Session, study_id: int, participant_id: str) -> SessionRow | None:
+def session_of_participant(
+    db: Session, study_ids: tuple[int, ...], participant_id: str
+) -> SessionRow | None:
+    """The participant's session in any of these study rows (the newest, if several)."""
     return db.scalar(
-        select(SessionRow).where(
-            SessionRow.study_id == study_id, SessionRow.participant_id == participant_id
-        )
+        select(SessionRow)
+        .where(SessionRow.study_id.in_(study_ids), SessionRow.participant_id == participant_id)
+        .order_by(SessionRow.id.desc())
+        .limit(1)
     )
 
 
-def count_sessions(db: Session, study_id: int) -> int:
+def session_of_create_key(
+    db: Session, study_ids: tuple[int, ...], key_hash: str
+) -> SessionRow | None:
+    """The session made with this creation key (its SHA-256) in these study rows."""
+    return db.scalar(
+        select(SessionRow)
+        .where(SessionRow.study_id.in_(study_ids), SessionRow.create_key == key_hash)
+        .limit(1)
+    )
+
+
+def count_sessions(db: Session, study_ids: tuple[int, ...]) -> int:
     n = db.scalar(
-        select(func.count()).select_from(SessionRow).where(SessionRow.study_id == study_id)
+        select(func.count()).select_from(SessionRow).where(SessionRow.study_id.in_(study_ids))
     )
     return int(n or 0)
 

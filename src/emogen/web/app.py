@@ -20,10 +20,13 @@ from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
 
 from emogen import __version__
+from emogen.errors import ConfigError
 from emogen.model.face import FaceModel
 from emogen.study.config import StudyConfig, load_study_config
+from emogen.study.failures import SharedBuckets
 from emogen.study.sessions import StudyService
 from emogen.study.storage import Store, resolve_database_url
+from emogen.study.versions import RunningSessions
 from emogen.web.assets import ModelGLBs
 from emogen.web.errors import install_error_handlers
 from emogen.web.faces import FacePNGs
@@ -37,8 +40,28 @@ RESEARCHER_TOKEN_ENV = "EMOGEN_RESEARCHER_TOKEN"
 #: room of 60 behind one address (a university NAT) starts within seconds, two rooms within a
 #: minute; a script gets 100, then one every 2 s — 1,900 in an hour, not unlimited.
 SESSION_LIMIT = RateLimit(burst=100, per_minute=30)
-#: Wrong researcher tokens per client address: 10, then one every 6 s.
+#: Wrong researcher tokens per client address: 10, then one every 6 s — counted in the database,
+#: so every worker process (and every server on the database) shares one count.
 RESEARCHER_FAILURE_LIMIT = RateLimit(burst=10, per_minute=10)
+#: A researcher token's least length and least number of different characters.
+MIN_TOKEN_CHARS = 32
+MIN_TOKEN_DISTINCT = 10
+TOKEN_ADVICE = 'make one with: python -c "import secrets; print(secrets.token_urlsafe(32))"'
+
+
+def check_researcher_token(token: str) -> None:
+    """Refuse a researcher token a brute force could guess: too short, or too few characters."""
+    what = f"${RESEARCHER_TOKEN_ENV}"
+    if len(token) < MIN_TOKEN_CHARS:
+        raise ConfigError(
+            f"{what} is {len(token)} characters long; it must be at least {MIN_TOKEN_CHARS} "
+            f"(a long random secret): {TOKEN_ADVICE}"
+        )
+    if len(set(token)) < MIN_TOKEN_DISTINCT:
+        raise ConfigError(
+            f"{what} has only {len(set(token))} different characters; a random secret has at "
+            f"least {MIN_TOKEN_DISTINCT}: {TOKEN_ADVICE}"
+        )
 
 
 def viewer_built() -> bool:
@@ -81,6 +104,7 @@ def create_app(
     session_limit: RateLimit = SESSION_LIMIT,
     researcher_failure_limit: RateLimit = RESEARCHER_FAILURE_LIMIT,
     hsts: bool = False,
+    running_sessions: RunningSessions = "refuse",
 ) -> FastAPI:
     """The study server for one study config.
 
@@ -89,8 +113,11 @@ def create_app(
     model : the face model (default: the config's ``model``, then $EMOGEN_MODEL …).
     researcher_token : default $EMOGEN_RESEARCHER_TOKEN; without one the researcher API is off.
     session_limit : new sessions per client address (429 beyond; ``RateLimit.parse("off")``).
-    researcher_failure_limit : wrong researcher tokens per client address (429 beyond).
+    researcher_failure_limit : wrong researcher tokens per client address (429 beyond),
+      counted in the database (shared by every worker process).
     hsts : send Strict-Transport-Security (only when the site is reached over HTTPS only).
+    running_sessions : ``end`` ends the unfinished sessions of an earlier design of the study
+      (default: refuse to start while there are any; :mod:`emogen.study.versions`).
     """
     from emogen.model import load_model
 
@@ -101,13 +128,15 @@ def create_app(
     )
     if model is None:
         model = load_model(config.model, rig=config.rig)
-    store = Store(resolve_database_url(database_url, config.database_url))
-    service = StudyService(
-        config, store, model.rig, model_name=model.name, model_hash=model.model_hash, model=model
-    )
     token = (
         researcher_token if researcher_token is not None else os.environ.get(RESEARCHER_TOKEN_ENV)
     )
+    if token:
+        check_researcher_token(token)
+    store = Store(resolve_database_url(database_url, config.database_url))
+    service = StudyService(config, store, model.rig, model_name=model.name,
+                           model_hash=model.model_hash, model=model,
+                           running_sessions=running_sessions)  # fmt: skip
     app = FastAPI(
         lifespan=_lifespan(store),
         title=f"EmoGen study: {config.name}",
@@ -128,7 +157,9 @@ def create_app(
     # no thread or OpenGL context until the first PNG is asked for
     app.state.faces = FacePNGs(model, correct=config.correct, identities=identities)
     app.state.session_buckets = TokenBuckets(session_limit)
-    app.state.researcher_failures = TokenBuckets(researcher_failure_limit)
+    app.state.researcher_failures = SharedBuckets(
+        store, burst=researcher_failure_limit.burst, per_minute=researcher_failure_limit.per_minute
+    )
     app.state.export_lock = asyncio.Lock()  # one dashboard export at a time
     add_response_headers(app, hsts=hsts)
     app.add_middleware(BodyLimit, max_bytes=MAX_BODY_BYTES)

@@ -61,8 +61,9 @@ def _app(options: dict[str, Any]) -> FastAPI:
     except ValueError as exc:
         raise ConfigError(f"--session-limit: {exc}") from None
     return create_app(
-        config, options.get("database_url"), session_limit=limit, hsts=bool(options.get("hsts"))
-    )
+        config, options.get("database_url"), session_limit=limit, hsts=bool(options.get("hsts")),
+        running_sessions=options.get("running_sessions") or "refuse",
+    )  # fmt: skip
 
 
 def _die_with_parent(parent: int) -> None:
@@ -96,12 +97,15 @@ def run_server(
     session_limit: str | None = None,
     hsts: bool = False,
     workers: int | None = None,
+    running_sessions: str = "refuse",
 ) -> None:
     """Load the study, open (and migrate) the database, serve until interrupted.
 
     No access log: session links carry their secret token in the path. ``session_limit`` is a
     :meth:`RateLimit.parse` text (default 30/min, burst 100 per client address; counted per worker
-    process); ``hsts`` sends HSTS; ``workers``: worker processes (default: the cores).
+    process); ``hsts`` sends HSTS; ``workers``: worker processes (default: the cores);
+    ``running_sessions``: ``end`` ends the unfinished sessions of an earlier design of the study
+    (default: refuse to start while there are any).
     """
     import uvicorn
 
@@ -115,6 +119,7 @@ def run_server(
         "database_url": database_url,
         "session_limit": session_limit,
         "hsts": hsts,
+        "running_sessions": running_sessions,
         "parent": os.getpid(),
     }
     app = _loaded_app(options, announce)  # the whole study checked here, once
