@@ -46,6 +46,13 @@ def serve_command(
             "(their participants are told the study changed).",
         ),
     ] = "refuse",
+    header_timeout: Annotated[
+        float | None,
+        typer.Option(
+            "--header-timeout",
+            help="Seconds a request's headers may take to arrive (408 beyond; default 15).",
+        ),
+    ] = None,
     workers: Annotated[
         int | None,
         typer.Option(
@@ -82,4 +89,5 @@ def serve_command(
         hsts=hsts,
         workers=workers,
         running_sessions=running_sessions,
+        header_timeout=header_timeout,
     )

@@ -121,6 +121,11 @@ def create_app(
     """
     from emogen.model import load_model
 
+    token = (
+        researcher_token if researcher_token is not None else os.environ.get(RESEARCHER_TOKEN_ENV)
+    )
+    if token:  # checked first: a weak token is named before anything loads
+        check_researcher_token(token)
     config = (
         study_config
         if isinstance(study_config, StudyConfig)
@@ -128,11 +133,6 @@ def create_app(
     )
     if model is None:
         model = load_model(config.model, rig=config.rig)
-    token = (
-        researcher_token if researcher_token is not None else os.environ.get(RESEARCHER_TOKEN_ENV)
-    )
-    if token:
-        check_researcher_token(token)
     store = Store(resolve_database_url(database_url, config.database_url))
     service = StudyService(config, store, model.rig, model_name=model.name,
                            model_hash=model.model_hash, model=model,
