@@ -29,6 +29,7 @@ from emogen.study.storage import Store, resolve_database_url
 from emogen.study.versions import RunningSessions
 from emogen.web.assets import ModelGLBs
 from emogen.web.errors import install_error_handlers
+from emogen.web.exports import remove_stale_downloads
 from emogen.web.faces import FacePNGs
 from emogen.web.limits import BodyLimit, add_response_headers
 from emogen.web.ratelimit import RateLimit, TokenBuckets
@@ -161,6 +162,7 @@ def create_app(
         store, burst=researcher_failure_limit.burst, per_minute=researcher_failure_limit.per_minute
     )
     app.state.export_lock = asyncio.Lock()  # one dashboard export at a time
+    remove_stale_downloads()  # left by a server killed outright (they hold participant data)
     add_response_headers(app, hsts=hsts)
     app.add_middleware(BodyLimit, max_bytes=MAX_BODY_BYTES)
     install_error_handlers(app)
