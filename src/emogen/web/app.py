@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from fastapi import FastAPI
+from fastapi.responses import JSONResponse
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
 
@@ -86,9 +87,14 @@ def _routes(app: FastAPI, store: Store, config: StudyConfig) -> None:
     from emogen.web import assets, participant, researcher
 
     @app.get("/healthz", include_in_schema=False)
-    def healthz() -> dict[str, Any]:
+    def healthz() -> JSONResponse:
+        """200 while participants' steps can be saved; 503 naming why not (a full disk, a
+        read-only database; an unreachable one is 503 by the error handler)."""
         store.ping()
-        return {"ok": True, "study": config.name, "version": __version__}
+        why = store.health_problem()
+        body = {"ok": why is None, "study": config.name, "version": __version__}
+        return JSONResponse(body if why is None else {**body, "problem": why},
+                            status_code=200 if why is None else 503)  # fmt: skip
 
     app.include_router(participant.router)
     app.include_router(assets.router)
@@ -135,6 +141,7 @@ def create_app(
     if model is None:
         model = load_model(config.model, rig=config.rig)
     store = Store(resolve_database_url(database_url, config.database_url))
+    store.check_writable()  # a full disk or read-only database: one clear line, at start
     service = StudyService(config, store, model.rig, model_name=model.name,
                            model_hash=model.model_hash, model=model,
                            running_sessions=running_sessions)  # fmt: skip

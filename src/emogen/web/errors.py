@@ -14,11 +14,12 @@ from fastapi import FastAPI, Request
 from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response
-from sqlalchemy.exc import IntegrityError, OperationalError
+from sqlalchemy.exc import DBAPIError, IntegrityError, OperationalError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from emogen.errors import EmoGenError, ModelFileError
 from emogen.study.errors import StudyError
+from emogen.study.storage import storage_problem
 from emogen.web.schemas import FieldError, InvalidRequest, Problem
 
 log = logging.getLogger("emogen.web")
@@ -94,7 +95,15 @@ def install_error_handlers(app: FastAPI) -> None:
     async def integrity(_request: Request, _exc: IntegrityError) -> JSONResponse:
         return problem(409, "this step was already recorded by another request; reload the page")
 
-    @app.exception_handler(OperationalError)
-    async def busy(_request: Request, exc: OperationalError) -> JSONResponse:
+    @app.exception_handler(DBAPIError)
+    async def database(_request: Request, exc: DBAPIError) -> JSONResponse:
+        """A full disk or a read-only database is said as such (nothing can be saved until
+        the researcher acts); other operational errors are a busy database."""
+        why = storage_problem(exc)
+        if why is not None:
+            log.error("the study database cannot save: %s (%s)", why, exc.orig)
+            return problem(503, f"{why}: nothing can be saved now; please tell the researcher")
+        if not isinstance(exc, OperationalError):
+            raise exc
         log.warning("database error: %s", exc)
         return problem(503, "the database is busy; try again in a moment")
