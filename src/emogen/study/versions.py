@@ -118,7 +118,8 @@ def check_running_sessions(
             select(SessionRow.study_id).where(*unfinished).order_by(SessionRow.updated_at.desc())
         )
         me, old = db.get(StudyRow, study_id), db.get(StudyRow, newest)
-        assert me is not None and old is not None  # noqa: S101 - rows just read
+        if me is None or old is None:  # pragma: no cover - both rows were just read
+            raise ConfigError(f"study rows {study_id} and {newest} are missing")
         keys = changed_keys(design(old.config_json), design(me.config_json))
         name, model_changed = me.name, me.model_hash != old.model_hash
     if running != "end":
