@@ -44,6 +44,7 @@ sys.path[:0] = [str(REPO), str(REPO / "src")]
 
 from benchmarks.bench_study import (  # noqa: E402
     BENCH_STUDY,
+    BENCH_TOKEN,
     MIXED_STUDY,
     ServerProcess,
     model_path,
@@ -150,7 +151,7 @@ async def exporter(client: httpx.AsyncClient, run: Run, stop: asyncio.Event, wai
         t0 = time.monotonic()
         try:
             r = await client.get("/api/researcher/export/faces.csv", timeout=600,
-                                 headers={"Authorization": "Bearer bench-token"})  # fmt: skip
+                                 headers={"Authorization": f"Bearer {BENCH_TOKEN}"})  # fmt: skip
             if r.status_code != 200:
                 run.errors.append(f"faces.csv: {r.status_code}")
         except httpx.HTTPError as exc:

@@ -30,6 +30,8 @@ import httpx
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
+#: The researcher token of the servers the benchmarks and tests start (32+ characters, as required).
+BENCH_TOKEN = "bench-researcher-token-0123456789-abcdefgh"
 
 BENCH_STUDY: dict[str, Any] = {
     "name": "bench",
@@ -107,7 +109,7 @@ class ServerProcess:
         return f"http://127.0.0.1:{self.port}"
 
     def start(self, timeout: float = 120.0) -> ServerProcess:
-        env = {**os.environ, "EMOGEN_RESEARCHER_TOKEN": "bench-token", **self.env}
+        env = {**os.environ, "EMOGEN_RESEARCHER_TOKEN": BENCH_TOKEN, **self.env}
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(
                 [

@@ -22,7 +22,7 @@ PACKAGE = SRC / "emogen"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors",),
     ("seeding",),
-    ("rng", "config", "data", "columns", "solvers"),
+    ("rng", "config", "data", "columns", "solvers", "leftovers"),
     ("model",),
     ("metrics", "appearance"),
     ("correct",),

@@ -145,7 +145,7 @@ def test_migrations_are_idempotent_and_match_the_models(db_url: str) -> None:
 
     store = Store(db_url)
     store.migrate()  # a second upgrade does nothing
-    assert current_revision(store.engine) == "0003"
+    assert current_revision(store.engine) == "0004"
     with store.engine.connect() as conn:
         diff = compare_metadata(MigrationContext.configure(conn), Base.metadata)
     assert diff == []

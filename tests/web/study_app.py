@@ -12,7 +12,7 @@ from fastapi.testclient import TestClient
 from tests.study.conftest import SMALL_STUDY
 from tests.study_fixtures import db_url, pg_cluster  # noqa: F401
 
-RESEARCHER_TOKEN = "researcher-secret-123"
+RESEARCHER_TOKEN = "researcher-secret-0123456789-abcdefghij"
 
 
 @pytest.fixture

@@ -10,7 +10,7 @@ from typing import Any
 
 import httpx
 import pytest
-from benchmarks.bench_study import ServerProcess, write_study_toml
+from benchmarks.bench_study import BENCH_TOKEN, ServerProcess, write_study_toml
 
 from tests.study.drive import new_key
 from tests.study_fixtures import db_url, pg_cluster  # noqa: F401
@@ -36,7 +36,7 @@ def test_dashboard_shows_the_participants_numbers_and_links(
     httpx.post(f"{server.url}/api/s/{token}/begin", json={"key": new_key()}).raise_for_status()
     page = browser.new_page()
     page.goto(f"{server.url}/researcher")
-    page.fill("#token", "bench-token")
+    page.fill("#token", BENCH_TOKEN)
     page.click("#token-form button")
     row = page.locator("#sessions tbody tr", has_text="DASH-1")
     row.wait_for(timeout=20_000)

@@ -192,3 +192,60 @@ def test_sigkill_during_categorisation_loses_and_duplicates_nothing(
     report = replay_session(store, 1, ict_model.rig, ict_model.model_hash, model=ict_model)
     assert report.ok and report.stimuli == 4, report.mismatches
     store.dispose()
+
+
+def session_count(db_url: str, participant: str) -> int:
+    from sqlalchemy import func, select
+
+    from emogen.study.tables import SessionRow
+
+    store = Store(db_url, migrate=False)
+    try:
+        with store.read() as db:
+            query = select(func.count()).select_from(SessionRow)
+            return int(db.scalar(query.where(SessionRow.participant_id == participant)) or 0)
+    finally:
+        store.dispose()
+
+
+def test_a_create_whose_answer_is_lost_to_a_sigkill_gets_the_same_session_again(
+    db_url: str, tmp_path: Path, ict_dir: Path
+) -> None:
+    """The consent page's create is committed, then the server is SIGKILLed before the page has
+    read the answer: the page's retry (same participant id, same creation key) after the restart
+    gets that session — not 409 "open your personal session link", a link it never saw."""
+    import json
+    import socket
+
+    config = write_study_toml(SMALL_STUDY, tmp_path / "study.toml")
+    server = ServerProcess(config, db_url, ict_dir, tmp_path / "server.log").start()
+    body = {"participant_id": "LOST-1", "resume_token": None, "create_key": new_key() + "-ck"}
+    raw = json.dumps(body).encode()
+    try:
+        with socket.create_connection(("127.0.0.1", server.port), timeout=30) as sock:
+            sock.sendall(
+                b"POST /api/sessions HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                b"Content-Type: application/json\r\n"
+                + f"Content-Length: {len(raw)}\r\n\r\n".encode()
+                + raw
+            )  # the answer is never read: lost, as behind a proxy that timed out
+            for _ in range(600):  # until the create is committed (at most ~60 s)
+                if session_count(db_url, "LOST-1") == 1:
+                    break
+                time.sleep(0.1)
+            else:
+                pytest.fail("the create was never committed")
+            server.kill()
+        server.start()
+        r = httpx.post(f"{server.url}/api/sessions", json=body, timeout=30)
+        assert r.status_code == 201, r.text
+        token = r.json()["token"]
+        again = httpx.post(f"{server.url}/api/sessions", json=body, timeout=30)
+        assert again.status_code == 201 and again.json()["token"] == token
+        # another browser (another key, or none) still needs the personal link
+        for other in ({**body, "create_key": new_key() + "-xx"}, {"participant_id": "LOST-1"}):
+            r = httpx.post(f"{server.url}/api/sessions", json=other, timeout=30)
+            assert r.status_code == 409 and "personal session link" in r.json()["detail"]
+    finally:
+        server.stop()
+    assert session_count(db_url, "LOST-1") == 1

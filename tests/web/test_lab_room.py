@@ -26,7 +26,7 @@ def test_a_room_of_60_behind_one_address_starts_and_a_flood_is_still_refused(
 
     # the defaults: no session_limit given, as `emogen serve` without --session-limit
     app = create_app(study_from_dict(SMALL_STUDY), f"sqlite:///{tmp_path / 'room.sqlite'}",
-                     model=ict_model, researcher_token="t")  # fmt: skip
+                     model=ict_model, researcher_token="lab-room-researcher-token-0123456789")  # fmt: skip
     nat = ("192.0.2.10", 50000)
     with TestClient(app, client=nat) as room, TestClient(app, client=("192.0.2.99", 1)) as home:
         start = time.monotonic()

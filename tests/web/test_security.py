@@ -26,7 +26,7 @@ from emogen.web.schemas import MAX_BODY_BYTES
 from tests.study.conftest import SMALL_STUDY
 from tests.study.drive import new_key
 
-TOKEN = "researcher-secret-123"
+TOKEN = "researcher-secret-0123456789-abcdefghij"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 
 

@@ -37,6 +37,22 @@ def serve_command(
         bool,
         typer.Option("--hsts", help="Send Strict-Transport-Security (only behind HTTPS)."),
     ] = False,
+    running_sessions: Annotated[
+        str,
+        typer.Option(
+            "--running-sessions",
+            help="When the config's design changed (not only its texts) while sessions begun "
+            "under the earlier design are unfinished: 'refuse' to start (default) or 'end' them "
+            "(their participants are told the study changed).",
+        ),
+    ] = "refuse",
+    header_timeout: Annotated[
+        float | None,
+        typer.Option(
+            "--header-timeout",
+            help="Seconds a request's headers may take to arrive (408 beyond; default 15).",
+        ),
+    ] = None,
     workers: Annotated[
         int | None,
         typer.Option(
@@ -47,11 +63,13 @@ def serve_command(
     ] = None,
 ) -> None:
     """Run a participant study: prints the URL to open; Ctrl-C stops it."""
-    from emogen.errors import ResourceError
+    from emogen.errors import ConfigError, ResourceError
     from emogen.study.config import demo_study_path, load_study_config
     from emogen.web.app import viewer_built
     from emogen.web.server import run_server
 
+    if running_sessions not in ("refuse", "end"):
+        raise ConfigError(f"--running-sessions must be 'refuse' or 'end'; got {running_sessions!r}")
     path = config if config is not None else demo_study_path()
     load_study_config(path)  # a bad config is named first
     if not viewer_built():
@@ -70,4 +88,6 @@ def serve_command(
         session_limit=session_limit,
         hsts=hsts,
         workers=workers,
+        running_sessions=running_sessions,
+        header_timeout=header_timeout,
     )

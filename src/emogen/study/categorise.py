@@ -213,7 +213,7 @@ class CategoriseTrials:
         """Finished faces of other participants' completed sessions, balanced over the labels;
         a fallback face (the block's ``others_fallback`` rows, else random) where too few."""
         done = select(SessionRow.id).where(
-            SessionRow.study_id == self.ctx.study_id,
+            SessionRow.study_id.in_(self.ctx.accepted),
             SessionRow.stage == "done",
             SessionRow.id != sess.id,
         )

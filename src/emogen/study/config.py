@@ -132,7 +132,7 @@ class StudyConfig(_Strict):
     @field_validator("name")
     @classmethod
     def _name(cls, v: str) -> str:
-        if not _NAME.match(v):
+        if not _NAME.fullmatch(v):
             raise ValueError(
                 f"name must be 1-64 letters, digits, '_', '.', '-' (starting with a letter or "
                 f"digit); got {v!r}"
@@ -142,7 +142,7 @@ class StudyConfig(_Strict):
     @field_validator("participant_param")
     @classmethod
     def _param(cls, v: str) -> str:
-        if not _PARAM.match(v):
+        if not _PARAM.fullmatch(v):
             raise ValueError(f"participant_param must be a plain identifier; got {v!r}")
         return v
 
@@ -163,7 +163,7 @@ class StudyConfig(_Strict):
             return v
         out: dict[str, Any] = {}
         for name, table in v.items():
-            if not _IDENTITY.match(str(name)):
+            if not _IDENTITY.fullmatch(str(name)):
                 raise ValueError(
                     f"identity name must be 1-64 letters, digits, '_', '-' (starting with a "
                     f"letter or digit); got {name!r}"

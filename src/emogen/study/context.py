@@ -35,6 +35,15 @@ class StudyContext:
     #: every trial of a session in config order (``StudyConfig.conditions``, its blocks' face
     #: tables counted)
     conditions: tuple[Condition, ...] = ()
+    #: study rows of this name and design (texts may differ) whose sessions this one continues,
+    #: and every row of this name (a participant id takes part once): :mod:`~emogen.study.versions`
+    same_design: tuple[int, ...] = ()
+    all_versions: tuple[int, ...] = ()
+
+    @property
+    def accepted(self) -> tuple[int, ...]:
+        """The study rows whose sessions this server runs (its own, and its design's)."""
+        return self.same_design or (self.study_id,)
 
 
 def accepted_hashes(model_hash: str, model: FaceModel | None) -> frozenset[str]:

@@ -7,6 +7,7 @@ trial order that depend on the participant id alone (a keyed hash with the study
 
 from __future__ import annotations
 
+import hashlib
 import re
 import secrets
 
@@ -20,19 +21,25 @@ from emogen.rng import spawn_seeds
 from emogen.study.context import StudyContext
 from emogen.study.design import participant_seed, participant_slot, trial_order
 from emogen.study.errors import StepConflict
-from emogen.study.queries import count_sessions, lock_study, session_of_participant
+from emogen.study.queries import (
+    count_sessions,
+    lock_study,
+    session_of_create_key,
+    session_of_participant,
+)
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, TrialRow, dumps, utcnow
 from emogen.study.view import SessionState, session_state
 
-PARTICIPANT_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:@+-]{0,127}$")
+#: Matched whole (``fullmatch``): ``$`` would also match before a trailing newline.
+PARTICIPANT_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9._:@+-]{0,127}")
 
 
 def checked_participant(participant_id: str | None) -> tuple[str, str]:
     """(participant id, its source): the URL's id checked, or a generated one when none came."""
     if participant_id is None or participant_id == "":
         return "anon-" + secrets.token_hex(8), "generated"
-    if not PARTICIPANT_ID.match(participant_id):
+    if not PARTICIPANT_ID.fullmatch(participant_id):
         raise ConfigError(
             f"participant id must be 1-128 letters, digits or ._:@+- (starting with a letter "
             f"or digit); got {participant_id[:40]!r}"
@@ -40,11 +47,17 @@ def checked_participant(participant_id: str | None) -> tuple[str, str]:
     return participant_id, "url"
 
 
+def key_hash(create_key: str | None) -> str | None:
+    """What is stored of a creation key (it is as secret as the session's token)."""
+    return None if create_key is None else hashlib.sha256(create_key.encode()).hexdigest()
+
+
 def _new_session(
-    db: Session, ctx: StudyContext, participant_id: str, source: str, user_agent: str
-) -> SessionRow:
+    db: Session, ctx: StudyContext, participant_id: str, source: str, user_agent: str,
+    create_key: str | None,
+) -> SessionRow:  # fmt: skip
     cfg = ctx.config
-    number = count_sessions(db, ctx.study_id)
+    number = count_sessions(db, ctx.accepted)
     seed = participant_seed(cfg.seed, participant_id)
     conditions = ctx.conditions
     order_seed, *trial_seeds = spawn_seeds(seed, len(conditions) + 1)
@@ -65,6 +78,7 @@ def _new_session(
         current_trial=0,
         package_version=__version__,
         user_agent=user_agent[:256] if cfg.collect_user_agent else None,
+        create_key=create_key,
         created_at=now,
         consented_at=now,
         updated_at=now,
@@ -93,37 +107,71 @@ def _new_session(
     return sess
 
 
+def _theirs(sess: SessionRow, resume_token: str | None, create_key: str | None) -> bool:
+    """Whether the request holds the session: its token, or the key it was created with."""
+    if resume_token is not None and secrets.compare_digest(sess.token, resume_token):
+        return True
+    return (
+        create_key is not None
+        and sess.create_key is not None
+        and (secrets.compare_digest(sess.create_key, create_key))
+    )
+
+
+def _existing(
+    db: Session, ctx: StudyContext, pid: str, source: str, resume_token: str | None,
+    create_key: str | None,
+) -> SessionRow | None:  # fmt: skip
+    """The session this request is a retry or a resumption of (None: make one); a conflict
+    when the participant has a session the request does not hold."""
+    if source == "generated" and create_key is not None:  # an anonymous create, retried
+        return session_of_create_key(db, ctx.accepted, create_key)
+    existing = session_of_participant(db, ctx.all_versions or ctx.accepted, pid)
+    if existing is None:
+        return None
+    if existing.study_id not in ctx.accepted:
+        raise StepConflict(
+            f"participant '{pid}' has already taken part in an earlier version of this study; "
+            "please contact the researcher"
+        )
+    if not _theirs(existing, resume_token, create_key):
+        raise StepConflict(
+            f"participant '{pid}' already has a session in this study: open your "
+            "personal session link (shown on the first page of your session), or ask "
+            "the researcher for it"
+        )
+    return existing
+
+
 def create_session(
     store: Store,
     ctx: StudyContext,
     participant_id: str | None,
     *,
     resume_token: str | None = None,
+    create_key: str | None = None,
     user_agent: str = "",
     source: str | None = None,
 ) -> tuple[str, SessionState]:
     """A new session (token, state), or the participant's own one again.
 
-    A participant id that already has a session is resumed only with that session's token
-    (``resume_token``, kept by the participant's browser); otherwise it is a conflict.
-    ``user_agent`` is stored only when the study collects it (``collect_user_agent``).
-    ``source`` records where the id came from instead of the URL (``simulated``).
+    A participant id that already has a session is resumed only by the browser that holds it:
+    with that session's token (``resume_token``) or with the creation key the consent page made
+    before its first try (``create_key``: a retried create whose answer was lost — a crash after
+    the commit, a proxy timeout, a mobile drop — gets the same session, as does an anonymous
+    participant's retry); otherwise it is a conflict. ``user_agent`` is stored only when the
+    study collects it (``collect_user_agent``). ``source`` records where the id came from
+    instead of the URL (``simulated``).
     """
     pid, given = checked_participant(participant_id)
     source = source or given
+    hashed = key_hash(create_key)
 
     def work(db: Session) -> tuple[str, SessionState]:
         lock_study(db, ctx.study_id)  # one new session at a time per study (session numbers)
-        existing = session_of_participant(db, ctx.study_id, pid)
-        if existing is not None:
-            if resume_token is None or not secrets.compare_digest(existing.token, resume_token):
-                raise StepConflict(
-                    f"participant '{pid}' already has a session in this study: open your "
-                    "personal session link (shown on the first page of your session), or ask "
-                    "the researcher for it"
-                )
-        else:
-            existing = _new_session(db, ctx, pid, source, user_agent)
+        existing = _existing(db, ctx, pid, given, resume_token, hashed)
+        if existing is None:
+            existing = _new_session(db, ctx, pid, source, user_agent, hashed)
         return existing.token, session_state(db, ctx.config, existing)
 
     for _ in range(3):

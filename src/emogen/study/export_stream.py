@@ -72,7 +72,12 @@ def parse_since(text: str) -> datetime:
             f"--since must be an ISO 8601 time such as 2026-05-01T12:00:00+00:00 (the 'until' "
             f"of the previous export); got {text!r}"
         ) from None
-    return t.replace(tzinfo=UTC) if t.tzinfo is None else t.astimezone(UTC)
+    try:
+        return t.replace(tzinfo=UTC) if t.tzinfo is None else t.astimezone(UTC)
+    except OverflowError:  # 9999-12-31T23:59-23:59 is past the last time UTC can hold
+        raise ConfigError(
+            f"--since must be a time between 0001-01-01 and 9999-12-31 in UTC; got {text!r}"
+        ) from None
 
 
 @dataclass(frozen=True)

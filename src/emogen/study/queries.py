@@ -38,13 +38,19 @@ _STEP_WITH_KEY = select(StepRow.kind, StepRow.request_hash).where(
 
 
 NO_SESSION = "no session with this link; check the address"
+ENDED_SESSION = (
+    "this session was ended when the researcher changed the study's design; thank you for "
+    "your time — please contact the researcher"
+)
 
 
-def _of_study(sess: SessionRow | None, study_id: int) -> SessionRow:
-    """The session found by its token, if it is one of this study's."""
+def _of_study(sess: SessionRow | None, study_ids: tuple[int, ...]) -> SessionRow:
+    """The session found by its token, if it is one of this study's (or its design's)."""
     if sess is None:
         raise SessionNotFound(NO_SESSION)
-    if sess.study_id != study_id:
+    if sess.stage == "ended":
+        raise StepConflict(ENDED_SESSION)
+    if sess.study_id not in study_ids:
         raise StepConflict(
             "this session belongs to another version of the study config than the one the "
             "server runs now; ask the researcher"
@@ -52,9 +58,12 @@ def _of_study(sess: SessionRow | None, study_id: int) -> SessionRow:
     return sess
 
 
-def session_by_token(db: Session, token: str, study_id: int, *, lock: bool = False) -> SessionRow:
-    """The session of this token in this study (locked for update if asked)."""
-    return _of_study(db.scalar(_BY_TOKEN_LOCKED if lock else _BY_TOKEN, {"token": token}), study_id)
+def session_by_token(
+    db: Session, token: str, study_ids: tuple[int, ...], *, lock: bool = False
+) -> SessionRow:
+    """The session of this token in these study rows (locked for update if asked)."""
+    found = db.scalar(_BY_TOKEN_LOCKED if lock else _BY_TOKEN, {"token": token})
+    return _of_study(found, study_ids)
 
 
 def lock_study(db: Session, study_id: int) -> None:
@@ -62,17 +71,32 @@ def lock_study(db: Session, study_id: int) -> None:
     db.get(StudyRow, study_id, with_for_update=True)
 
 
-def session_of_participant(db: Session, study_id: int, participant_id: str) -> SessionRow | None:
+def session_of_participant(
+    db: Session, study_ids: tuple[int, ...], participant_id: str
+) -> SessionRow | None:
+    """The participant's session in any of these study rows (the newest, if several)."""
     return db.scalar(
-        select(SessionRow).where(
-            SessionRow.study_id == study_id, SessionRow.participant_id == participant_id
-        )
+        select(SessionRow)
+        .where(SessionRow.study_id.in_(study_ids), SessionRow.participant_id == participant_id)
+        .order_by(SessionRow.id.desc())
+        .limit(1)
     )
 
 
-def count_sessions(db: Session, study_id: int) -> int:
+def session_of_create_key(
+    db: Session, study_ids: tuple[int, ...], key_hash: str
+) -> SessionRow | None:
+    """The session made with this creation key (its SHA-256) in these study rows."""
+    return db.scalar(
+        select(SessionRow)
+        .where(SessionRow.study_id.in_(study_ids), SessionRow.create_key == key_hash)
+        .limit(1)
+    )
+
+
+def count_sessions(db: Session, study_ids: tuple[int, ...]) -> int:
     n = db.scalar(
-        select(func.count()).select_from(SessionRow).where(SessionRow.study_id == study_id)
+        select(func.count()).select_from(SessionRow).where(SessionRow.study_id.in_(study_ids))
     )
     return int(n or 0)
 
@@ -139,8 +163,8 @@ def current_face(
     trial: int | None = None,
     attempt: int | None = None,
 ) -> tuple[str, str] | None:
-    """(weights JSON, identity) of a face in the session's current trial, if there is one (a
-    categorise trial's one face has id ``categorise_face``); None also when ``trial`` or
+    """(weights JSON, identity) of a face of the generation the session shows now, if there is
+    one (a categorise trial's one face has id ``categorise_face``); None also when ``trial`` or
     ``attempt`` is given and is not the current trial's position or attempt."""
     if trial is not None and trial != sess.current_trial:
         return None
@@ -156,14 +180,24 @@ def current_face(
         if stim is None or face_id != categorise_face:
             return None
         return str(stim[0]), str(stim[1])
+    # only what the page shows now: the generation shown, or while the trial waits for its
+    # rating its final face; an earlier generation's faces are not served (404, as documented)
+    if current.status == "rating":
+        if face_id != current.final_face_id:
+            return None
+        shown = PopulationRow.generation <= current.generation
+    else:
+        shown = PopulationRow.generation == current.generation
     found = db.execute(
         select(FaceRow.weights)
         .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
         .where(
             PopulationRow.trial_id == current.id,
+            PopulationRow.attempt == current.attempt,
+            shown,
             FaceRow.face_id == face_id,
-            *(() if attempt is None else (PopulationRow.attempt == attempt,)),
         )
+        .order_by(PopulationRow.generation.desc())
         .limit(1)
     ).first()
     return None if found is None else (str(found[0]), current.identity)

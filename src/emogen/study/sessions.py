@@ -27,6 +27,7 @@ from emogen.study.records import StudyInfo, TrialRecord, study_info, trial_recor
 from emogen.study.steps import Payload, SessionSteps, request_hash
 from emogen.study.storage import Store
 from emogen.study.trials import TrialEngines
+from emogen.study.versions import RunningSessions, check_running_sessions, study_versions
 from emogen.study.view import Completion, SessionState, completion, session_state
 from emogen.study.weights import Floats, StudyCorrectors, full_weights, weight_names
 from emogen.study.writes import Timing
@@ -59,7 +60,8 @@ class StudyService:
     """
 
     def __init__(self, config: StudyConfig, store: Store, rig: Rig, *, model_name: str,
-                 model_hash: str, model: FaceModel | None = None) -> None:  # fmt: skip
+                 model_hash: str, model: FaceModel | None = None,
+                 running_sessions: RunningSessions = "refuse") -> None:  # fmt: skip
         check_identities(config, rig, model)
         self.store = store
         self.correctors = StudyCorrectors(config, model)
@@ -69,7 +71,12 @@ class StudyService:
         study_id = register_study(store, config, model_name=model_name, model_hash=model_hash,
                                   gene_names=genes, weight_names=names,
                                   aliases=accepted_hashes(model_hash, model))  # fmt: skip
-        ctx = StudyContext(config, rig, model_name, model_hash, study_id, genes, names)
+        versions = study_versions(store, study_id)
+        #: unfinished sessions of another design ended at start (``running_sessions="end"``)
+        self.ended = check_running_sessions(store, study_id, versions, running_sessions)
+        ctx = StudyContext(config, rig, model_name, model_hash, study_id, genes, names,
+                           same_design=versions.same_design,
+                           all_versions=versions.all_versions)  # fmt: skip
         files = block_files(ctx)  # categorise blocks' face tables, checked before anyone starts
         self.ctx = replace(ctx, conditions=tuple(config.conditions(file_rows(files))))
         categorise = CategoriseTrials(self.ctx, self.correctors, files)
@@ -83,17 +90,19 @@ class StudyService:
 
     def create_session(
         self, participant_id: str | None = None, *, resume_token: str | None = None,
-        user_agent: str = "", source: str | None = None,
+        create_key: str | None = None, user_agent: str = "", source: str | None = None,
     ) -> tuple[str, SessionState]:  # fmt: skip
         """Consent given: a new session (token, state), or the participant's own one again
-        (``source``: ``simulated`` for :mod:`emogen.study.simulate`'s participants)."""
+        (``create_key``: a retried create gets the same session; ``source``: ``simulated``
+        for :mod:`emogen.study.simulate`'s participants)."""
         return create_session(self.store, self.ctx, participant_id, resume_token=resume_token,
-                              user_agent=user_agent, source=source)  # fmt: skip
+                              create_key=create_key, user_agent=user_agent,
+                              source=source)  # fmt: skip
 
     def state(self, token: str) -> SessionState:
         with self.store.read() as db:
             return session_state(
-                db, self.ctx.config, session_by_token(db, token, self.ctx.study_id)
+                db, self.ctx.config, session_by_token(db, token, self.ctx.accepted)
             )
 
     def begin(self, token: str, key: str) -> SessionState:
@@ -163,13 +172,13 @@ class StudyService:
     def trial_record(self, token: str, position: int) -> TrialRecord:
         """Trial ``position`` of the caller's session as recorded: session id, seeds, final face."""
         with self.store.read() as db:
-            sess = session_by_token(db, token, self.ctx.study_id)
+            sess = session_by_token(db, token, self.ctx.accepted)
             return trial_record(db, self.ctx, sess, position)
 
     def participant_token(self, participant_id: str) -> str:
         """The token of the participant's session in this study (404 when there is none)."""
         checked_participant(participant_id)  # a bad id is named as such
-        return participant_token(self.store, participant_id, study_id=self.ctx.study_id)
+        return participant_token(self.store, participant_id, study=self.ctx.config.name)
 
     def completion(self, participant_id: str) -> Completion:
         return completion(self.ctx.config, participant_id)
@@ -180,7 +189,7 @@ class StudyService:
         """(full weights (n_columns,), identity) of a face of the caller's current trial (and,
         where given, only if that is trial position ``trial`` in its attempt ``attempt``)."""
         with self.store.read() as db:
-            sess = session_by_token(db, token, self.ctx.study_id)
+            sess = session_by_token(db, token, self.ctx.accepted)
             if sess.stage != "trial":
                 raise SessionNotFound("no faces are shown now")
             found = current_face(

@@ -80,7 +80,7 @@ class SessionSteps:
         digest = request_hash(kind, payload)
 
         def work(db: Session) -> SessionState:
-            sess = session_by_token(db, token, self.ctx.study_id, lock=True)
+            sess = session_by_token(db, token, self.ctx.accepted, lock=True)
             replayed = self._replayed(db, sess, kind, key, digest)
             if replayed is not None:
                 return replayed

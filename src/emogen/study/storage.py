@@ -11,6 +11,11 @@ SQLite by ``BEGIN IMMEDIATE`` (and, so that concurrent requests queue instead of
 database's busy lock, an in-process lock and an exclusive ``flock`` on ``<database>.writer-lock``
 shared by every process of the server), on PostgreSQL by ``SELECT … FOR UPDATE`` on the session
 row.
+
+A full disk or a read-only database is named as such (:func:`storage_problem`), never as a
+busy database: :meth:`Store.check_writable` refuses to start on one, a write that fails on
+one is remembered until a write succeeds, and :meth:`Store.health_problem` reports it (and,
+on SQLite, a read-only file system or under :data:`MIN_FREE_BYTES` free) for ``/healthz``.
 """
 
 from __future__ import annotations
@@ -33,6 +38,21 @@ from emogen.errors import ConfigError, ResourceError
 
 T = TypeVar("T")
 DATABASE_ENV = "EMOGEN_DATABASE_URL"
+#: Free bytes under which an SQLite database's disk counts as full (a session writes ~1 MB).
+MIN_FREE_BYTES = 16 * 1024 * 1024
+
+
+def storage_problem(exc: BaseException) -> str | None:
+    """What a database error says of the storage itself (a full disk, a read-only database),
+    or None for any other error."""
+    orig = getattr(exc, "orig", None) or exc
+    text = str(orig).lower()
+    state = getattr(orig, "sqlstate", None)
+    if state == "53100" or "disk is full" in text or "no space left" in text:
+        return "the disk of the study database is full"
+    if state == "25006" or "readonly database" in text or "read-only" in text:
+        return "the study database is read-only"
+    return None
 
 
 # ---- engines ---------------------------------------------------------------------------------
@@ -235,6 +255,8 @@ class Store:
         self._lock = threading.Lock() if self.is_sqlite else None
         self._lock_path = _writer_lock_path(self.engine) if self.is_sqlite else None
         self._group = _GroupCommit(self) if self.is_sqlite else None
+        #: the storage problem the last failed write met (cleared by a write that succeeds)
+        self.write_problem: str | None = None
         if migrate:
             self.migrate()
 
@@ -247,6 +269,8 @@ class Store:
             upgrade(self._write_engine)
         except DBAPIError as exc:
             self.engine.dispose()
+            if storage_problem(exc) is not None:
+                raise self._cannot_save(str(storage_problem(exc))) from None
             if not _is_connection_error(exc) and "not a database" not in str(exc.orig):
                 raise
             first = str(exc.orig).strip().splitlines()[0] if exc.orig else type(exc).__name__
@@ -300,10 +324,65 @@ class Store:
         On SQLite concurrent calls share commits (see :class:`_GroupCommit`); on PostgreSQL
         each call is its own transaction.
         """
-        if self._group is not None:
-            return self._group.submit(fn)
-        with Session(self.engine, expire_on_commit=False) as session, session.begin():
-            return fn(session)
+        from sqlalchemy.exc import DBAPIError
+
+        try:
+            if self._group is not None:
+                result = self._group.submit(fn)
+            else:
+                with Session(self.engine, expire_on_commit=False) as session, session.begin():
+                    result = fn(session)
+        except DBAPIError as exc:
+            self.write_problem = storage_problem(exc) or self.write_problem
+            raise
+        self.write_problem = None
+        return result
+
+    def _disk_problem(self) -> str | None:
+        """SQLite: its folder on a read-only file system, or under MIN_FREE_BYTES free."""
+        if not self.is_sqlite:
+            return None
+        try:
+            stat = os.statvfs(Path(str(self.engine.url.database)).expanduser().parent)
+        except OSError:
+            return None
+        if stat.f_flag & os.ST_RDONLY:
+            return "the study database is read-only (its file system is mounted read-only)"
+        free = stat.f_bavail * stat.f_frsize
+        if free < MIN_FREE_BYTES:
+            return f"the disk of the study database is full ({free // 1024} KiB free)"
+        return None
+
+    def health_problem(self) -> str | None:
+        """Why the database cannot save participants' steps now, or None."""
+        return self.write_problem or self._disk_problem()
+
+    def check_writable(self) -> None:
+        """Refuse (``ResourceError``) a database that cannot be written: a full disk, a
+        read-only file or server. Writes nothing but the header's own value back (SQLite)."""
+        from sqlalchemy.exc import DBAPIError
+
+        problem = self._disk_problem()
+        if problem is None:
+            try:
+                with self.write() as db:
+                    if self.is_sqlite:
+                        version = db.execute(text("PRAGMA user_version")).scalar()
+                        db.execute(text(f"PRAGMA user_version = {int(version or 0)}"))
+                    elif db.execute(text("SHOW transaction_read_only")).scalar() == "on":
+                        problem = "the study database is read-only (a standby or read-only server)"
+            except DBAPIError as exc:
+                problem = storage_problem(exc)
+                if problem is None:
+                    raise
+        if problem is not None:
+            raise self._cannot_save(problem)
+
+    def _cannot_save(self, problem: str) -> ResourceError:
+        return ResourceError(
+            f"cannot save anything in {self.describe()}: {problem}; free space on its disk "
+            "or make it writable, then start again"
+        )
 
     def dispose(self) -> None:
         if self._group is not None:

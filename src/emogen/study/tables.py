@@ -17,6 +17,7 @@ from sqlalchemy import (
     DateTime,
     Float,
     ForeignKey,
+    Index,
     Integer,
     String,
     Table,
@@ -97,6 +98,7 @@ class SessionRow(Base):
     __table_args__ = (
         UniqueConstraint("study_id", "participant_id", name="uq_sessions_participant"),
         UniqueConstraint("study_id", "number", name="uq_sessions_number"),
+        Index("ix_sessions_create_key", "study_id", "create_key"),
     )
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
@@ -115,6 +117,9 @@ class SessionRow(Base):
     package_version: Mapped[str] = mapped_column(String(32))
     #: NULL unless the study collects it (``collect_user_agent``).
     user_agent: Mapped[str | None] = mapped_column(String(256), nullable=True)
+    #: SHA-256 (hex) of the creation key the consent page sent: a retried create with the same
+    #: key gets this session again (NULL: none sent, or made before schema revision 0004).
+    create_key: Mapped[str | None] = mapped_column(String(64), nullable=True)
     created_at: Mapped[datetime] = mapped_column(Stamp)
     consented_at: Mapped[datetime] = mapped_column(Stamp)
     started_at: Mapped[datetime | None] = mapped_column(Stamp, nullable=True)
@@ -290,6 +295,17 @@ class ResponseRow(Base):
     client_response_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
     load_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
     step_key: Mapped[str] = mapped_column(String(64))
+
+
+class ResearcherFailureRow(Base):
+    """Wrong researcher tokens of one client address: a token bucket (``tokens`` left at
+    ``updated``, seconds since the epoch) shared by every worker process on the database."""
+
+    __tablename__ = "researcher_failures"
+
+    client: Mapped[str] = mapped_column(String(64), primary_key=True)
+    tokens: Mapped[float] = mapped_column(Float)
+    updated: Mapped[float] = mapped_column(Float)
 
 
 class StepRow(Base):

@@ -57,7 +57,7 @@ class _Block(_Strict):
     @field_validator("name")
     @classmethod
     def _name(cls, v: str | None) -> str | None:
-        if v is not None and not _BLOCK_NAME.match(v):
+        if v is not None and not _BLOCK_NAME.fullmatch(v):
             raise ValueError(f"block name must be 1-64 letters, digits, '_' or '-'; got {v!r}")
         return v
 

@@ -16,17 +16,22 @@ from pathlib import Path
 from typing import Any
 
 from fastapi import FastAPI
+from fastapi.responses import JSONResponse
 from fastapi.staticfiles import StaticFiles
 from fastapi.templating import Jinja2Templates
 
 from emogen import __version__
+from emogen.errors import ConfigError
 from emogen.model.face import FaceModel
 from emogen.study.config import StudyConfig, load_study_config
+from emogen.study.failures import SharedBuckets
 from emogen.study.sessions import StudyService
 from emogen.study.storage import Store, resolve_database_url
+from emogen.study.versions import RunningSessions
 from emogen.web.assets import ModelGLBs
 from emogen.web.embed import add_cors
 from emogen.web.errors import install_error_handlers
+from emogen.web.exports import remove_stale_downloads
 from emogen.web.faces import FacePNGs
 from emogen.web.limits import BodyLimit, add_response_headers
 from emogen.web.ratelimit import RateLimit, TokenBuckets
@@ -38,8 +43,28 @@ RESEARCHER_TOKEN_ENV = "EMOGEN_RESEARCHER_TOKEN"
 #: room of 60 behind one address (a university NAT) starts within seconds, two rooms within a
 #: minute; a script gets 100, then one every 2 s — 1,900 in an hour, not unlimited.
 SESSION_LIMIT = RateLimit(burst=100, per_minute=30)
-#: Wrong researcher tokens per client address: 10, then one every 6 s.
+#: Wrong researcher tokens per client address: 10, then one every 6 s — counted in the database,
+#: so every worker process (and every server on the database) shares one count.
 RESEARCHER_FAILURE_LIMIT = RateLimit(burst=10, per_minute=10)
+#: A researcher token's least length and least number of different characters.
+MIN_TOKEN_CHARS = 32
+MIN_TOKEN_DISTINCT = 10
+TOKEN_ADVICE = 'make one with: python -c "import secrets; print(secrets.token_urlsafe(32))"'
+
+
+def check_researcher_token(token: str) -> None:
+    """Refuse a researcher token a brute force could guess: too short, or too few characters."""
+    what = f"${RESEARCHER_TOKEN_ENV}"
+    if len(token) < MIN_TOKEN_CHARS:
+        raise ConfigError(
+            f"{what} is {len(token)} characters long; it must be at least {MIN_TOKEN_CHARS} "
+            f"(a long random secret): {TOKEN_ADVICE}"
+        )
+    if len(set(token)) < MIN_TOKEN_DISTINCT:
+        raise ConfigError(
+            f"{what} has only {len(set(token))} different characters; a random secret has at "
+            f"least {MIN_TOKEN_DISTINCT}: {TOKEN_ADVICE}"
+        )
 
 
 def viewer_built() -> bool:
@@ -63,9 +88,14 @@ def _routes(app: FastAPI, store: Store, config: StudyConfig) -> None:
     from emogen.web import assets, embed, participant, researcher
 
     @app.get("/healthz", include_in_schema=False)
-    def healthz() -> dict[str, Any]:
+    def healthz() -> JSONResponse:
+        """200 while participants' steps can be saved; 503 naming why not (a full disk, a
+        read-only database; an unreachable one is 503 by the error handler)."""
         store.ping()
-        return {"ok": True, "study": config.name, "version": __version__}
+        why = store.health_problem()
+        body = {"ok": why is None, "study": config.name, "version": __version__}
+        return JSONResponse(body if why is None else {**body, "problem": why},
+                            status_code=200 if why is None else 503)  # fmt: skip
 
     app.include_router(participant.router)
     app.include_router(embed.router)
@@ -83,6 +113,7 @@ def create_app(
     session_limit: RateLimit = SESSION_LIMIT,
     researcher_failure_limit: RateLimit = RESEARCHER_FAILURE_LIMIT,
     hsts: bool = False,
+    running_sessions: RunningSessions = "refuse",
 ) -> FastAPI:
     """The study server for one study config.
 
@@ -91,11 +122,19 @@ def create_app(
     model : the face model (default: the config's ``model``, then $EMOGEN_MODEL …).
     researcher_token : default $EMOGEN_RESEARCHER_TOKEN; without one the researcher API is off.
     session_limit : new sessions per client address (429 beyond; ``RateLimit.parse("off")``).
-    researcher_failure_limit : wrong researcher tokens per client address (429 beyond).
+    researcher_failure_limit : wrong researcher tokens per client address (429 beyond),
+      counted in the database (shared by every worker process).
     hsts : send Strict-Transport-Security (only when the site is reached over HTTPS only).
+    running_sessions : ``end`` ends the unfinished sessions of an earlier design of the study
+      (default: refuse to start while there are any; :mod:`emogen.study.versions`).
     """
     from emogen.model import load_model
 
+    token = (
+        researcher_token if researcher_token is not None else os.environ.get(RESEARCHER_TOKEN_ENV)
+    )
+    if token:  # checked first: a weak token is named before anything loads
+        check_researcher_token(token)
     config = (
         study_config
         if isinstance(study_config, StudyConfig)
@@ -104,12 +143,10 @@ def create_app(
     if model is None:
         model = load_model(config.model, rig=config.rig)
     store = Store(resolve_database_url(database_url, config.database_url))
-    service = StudyService(
-        config, store, model.rig, model_name=model.name, model_hash=model.model_hash, model=model
-    )
-    token = (
-        researcher_token if researcher_token is not None else os.environ.get(RESEARCHER_TOKEN_ENV)
-    )
+    store.check_writable()  # a full disk or read-only database: one clear line, at start
+    service = StudyService(config, store, model.rig, model_name=model.name,
+                           model_hash=model.model_hash, model=model,
+                           running_sessions=running_sessions)  # fmt: skip
     app = FastAPI(
         lifespan=_lifespan(store),
         title=f"EmoGen study: {config.name}",
@@ -130,8 +167,11 @@ def create_app(
     # no thread or OpenGL context until the first PNG is asked for
     app.state.faces = FacePNGs(model, correct=config.correct, identities=identities)
     app.state.session_buckets = TokenBuckets(session_limit)
-    app.state.researcher_failures = TokenBuckets(researcher_failure_limit)
+    app.state.researcher_failures = SharedBuckets(
+        store, burst=researcher_failure_limit.burst, per_minute=researcher_failure_limit.per_minute
+    )
     app.state.export_lock = asyncio.Lock()  # one dashboard export at a time
+    remove_stale_downloads()  # left by a server killed outright (they hold participant data)
     add_cors(app, config.embed_origins)  # innermost: preflights get the security headers too
     add_response_headers(app, hsts=hsts)
     app.add_middleware(BodyLimit, max_bytes=MAX_BODY_BYTES)

@@ -11,12 +11,15 @@ from collections.abc import Mapping
 from typing import Any
 
 from fastapi import FastAPI, Request
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse
-from sqlalchemy.exc import IntegrityError, OperationalError
+from fastapi.responses import JSONResponse, Response
+from sqlalchemy.exc import DBAPIError, IntegrityError, OperationalError
+from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from emogen.errors import EmoGenError, ModelFileError
 from emogen.study.errors import StudyError
+from emogen.study.storage import storage_problem
 from emogen.web.schemas import FieldError, InvalidRequest, Problem
 
 log = logging.getLogger("emogen.web")
@@ -62,7 +65,24 @@ def problem(status: int, detail: str) -> JSONResponse:
     return JSONResponse(Problem(detail=detail).model_dump(), status_code=status)
 
 
+#: Paths whose errors stay JSON; any other unknown address is a link a person typed or was given.
+_MACHINE_PATHS = ("/api/", "/static/", "/openapi.json", "/healthz")
+
+
 def install_error_handlers(app: FastAPI) -> None:
+    @app.exception_handler(StarletteHTTPException)
+    async def not_found(request: Request, exc: StarletteHTTPException) -> Response:
+        """An unknown page address (``/s/``, ``/S/TOKEN``, ``/s/TOKEN/x``) gets the link error
+        page the docs promise, never raw JSON; the API's errors stay JSON."""
+        if exc.status_code == 404 and not request.url.path.startswith(_MACHINE_PATHS):
+            from emogen.web.participant import link_error
+
+            shown = (
+                request.url.path if len(request.url.path) <= 40 else request.url.path[:37] + "..."
+            )
+            return link_error(request, 404, f"“{shown}” is not a session link of this study.")
+        return await http_exception_handler(request, exc)
+
     @app.exception_handler(EmoGenError)
     async def emogen_error(_request: Request, exc: EmoGenError) -> JSONResponse:
         return problem(status_for(exc), str(exc))
@@ -75,7 +95,15 @@ def install_error_handlers(app: FastAPI) -> None:
     async def integrity(_request: Request, _exc: IntegrityError) -> JSONResponse:
         return problem(409, "this step was already recorded by another request; reload the page")
 
-    @app.exception_handler(OperationalError)
-    async def busy(_request: Request, exc: OperationalError) -> JSONResponse:
+    @app.exception_handler(DBAPIError)
+    async def database(_request: Request, exc: DBAPIError) -> JSONResponse:
+        """A full disk or a read-only database is said as such (nothing can be saved until
+        the researcher acts); other operational errors are a busy database."""
+        why = storage_problem(exc)
+        if why is not None:
+            log.error("the study database cannot save: %s (%s)", why, exc.orig)
+            return problem(503, f"{why}: nothing can be saved now; please tell the researcher")
+        if not isinstance(exc, OperationalError):
+            raise exc
         log.warning("database error: %s", exc)
         return problem(503, "the database is busy; try again in a moment")

@@ -7,12 +7,22 @@ sessions at a time) and never the server's, its CPU time goes to participants' s
 lock of this process (the GIL included), so participants' requests are not stalled while it
 runs. One export at a time per worker process; the database URL reaches the child through its
 environment, never its command line.
+
+The tables hold participant data, so they are private while they exist and are removed on
+every way out: the child writes with umask 077 (files 0600, folders 0700) inside a private
+folder ``emogen-download-PID-XXXX`` (0700) of the temporary folder; the folder is removed once
+the file is sent, when the export fails or the request is cancelled (the child is then killed),
+and the child dies with the server process (``SIGTERM`` on Linux). A server killed outright
+leaves its folder: the next server to start removes every such folder whose process is gone
+(:func:`remove_stale_downloads`).
 """
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
+import re
 import shutil
 import sys
 import tempfile
@@ -21,13 +31,22 @@ from pathlib import Path
 from starlette.background import BackgroundTask
 from starlette.responses import FileResponse
 
+from emogen.leftovers import remove_orphans
 from emogen.study.errors import StudyError
 from emogen.study.storage import DATABASE_ENV
 
 #: The child: idle priority (or the lowest nice), then ``python -m emogen`` with the given
 #: arguments.
 _CHILD = (
-    "import os, runpy, sys\n"
+    "import os, runpy, signal, sys\n"
+    "os.umask(0o077)\n"
+    "if sys.platform == 'linux':\n"
+    "    import ctypes\n"
+    "    ctypes.CDLL(None).prctl(1, int(signal.SIGTERM))  # dies with the server\n"
+    "    if os.getppid() != int(sys.argv.pop(1)):\n"
+    "        sys.exit(1)\n"
+    "else:\n"
+    "    sys.argv.pop(1)\n"
     "try:\n"
     "    os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))\n"
     "except (AttributeError, OSError):\n"
@@ -41,16 +60,27 @@ class ExportFailed(StudyError):
     status = 503
 
 
+PREFIX = "emogen-download-"
+_STALE = re.compile(rf"{PREFIX}(\d+)-")
+
+
+def remove_stale_downloads(folder: Path | None = None) -> list[Path]:
+    """Remove download folders (``emogen-download-PID-*``) whose server process is gone."""
+    return remove_orphans(Path(folder or tempfile.gettempdir()), f"{PREFIX}*", _STALE)
+
+
 async def export_table_file(
     lock: asyncio.Lock, database_url: str, study: str, table: str, since: str | None
 ) -> FileResponse:
     """``table`` of ``study`` as a CSV download (``since``: an incremental export's start)."""
-    folder = Path(tempfile.mkdtemp(prefix="emogen-download-"))
-    args = ["study", "export", "--format", "csv", "--table", table, "--study", study,
-            "--out", str(folder)]  # fmt: skip
+    folder = Path(tempfile.mkdtemp(prefix=f"{PREFIX}{os.getpid()}-"))  # 0700
+    out = folder / "export"
+    args = [str(os.getpid()), "study", "export", "--format", "csv", "--table", table,
+            "--study", study, "--out", str(out)]  # fmt: skip
     if since is not None:
         args += ["--since", since]
     env = {**os.environ, DATABASE_ENV: database_url}
+    child = None
     try:
         async with lock:
             child = await asyncio.create_subprocess_exec(
@@ -62,10 +92,14 @@ async def export_table_file(
             lines = err.decode(errors="replace").strip().splitlines() or ["no message"]
             raise ExportFailed(f"the export of {table} failed: {lines[-1]}")
     except BaseException:
+        if child is not None and child.returncode is None:  # cancelled: the child goes too
+            with contextlib.suppress(ProcessLookupError):
+                child.kill()
+            await asyncio.shield(child.wait())
         shutil.rmtree(folder, ignore_errors=True)
         raise
     return FileResponse(
-        folder / f"{table}.csv",
+        out / f"{table}.csv",
         media_type="text/csv",
         filename=f"{table}.csv",
         background=BackgroundTask(shutil.rmtree, folder, ignore_errors=True),

@@ -111,6 +111,7 @@ def create_session(request: Request, body: NewSession) -> JSONResponse:
     token, state = _service(request).create_session(
         body.participant_id,
         resume_token=body.resume_token,
+        create_key=body.create_key,
         user_agent=request.headers.get("user-agent", ""),
     )
     return JSONResponse({"token": token, "url": f"/s/{token}", "state": state}, status_code=201)

@@ -41,12 +41,15 @@ class NewSession(_Body):
     participant_id: (
         Annotated[
             str,
-            Field(max_length=128, json_schema_extra={"pattern": f"^$|{PARTICIPANT_ID.pattern}"}),
+            Field(max_length=128, json_schema_extra={"pattern": f"^$|^{PARTICIPANT_ID.pattern}$"}),
         ]
         | None
     ) = None
     #: The token this browser holds for the participant's session, to resume it.
     resume_token: Annotated[str, Field(pattern=TOKEN_PATTERN)] | None = None
+    #: A random key the page makes once, before its first try, and sends with every retry: a
+    #: retried create (its answer lost) then gets the same session, not a conflict.
+    create_key: Annotated[str, Field(pattern=r"^[A-Za-z0-9_-]{16,64}$")] | None = None
 
 
 class Begin(_Body):

@@ -61,8 +61,9 @@ def _app(options: dict[str, Any]) -> FastAPI:
     except ValueError as exc:
         raise ConfigError(f"--session-limit: {exc}") from None
     return create_app(
-        config, options.get("database_url"), session_limit=limit, hsts=bool(options.get("hsts"))
-    )
+        config, options.get("database_url"), session_limit=limit, hsts=bool(options.get("hsts")),
+        running_sessions=options.get("running_sessions") or "refuse",
+    )  # fmt: skip
 
 
 def _die_with_parent(parent: int) -> None:
@@ -96,25 +97,37 @@ def run_server(
     session_limit: str | None = None,
     hsts: bool = False,
     workers: int | None = None,
+    running_sessions: str = "refuse",
+    header_timeout: float | None = None,
 ) -> None:
     """Load the study, open (and migrate) the database, serve until interrupted.
 
     No access log: session links carry their secret token in the path. ``session_limit`` is a
     :meth:`RateLimit.parse` text (default 30/min, burst 100 per client address; counted per worker
-    process); ``hsts`` sends HSTS; ``workers``: worker processes (default: the cores).
+    process); ``hsts`` sends HSTS; ``workers``: worker processes (default: the cores);
+    ``running_sessions``: ``end`` ends the unfinished sessions of an earlier design of the study
+    (default: refuse to start while there are any); ``header_timeout``: seconds a request's
+    headers may take to arrive (408 beyond; :mod:`emogen.web.protocol`, default 15).
     """
     import uvicorn
+
+    from emogen.web.protocol import HEAD_TIMEOUT_ENV, PROTOCOL
 
     n_workers = default_workers() if workers is None else workers
     if n_workers < 1:
         raise ConfigError(f"--workers must be at least 1; got {n_workers}")
     check_address(host, port)
+    if header_timeout is not None:
+        if not 0 < header_timeout <= 600:
+            raise ConfigError(f"--header-timeout must be in (0, 600] seconds; got {header_timeout}")
+        os.environ[HEAD_TIMEOUT_ENV] = str(header_timeout)  # the workers read it
     options = {
         "config": str(Path(config_path).resolve()),
         "model": None if model is None else str(Path(model).resolve()),
         "database_url": database_url,
         "session_limit": session_limit,
         "hsts": hsts,
+        "running_sessions": running_sessions,
         "parent": os.getpid(),
     }
     app = _loaded_app(options, announce)  # the whole study checked here, once
@@ -127,6 +140,8 @@ def run_server(
         "log_level": log_level,
         "access_log": False,
         "timeout_graceful_shutdown": 3,
+        # request heads bounded in size (431) and read time (408): uvicorn's own are not
+        "http": PROTOCOL,
         # participants pause 1–20 s between steps: a 5 s keep-alive (uvicorn's default) closes
         # most connections between steps, and a step sent as the server closes it fails
         "timeout_keep_alive": KEEP_ALIVE_S,

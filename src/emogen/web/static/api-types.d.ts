@@ -425,6 +425,8 @@ export interface components {
         };
         /** NewSession */
         NewSession: {
+            /** Create Key */
+            create_key?: string | null;
             /** Participant Id */
             participant_id?: string | null;
             /** Resume Token */

@@ -23,6 +23,29 @@ function remembered() {
   }
 }
 
+/** A random key made once in this browser before the first try to start the session, sent with
+ * every try: when an answer is lost (a crash after the commit, a proxy timeout, a mobile drop)
+ * the retry gets the same session instead of "already has a session". */
+let madeKey = "";
+function createKey() {
+  const name = `${storageKey}:create-key`;
+  try {
+    madeKey = madeKey || localStorage.getItem(name) || "";
+  } catch {
+    /* private mode: the key lives as long as the page */
+  }
+  if (!madeKey) {
+    const bytes = crypto.getRandomValues(new Uint8Array(18));
+    madeKey = btoa(String.fromCharCode(...bytes)).replace(/\+/g, "-").replace(/\//g, "_");
+    try {
+      localStorage.setItem(name, madeKey);
+    } catch {
+      /* private mode */
+    }
+  }
+  return madeKey;
+}
+
 /** @type {import("./connection.js").Link} */
 let link = { kind: "online" };
 /** @type {ReturnType<typeof setInterval> | undefined} */
@@ -48,7 +71,11 @@ agree.addEventListener("click", async () => {
   try {
     const created = await api("/api/sessions", {
       method: "POST",
-      body: { participant_id: participant || null, resume_token: remembered() },
+      body: {
+        participant_id: participant || null,
+        resume_token: remembered(),
+        create_key: createKey(),
+      },
       waitIfCrowded: true,
       onLink,
     });
