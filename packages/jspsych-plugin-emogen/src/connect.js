@@ -116,6 +116,27 @@ function remembered(key) {
 }
 
 /**
+ * The page's creation key for this participant's session: made once, kept with the session,
+ * sent with every try, so that a create whose answer was lost (a dropped connection, a proxy
+ * timeout) is answered with the same session instead of "already has a session".
+ * @param {string} key
+ */
+function createKey(key) {
+  const name = `${key}:create-key`;
+  let made = remembered(name);
+  if (!made) {
+    const bytes = crypto.getRandomValues(new Uint8Array(18));
+    made = btoa(String.fromCharCode(...bytes)).replace(/\+/g, "-").replace(/\//g, "_");
+    try {
+      sessionStorage.setItem(name, made);
+    } catch {
+      /* storage unavailable: the key lives as long as the page */
+    }
+  }
+  return made;
+}
+
+/**
  * The participant's session on this server: made by the first emogen trial of the page (the
  * instructions step taken: the experiment's own timeline instructs), the same for the
  * following trials, resumed after a reload of the page.
@@ -129,7 +150,7 @@ export function session(base, participant, { retries, onLink }) {
     const made = (async () => {
       const created = await request(base, "/api/sessions", {
         method: "POST",
-        body: { participant_id: participant, resume_token: remembered(key) },
+        body: { participant_id: participant, resume_token: remembered(key), create_key: createKey(key) },
         waitIfCrowded: true,
         retries,
         onLink,

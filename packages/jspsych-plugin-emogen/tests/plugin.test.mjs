@@ -75,6 +75,10 @@ test("an evolve and a categorise trial run on one session; their data are what w
   assert.equal(fake.sessions, 1); // one session for both trials
   assert.equal(fake.log.filter((r) => r.path.endsWith("/begin")).length, 1);
   assert.equal(fake.participant, "node-participant"); // PROLIFIC_PID from the page's URL
+  // the creation key: the server's pattern, kept for the session (a lost answer's retry gets it)
+  const create = fake.log.find((r) => r.path === "/api/sessions").body;
+  assert.match(create.create_key, /^[A-Za-z0-9_-]{16,64}$/);
+  assert.equal(sessionStorage.getItem(`emogen-plugin:${SERVER}:node-participant:create-key`), create.create_key);
   assert.equal(evolve.success, true);
   assert.equal(evolve.reason, null);
   assert.equal(evolve.session_id, 7);
