@@ -63,15 +63,19 @@ def serve_command(
     ] = None,
 ) -> None:
     """Run a participant study: prints the URL to open; Ctrl-C stops it."""
+    from emogen.cli.study_check import checked_study, refuse_errors
     from emogen.errors import ConfigError, ResourceError
-    from emogen.study.config import demo_study_path, load_study_config
+    from emogen.study.config import demo_study_path
     from emogen.web.app import viewer_built
     from emogen.web.server import run_server
 
     if running_sessions not in ("refuse", "end"):
         raise ConfigError(f"--running-sessions must be 'refuse' or 'end'; got {running_sessions!r}")
     path = config if config is not None else demo_study_path()
-    load_study_config(path)  # a bad config is named first
+    report = checked_study(path)  # a bad config, then the study's errors, are named first
+    refuse_errors(report, path)
+    for line in [*(f.line() for f in report.warnings), report.length.explained()]:
+        typer.echo(line)
     if not viewer_built():
         raise ResourceError(
             "the face viewer bundle (emogen/web/static/build/study-viewer.js) is missing, so "
