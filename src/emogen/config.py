@@ -182,7 +182,7 @@ class SimulationConfig(_Strict):
     @model_validator(mode="after")
     def _consistent(self) -> SimulationConfig:
         if self.target is None and self.target_file is None:
-            raise ValueError("'target' Field required (or give target_file)")
+            raise ValueError("'target' is required (or give target_file)")
         if self.target is not None and self.target_file is not None:
             raise ValueError("give either target or target_file, not both")
         if self.target is not None and not any(v > 0 for v in self.target.values()):

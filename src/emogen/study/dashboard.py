@@ -77,6 +77,13 @@ def condition_progress(store: Store, study_ids: tuple[int, ...]) -> list[dict[st
     return [table[k] for k in sorted(table)]
 
 
+def in_config_order(lines: list[dict[str, Any]], config: StudyConfig) -> list[dict[str, Any]]:
+    """Condition lines in the config's order (block, then emotion, then identity)."""
+    rank = {(c.block, c.emotion, c.identity): k for k, c in enumerate(config.conditions())}
+    return sorted(lines, key=lambda x: (x["block"], rank.get((x["block"], x["emotion"],
+                                                              x["identity"]), len(rank))))  # fmt: skip
+
+
 def row_counts(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) -> dict[str, Any]:
     """Latin-square rows of the first evolve block: how many sessions (and completed ones) got
     each row, every row listed (``rows``: None when the study does not use a Latin square)."""
@@ -104,8 +111,8 @@ def overview(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) -> d
     """The dashboard's figures for the study rows ``study_ids`` of ``config``'s design."""
     length = session_length(config)
     return {
-        "estimate": {"minutes": list(length.minutes), "text": length.explained()},
+        "estimate": {"minutes": list(length.minutes), "basis": length.basis()},
         "durations": durations(store, study_ids),
-        "conditions": condition_progress(store, study_ids),
+        "conditions": in_config_order(condition_progress(store, study_ids), config),
         "counterbalancing": row_counts(store, config, study_ids),
     }

@@ -41,12 +41,12 @@ class ParticipantRequired(StudyError):
     """A session asked for without a participant id, in a study that requires one."""
 
 
-def missing_participant(param: str) -> str:
+def missing_advice(param: str) -> tuple[str, str]:
     """What a participant reads when the link lacks the id (the page and the API say it)."""
     return (
-        f"this study needs your participant id in the link (…?{param}=YOUR_ID), and the link "
-        "you opened has none: open the study again from the page that gave you the link (a "
-        "copied link is sometimes cut short), or contact the researcher"
+        f"This study needs your participant id in the link (…?{param}=YOUR_ID).",
+        "Open the study again from the page that gave you the link (a copied link is sometimes "
+        "cut short), or contact the researcher.",
     )
 
 
@@ -57,7 +57,9 @@ def checked_participant(
     (``required_param``: the study requires an id, named by this URL parameter)."""
     if participant_id is None or participant_id == "":
         if required_param is not None:
-            raise ParticipantRequired(missing_participant(required_param))
+            raise ParticipantRequired(
+                "the link has no participant id. " + " ".join(missing_advice(required_param))
+            )
         return "anon-" + secrets.token_hex(8), "generated"
     if not PARTICIPANT_ID.fullmatch(participant_id):
         raise ConfigError(

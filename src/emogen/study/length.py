@@ -56,17 +56,21 @@ class SessionLength:
         span = f"{low}" if low == high else f"{low}–{high}"
         return f"about {span} minute{'s' if high > 1 else ''}"
 
-    def explained(self) -> str:
-        """The estimate with the screens and the seconds it assumes, for the researcher."""
+    def basis(self) -> str:
+        """What the estimate counts: ``"88 selection screens × 6–9 s + … + 1–2 min of …"``."""
         parts = [
             f"{n} {kind} screens × {SECONDS_PER_SCREEN[kind][0]:g}–{SECONDS_PER_SCREEN[kind][1]:g} s"
             for kind, n in self.screens.items()
             if n
         ]
-        pages = f"{PAGES_SECONDS[0] / 60:g}–{PAGES_SECONDS[1] / 60:g} min of consent, instructions and end"
+        low, high = (s / 60 for s in PAGES_SECONDS)
+        return " + ".join([*parts, f"{low:g}–{high:g} min of consent, instructions and end"])
+
+    def explained(self) -> str:
+        """The estimate with the screens and the seconds it assumes, for the researcher."""
         return (
-            f"a session takes {self.words()} ({' + '.join([*parts, pages])}; restarts not "
-            "counted; the seconds a screen are assumptions, see emogen.study.length)"
+            f"a session takes {self.words()} ({self.basis()}; restarts not counted; the "
+            "seconds a screen are assumptions, see emogen.study.length)"
         )
 
 

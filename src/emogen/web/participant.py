@@ -10,7 +10,7 @@ import orjson
 from fastapi import APIRouter, HTTPException, Path, Query, Request
 from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse, Response
 
-from emogen.study.enrolment import missing_participant
+from emogen.study.enrolment import missing_advice
 from emogen.study.errors import StudyError
 from emogen.study.sessions import StudyService
 from emogen.study.view import SessionState
@@ -60,9 +60,9 @@ def landing(request: Request) -> HTMLResponse:
     note_parameters(request.app.state.link_parameters, query.keys())
     given = query.get(cfg.participant_param) or query.get("participant")
     if cfg.participant_required and not given:
-        text = missing_participant(cfg.participant_param)
         response = _page(request, "error.html", heading="Your participant id is missing",
-                         detail=text[0].upper() + text[1:] + ".", advice=())  # fmt: skip
+                         detail="The link you opened has no participant id.",
+                         advice=missing_advice(cfg.participant_param))  # fmt: skip
         response.status_code = 400
         return response
     return _page(request, "landing.html")

@@ -67,6 +67,9 @@ function row(cells) {
   return tr;
 }
 
+// "2025-03-04 14:10" (UTC, as stored): the time without seconds and zone.
+const shortTime = (iso) => (iso ? iso.slice(0, 16).replace("T", " ") : "");
+
 const minutes = (seconds) => (seconds === null || seconds === undefined ? "" : (seconds / 60).toFixed(1));
 
 function showWarnings(warnings) {
@@ -82,7 +85,7 @@ function showWarnings(warnings) {
 function showDurations(status) {
   const d = status.durations;
   const [low, high] = status.estimate.minutes;
-  let text = `Estimated session length: ${low}–${high} min (${status.estimate.text}).`;
+  let text = `Estimated session length: about ${low}–${high} min (${status.estimate.basis}; restarts not counted).`;
   if (d.completed > 0) {
     const quartiles = d.quartiles_min ? ` (quartiles ${d.quartiles_min[0]}–${d.quartiles_min[1]})` : "";
     text = `Completed sessions took ${d.median_min} min (median of ${d.completed})${quartiles}. ${text}`;
@@ -107,7 +110,7 @@ function showRows(cb) {
 
 function sessionRow(s) {
   const tr = row([s.session_id, s.session_number, s.participant_id, s.stage, `${s.trial} of ${s.trials}`,
-    shownGeneration(s), s.attempt ?? "", s.order_row ?? "", minutes(s.duration_s), s.created_at, s.updated_at]);
+    shownGeneration(s), s.attempt ?? "", s.order_row ?? "", minutes(s.duration_s), shortTime(s.created_at), shortTime(s.updated_at)]);
   tr.appendChild(linkCell(s.participant_id));
   return tr;
 }
