@@ -63,7 +63,7 @@ def serve_command(
     ] = None,
 ) -> None:
     """Run a participant study: prints the URL to open; Ctrl-C stops it."""
-    from emogen.cli.study_check import checked_study, refuse_errors
+    from emogen.cli.study_check import check_before_serving
     from emogen.errors import ConfigError, ResourceError
     from emogen.study.config import demo_study_path
     from emogen.web.app import viewer_built
@@ -72,10 +72,7 @@ def serve_command(
     if running_sessions not in ("refuse", "end"):
         raise ConfigError(f"--running-sessions must be 'refuse' or 'end'; got {running_sessions!r}")
     path = config if config is not None else demo_study_path()
-    report = checked_study(path)  # a bad config, then the study's errors, are named first
-    refuse_errors(report, path)
-    for line in [*(f.line() for f in report.warnings), report.length.explained()]:
-        typer.echo(line)
+    check_before_serving(path)  # a bad config, then the study's errors, are named first
     if not viewer_built():
         raise ResourceError(
             "the face viewer bundle (emogen/web/static/build/study-viewer.js) is missing, so "

@@ -35,6 +35,14 @@ def refuse_errors(report: CheckReport, path: Path) -> None:
         )
 
 
+def check_before_serving(path: Path) -> None:
+    """``serve``'s check: refuse a study with errors; print its warnings and length."""
+    report = checked_study(path)
+    refuse_errors(report, path)
+    for line in [*(f.line() for f in report.warnings), report.length.explained()]:
+        typer.echo(line)
+
+
 @friendly_errors
 def check_study_command(
     config: Annotated[Path, typer.Argument(help="The study TOML.")],

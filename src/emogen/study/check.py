@@ -266,7 +266,9 @@ def check_study(config: StudyConfig, rig: Rig | None = None) -> CheckReport:
         "(participant_required = true refuses them)"
     )
     notes = (f"participants open /?{config.participant_param}=PARTICIPANT_ID; {anonymous}",)
-    return CheckReport(tuple(findings), session_length(config), notes)
+    return CheckReport(
+        tuple(findings), session_length(config.conditions(), config.ga.generations), notes
+    )
 
 
 def check_identity_names(config: StudyConfig) -> list[Finding]:

@@ -213,7 +213,7 @@ class StudyConfig(_Strict):
         config = handler(data)
         if given:
             return config
-        minutes = session_length(config).words()
+        minutes = session_length(config.conditions(), config.ga.generations).words()
         return config.model_copy(
             update={"consent": default_consent(minutes, user_agent=config.collect_user_agent)}
         )

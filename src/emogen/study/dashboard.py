@@ -109,7 +109,7 @@ def row_counts(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) ->
 
 def overview(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) -> dict[str, Any]:
     """The dashboard's figures for the study rows ``study_ids`` of ``config``'s design."""
-    length = session_length(config)
+    length = session_length(config.conditions(), config.ga.generations)
     return {
         "estimate": {"minutes": list(length.minutes), "basis": length.basis()},
         "durations": durations(store, study_ids),

@@ -21,11 +21,10 @@ than the estimate should say so in its own consent text.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    from emogen.study.config import StudyConfig
+from emogen.tasks.blocks import Condition
 
 #: Seconds a screen of each kind takes (low, high); see the module docstring for their source.
 SECONDS_PER_SCREEN: dict[str, tuple[float, float]] = {
@@ -74,13 +73,14 @@ class SessionLength:
         )
 
 
-def session_length(config: StudyConfig) -> SessionLength:
-    """The screens of one session of ``config`` and the time they take (a categorise block's
-    ``file`` without ``file_faces`` counts no trials: its rows are read when the server starts)."""
+def session_length(conditions: Sequence[Condition], generations: int) -> SessionLength:
+    """The screens of a session of these trials (``StudyConfig.conditions()``; ``generations``:
+    ``ga.generations``) and the time they take (a categorise block's ``file`` without
+    ``file_faces`` counts no trials there: its rows are read when the server starts)."""
     screens = {"selection": 0, "rating": 0, "categorise": 0}
-    for condition in config.conditions():
+    for condition in conditions:
         if condition.task == "evolve":
-            screens["selection"] += config.ga.generations + 1  # generations 0 … G are shown
+            screens["selection"] += generations + 1  # generations 0 … G are shown
             screens["rating"] += 1
         else:
             screens["categorise"] += 1
