@@ -36,11 +36,12 @@ def refuse_errors(report: CheckReport, path: Path) -> None:
 
 
 def check_before_serving(path: Path) -> None:
-    """``serve``'s check: refuse a study with errors; print its warnings and length."""
+    """``serve``'s check: refuse a study with errors; its warnings on stderr (the session
+    length is in the banner the server prints once it listens)."""
     report = checked_study(path)
     refuse_errors(report, path)
-    for line in [*(f.line() for f in report.warnings), report.length.explained()]:
-        typer.echo(line)
+    for finding in report.warnings:
+        typer.echo(finding.line(), err=True)
 
 
 @friendly_errors

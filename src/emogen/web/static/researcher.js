@@ -96,7 +96,7 @@ function showDurations(status) {
 
 function showConditions(conditions) {
   $("conditions").querySelector("tbody").replaceChildren(...conditions.map((c) =>
-    row([c.block + 1, c.task, c.emotion, c.identity, c.assigned, c.started, c.done])));
+    row([c.block, c.task, c.emotion, c.identity, c.assigned, c.started, c.done])));
 }
 
 function showRows(cb) {
