@@ -58,7 +58,7 @@ def test_load_toml(tmp_path: Path) -> None:
         ("mutaton_genes = 2", "unknown key 'mutaton_genes'"),
         ("[init]\nkindd = 'fixed'", r"unknown key 'kindd' in \[init\]"),
         ("mutation_genes = -1", "'mutation_genes' must be >= 0; got -1"),
-        ("generations = 'ten'", "'generations' must be a valid integer"),
+        ("generations = 'ten'", "'generations' must be a whole number"),
         ("[init]\nkind = 'random'", "'init.kind' must be 'protocol' or 'fixed'"),
         ("[init]\nactivation_range = [8, 3]", r"activation_range must be \[lo, hi\]"),
         ("[init]\nactivation_range = [0, 3]", "'init.activation_range.0' must be >= 1"),
@@ -84,8 +84,8 @@ def test_missing_file(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("data", "match"),
     [
-        ({}, "'target' Field required"),
-        ({"target": {}}, "'target' Dictionary should have at least 1 item"),
+        ({}, "'target' is required"),
+        ({"target": {}}, "'target' must have at least 1 entry"),
         ({"target": {"jawOpen": 0}}, "at least one non-zero weight"),
         ({"target": {"jawOpen": 2}}, "'target.jawOpen' must be <= 1"),
         ({"target": {"jawOpen": 1}, "runs": 0}, "'runs' must be >= 1"),
@@ -103,3 +103,32 @@ def test_missing_file(tmp_path: Path) -> None:
 def test_simulation_config_errors(data, match) -> None:
     with pytest.raises(ConfigError, match=match):
         validate_config(SimulationConfig, data)
+
+
+@pytest.mark.parametrize(
+    ("data", "words"),
+    [
+        ({"identities": "female-light"}, "'identities' must be a list in square brackets"),
+        ({"identities": []}, "'identities' must have at least 1 entry; got []"),
+        ({"repetitions": "two"}, "'repetitions' must be a whole number; got 'two'"),
+        ({"completion": {"code": 5}}, "'completion.code' must be text in quotes"),
+        ({"ga": {"generations": [1]}}, "'ga.generations' must be a whole number"),
+    ],
+)
+def test_study_config_errors_are_in_plain_words(data: dict, words: str) -> None:
+    """Not pydantic's words ("must be a valid tuple", "Tuple should have at least 1 item after
+    validation"): what a researcher writing TOML needs to read."""
+    from emogen.study.config import study_from_dict
+
+    with pytest.raises(ConfigError) as info:
+        study_from_dict(data)
+    message = str(info.value)
+    assert words in message
+    for library in (
+        "valid tuple",
+        "Tuple should",
+        "after validation",
+        "Input should",
+        "valid integer",
+    ):
+        assert library not in message

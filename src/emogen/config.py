@@ -182,7 +182,7 @@ class SimulationConfig(_Strict):
     @model_validator(mode="after")
     def _consistent(self) -> SimulationConfig:
         if self.target is None and self.target_file is None:
-            raise ValueError("'target' Field required (or give target_file)")
+            raise ValueError("'target' is required (or give target_file)")
         if self.target is not None and self.target_file is not None:
             raise ValueError("give either target or target_file, not both")
         if self.target is not None and not any(v > 0 for v in self.target.values()):
@@ -212,6 +212,36 @@ class SimulationConfig(_Strict):
 M = TypeVar("M", bound=BaseModel)
 
 
+#: What a TOML writer reads instead of pydantic's words ("Input should be a valid tuple").
+_PLAIN = {
+    "tuple_type": 'must be a list in square brackets, e.g. ["a", "b"]',
+    "list_type": 'must be a list in square brackets, e.g. ["a", "b"]',
+    "int_parsing": "must be a whole number",
+    "int_type": "must be a whole number",
+    "int_from_float": "must be a whole number",
+    "float_parsing": "must be a number",
+    "float_type": "must be a number",
+    "string_type": 'must be text in quotes, e.g. "abc"',
+    "bool_parsing": "must be true or false",
+    "bool_type": "must be true or false",
+    "dict_type": "must be a table of keys",
+    "model_type": "must be a table of keys",
+    "missing": "is required",
+}
+
+
+def plain_words(err: Any) -> str | None:
+    """One pydantic error in a researcher's words (None: pydantic's own message will do)."""
+    ctx = err.get("ctx") or {}
+    if err["type"] == "too_short":
+        n = int(ctx.get("min_length", 1))
+        return f"must have at least {n} entr{'y' if n == 1 else 'ies'}"
+    if err["type"] == "too_long":
+        n = int(ctx.get("max_length", 0))
+        return f"must have at most {n} entr{'y' if n == 1 else 'ies'}"
+    return _PLAIN.get(err["type"])
+
+
 def format_validation_error(exc: ValidationError, source: str) -> str:
     """One line naming every bad key: ``unknown key 'x'``, ``'ga.generations' must be …``."""
     parts = []
@@ -221,7 +251,7 @@ def format_validation_error(exc: ValidationError, source: str) -> str:
             where = f" in [{'.'.join(loc[:-1])}]" if len(loc) > 1 else ""
             parts.append(f"unknown key '{loc[-1]}'{where}")
             continue
-        msg = err["msg"].removeprefix("Value error, ")
+        msg = plain_words(err) or err["msg"].removeprefix("Value error, ")
         msg = msg.replace("Input should be", "must be").replace("greater than or equal to", ">=")
         msg = msg.replace("less than or equal to", "<=").replace("greater than", ">")
         msg = msg.replace("less than", "<")

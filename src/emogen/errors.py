@@ -6,6 +6,8 @@ config value: :class:`ConfigError`, :class:`ShapeError`, :class:`SelectionError`
 (:class:`ResourceError`, :class:`ModelNotFoundError`, and the operating system's own errors).
 """
 
+from pathlib import Path
+
 
 class EmoGenError(Exception):
     """Base class of every error EmoGen raises on purpose."""
@@ -38,3 +40,16 @@ class DataError(ConfigError):
 class ResourceError(EmoGenError):
     """The machine or a service stands in the way: a database that cannot be reached or does
     not exist, a folder that cannot be written (exit 4)."""
+
+
+def did_you_mean_path(path: Path) -> str:
+    """`` (did you mean …?)`` naming the closest entry beside a path that does not exist."""
+    import difflib
+
+    parent = path.parent
+    try:
+        names = [p.name for p in parent.iterdir()]
+    except OSError:
+        return ""
+    close = difflib.get_close_matches(path.name, names, n=1, cutoff=0.6)
+    return f" (did you mean {parent / close[0]}?)" if close else ""

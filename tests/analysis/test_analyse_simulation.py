@@ -84,5 +84,12 @@ def test_simulation_without_weights_still_gives_errors(ict_model, tmp_path: Path
 def test_not_a_dataset(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match="neither a study export"):
         load_dataset(tmp_path)
+    # before: a mistyped folder "must be a folder"; it does not exist, and the closest is named
+    (tmp_path / "study-export").mkdir()
+    with pytest.raises(
+        ConfigError, match=r"study-exprot does not exist \(did you mean .*study-export\?\)"
+    ):
+        load_dataset(tmp_path / "study-exprot")
+    (tmp_path / "file.csv").write_text("a\n")
     with pytest.raises(ConfigError, match="must be a folder"):
-        load_dataset(tmp_path / "missing")
+        load_dataset(tmp_path / "file.csv")

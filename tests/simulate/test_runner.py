@@ -112,7 +112,7 @@ def test_cli_simulate_errors(ict_dir: Path, tmp_path: Path) -> None:
         (["--target", "jawOpen=0.5", "--init-range", "3to8"], "--init-range must look like LO-HI"),
         (["--target", "jawOpen=0.5", "--init-range", "8-3"], "activation_range must be"),
         (["--target", "jawOpen=0.5", "--runs", "0"], "must be at least 1; got 0"),
-        ([], "'target' Field required"),
+        ([], "'target' is required"),
     ]
     for extra, message in cases:
         result = runner.invoke(app, base + extra)

@@ -73,7 +73,7 @@ def test_training_rows_by_query(ict_model, tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("data", "message"),
     [
-        ({}, "'target' Field required"),
+        ({}, "'target' is required"),
         ({"target": {"jawOpen": 1}, "target_file": "x.csv"}, "either target or target_file"),
         ({"target": {"jawOpen": 1}, "target_row": 2}, "target_row needs target_file"),
         ({"target": {"jawOpen": 1}, "metric": "cosine"}, "'metric.name' must be"),

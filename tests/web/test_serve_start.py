@@ -81,6 +81,8 @@ def test_the_loading_line_then_the_banner_once_the_address_accepts_connections(
     assert "participants open" not in before_listening[0]
     assert after.startswith("EmoGen study 'small' (2 trials)")
     assert "participants open:    http://localhost:" in after
+    # the session length from the design: 2 trials × 3 generations shown; 102–184 s
+    assert "a session takes about 2–4 minutes (6 selection screens × 6–9 s" in after
 
 
 def test_no_banner_when_the_server_never_listens(

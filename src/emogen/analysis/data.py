@@ -30,7 +30,7 @@ import pandas as pd
 from emogen import columns as tidy
 from emogen.analysis.people import sessions_of
 from emogen.analysis.validate import check_simulation, check_study
-from emogen.errors import ConfigError, DataError
+from emogen.errors import ConfigError, DataError, did_you_mean_path
 from emogen.metrics import cosine_distance
 
 STUDY_TABLES = ("trials", "faces", "selections")
@@ -115,10 +115,10 @@ def load_dataset(path: Path, exclude: frozenset[str] = frozenset()) -> Dataset:
     """A study export or simulation output folder (see the module docstring); ``exclude``: ids
     of a study's participants left out of everything (an exclusion rule's verdict)."""
     folder = Path(path)
+    if not folder.exists():
+        raise ConfigError(f"DATA folder {folder} does not exist{did_you_mean_path(folder)}")
     if not folder.is_dir():
-        raise ConfigError(
-            f"DATA must be a folder (a study export or simulation output); got {folder}"
-        )
+        raise ConfigError(f"DATA must be a folder (a study export or simulation output): {folder}")
     if all(any((folder / f"{t}{s}").is_file() for s in (".parquet", ".csv")) for t in STUDY_TABLES):
         return load_study(folder, exclude)
     sims = simulation_folders(folder)

@@ -63,15 +63,16 @@ def serve_command(
     ] = None,
 ) -> None:
     """Run a participant study: prints the URL to open; Ctrl-C stops it."""
+    from emogen.cli.study_check import check_before_serving
     from emogen.errors import ConfigError, ResourceError
-    from emogen.study.config import demo_study_path, load_study_config
+    from emogen.study.config import demo_study_path
     from emogen.web.app import viewer_built
     from emogen.web.server import run_server
 
     if running_sessions not in ("refuse", "end"):
         raise ConfigError(f"--running-sessions must be 'refuse' or 'end'; got {running_sessions!r}")
     path = config if config is not None else demo_study_path()
-    load_study_config(path)  # a bad config is named first
+    check_before_serving(path)  # a bad config, then the study's errors, are named first
     if not viewer_built():
         raise ResourceError(
             "the face viewer bundle (emogen/web/static/build/study-viewer.js) is missing, so "

@@ -1,4 +1,4 @@
-"""Study commands: ``emogen study status|export|resume-link`` and ``emogen replay``.
+"""Study commands: ``emogen study status|export|resume-link|check|simulate``, ``emogen replay``.
 
 ``study_app`` is a Typer sub-app; ``replay_command`` is a plain function for the top-level app
 (``app.command("replay")(replay_command)``). ``emogen serve`` is :mod:`emogen.cli.serve`.
@@ -15,6 +15,7 @@ import typer
 
 from emogen.cli.options import JsonOpt, friendly_errors, show_result
 from emogen.cli.outputs import ForceOpt, check_out_folder, moved, output_folder
+from emogen.cli.study_check import check_study_command
 from emogen.cli.study_simulate import simulate_study_command
 from emogen.errors import ConfigError
 
@@ -25,6 +26,7 @@ study_app = typer.Typer(
     help="Participant studies: progress, data export and simulated pilots.", no_args_is_help=True
 )
 study_app.command("simulate")(simulate_study_command)
+study_app.command("check")(check_study_command)
 
 DatabaseOpt = Annotated[
     str | None,

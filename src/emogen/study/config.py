@@ -25,26 +25,31 @@ import hashlib
 import json
 import re
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, Field, field_serializer, field_validator, model_validator
+from pydantic import (
+    AfterValidator,
+    Field,
+    ModelWrapValidatorHandler,
+    field_serializer,
+    field_validator,
+    model_validator,
+)
 
 from emogen.appearance.identities import PRESETS, Identity, identity_from_dict
 from emogen.config import GAConfig, _Strict, read_toml, validate_config
-from emogen.errors import ConfigError, EmoGenError
-from emogen.model.rig import Rig
+from emogen.errors import ConfigError
+from emogen.study.length import session_length
 from emogen.study.origins import check_origin
 from emogen.study.texts import (
     DEFAULT_CONSENT,
     DEFAULT_CONSENT_USER_AGENT,
     DEFAULT_INSTRUCTIONS,
     USER_AGENT_WORDS,
+    default_consent,
     default_instructions,
 )
 from emogen.tasks.blocks import Block, CategoriseBlock, Condition, EvolveBlock, check_blocks
-
-if TYPE_CHECKING:
-    from emogen.model.face import FaceModel
 
 STUDY_SCHEMA = "emogen.study/1"
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
@@ -68,7 +73,8 @@ class CompletionConfig(_Strict):
     message: str = "Thank you! You have completed the study."
     #: Completion code shown to the participant (e.g. Prolific's).
     code: str | None = None
-    #: Redirect URL; ``{code}`` and ``{participant}`` are filled in.
+    #: Redirect URL; ``{code}`` (or ``{completion_code}``) and ``{participant}`` (or
+    #: ``{participant_id}``, or the study's ``participant_param`` in braces) are filled in.
     redirect_url: str | None = None
 
     @field_validator("redirect_url")
@@ -95,14 +101,22 @@ class StudyConfig(_Strict):
     #: The lab's own identities, ``[identity.NAME]`` tables: ``shape`` (generic, a rig preset or
     #: identity coefficients) plus any :class:`~emogen.appearance.Appearance` key.
     identity: dict[str, Identity] = Field(default_factory=dict)
-    #: random (seeded per session), latin_square (balanced, row from a keyed hash of the
-    #: participant id), fixed.
+    #: random (seeded per session), latin_square (balanced Williams rows), fixed.
     order: Literal["random", "latin_square", "fixed"] = "random"
+    #: How a participant's Latin-square row is chosen: ``hash`` (a keyed hash of the participant
+    #: id: balanced in expectation, the same row whoever came first) or ``arrival`` (exact: the
+    #: k-th session of the study gets row k modulo the rows, under the database's lock).
+    counterbalance: Literal["hash", "arrival"] = "hash"
     #: URL parameter carrying the participant id (e.g. Prolific's PROLIFIC_PID); also accepted:
-    #: ``participant``. Without one, an id is generated.
+    #: ``participant``. Without one, an id is generated (unless ``participant_required``).
     participant_param: str = "PROLIFIC_PID"
+    #: Refuse sessions without a participant id in the link (a page says the link lacks it).
+    participant_required: bool = False
+    #: Emotion words the study means although ``emogen study check`` does not know them.
+    custom_emotions: tuple[str, ...] = ()
     prompt: str = "Make the face look {EMOTION}"
-    #: Default: :data:`DEFAULT_CONSENT` (or, when ``collect_user_agent``, the text that says so).
+    #: Default: :func:`default_consent`, its length estimated from the design (and, when
+    #: ``collect_user_agent``, saying so).
     consent: str = DEFAULT_CONSENT
     #: Record the browser's user agent with each session (personal data: off by default; the
     #: default consent text then says it is recorded). Off: ``user_agent`` is NULL.
@@ -146,7 +160,7 @@ class StudyConfig(_Strict):
             raise ValueError(f"participant_param must be a plain identifier; got {v!r}")
         return v
 
-    @field_validator("emotions", "identities")
+    @field_validator("emotions", "identities", "custom_emotions")
     @classmethod
     def _unique(cls, v: tuple[str, ...]) -> tuple[str, ...]:
         dup = sorted({x for x in v if v.count(x) > 1})
@@ -186,13 +200,23 @@ class StudyConfig(_Strict):
         """As written in the TOML: ``shape`` and the appearance keys side by side."""
         return {name: identity_table(ident) for name, ident in v.items()}
 
-    @model_validator(mode="before")
+    @model_validator(mode="wrap")
     @classmethod
-    def _consent_says_user_agent(cls, data: Any) -> Any:
-        collects = isinstance(data, dict) and data.get("collect_user_agent") is True
+    def _default_consent(cls, data: Any, handler: ModelWrapValidatorHandler[StudyConfig]) -> Any:
+        """No consent given: the default text with the length estimated from the design."""
+        if not isinstance(data, dict):
+            return handler(data)
+        collects = data.get("collect_user_agent") is True
+        given = "consent" in data
         if collects and data.get("consent", DEFAULT_CONSENT) == DEFAULT_CONSENT:
-            data = {**data, "consent": DEFAULT_CONSENT_USER_AGENT}
-        return data
+            data = {**data, "consent": DEFAULT_CONSENT_USER_AGENT}  # says so; checked below
+        config = handler(data)
+        if given:
+            return config
+        minutes = session_length(config.conditions(), config.ga.generations).words()
+        return config.model_copy(
+            update={"consent": default_consent(minutes, user_agent=config.collect_user_agent)}
+        )
 
     @model_validator(mode="before")
     @classmethod
@@ -322,6 +346,10 @@ class StudyConfig(_Strict):
             del data["collect_user_agent"]
         if not data["blocks"]:  # nor studies of one evolve block (written before blocks)
             del data["blocks"]
+        for key, default in (("custom_emotions", []), ("participant_required", False),
+                             ("counterbalance", "hash")):  # fmt: skip
+            if data[key] == default:  # studies without them keep their hash
+                del data[key]
         del data["embed_origins"]  # where it may be embedded is no part of what people do
         return json.dumps(data, sort_keys=True, separators=(",", ":"))
 
@@ -361,28 +389,3 @@ def identity_table(identity: Identity) -> dict[str, Any]:
     """An identity as a flat table (``shape`` then the appearance keys), as in the TOML."""
     shape = identity.shape if isinstance(identity.shape, str) else list(identity.shape)
     return {"shape": shape, **identity.appearance.record()}
-
-
-def check_identities(config: StudyConfig, rig: Rig, model: FaceModel | None = None) -> None:
-    """Every identity of the study must be a preset or the lab's own, and every shape one the
-    rig has (``generic`` or its presets); with ``model``, coefficient shapes must fit it."""
-    shapes = ["generic", *sorted(rig.identities)]
-    known = sorted({*PRESETS, *config.identity, *rig.identities})
-    bad = [i for i in config.all_identities() if i not in known]
-    if bad:
-        raise ConfigError(
-            f"invalid study config: 'identities' must be among the presets and the study's own "
-            f"[identity.NAME] tables ({', '.join(known)}); got {bad}"
-        )
-    for name in config.all_identities():
-        shape = config.identity_of(name).shape
-        if isinstance(shape, str) and shape not in shapes:
-            raise ConfigError(
-                f"invalid study config: identity '{name}' has shape '{shape}'; the model's "
-                f"shapes are {', '.join(shapes)} (or a list of identity coefficients)"
-            )
-        if model is not None and not isinstance(shape, str):
-            try:
-                model.resolve_identity(shape)
-            except EmoGenError as exc:
-                raise ConfigError(f"invalid study config: identity '{name}': {exc}") from None

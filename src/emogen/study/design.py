@@ -1,9 +1,13 @@
 """Trial order: random (seeded per session), balanced Latin square (row by participant), fixed.
 
 Trials are the conditions emotions × identities × repetitions (``StudyConfig.conditions``).
-A participant's seed and Latin-square row come from a keyed hash of the study seed and the
-participant id (:func:`participant_seed`, :func:`participant_slot`), never from the order of
-arrival: sessions made by others (anonymous or not) shift nobody's seeds or trial order.
+A participant's seed comes from a keyed hash of the study seed and the participant id
+(:func:`participant_seed`), never from the order of arrival: sessions made by others
+(anonymous or not) shift nobody's seeds. The Latin-square row comes from that hash too
+(``counterbalance = "hash"``: balanced in expectation only — three participants may get rows
+3, 1, 7) or, with ``counterbalance = "arrival"``, from the order of arrival (exact: rows 0, 1,
+2 …; :func:`assignment_slot`). Either way the row is stored with the session, and replay reads
+the stored order.
 """
 
 from __future__ import annotations
@@ -42,6 +46,16 @@ def participant_slot(config: StudyConfig, participant_id: str) -> int:
     modulo the number of rows): uniform over participants, so rows stay balanced in expectation."""
     key = str(config.seed) if config.seed is not None else "name:" + config.name
     return int.from_bytes(_digest("order", key, participant_id)[:8], "little")
+
+
+def assignment_slot(config: StudyConfig, participant_id: str, *, arrival: int) -> int:
+    """The slot a new session's Latin-square rows come from: :func:`participant_slot` (the
+    default, ``counterbalance = "hash"``), or with ``counterbalance = "arrival"`` the session's
+    arrival number (0, 1, 2 … in the study, counted under the study's lock): the k-th session
+    gets row k modulo the rows, so every row is used equally often up to one session."""
+    if config.counterbalance == "arrival":
+        return arrival
+    return participant_slot(config, participant_id)
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,10 @@
 """Consent given: a participant's session is made (or resumed with its token).
 
-A session gets the next number in the study (arrival order, for display only), a seed and a
-trial order that depend on the participant id alone (a keyed hash with the study seed:
-:mod:`emogen.study.design`), and one trial row per condition, each with its own seed.
+A session gets the next number in the study (arrival order, counted under the study's lock), a
+seed that depends on the participant id alone (a keyed hash with the study seed:
+:mod:`emogen.study.design`), a trial order whose Latin-square row is that hash's or, with
+``counterbalance = "arrival"``, the session's number modulo the rows (exactly balanced in
+arrival order), and one trial row per condition, each with its own seed.
 """
 
 from __future__ import annotations
@@ -19,8 +21,8 @@ from emogen import __version__
 from emogen.errors import ConfigError
 from emogen.rng import spawn_seeds
 from emogen.study.context import StudyContext
-from emogen.study.design import participant_seed, participant_slot, trial_order
-from emogen.study.errors import StepConflict
+from emogen.study.design import assignment_slot, participant_seed, trial_order
+from emogen.study.errors import StepConflict, StudyError
 from emogen.study.queries import (
     count_sessions,
     lock_study,
@@ -35,9 +37,29 @@ from emogen.study.view import SessionState, session_state
 PARTICIPANT_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9._:@+-]{0,127}")
 
 
-def checked_participant(participant_id: str | None) -> tuple[str, str]:
-    """(participant id, its source): the URL's id checked, or a generated one when none came."""
+class ParticipantRequired(StudyError):
+    """A session asked for without a participant id, in a study that requires one."""
+
+
+def missing_advice(param: str) -> tuple[str, str]:
+    """What a participant reads when the link lacks the id (the page and the API say it)."""
+    return (
+        f"This study needs your participant id in the link (…?{param}=YOUR_ID).",
+        "Open the study again from the page that gave you the link (a copied link is sometimes "
+        "cut short), or contact the researcher.",
+    )
+
+
+def checked_participant(
+    participant_id: str | None, *, required_param: str | None = None
+) -> tuple[str, str]:
+    """(participant id, its source): the URL's id checked, or a generated one when none came
+    (``required_param``: the study requires an id, named by this URL parameter)."""
     if participant_id is None or participant_id == "":
+        if required_param is not None:
+            raise ParticipantRequired(
+                "the link has no participant id. " + " ".join(missing_advice(required_param))
+            )
         return "anon-" + secrets.token_hex(8), "generated"
     if not PARTICIPANT_ID.fullmatch(participant_id):
         raise ConfigError(
@@ -61,7 +83,7 @@ def _new_session(
     seed = participant_seed(cfg.seed, participant_id)
     conditions = ctx.conditions
     order_seed, *trial_seeds = spawn_seeds(seed, len(conditions) + 1)
-    slot = participant_slot(cfg, participant_id)
+    slot = assignment_slot(cfg, participant_id, arrival=number)
     order = trial_order(cfg, conditions, slot=slot, rng=np.random.default_rng(order_seed))
     now = utcnow()
     sess = SessionRow(
@@ -163,7 +185,9 @@ def create_session(
     study collects it (``collect_user_agent``). ``source`` records where the id came from
     instead of the URL (``simulated``).
     """
-    pid, given = checked_participant(participant_id)
+    cfg = ctx.config
+    required = cfg.participant_param if cfg.participant_required and source is None else None
+    pid, given = checked_participant(participant_id, required_param=required)
     source = source or given
     hashed = key_hash(create_key)
 

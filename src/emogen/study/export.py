@@ -30,6 +30,7 @@ from emogen.appearance.identities import Identity
 from emogen.appearance.params import GENERATOR_VERSION, Appearance
 from emogen.errors import ConfigError
 from emogen.study.config import StudyConfig
+from emogen.study.dashboard import seconds_between
 from emogen.study.export_rows import (
     SESSION_TABLE_ROWS,
     TABLE_COLUMNS,
@@ -120,8 +121,10 @@ def session_progress(store: Store, study_id: int | None = None) -> list[dict[str
             out.append(
                 {
                     "session_id": s.id,
+                    "session_number": s.number,
                     "study_id": s.study_id,
                     "participant_id": s.participant_id,
+                    "order_row": None if s.order_row < 0 else s.order_row,
                     "stage": s.stage,
                     "trial": s.current_trial + 1,
                     "trials": len(json.loads(s.trial_order)),
@@ -130,6 +133,7 @@ def session_progress(store: Store, study_id: int | None = None) -> list[dict[str
                     "created_at": iso(s.created_at),
                     "updated_at": iso(s.updated_at),
                     "completed_at": iso(s.completed_at),
+                    "duration_s": seconds_between(s.consented_at, s.completed_at or s.updated_at),
                 }
             )
     return out

@@ -101,6 +101,17 @@ def count_sessions(db: Session, study_ids: tuple[int, ...]) -> int:
     return int(n or 0)
 
 
+def sessions_by_source(db: Session, study_ids: tuple[int, ...]) -> dict[str, int]:
+    """How many sessions of these study rows had their id from the link (``url``), generated
+    (``generated``) or simulated."""
+    rows = db.execute(
+        select(SessionRow.participant_source, func.count())
+        .where(SessionRow.study_id.in_(study_ids))
+        .group_by(SessionRow.participant_source)
+    )
+    return {str(source): int(n) for source, n in rows}
+
+
 def n_trials(sess: SessionRow) -> int:
     """How many trials the session has (its stored trial order)."""
     return len(json.loads(sess.trial_order))

@@ -17,12 +17,13 @@ import numpy as np
 from emogen.ga.engine import Engine
 from emogen.model.rig import Rig
 from emogen.study.categorise import FACE_ID, CategoriseTrials, block_files, file_rows
-from emogen.study.config import StudyConfig, check_identities
+from emogen.study.check import check_identities
+from emogen.study.config import StudyConfig
 from emogen.study.context import StudyContext, accepted_hashes, register_study
 from emogen.study.enrolment import PARTICIPANT_ID, checked_participant, create_session
 from emogen.study.errors import SessionNotFound
 from emogen.study.progress import participant_token
-from emogen.study.queries import current_face, session_by_token
+from emogen.study.queries import current_face, session_by_token, sessions_by_source
 from emogen.study.records import StudyInfo, TrialRecord, study_info, trial_record
 from emogen.study.steps import Payload, SessionSteps, request_hash
 from emogen.study.storage import Store
@@ -179,6 +180,11 @@ class StudyService:
         """The token of the participant's session in this study (404 when there is none)."""
         checked_participant(participant_id)  # a bad id is named as such
         return participant_token(self.store, participant_id, study=self.ctx.config.name)
+
+    def participant_sources(self) -> dict[str, int]:
+        """Sessions of this study by where their participant id came from (url, generated…)."""
+        with self.store.read() as db:
+            return sessions_by_source(db, self.ctx.accepted)
 
     def completion(self, participant_id: str) -> Completion:
         return completion(self.ctx.config, participant_id)

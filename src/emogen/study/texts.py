@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+#: The consent text of studies written before the length was estimated (still accepted as
+#: "the default" when given explicitly); new studies get :func:`default_consent`.
 DEFAULT_CONSENT = (
     "This study asks you to make faces show emotions by choosing among computer-generated "
     "faces. It takes about 10 minutes. Your choices and their timings are recorded with a "
@@ -16,6 +18,16 @@ DEFAULT_CONSENT_USER_AGENT = DEFAULT_CONSENT.replace(
     "your browser's identification string (its user agent: browser, version and operating "
     "system) is also recorded; no other personal data are collected.",
 )
+
+
+def default_consent(minutes: str, *, user_agent: bool) -> str:
+    """The default consent text with the session length estimated from the design
+    (``minutes``: :meth:`emogen.study.length.SessionLength.words`, e.g. "about 10–16 minutes");
+    ``user_agent``: the text saying the browser's user agent is recorded."""
+    text = DEFAULT_CONSENT_USER_AGENT if user_agent else DEFAULT_CONSENT
+    return text.replace("about 10 minutes", minutes)
+
+
 #: A consent text of a study collecting user agents must name it with one of these (any case).
 USER_AGENT_WORDS = ("user agent", "user-agent", "useragent")
 DEFAULT_INSTRUCTIONS = (

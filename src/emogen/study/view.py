@@ -127,9 +127,12 @@ def completion(config: StudyConfig, participant_id: str) -> Completion:
     c = config.completion
     url = None
     if c.redirect_url:
-        url = c.redirect_url.replace("{code}", quote(c.code or "", safe="")).replace(
-            "{participant}", quote(participant_id, safe="")
-        )
+        code, pid = quote(c.code or "", safe=""), quote(participant_id, safe="")
+        url = c.redirect_url
+        for name in ("code", "completion_code"):
+            url = url.replace("{" + name + "}", code)
+        for name in ("participant", "participant_id", config.participant_param):
+            url = url.replace("{" + name + "}", pid)
     return {"message": c.message, "code": c.code, "redirect_url": url}
 
 

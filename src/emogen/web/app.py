@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+from collections import Counter
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -171,6 +172,8 @@ def create_app(
         store, burst=researcher_failure_limit.burst, per_minute=researcher_failure_limit.per_minute
     )
     app.state.export_lock = asyncio.Lock()  # one dashboard export at a time
+    app.state.link_parameters = Counter()  # URL parameter names of landing pages (web.links)
+    app.state.never_matched_warned = False
     remove_stale_downloads()  # left by a server killed outright (they hold participant data)
     add_cors(app, config.embed_origins)  # innermost: preflights get the security headers too
     add_response_headers(app, hsts=hsts)

@@ -1,6 +1,6 @@
 """Dashboard downloads: an export table written by a separate, lower-priority process.
 
-``emogen study export`` runs as a child process at idle priority (Linux ``SCHED_IDLE``: it gets
+``emogen study export`` (CSV or Parquet, any table) runs as a child process at idle priority (Linux ``SCHED_IDLE``: it gets
 a core only when no participant request wants one; elsewhere ``nice`` 19) into a temporary
 folder and the file is then streamed to the researcher: the export's memory is bounded (a few
 sessions at a time) and never the server's, its CPU time goes to participants' steps first, and it holds no
@@ -69,13 +69,19 @@ def remove_stale_downloads(folder: Path | None = None) -> list[Path]:
     return remove_orphans(Path(folder or tempfile.gettempdir()), f"{PREFIX}*", _STALE)
 
 
+#: Download formats and their media types.
+MEDIA_TYPES = {"csv": "text/csv", "parquet": "application/vnd.apache.parquet"}
+
+
 async def export_table_file(
-    lock: asyncio.Lock, database_url: str, study: str, table: str, since: str | None
-) -> FileResponse:
-    """``table`` of ``study`` as a CSV download (``since``: an incremental export's start)."""
+    lock: asyncio.Lock, database_url: str, study: str, table: str, since: str | None,
+    fmt: str = "csv",
+) -> FileResponse:  # fmt: skip
+    """``table`` of ``study`` as a CSV or Parquet download (``since``: an incremental export's
+    start)."""
     folder = Path(tempfile.mkdtemp(prefix=f"{PREFIX}{os.getpid()}-"))  # 0700
     out = folder / "export"
-    args = [str(os.getpid()), "study", "export", "--format", "csv", "--table", table,
+    args = [str(os.getpid()), "study", "export", "--format", fmt, "--table", table,
             "--study", study, "--out", str(out)]  # fmt: skip
     if since is not None:
         args += ["--since", since]
@@ -99,8 +105,8 @@ async def export_table_file(
         shutil.rmtree(folder, ignore_errors=True)
         raise
     return FileResponse(
-        out / f"{table}.csv",
-        media_type="text/csv",
-        filename=f"{table}.csv",
+        out / f"{table}.{fmt}",
+        media_type=MEDIA_TYPES[fmt],
+        filename=f"{table}.{fmt}",
         background=BackgroundTask(shutil.rmtree, folder, ignore_errors=True),
     )

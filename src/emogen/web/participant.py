@@ -10,9 +10,11 @@ import orjson
 from fastapi import APIRouter, HTTPException, Path, Query, Request
 from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse, Response
 
+from emogen.study.enrolment import missing_advice
 from emogen.study.errors import StudyError
 from emogen.study.sessions import StudyService
 from emogen.study.view import SessionState
+from emogen.web.links import note_parameters, warn_never_matched
 from emogen.web.ratelimit import client_key, too_many
 from emogen.web.schemas import (
     TOKEN_PATTERN,
@@ -51,7 +53,18 @@ def _page(request: Request, name: str, **context: Any) -> HTMLResponse:
 
 @router.get("/", response_class=HTMLResponse, include_in_schema=False)
 def landing(request: Request) -> HTMLResponse:
-    """Consent page; the participant id comes from the URL (``?PROLIFIC_PID=…``)."""
+    """Consent page; the participant id comes from the URL (``?PROLIFIC_PID=…``). A study with
+    ``participant_required`` shows a link without the id a page saying so (400)."""
+    cfg = request.app.state.config
+    query = request.query_params
+    note_parameters(request.app.state.link_parameters, query.keys())
+    given = query.get(cfg.participant_param) or query.get("participant")
+    if cfg.participant_required and not given:
+        response = _page(request, "error.html", heading="Your participant id is missing",
+                         detail="The link you opened has no participant id.",
+                         advice=missing_advice(cfg.participant_param))  # fmt: skip
+        response.status_code = 400
+        return response
     return _page(request, "landing.html")
 
 
@@ -114,6 +127,8 @@ def create_session(request: Request, body: NewSession) -> JSONResponse:
         create_key=body.create_key,
         user_agent=request.headers.get("user-agent", ""),
     )
+    if not body.participant_id:
+        warn_never_matched(request.app.state, _service(request))
     return JSONResponse({"token": token, "url": f"/s/{token}", "state": state}, status_code=201)
 
 

@@ -10,11 +10,13 @@ from fastapi.responses import HTMLResponse, Response
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from pydantic import BaseModel, Field
 
+from emogen.study.dashboard import overview
 from emogen.study.errors import Forbidden
 from emogen.study.export import TABLES, study_status
 from emogen.study.export_stream import parse_since
 from emogen.study.progress import progress_as_shown
-from emogen.web.exports import export_table_file
+from emogen.web.exports import MEDIA_TYPES, export_table_file
+from emogen.web.links import never_matched_warning
 from emogen.web.ratelimit import client_key, too_many
 from emogen.web.schemas import error_responses
 
@@ -59,20 +61,27 @@ def dashboard(request: Request) -> HTMLResponse:
             "config": request.app.state.config,
             "viewer": False,
             "disabled": None if request.app.state.researcher_token else DISABLED,
+            "tables": TABLES,
         },
     )
 
 
 @router.get("/api/researcher/status", responses=error_responses(403, 429, 503))
 def status(request: Request, _auth: Researcher) -> dict[str, Any]:
-    """Progress of every study in the database, and of this study's sessions."""
+    """Progress of every study in the database, and of this study's sessions; this study's
+    durations, progress per condition, Latin-square row counts, estimated session length,
+    and warnings (a participant URL parameter no link carried)."""
     store = request.app.state.store
     service = request.app.state.service
+    ctx = service.ctx
+    warning = never_matched_warning(request.app.state, service)
     return {
-        "study": service.ctx.config.name,
-        "study_id": service.ctx.study_id,
+        "study": ctx.config.name,
+        "study_id": ctx.study_id,
         "studies": study_status(store),
-        "sessions": progress_as_shown(store, service.ctx.study_id),
+        "sessions": progress_as_shown(store, ctx.study_id),
+        **overview(store, ctx.config, ctx.accepted),
+        "warnings": [] if warning is None else [warning],
     }
 
 
@@ -103,29 +112,50 @@ def resume_link(
     )
 
 
+TableName = Annotated[str, Path(pattern="^(" + "|".join(TABLES) + ")$")]
+Since = Annotated[
+    str | None,
+    Query(
+        max_length=64,
+        description="Incremental: only the sessions completed from this ISO 8601 time to "
+        "a minute ago (see docs/study.md).",
+    ),
+]
+
+
+async def _download(request: Request, table: str, since: str | None, fmt: str) -> Response:
+    if since is not None:
+        parse_since(since)  # a bad time is a 422 naming it, before any work
+    state = request.app.state
+    return await export_table_file(
+        state.export_lock, state.store.url, state.service.ctx.config.name, table, since, fmt
+    )
+
+
 @router.get(
     "/api/researcher/export/{table}.csv",
     responses={200: {"content": {"text/csv": {}}}, **error_responses(403, 422, 429, 503)},
     response_class=Response,
 )
 async def export_csv(
-    request: Request,
-    _auth: Researcher,
-    table: Annotated[str, Path(pattern="^(" + "|".join(TABLES) + ")$")],
-    since: Annotated[
-        str | None,
-        Query(
-            max_length=64,
-            description="Incremental: only the sessions completed from this ISO 8601 time to "
-            "a minute ago (see docs/study.md).",
-        ),
-    ] = None,
+    request: Request, _auth: Researcher, table: TableName, since: Since = None
 ) -> Response:
     """One export table of this study as CSV, written by a separate low-priority process in
     bounded memory (participants' requests go first) and streamed."""
-    if since is not None:
-        parse_since(since)  # a bad time is a 422 naming it, before any work
-    state = request.app.state
-    return await export_table_file(
-        state.export_lock, state.store.url, state.service.ctx.config.name, table, since
-    )
+    return await _download(request, table, since, "csv")
+
+
+@router.get(
+    "/api/researcher/export/{table}.parquet",
+    responses={
+        200: {"content": {MEDIA_TYPES["parquet"]: {}}},
+        **error_responses(403, 422, 429, 503),
+    },
+    response_class=Response,
+)
+async def export_parquet(
+    request: Request, _auth: Researcher, table: TableName, since: Since = None
+) -> Response:
+    """One export table of this study as Parquet (the provenance in its metadata), written
+    as the CSV is."""
+    return await _download(request, table, since, "parquet")

@@ -220,12 +220,16 @@ def _announce_when_listening(banner: str, host: str, port: int, stop: threading.
 
 
 def _banner(app: FastAPI, host: str, port: int, workers: int) -> str:
+    from emogen.study.length import session_length
+
     config = app.state.config
     shown = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::") else host
     return (
         f"EmoGen study '{config.name}' ({app.state.service.n_trials} trials), data in "
         f"{app.state.store.describe()}, {workers} worker process{'es' if workers > 1 else ''}\n"
-        f"  participants open:    http://{shown}:{port}/?{config.participant_param}=PARTICIPANT_ID\n"
+        f"  participants open:    http://{shown}:{port}/?{config.participant_param}=PARTICIPANT_ID"
+        f"{' (required)' if config.participant_required else ''}\n"
+        f"  {session_length(config.conditions(), config.ga.generations).explained()}\n"
         f"  researcher dashboard: http://{shown}:{port}/researcher"
         f"{'' if app.state.researcher_token else '  (set EMOGEN_RESEARCHER_TOKEN to enable)'}\n"
         "  stop with Ctrl-C\n"

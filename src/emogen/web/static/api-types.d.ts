@@ -46,6 +46,27 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/researcher/export/{table}.parquet": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Export Parquet
+         * @description One export table of this study as Parquet (the provenance in its metadata), written
+         *     as the CSV is.
+         */
+        get: operations["export_parquet_api_researcher_export__table__parquet_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/researcher/participants/{participant_id}/link": {
         parameters: {
             query?: never;
@@ -76,7 +97,9 @@ export interface paths {
         };
         /**
          * Status
-         * @description Progress of every study in the database, and of this study's sessions.
+         * @description Progress of every study in the database, and of this study's sessions; this study's
+         *     durations, progress per condition, Latin-square row counts, estimated session length,
+         *     and warnings (a participant URL parameter no link carried).
          */
         get: operations["status_api_researcher_status_get"];
         put?: never;
@@ -746,6 +769,69 @@ export interface operations {
                 };
                 content: {
                     "text/csv": unknown;
+                };
+            };
+            /** @description Researcher endpoints without the right token (or disabled). */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The request's values break a rule (the message names the value). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["InvalidRequest"];
+                };
+            };
+            /** @description Too many requests from this address; wait Retry-After seconds. */
+            429: {
+                headers: {
+                    /** @description Seconds to wait before trying again. */
+                    "Retry-After"?: number;
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The server is busy or shutting down; try again in a moment. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+        };
+    };
+    export_parquet_api_researcher_export__table__parquet_get: {
+        parameters: {
+            query?: {
+                /** @description Incremental: only the sessions completed from this ISO 8601 time to a minute ago (see docs/study.md). */
+                since?: string | null;
+            };
+            header?: never;
+            path: {
+                table: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/vnd.apache.parquet": unknown;
                 };
             };
             /** @description Researcher endpoints without the right token (or disabled). */

@@ -55,6 +55,66 @@ function linkCell(participant) {
   return td;
 }
 
+/** A table row of these cells (numbers right-aligned). */
+function row(cells) {
+  const tr = document.createElement("tr");
+  for (const v of cells) {
+    const td = document.createElement("td");
+    td.textContent = v === null || v === undefined ? "" : String(v);
+    if (typeof v === "number") td.className = "n";
+    tr.appendChild(td);
+  }
+  return tr;
+}
+
+// "2025-03-04 14:10" (UTC, as stored): the time without seconds and zone.
+const shortTime = (iso) => (iso ? iso.slice(0, 16).replace("T", " ") : "");
+
+const minutes = (seconds) => (seconds === null || seconds === undefined ? "" : (seconds / 60).toFixed(1));
+
+function showWarnings(warnings) {
+  const list = $("warnings");
+  list.replaceChildren(...warnings.map((w) => {
+    const li = document.createElement("li");
+    li.textContent = w;
+    return li;
+  }));
+  list.hidden = warnings.length === 0;
+}
+
+function showDurations(status) {
+  const d = status.durations;
+  const [low, high] = status.estimate.minutes;
+  let text = `Estimated session length: about ${low}–${high} min (${status.estimate.basis}; restarts not counted).`;
+  if (d.completed > 0) {
+    const quartiles = d.quartiles_min ? ` (quartiles ${d.quartiles_min[0]}–${d.quartiles_min[1]})` : "";
+    text = `Completed sessions took ${d.median_min} min (median of ${d.completed})${quartiles}. ${text}`;
+  }
+  $("durations").textContent = text;
+  $("durations").hidden = false;
+}
+
+function showConditions(conditions) {
+  $("conditions").querySelector("tbody").replaceChildren(...conditions.map((c) =>
+    row([c.block, c.task, c.emotion, c.identity, c.assigned, c.started, c.done])));
+}
+
+function showRows(cb) {
+  const table = $("rows");
+  table.hidden = !cb.rows;
+  if (!cb.rows) return;
+  const how = cb.counterbalance === "arrival" ? "exact, in arrival order" : "from a hash of the participant id";
+  $("rows-caption").textContent = `Counterbalancing: sessions per Latin-square row (${how})`;
+  table.querySelector("tbody").replaceChildren(...cb.rows.map((r) => row([r.row, r.sessions, r.done])));
+}
+
+function sessionRow(s) {
+  const tr = row([s.session_id, s.session_number, s.participant_id, s.stage, `${s.trial} of ${s.trials}`,
+    shownGeneration(s), s.attempt ?? "", s.order_row ?? "", minutes(s.duration_s), shortTime(s.created_at), shortTime(s.updated_at)]);
+  tr.appendChild(linkCell(s.participant_id));
+  return tr;
+}
+
 async function refresh() {
   try {
     const status = await api("/api/researcher/status", { headers: headers(), retries: 0 });
@@ -65,21 +125,12 @@ async function refresh() {
           .map(([k, v]) => `${v} ${k}`)
           .join(", ")}); ${mine.trials_done} trials done; ${mine.selections} selections.`
       : "No sessions yet.";
-    const body = $("sessions").querySelector("tbody");
-    body.replaceChildren();
-    for (const s of status.sessions) {
-      const tr = document.createElement("tr");
-      for (const v of [s.session_id, s.participant_id, s.stage, `${s.trial} of ${s.trials}`,
-        shownGeneration(s), s.attempt ?? "", s.created_at, s.updated_at]) {
-        const td = document.createElement("td");
-        td.textContent = String(v);
-        tr.appendChild(td);
-      }
-      tr.appendChild(linkCell(s.participant_id));
-      body.appendChild(tr);
-    }
-    $("sessions").hidden = false;
-    $("downloads").hidden = false;
+    showWarnings(status.warnings);
+    showDurations(status);
+    showConditions(status.conditions);
+    showRows(status.counterbalancing);
+    $("sessions").querySelector("tbody").replaceChildren(...status.sessions.map(sessionRow));
+    for (const id of ["details", "sessions", "downloads"]) $(id).hidden = false;
   } catch (err) {
     $("message").textContent = err.message;
   }
@@ -93,19 +144,23 @@ $("token-form").addEventListener("submit", (event) => {
 });
 
 $("downloads").addEventListener("click", async (event) => {
-  const table = event.target.dataset && event.target.dataset.table;
-  if (!table) return;
-  const response = await fetch(`/api/researcher/export/${table}.csv`, { headers: headers() });
+  const { table, format } = event.target.dataset || {};
+  if (!table || !format) return;
+  const name = `${table}.${format}`;
+  $("message").textContent = `Preparing ${name} …`;
+  const response = await fetch(`/api/researcher/export/${name}`, { headers: headers() });
   if (!response.ok) {
-    $("message").textContent = `export failed (${response.status})`;
+    const body = await response.json().catch(() => ({}));
+    $("message").textContent = `The export of ${name} failed: ${body.detail || response.statusText}`;
     return;
   }
   const url = URL.createObjectURL(await response.blob());
   const a = document.createElement("a");
   a.href = url;
-  a.download = `${table}.csv`;
+  a.download = name;
   a.click();
   URL.revokeObjectURL(url);
+  $("message").textContent = "";
 });
 
 if (token) refresh();
