@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Debian packages EmoGen needs: offscreen OpenGL (EGL on Mesa llvmpipe), Chromium for the
-# browser tests, PostgreSQL for the study server's second backend, Node.js for the front end.
+# browser tests, PostgreSQL for the study server's second backend, Node.js for the front end,
+# R with readr (the tests read every CSV output as an R user does: docs/data.md).
 # Installs only what is missing; uses sudo when not root.
 set -euo pipefail
-PACKAGES=(libegl1 libegl-mesa0 libgl1-mesa-dri libgbm1 libgl1 chromium postgresql nodejs npm)
+PACKAGES=(libegl1 libegl-mesa0 libgl1-mesa-dri libgbm1 libgl1 chromium postgresql nodejs npm
+  r-base-core r-cran-readr)
 missing=()
 for p in "${PACKAGES[@]}"; do
   if [ "$p" = nodejs ] || [ "$p" = npm ]; then

@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.r_readers import R_MISSING, r_available
+
 REPO = Path(__file__).resolve().parents[1]
 #: The model the tests use: $EMOGEN_MODEL when set (read before the tests unset it), else
 #: ../shared beside the repository.
@@ -36,6 +38,10 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             item.add_marker(pytest.mark.model)
             if not have and not os.environ.get("CI"):
                 item.add_marker(pytest.mark.skip(reason=MODEL_MISSING))
+        # R (readr) the same way: skipped on a contributor's machine without it, failed in CI
+        wants_r = "rscript" in getattr(item, "fixturenames", ())
+        if wants_r and not os.environ.get("CI") and not r_available():
+            item.add_marker(pytest.mark.skip(reason=R_MISSING))
 
 
 @pytest.fixture(autouse=True, scope="session")
@@ -44,6 +50,13 @@ def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     os.environ["EMOGEN_CACHE_DIR"] = str(tmp_path_factory.mktemp("emogen-cache"))
     os.environ.pop("EMOGEN_MODEL", None)
     os.environ.pop("EMOGEN_MODEL_URL", None)
+
+
+@pytest.fixture(scope="session")
+def rscript() -> None:
+    """R with readr (tests/r_readers.py reads outputs with it); a failure when missing."""
+    if not r_available():
+        pytest.fail(R_MISSING)
 
 
 @pytest.fixture(scope="session")

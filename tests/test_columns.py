@@ -12,12 +12,14 @@ import pytest
 
 from emogen import columns as tidy
 from emogen.errors import ConfigError
-from tests.rlike import read_csv_like_r
+from tests.r_readers import R_CLASS, col_types_of, read_in_r
 
 BIG = 2**60 + 1  # no double holds it: float(BIG) == 2**60
 
 
-def test_a_big_seed_beside_a_missing_value_survives_csv_and_parquet(tmp_path: Path) -> None:
+def test_a_big_seed_beside_a_missing_value_survives_csv_and_parquet(
+    tmp_path: Path, rscript: None
+) -> None:
     rows = [{"seed": BIG, "rank": 0, "shown_at": "2026-01-31T09:30:00+00:00"},
             {"seed": None, "rank": None, "shown_at": None}]  # fmt: skip
     df = tidy.frame(rows)
@@ -26,10 +28,12 @@ def test_a_big_seed_beside_a_missing_value_survives_csv_and_parquet(tmp_path: Pa
     # the plain digits would have been rounded: pandas (a missing value makes the column
     # float) and R (every numeric column is double) both lose the last bits
     assert int(pd.read_csv(io.StringIO(f"seed,x\n{BIG},1\n,2\n"))["seed"].iloc[0]) != BIG
-    as_r = read_csv_like_r(tmp_path / "t.csv")
-    assert as_r["seed"].iloc[0] == f"s{BIG}" and pd.isna(as_r["seed"].iloc[1])
-    assert as_r["rank"].isna().iloc[1]  # NA, not -1
-    assert as_r["shown_at"].iloc[0] == "2026-01-31T09:30:00.000000Z"
+    (as_r,) = read_in_r([tmp_path / "t.csv"])  # R's readr, its defaults
+    assert as_r.classes["seed"] == "character" and as_r.problems == 0
+    assert as_r.frame["seed"].iloc[0] == f"s{BIG}" and pd.isna(as_r.frame["seed"].iloc[1])
+    assert as_r.classes["rank"] == "numeric" and as_r.frame["rank"].isna().iloc[1]  # NA, not -1
+    assert as_r.classes["shown_at"] == "POSIXct:UTC"
+    assert as_r.frame["shown_at"].iloc[0] == "2026-01-31T09:30:00.000000Z"
     back = tidy.read_csv(tmp_path / "t.csv")
     pd.testing.assert_frame_equal(back, df)
     tidy.write_parquet(df, tmp_path / "t.parquet", {"seed": BIG})
@@ -58,6 +62,31 @@ def test_empty_tables_take_their_columns_types() -> None:
         tidy.arrow_table(empty).schema.remove_metadata()
         == tidy.arrow_table(full).schema.remove_metadata()
     )
+
+
+def test_an_empty_table_reads_in_r_with_the_types_of_a_full_one(
+    tmp_path: Path, rscript: None
+) -> None:
+    """readr guesses types from rows: a table without rows reads as all text unless given its
+    ``col_types`` (col_types.csv, written beside the table)."""
+    rows = [{"seed": BIG, "rank": 1, "shown_at": "2026-01-31T09:30:00Z", "study": "s",
+             "w_jawOpen": 0.5, "correct": True, "p_value": 0.04, "note": "x"}]  # fmt: skip
+    full = tidy.frame(rows)
+    empty = tidy.typed(full.iloc[:0])
+    for name, df in (("full", full), ("empty", empty)):
+        (tmp_path / name).mkdir()
+        tidy.write_csv(df, tmp_path / name / "t.csv", col_types=True)
+    types = col_types_of(tmp_path / "empty")
+    assert types == col_types_of(tmp_path / "full") == {"t": "cdTcdldc"}
+    as_guessed, as_given, empty_given = read_in_r(
+        [tmp_path / "full" / "t.csv", tmp_path / "full" / "t.csv", tmp_path / "empty" / "t.csv"],
+        [{}, types, types],
+    )
+    want = {"seed": "character", "rank": "numeric", "shown_at": "POSIXct:UTC", "study": "character",
+            "w_jawOpen": "numeric", "correct": "logical", "p_value": "numeric", "note": "character"}  # fmt: skip
+    assert as_guessed.classes == as_given.classes == empty_given.classes == want
+    assert {R_CLASS[k] for k in types["t"]} <= {c.split(":")[0] for c in want.values()}
+    assert len(empty_given.frame) == 0 and empty_given.problems == 0
 
 
 def test_values_that_do_not_fit_their_type_are_named() -> None:

@@ -13,7 +13,8 @@ simulation and sweep outputs and analysis tables (the data dictionary is docs/da
   missing values as empty cells (NA to R and pandas), and seeds as text ``s<digits>`` — a seed
   above 2**53 read as a number by R (``read.csv``, readr) or by pandas in a column with a missing
   value becomes a rounded double; with the ``s`` no reader takes it for a number.
-  :func:`read_csv` reads such a CSV back with these types.
+  :func:`read_csv` reads such a CSV back with these types; ``col_types.csv`` beside a folder's
+  tables gives R's readr each table's types (:func:`readr_types`: an empty table too).
 """
 
 from __future__ import annotations
@@ -105,9 +106,9 @@ def typed(
                 out[c] = pd.to_datetime(out[c], utc=True, format="ISO8601").astype(
                     "datetime64[us, UTC]"
                 )
-            elif rule in ("int", "seed") and not _numeric(out[c]):
+            elif rule in ("int", "seed") and not _numeric(out[c].dtype):
                 out[c] = pd.array([_int(v) for v in out[c]], dtype="Int64")
-            elif rule == "float" and not _numeric(out[c]):
+            elif rule == "float" and not _numeric(out[c].dtype):
                 out[c] = pd.to_numeric(out[c]).astype("float64")
             elif rule is not None:
                 out[c] = out[c].astype(_PANDAS[rule])  # type: ignore[call-overload]
@@ -142,19 +143,16 @@ def _int(v: object) -> int | None:
         return None
     v = seed_value(v)
     if isinstance(v, str):
-        number = float(v)  # a ValueError names the cell
-        if not number.is_integer():
-            raise ValueError(f"{v!r} is not an integer")
-        return int(number)
+        v = float(v)  # a ValueError names the cell
     if isinstance(v, float) and not v.is_integer():
         raise ValueError(f"{v!r} is not an integer")
     return int(v)  # type: ignore[call-overload]
 
 
-def _numeric(column: pd.Series) -> bool:
-    import pandas as pd
+def _numeric(dtype: Any) -> bool:
+    from pandas.api.types import is_numeric_dtype
 
-    return bool(pd.api.types.is_numeric_dtype(column.dtype))
+    return bool(is_numeric_dtype(dtype))
 
 
 def _arrow_type(column: str, dtype: Any) -> pa.DataType:
@@ -170,12 +168,11 @@ def _arrow_type(column: str, dtype: Any) -> pa.DataType:
         return pa.float64()
     if rule == "str":
         return pa.string()
-    if pd.api.types.is_bool_dtype(dtype):
-        return pa.bool_()
-    if pd.api.types.is_integer_dtype(dtype):
-        return pa.int64()
-    if pd.api.types.is_float_dtype(dtype):
-        return pa.float64()
+    for test, arrow in ((pd.api.types.is_bool_dtype, pa.bool_()),
+                        (pd.api.types.is_integer_dtype, pa.int64()),
+                        (pd.api.types.is_float_dtype, pa.float64())):  # fmt: skip
+        if test(dtype):
+            return arrow
     return pa.string()
 
 
@@ -203,11 +200,8 @@ def pandas_types(t: pa.DataType) -> Any:
 
     if pa.types.is_integer(t):
         return pd.Int64Dtype()
-    if pa.types.is_string(t) or pa.types.is_large_string(t):
-        return pd.StringDtype()
-    if pa.types.is_boolean(t):
-        return pd.BooleanDtype()
-    return None
+    text = pa.types.is_string(t) or pa.types.is_large_string(t)
+    return pd.StringDtype() if text else pd.BooleanDtype() if pa.types.is_boolean(t) else None
 
 
 def arrow_table(df: pd.DataFrame, provenance: Mapping[str, Any] | None = None) -> pa.Table:
@@ -260,8 +254,41 @@ def csv_text(df: pd.DataFrame) -> str:
     return str(csv_frame(df).to_csv(index=False))
 
 
-def write_csv(df: pd.DataFrame, path: Path) -> Path:
+#: readr's one-letter ``col_types`` of each rule: integers ``d`` (as readr's own guess: a double
+#: holds them exactly to 2**53), seeds ``c`` (``s<digits>``), times ``T``, booleans ``l``.
+_READR = {"int": "d", "seed": "c", "float": "d", "str": "c", "time": "T", "bool": "l"}
+#: The file beside a folder's CSV tables that gives each table its readr ``col_types``.
+COL_TYPES = "col_types.csv"
+
+
+def readr_types(df: pd.DataFrame) -> str:
+    """``df``'s columns as a readr ``col_types`` string (:data:`_READR`; a column without a rule
+    by its data's type), so R reads the table with the same types whether it has rows or not."""
+    import pandas as pd
+
+    out, letters = typed(df), []
+    for c in out.columns:
+        rule, dt = kind(str(c)), out[c].dtype
+        if rule is None:
+            rule = "bool" if pd.api.types.is_bool_dtype(dt) else "float" if _numeric(dt) else "str"
+        letters.append(_READR[rule])
+    return "".join(letters)
+
+
+def write_col_types(folder: Path, types: Mapping[str, str]) -> Path:
+    """Add ``types`` (table name → :func:`readr_types`) to ``folder``'s :data:`COL_TYPES`."""
+    path = Path(folder) / COL_TYPES
+    lines = path.read_text().splitlines()[1:] if path.is_file() else []
+    rows = {**dict(line.split(",", 1) for line in lines), **types}
+    path.write_text("table,col_types\n" + "".join(f"{t},{rows[t]}\n" for t in sorted(rows)))
+    return path
+
+
+def write_csv(df: pd.DataFrame, path: Path, *, col_types: bool = False) -> Path:
+    """``df`` as CSV (:func:`csv_text`); ``col_types``: also its readr types (:data:`COL_TYPES`)."""
     Path(path).write_text(csv_text(df), encoding="utf-8")
+    if col_types:
+        write_col_types(Path(path).parent, {Path(path).stem: readr_types(df)})
     return Path(path)
 
 
@@ -315,8 +342,7 @@ _DISPLAY_MISSING = ("–", "—", "-", "")
 
 def machine_name(header: object) -> str:
     """A column header as an identifier R and pandas take as it is (identifiers stay; else lower
-    case ``[a-z0-9_]``,
-    units and symbols spelt out (``"bias mean"`` → ``bias_mean``, ``"max [cm]"`` → ``max_cm``,
+    case ``[a-z0-9_]``, units and symbols spelt out (``"bias mean"`` → ``bias_mean``, ``"max [cm]"`` → ``max_cm``,
     ``"[0.25, 0.5) %"`` → ``x0_25_0_5_pct``)."""
     text = str(header)
     if re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", text):
@@ -362,13 +388,8 @@ def git_commit() -> str | None:
     """The commit of the checkout this package runs from (None when not a git checkout)."""
     here = Path(__file__).resolve().parent
     try:
-        done = subprocess.run(
-            ["git", "-C", str(here), "rev-parse", "--show-toplevel", "HEAD"],
-            capture_output=True,
-            text=True,
-            timeout=5,
-            check=False,
-        )
+        command = ["git", "-C", str(here), "rev-parse", "--show-toplevel", "HEAD"]
+        done = subprocess.run(command, capture_output=True, text=True, timeout=5, check=False)
     except (OSError, subprocess.SubprocessError):
         return None
     lines = done.stdout.split()

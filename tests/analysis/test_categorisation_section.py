@@ -13,7 +13,7 @@ from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.categorisation import categorisation_section
 from emogen.analysis.report import Report
 from emogen.analysis.simulated_study import PeopleDesign, as_people, simulate_people
-from tests.rlike import dictionary_section, undocumented
+from tests.r_readers import dictionary_section, undocumented
 
 DESIGN = PeopleDesign(participants=12, repetitions=1, identities=("female-medium",))
 

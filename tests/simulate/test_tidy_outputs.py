@@ -20,7 +20,7 @@ from emogen.cli.analysis import analysis_app
 from emogen.config import GAConfig, SimulationConfig
 from emogen.simulate.runner import RECORD_SCHEMA, run_simulation, write_simulation
 from emogen.simulate.sweep import Cell, Sweep, sweep_summary
-from tests.rlike import read_csv_like_r, undocumented
+from tests.r_readers import col_types_of, read_in_r, undocumented
 
 CONFIG = SimulationConfig(target={"jawOpen": 0.9}, runs=4, seed=11, ga=GAConfig(generations=3))
 
@@ -33,15 +33,16 @@ def _simulate(rig, out: Path, target: dict[str, float] | None = None) -> dict:  
 
 
 def test_simulation_outputs_keep_seeds_exact_and_carry_the_record(
-    ict_model, tmp_path: Path
+    ict_model, tmp_path: Path, rscript: None
 ) -> None:  # type: ignore[no-untyped-def]
     record = _simulate(ict_model.rig, tmp_path)
     assert record["schema"] == RECORD_SCHEMA == "emogen.simulate/4"
     seeds = record["run_seeds"]
     assert any(s > 2**53 for s in seeds), "the test needs seeds a double cannot hold"
     # R reads the CSV: the seeds are text and exact
-    table = read_csv_like_r(tmp_path / "simulation.csv")
-    assert table["run_seed"].dtype != "float64"
+    in_r = read_in_r([tmp_path / "simulation.csv", tmp_path / "faces.csv"])
+    table, csv_faces = (t.frame for t in in_r)
+    assert in_r[0].classes["run_seed"] == "character"
     first = table.groupby("run")["run_seed"].first()
     assert [int(s.removeprefix("s")) for s in first] == seeds
     # Parquet: exact int64, and the record in the file's own metadata
@@ -58,7 +59,7 @@ def test_simulation_outputs_keep_seeds_exact_and_carry_the_record(
     # a face not selected has rank NA, in both files; never -1
     faces = pd.read_parquet(tmp_path / "faces.parquet")
     assert faces["rank"].isna().sum() == (faces["rank"].notna() == 0).sum() > 0
-    csv_faces = read_csv_like_r(tmp_path / "faces.csv")
+    assert in_r[1].classes["rank"] == "numeric"
     assert csv_faces["rank"].isna().sum() == faces["rank"].isna().sum()
     assert not (csv_faces["rank"] == -1).any()
     # weights are w_<shape>, as in a study export's faces table
@@ -100,7 +101,7 @@ def test_sweep_summary_is_typed_and_documented(ict_model, tmp_path: Path) -> Non
 
 
 def test_analysis_tables_are_long_with_identifier_headers(
-    ict_model, ict_dir: Path, tmp_path: Path
+    ict_model, ict_dir: Path, tmp_path: Path, rscript: None
 ) -> None:  # type: ignore[no-untyped-def]
     for target in ("jawOpen", "mouthSmile"):
         _simulate(ict_model.rig, tmp_path / "sims" / target, {target: 0.9})
@@ -119,8 +120,11 @@ def test_analysis_tables_are_long_with_identifier_headers(
     names = {p.stem for p in tables}
     assert {"kl_by_generation", "repeatability", "confusion", "spread_test"} <= names
     groups = {"jawOpen", "mouthSmile"}
-    for path in tables:
-        df = read_csv_like_r(path)
+    types = col_types_of(tmp_path / "out" / "tables")  # readr's col_types of every table
+    assert set(types) == names - {"col_types"}
+    for path, in_r in zip(tables, read_in_r(tables, types), strict=True):
+        df = in_r.frame
+        assert in_r.problems == 0, path.name
         for c in df.columns:  # identifiers R and pandas take as they are
             assert re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", c), (path.name, c)
             assert c not in groups, (path.name, c)  # long format: groups are rows, not columns

@@ -138,4 +138,5 @@ def test_since_is_checked_and_named(service: StudyService, tmp_path: Path) -> No
     assert result.exit_code == 0, result.output
     # completed less than SETTLE ago: not yet in an incremental export
     assert "sessions.csv (0 rows)" in result.output and "--since 20" in result.output
-    assert sorted(p.name for p in (tmp_path / "i").iterdir()) == ["export.json", "sessions.csv"]
+    written = sorted(p.name for p in (tmp_path / "i").iterdir())
+    assert written == ["col_types.csv", "export.json", "sessions.csv"]

@@ -1,6 +1,6 @@
 """Study exports as R and pandas users read them: exact seeds, real timestamps, NA for missing,
 one value per cell, the same schema when empty, provenance in every Parquet file, and every
-column in docs/data.md (no R here: see tests/rlike.py)."""
+column in docs/data.md. R reads the CSV files in tests/study/test_export_r.py."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from emogen import columns as tidy
 from emogen.study.export import TABLES, export_tables, write_export
 from emogen.study.sessions import StudyService
 from emogen.study.tables import SCHEMA_VERSION, SessionRow, TrialRow
-from tests.rlike import ISO_UTC, read_csv_like_r, undocumented
+from tests.r_readers import ISO_UTC, read_in_r, undocumented
 from tests.study.test_export_replay import completed
 
 #: Cells that hold a JSON document by design (docs/data.md says so): the resolved config, the
@@ -83,7 +83,7 @@ def test_parquet_export_is_typed_and_carries_its_provenance(
 
 
 def test_csv_export_keeps_seeds_exact_for_r_and_times_with_their_zone(
-    service: StudyService, tmp_path: Path
+    service: StudyService, tmp_path: Path, rscript: None
 ) -> None:
     completed(service, "C-1")
     tables = export_tables(service.store)
@@ -91,12 +91,13 @@ def test_csv_export_keeps_seeds_exact_for_r_and_times_with_their_zone(
     write_export(tables, tmp_path / "pq", "parquet")
     db = _seeds(service)
     assert any(s > 2**53 for s in db["sessions"].values())
-    sessions = read_csv_like_r(tmp_path / "csv" / "sessions.csv")
-    # read as R reads it, the seed is text, and exact
-    assert sessions["seed"].dtype != "float64"
+    in_r = read_in_r([tmp_path / "csv" / "sessions.csv", tmp_path / "csv" / "trials.csv"])
+    sessions, trials = (t.frame for t in in_r)
+    # read by R's readr, the seed is text, and exact; times are POSIXct in UTC
+    assert in_r[0].classes["seed"] == in_r[1].classes["seed"] == "character"
     assert [int(s.removeprefix("s")) for s in sessions["seed"]] == list(db["sessions"].values())
-    trials = read_csv_like_r(tmp_path / "csv" / "trials.csv")
     assert sorted(int(s.removeprefix("s")) for s in trials["seed"]) == sorted(db["trials"].values())
+    assert in_r[0].classes["created_at"] == in_r[1].classes["started_at"] == "POSIXct:UTC"
     for stamp in sessions["created_at"].tolist() + trials["started_at"].dropna().tolist():
         assert ISO_UTC.match(stamp), stamp
     assert sessions["user_agent"].isna().all()  # not collected: NA (an empty cell)

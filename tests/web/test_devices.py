@@ -7,7 +7,8 @@ said at once and retried until the server answers, Back stays in the study, the 
 is shown and copied, and the keyboard does what the instructions say.
 
 Screenshots go to /tmp/emogen-device-screenshots; ``EMOGEN_UPDATE_SCREENSHOTS=1`` writes the
-ones docs/study.md shows (docs/images/devices_<w>x<h>.jpg).
+ones docs/study.md shows (docs/images/devices_<w>x<h>.png, and the rating and the pause between
+trials at 390×844).
 """
 
 from __future__ import annotations
@@ -98,7 +99,14 @@ def check_trial_layout(page: Any, width: int, height: int) -> None:
     columns = len({round(b[0]) for b in boxes})
     sizes = [b[2] for b in boxes]
     assert max(sizes) - min(sizes) < 1 and all(abs(b[2] - b[3]) < 1 for b in boxes)  # square
-    assert sizes[0] >= 0.4 * width or columns == 5, (sizes[0], width, columns)
+    if width < 700 and height > width:  # a phone upright: all ten faces seen at once, no scroll
+        outside = [i + 1 for i, b in enumerate(boxes) if b[1] < 0 or b[1] + b[3] > height + 0.5]
+        assert not outside, f"faces {outside} are below the fold at {width}x{height}"
+        assert sizes[0] >= 90, (sizes[0], width, height)  # still large enough to judge
+        actions = page.eval_on_selector(".actions", "e => e.getBoundingClientRect().top")
+        assert all(b[1] + b[3] <= actions + 0.5 for b in boxes), "a face is under the action bar"
+    else:
+        assert sizes[0] >= 0.4 * width or columns == 5, (sizes[0], width, columns)
     assert all(b[0] >= 0 and b[0] + b[2] <= width + 0.5 for b in boxes)
     if page.evaluate("window.emogenStudy.display") == "webgl":  # the canvas covers the grid
         grid, canvas = (
@@ -116,6 +124,10 @@ def check_trial_layout(page: Any, width: int, height: int) -> None:
         )
         assert len(imgs) == 10 and all(ok and abs(w - sizes[0]) < 12 for ok, w in imgs), imgs
     inside_viewport(page, "#next")
+    # the marks are explained on the screen: the ★ on a face, ★ best, ✓ also acceptable
+    inside_viewport(page, "#star-help")
+    legend = page.inner_text("#star-help")
+    assert "★ best" in legend and "✓ also acceptable" in legend and "★ on a face" in legend
     no_horizontal_overflow(page)
 
 
@@ -141,7 +153,7 @@ def test_every_view_fits_the_screen(
     choose_two(page)
     SCREENSHOTS.mkdir(parents=True, exist_ok=True)
     page.evaluate("scrollTo(0, 0)")
-    page.screenshot(path=str(SCREENSHOTS / f"devices_{width}x{height}.jpg"), quality=70)
+    page.screenshot(path=str(SCREENSHOTS / f"devices_{width}x{height}.png"))
     # landscape (turned phone or tablet, a portrait monitor): still fits
     page.set_viewport_size({"width": height, "height": width})
     page.wait_for_timeout(100)
@@ -153,8 +165,16 @@ def test_every_view_fits_the_screen(
     page.click("#next")
     wait_ready(page, "rating")
     no_horizontal_overflow(page)
+    inside_viewport(page, "#prompt")  # the rating's own question, not "Make the face look …"
+    assert page.inner_text("#prompt").startswith("How well does this face show")
     page.get_by_label("4", exact=True).check()
     inside_viewport(page, "#rate")
+    if (width, height) == (390, 844):
+        page.evaluate("scrollTo(0, 0)")
+        page.screenshot(path=str(SCREENSHOTS / "devices_rating_390x844.png"))
+        page.click("#rate")
+        wait_for(page, "window.emogenStudy.stage === 'transition'", timeout=10_000)
+        page.screenshot(path=str(SCREENSHOTS / "devices_transition_390x844.png"))
     page.context.close()
 
 
@@ -203,7 +223,7 @@ def test_a_lost_connection_is_said_at_once_and_retried_until_the_server_answers(
         page, f"document.querySelector('#grid > .cell').dataset.face !== '{before}'", timeout=15_000
     )
     wait_ready(page, "trial")
-    assert "Generation 2 of 2" in page.inner_text("#progress")
+    assert "Round 2 of 2" in page.inner_text("#progress")
     assert "Connection lost" not in page.inner_text("#message")
     page.context.close()
 
@@ -253,7 +273,7 @@ def test_back_stays_in_the_study(browser: Any, site: ServerProcess) -> None:
         assert page.url == url
         assert page.evaluate("window.emogenStudy.stage") == "trial"
         assert "Back does not undo" in page.inner_text("#message")
-    assert "Generation 2 of 2" in page.inner_text("#progress")
+    assert "Round 2 of 2" in page.inner_text("#progress")
     page.context.close()
 
 

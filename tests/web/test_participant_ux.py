@@ -126,7 +126,7 @@ def test_dashboard_numbers_generations_as_the_participant_saw_them(client: TestC
 
     assert line()["step"] == "instructions"
     state = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()
-    # the page reads "Trial 1 of 2 · Generation 1 of 3" (ga.generations = 2: 0 … 2 shown)
+    # the page reads "Trial 1 of 2 · Round 1 of 3" (ga.generations = 2: generations 0 … 2)
     shown = line()
     assert (shown["trial"], shown["generation"]) == (1, 0)  # stored: generation from 0
     assert (shown["generation_shown"], shown["generations_shown"]) == (1, 3)

@@ -150,7 +150,7 @@ def test_participant_completes_two_trials(
     assert page.evaluate("window.emogenStudy.display") == "webgl"
     assert "Make the face look HAPPY" in page.inner_text("#prompt")
     assert "Trial 1 of 2" in page.inner_text("#progress")
-    assert "Generation 1 of 2" in page.inner_text("#progress")
+    assert "Round 1 of 2" in page.inner_text("#progress")  # ga.generations = 1: rounds 1, 2
     SCREENSHOTS.mkdir(exist_ok=True)
 
     # ---- trial 1, generation 0, keyboard only ----
@@ -177,7 +177,7 @@ def test_participant_completes_two_trials(
     page.focus("#next")
     page.keyboard.press("Enter")
     chosen.append((0, 0, 0, ids[7], [ids[2]]))
-    wait_for(page, "document.querySelector('#progress').innerText.includes('Generation 2 of 2')")
+    wait_for(page, "document.querySelector('#progress').innerText.includes('Round 2 of 2')")
     wait_ready(page, "trial")
 
     # ---- trial 1, generation 1: min 2 and max 3 selections enforced in the page ----
@@ -194,9 +194,19 @@ def test_participant_completes_two_trials(
 
     # ---- rating of trial 1 ----
     wait_ready(page, "rating")
+    # the rating screen asks its own question (the study's [rating] question), not the prompt
+    assert page.inner_text("#prompt") == (
+        "How well does this face show the emotion you were asked for?"
+    )
     page.screenshot(path=str(SCREENSHOTS / "rating-1366x768.png"))
     page.get_by_label("6", exact=True).check()
     page.click("#rate")
+
+    # ---- a short pause before trial 2 says where the participant is; a tap skips it ----
+    wait_for(page, "window.emogenStudy.stage === 'transition'", timeout=10_000)
+    assert page.inner_text("#transition-text") == "Trial 2 of 2 — next: SAD"
+    assert not page.evaluate("window.emogenStudy.ready")  # no faces yet: no clock running
+    page.evaluate("document.getElementById('view-transition').click()")
 
     # ---- trial 2: a restart, then two generations with the mouse ----
     wait_for(page, "document.querySelector('#prompt').innerText.includes('SAD')")

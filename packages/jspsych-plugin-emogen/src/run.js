@@ -7,6 +7,7 @@
 import { newKey } from "../../../src/emogen/web/static/api.js";
 import { statusText } from "../../../src/emogen/web/static/connection.js";
 import { createFaceDisplay } from "../../../src/emogen/web/static/faces.js";
+import { roundText, screenPrompt } from "../../../src/emogen/web/static/progress.js";
 import { createCategorise } from "../../../src/emogen/web/static/tasks/categorise.js";
 import { createEvolve } from "../../../src/emogen/web/static/tasks/evolve.js";
 import { STATUS_LINES, TASK_VIEWS } from "../../../src/emogen/web/static/tasks/markup.js";
@@ -116,9 +117,8 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
   function paintProgress(state) {
     const p = state.progress;
     const evolving = state.trial.task === "evolve";
-    const generation = `Generation ${p.generation + 1} of ${p.generations + 1}`;
-    $("gen-progress").textContent = evolving ? (state.trial.status === "active" ? generation : "Rating") : "";
-    $("prompt").textContent = state.trial.prompt;
+    $("gen-progress").textContent = evolving ? (state.trial.status === "active" ? roundText(p) : "Rating") : "";
+    $("prompt").textContent = screenPrompt(state, state.trial.prompt);
   }
 
   async function step(path, body) {

@@ -58,7 +58,7 @@ test("an evolve and a categorise trial run on one session; their data are what w
     { type: EmogenPlugin, server: SERVER, task: "categorise" },
   ]);
   await chooseAndNext(2, 5); // generation 1: faces 2 (best) and 5
-  await until(() => document.querySelector("#gen-progress").textContent === "Generation 2 of 2", "generation 2");
+  await until(() => document.querySelector("#gen-progress").textContent === "Round 2 of 2", "generation 2");
   await chooseAndNext(0, 9);
   await until(ready("rating"), "the rating");
   const five = document.querySelector('#rating-scale input[value="5"]');
@@ -138,7 +138,7 @@ test("the next trial of another task: fails, saying so", async () => {
 test("the server gone mid-trial: the trial ends as failed, what was done kept", async () => {
   const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, retries: 0 }]);
   await chooseAndNext(1, 2);
-  await until(() => document.querySelector("#gen-progress").textContent === "Generation 2 of 2", "generation 2");
+  await until(() => document.querySelector("#gen-progress").textContent === "Round 2 of 2", "generation 2");
   await until(ready("trial"), "the faces");
   fake.down = true;
   await chooseAndNext(3, 4);

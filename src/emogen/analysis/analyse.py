@@ -113,6 +113,7 @@ def analyse(
         tidy.write_csv(
             ds.elites.rename(columns={c: f"w_{c}" for c in ds.columns}),
             report.out / "tables" / "elites.csv",
+            col_types=True,
         )
     (report.out / "analysis.json").write_text(json.dumps(summary, indent=2, default=_json) + "\n")
     html_path, md_path = report.write()

@@ -140,6 +140,7 @@ def prototypes_section(
         tidy.write_csv(
             protos.rename(columns={c: f"w_{c}" for c in cols}),
             report.out / "tables" / "prototypes.csv",
+            col_types=True,
         )
         show = protos[["group", "participant", "n_trials"]].copy()
         show["largest weights"] = [top_weights(r, cols) for r in protos[cols].to_numpy()]

@@ -150,7 +150,7 @@ def _write_only(report: Report, table: pd.DataFrame, name: str) -> None:
     from emogen import columns as tidy
 
     path = report.out / "tables" / f"{name}.csv"
-    tidy.write_csv(tidy.machine_table(table), path)
+    tidy.write_csv(tidy.machine_table(table), path, col_types=True)
     report.tables[name] = path
 
 

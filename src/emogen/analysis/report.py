@@ -153,7 +153,7 @@ class Report:
         if name is not None:
             path = self.out / "tables" / f"{name}.csv"
             machine = tidy.machine_table(df if data is None else data, index=index and data is None)
-            tidy.write_csv(machine, path)
+            tidy.write_csv(machine, path, col_types=True)
             self.tables[name] = path
         shown = df.reset_index() if index else df
         self.blocks.append(_Table(shown, caption, name))

@@ -281,7 +281,8 @@ def export_provenance(tables: dict[str, pd.DataFrame]) -> dict[str, Any]:
 
 def write_export(tables: dict[str, pd.DataFrame], out: Path, fmt: str = "parquet") -> list[Path]:
     """``<table>.parquet`` or ``<table>.csv`` for every table, in ``out`` (CSV text cells
-    that a spreadsheet would run as formulas are neutralised: :func:`neutralise_formulas`)."""
+    that a spreadsheet would run as formulas are neutralised: :func:`neutralise_formulas`;
+    beside CSV tables, their readr types: :func:`emogen.columns.write_col_types`)."""
     if fmt not in ("parquet", "csv"):
         raise ConfigError(f"--format must be parquet or csv; got {fmt!r}")
     out = Path(out)
@@ -295,6 +296,8 @@ def write_export(tables: dict[str, pd.DataFrame], out: Path, fmt: str = "parquet
         else:
             path.write_text(csv_text(df), encoding="utf-8")
         paths.append(path)
+    if fmt == "csv":
+        tidy.write_col_types(out, {name: tidy.readr_types(df) for name, df in tables.items()})
     return paths
 
 

@@ -209,6 +209,8 @@ def _write(spill: _Spill, name: str, path: Path, fmt: str, provenance: dict[str,
             for group in _row_groups(tables):
                 writer.write_table(group)
         return
+    empty = schema.empty_table().to_pandas(types_mapper=tidy.pandas_types)
+    tidy.write_col_types(path.parent, {name: tidy.readr_types(empty)})
     with open(path, "w", encoding="utf-8", newline="") as out:
         for i, table in enumerate(tables):
             frame = neutralise_formulas(table.to_pandas(types_mapper=tidy.pandas_types))

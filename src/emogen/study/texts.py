@@ -33,8 +33,9 @@ USER_AGENT_WORDS = ("user agent", "user-agent", "useragent")
 DEFAULT_INSTRUCTIONS = (
     "You will see ten faces at a time. Click the face that best shows the emotion you are asked "
     "for: it is marked with a star (★). Then click any other faces that are also acceptable: "
-    "they are marked with a tick (✓). Press “Next generation” and new faces will be bred from "
-    "the ones you chose. After a few generations you rate the final face.\n\nKeyboard: Tab or "
+    "they are marked with a tick (✓); the ★ on a face makes that face the best. Press “Next "
+    "round” and new faces will be bred from the ones you chose. After the last round you rate "
+    "the final face.\n\nKeyboard: Tab or "
     "the arrow keys move between faces, Enter or Space selects, B makes a face the best one."
 )
 

@@ -14,6 +14,7 @@ import {
   options,
 } from "../../../src/emogen/web/static/answer.js";
 import { viewOf } from "../../../src/emogen/web/static/selection.js";
+import { sessionState } from "./states.mjs";
 
 const scale = { question: "How intense?", points: 7, low_label: "weak", high_label: "strong" };
 
@@ -30,19 +31,14 @@ function view(over = {}) {
 }
 
 function state(v) {
-  return {
-    stage: "trial",
-    participant_id: "p",
-    progress: { trial: 6, trials: 9, block: 2, blocks: 3, generation: 0, generations: 9 },
-    limits: { min_selections: 1, max_selections: 4 },
-    allow_restart: true,
-    trial: { position: 6, block: 2, task: "categorise", emotion: "", prompt: "Which emotion?",
-      identity: "female-medium", attempt: 0, status: "active" },
-    population: null,
-    rating: null,
-    categorise: v,
-    completion: null,
-  };
+  return sessionState(
+    {
+      progress: { trial: 6, trials: 9, block: 2, blocks: 3, generation: 0, generations: 9 },
+      allow_restart: true,
+      categorise: v,
+    },
+    { position: 6, block: 2, task: "categorise", emotion: "", prompt: "Which emotion?", identity: "female-medium" },
+  );
 }
 
 test("labels are offered in the server's order, 'none of these' last, keyed 1-9", () => {

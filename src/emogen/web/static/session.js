@@ -6,6 +6,7 @@
 import { api, ApiError, newKey } from "./api.js";
 import { statusText } from "./connection.js";
 import { createFaceDisplay } from "./faces.js";
+import { roundText, screenPrompt, startsTrial, TRANSITION_MS, transitionText } from "./progress.js";
 import * as selection from "./selection.js";
 import { createCategorise } from "./tasks/categorise.js";
 import { createEvolve } from "./tasks/evolve.js";
@@ -17,7 +18,7 @@ const $ = (id) => document.getElementById(id);
 // the task components' screens (shared with the jsPsych plugin), before the components start
 $("view-instructions").insertAdjacentHTML("afterend", TASK_VIEWS);
 $("main").insertAdjacentHTML("beforeend", STATUS_LINES);
-const views = ["loading", "instructions", "trial", "rating", "categorise", "done"];
+const views = ["loading", "instructions", "transition", "trial", "rating", "categorise", "done"];
 
 const ui = {
   state: null,
@@ -90,7 +91,7 @@ function renderProgress(state) {
   $("trial-progress").textContent = `Trial ${p.trial + 1} of ${p.trials}`;
   let detail = "";
   if (trial && trial.task === "evolve") {
-    detail = trial.status === "active" ? `· Generation ${p.generation + 1} of ${G}` : "· Rating";
+    detail = trial.status === "active" ? `· ${roundText(p)}` : "· Rating";
   } else if (trial && p.blocks > 1) {
     detail = `· Part ${p.block + 1} of ${p.blocks}`;
   }
@@ -98,7 +99,7 @@ function renderProgress(state) {
   const within = trial && trial.task === "evolve" ? (p.generation + 1) / (G + 1) : 0;
   const done = state.stage === "done" ? 1 : (p.trial + within) / p.trials;
   $("meter-fill").style.width = `${Math.round(100 * Math.min(1, done))}%`;
-  $("prompt").textContent = trial ? trial.prompt : document.title;
+  $("prompt").textContent = screenPrompt(state, document.title);
 }
 
 // ---- what the task components share ---------------------------------------------------------
@@ -146,12 +147,35 @@ function showDone(state) {
   setReady(true);
 }
 
+// ---- the pause between trials: "Trial 2 of 8 — next: SAD", a tap or a key skips it -----------
+function pause(state) {
+  $("transition-text").textContent = transitionText(state);
+  show("transition");
+  return new Promise((resolve) => {
+    const done = () => {
+      clearTimeout(timer);
+      $("view-transition").removeEventListener("click", done);
+      document.removeEventListener("keydown", done);
+      resolve(undefined);
+    };
+    const timer = setTimeout(done, TRANSITION_MS);
+    $("view-transition").addEventListener("click", done);
+    document.addEventListener("keydown", done);
+  });
+}
+
 // ---- state machine ---------------------------------------------------------------------------
 async function render(state) {
-  // the first faces this page draws count from the page's start (receivedAt stays 0)
-  ui.receivedAt = ui.receivedAt === null ? 0 : performance.now();
+  const before = ui.state;
   ui.state = state;
   renderProgress(state);
+  if (startsTrial(before, state)) {
+    await pause(state);
+    ui.receivedAt = performance.now(); // the faces' load time starts after the pause
+  } else {
+    // the first faces this page draws count from the page's start (receivedAt stays 0)
+    ui.receivedAt = ui.receivedAt === null ? 0 : performance.now();
+  }
   const view = selection.viewOf(state);
   if (view === "instructions") {
     $("resume-link").value = `${location.origin}/s/${token}`;

@@ -78,12 +78,12 @@ export function createEvolve(page) {
     let status;
     if (ui.busy) status = "Saving your choice…";
     else if (ui.loading) status = "Loading the faces: please wait until they appear.";
-    else if (sel.elite === null) status = "Click the face that looks most like the emotion: it becomes ★ best.";
+    else if (sel.elite === null) status = "Tap the face most like the emotion: it becomes ★ best.";
     else if (n < min) status = `Choose at least ${min} faces (${n} chosen).`;
-    else status = `${n} chosen (up to ${max}): ★ best + ${sel.others.length} also acceptable. Then press Next generation.`;
+    else status = `${n} chosen (up to ${max}): ★ best + ${sel.others.length} also acceptable. Then press Next round.`;
     $("selection-status").textContent = status;
     $("next").disabled = ui.busy || ui.loading || !selection.complete(sel, ui.state.limits);
-    $("next").textContent = ui.busy ? "Saving…" : "Next generation";
+    $("next").textContent = ui.busy ? "Saving…" : "Next round";
   }
 
   // ---- the grid ------------------------------------------------------------------------------

@@ -8,10 +8,11 @@ export const TASK_VIEWS = `
     <p id="grid-help" class="sr-only">Faces. Tab or the arrow keys move between faces; Enter or Space selects a face or removes it; B makes the focused face the best one.</p>
     <div id="grid" class="grid" data-viewer-container role="group" aria-describedby="grid-help"></div>
     <div class="actions">
+      <p id="star-help" class="legend"><span class="legend-best">★ best</span> · <span class="legend-ok">✓ also acceptable</span> · the ★ on a face makes it the best</p>
       <p id="selection-status" class="status" aria-live="polite">&nbsp;</p>
       <div class="buttons">
         <button id="restart" type="button" class="secondary">Start again</button>
-        <button id="next" type="button" class="primary" disabled>Next generation</button>
+        <button id="next" type="button" class="primary" disabled>Next round</button>
       </div>
     </div>
   </section>
@@ -20,7 +21,7 @@ export const TASK_VIEWS = `
     <div class="rating-face" data-viewer-container><div class="slot big" id="rating-slot"></div></div>
     <form id="rating-form" class="rating-form">
       <fieldset>
-        <legend id="rating-question">&nbsp;</legend>
+        <legend id="rating-question" class="sr-only">&nbsp;</legend>
         <div class="scale" id="rating-scale"></div>
         <div class="scale-labels"><span id="rating-low"></span><span id="rating-high"></span></div>
       </fieldset>
