@@ -24,14 +24,14 @@ def test_a_job_sees_what_an_earlier_job_of_its_batch_wrote_by_a_plain_statement(
     try:
         service = study_service(small_study, store, ict_model)
         token, _ = service.create_session("BATCH-1")
-        study_id = service.ctx.study_id
+        study_ids = service.ctx.accepted
         table = core_table(SessionRow)
 
         def keep(db: Session) -> SessionRow:
-            return session_by_token(db, token, study_id)  # still referenced after the job
+            return session_by_token(db, token, study_ids)  # still referenced after the job
 
         def load(db: Session) -> str:
-            return session_by_token(db, token, study_id).stage
+            return session_by_token(db, token, study_ids).stage
 
         def change(db: Session) -> None:
             db.connection().execute(

@@ -78,6 +78,9 @@ def test_half_sent_requests_are_408_after_the_header_timeout(server: ServerProce
 
 
 def test_wrong_researcher_tokens_are_counted_across_workers(server: ServerProcess) -> None:
+    deadline = time.monotonic() + 30  # both workers idle in their event loop (not mid-request)
+    while server.ready_workers() < 2 and time.monotonic() < deadline:
+        time.sleep(0.2)
     assert server.ready_workers() == 2
     statuses = []
     for i in range(30):  # a brute force, a new connection each (any worker may take it)
