@@ -25,6 +25,7 @@ from emogen.render.gl import GLRenderer
 from emogen.render.images import contact_sheet
 from emogen.render.look import Look, default_look, fitted_look
 from emogen.render.scene import FaceMesh, face_mesh
+from emogen.render.wrinkles import StrainOperator, skin_strain_operator
 
 
 @cache
@@ -74,7 +75,9 @@ class Renderer:
         )
         self.appearance = appearance
         self.textures: SkinTextures | None = None
+        self.strain: StrainOperator | None = None
         if appearance is not None:
+            self.strain = skin_strain_operator(model, self.mesh, self.look)
             self.textures = skin_textures(
                 model, appearance, irradiance=self.look.front_irradiance()
             )
@@ -139,11 +142,15 @@ class Renderer:
                 )
         out = np.empty((len(v), self.size, self.size, 3), dtype=np.uint8)
         normals = self.mesh.normals(v)
+        src = self.mesh.source
         try:
             for i in range(len(v)):
                 if albedo is not None:
                     self._gl.set_albedo(albedo if albedo.ndim == 2 else albedo[i])
-                out[i] = self._gl.draw(v[i], normals[i])
+                strain = None
+                if self.strain is not None and albedo is None:
+                    strain = self.strain.strain(v[i][src] - self.model.neutral[src])
+                out[i] = self._gl.draw(v[i], normals[i], strain)
         finally:
             if albedo is not None:
                 self._gl.set_albedo(None)

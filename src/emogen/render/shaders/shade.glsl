@@ -10,6 +10,8 @@
 //   eye     : xyz = unit direction from the eyeball centre in the eye's rest frame (z = eye axis),
 //             w = side (1 left, 2 right, 0 not an eye)
 //   uv      : glTF texture coordinates (u counts UDIM tiles: face 0-1, head 1-2; v down)
+//   strain  : linear strain of the skin in UV axes (εuu, εvv, εuv; −0.2: compressed by 20 %),
+//             from the face's own displacement (emogen/render/wrinkles.py, viewer/strain.js)
 //
 // Textures (skin and eye-socket parts, when emogenTextured > 0.5): emogenSkin, the identity's skin atlas
 // (SKIN_TILES tiles side by side, sRGB); emogenDetail, a tileable micro-relief (R height,
@@ -100,16 +102,45 @@ vec3 emogenBump(vec3 pos, vec3 n, float h) {
     return len > 1e-12 ? bumped / len : n;
 }
 
+// Furrows across lines of constant x (UV units): 1 in a furrow, 0 between. The lines wander
+// and fade along y so that they do not look ruled.
+float emogenFurrows(float x, float y) {
+    float k = 1.0 / WRINKLE_PERIOD_UV;
+    float ph = x * k + 0.35 * sin(y * k * 0.45 + 1.3) + 0.12 * sin(y * k * 1.3 + 0.4);
+    float s = 0.5 + 0.5 * cos(6.2831853 * ph);
+    float along = 0.55 + 0.45 * sin(y * k * 0.8 + 2.7 * floor(ph + 0.5));
+    return s * s * along;
+}
+
+// Wrinkles of skin under strain: (furrow depth in cm, furrow shade in [0, 1]). Compression c
+// along four directions of the UV plane (c = −eᵀ ε e) makes furrows across each, from
+// WRINKLE_START to full depth at WRINKLE_FULL; the sharpening keeps the dominant direction.
+vec2 emogenWrinkles(vec2 uv, vec3 strain) {
+    float mean = 0.5 * (strain.x + strain.y);
+    vec4 c = -vec4(strain.x, strain.y, mean + strain.z, mean - strain.z);
+    float cmax = max(max(c.x, c.y), max(c.z, c.w));
+    vec4 share = clamp(c / max(cmax, 1e-4), 0.0, 1.0);
+    share *= share;
+    vec4 a = smoothstep(vec4(WRINKLE_START), vec4(WRINKLE_FULL), c) * share * share;
+    float r = 0.70710678;
+    float f = a.x * emogenFurrows(uv.x, uv.y) + a.y * emogenFurrows(uv.y, uv.x)
+        + a.z * emogenFurrows((uv.x + uv.y) * r, (uv.x - uv.y) * r)
+        + a.w * emogenFurrows((uv.x - uv.y) * r, (uv.x + uv.y) * r);
+    float fold = smoothstep(WRINKLE_START, WRINKLE_FULL, cmax);
+    return vec2(WRINKLE_DEPTH_CM * f, WRINKLE_SHADE * f + FOLD_SHADE * fold);
+}
+
 // Final sRGB colour of a fragment.
 vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v, vec4 eye,
-                 bool front, vec2 uv) {
+                 bool front, vec2 uv, vec3 strain) {
     vec3 skin = texture(emogenSkin, vec2(uv.x / SKIN_TILES, uv.y)).rgb;
     vec3 detail = texture(emogenDetail, uv * DETAIL_TILES).rgb;
-    vec3 bumped = emogenBump(pos, n, (detail.r - 0.5) * DETAIL_BUMP_CM);
+    vec2 wrinkle = emogenWrinkles(uv, strain);
+    vec3 bumped = emogenBump(pos, n, (detail.r - 0.5) * DETAIL_BUMP_CM - wrinkle.x);
     bool textured = emogenTextured > 0.5
         && (abs(part - PART_SKIN) < 0.5 || abs(part - PART_EYE_SOCKET) < 0.5);
     if (textured) {
-        albedo = emogenToLinear(skin);
+        albedo = emogenToLinear(skin) * (1.0 - wrinkle.y);
         surface.x *= 1.0 + DETAIL_SPECULAR * (2.0 * detail.g - 1.0);
         n = bumped;
     }
