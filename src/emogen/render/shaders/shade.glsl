@@ -74,6 +74,15 @@ vec3 emogenIris(vec4 eye, vec3 scleraLinear) {
     return c;
 }
 
+// The eyeball's own shading (no shadows are cast): darker toward the corners, away from the
+// eye axis, and under the upper lid, which shades the top of the visible ball.
+float emogenEyeShade(vec4 eye) {
+    vec3 e = normalize(eye.xyz);
+    float corner = 1.0 - EYE_CORNER_SHADE * smoothstep(IRIS_DEG, 55.0, emogenEyeAngle(eye));
+    float lid = 1.0 - EYE_LID_SHADE * smoothstep(0.10, 0.45, e.y);
+    return corner * lid;
+}
+
 vec3 emogenLight(vec3 n, vec3 v, vec3 albedo, float spec, float shin, float wrap) {
     vec3 l1 = normalize(KEY_DIR);
     vec3 l2 = normalize(FILL_DIR);
@@ -158,6 +167,9 @@ vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v
             return EYE_INTERIOR_SRGB;
         }
         base = emogenIris(eye, albedo);
+    }
+    if (isEye && eye.w > 0.5) {
+        base *= emogenEyeShade(eye);
     }
     // No shadows: deep in the mouth gets darker with depth behind the lips instead.
     float depth = smoothstep(CAVITY_Z_BACK, CAVITY_Z_FRONT, pos.z);
