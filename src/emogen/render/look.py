@@ -153,7 +153,7 @@ class Look:
         ``emogenLight`` computes it: what the skin generator divides a target colour by."""
         sh = self.shader
         n = np.array([0.0, 0.0, 1.0])
-        wrap = float(sh["WRAP"])
+        wrap = float(sh["SKIN_WRAP_RGB"][1])
         total = 0.5 * (np.asarray(sh["GROUND_RGB"]) + np.asarray(sh["SKY_RGB"]))
         for d, rgb in (("KEY_DIR", "KEY_RGB"), ("FILL_DIR", "FILL_RGB")):
             direction = np.asarray(sh[d], dtype=np.float64)

@@ -83,17 +83,32 @@ float emogenEyeShade(vec4 eye) {
     return corner * lid;
 }
 
-vec3 emogenLight(vec3 n, vec3 v, vec3 albedo, float spec, float shin, float wrap) {
+// Two lights and a sky/ground ambient. wrap (per channel) lets light reach past the terminator:
+// skin's soft light bleed, wider in red than in blue (wrap lighting as a cheap stand-in for
+// subsurface scattering; Green 2004, GPU Gems ch. 16). Eyes take no wrap.
+vec3 emogenLight(vec3 n, vec3 v, vec3 albedo, float spec, float shin, vec3 wrap) {
     vec3 l1 = normalize(KEY_DIR);
     vec3 l2 = normalize(FILL_DIR);
     float n1 = dot(n, l1);
     float n2 = dot(n, l2);
-    float d1 = max((n1 + wrap) / (1.0 + wrap), 0.0);
-    float d2 = max((n2 + wrap) / (1.0 + wrap), 0.0);
+    vec3 d1 = max((vec3(n1) + wrap) / (1.0 + wrap), 0.0);
+    vec3 d2 = max((vec3(n2) + wrap) / (1.0 + wrap), 0.0);
     float s1 = n1 > 0.0 ? spec * pow(max(dot(n, normalize(l1 + v)), 0.0), shin) : 0.0;
     float s2 = n2 > 0.0 ? spec * pow(max(dot(n, normalize(l2 + v)), 0.0), shin) : 0.0;
     vec3 hemi = mix(GROUND_RGB, SKY_RGB, 0.5 + 0.5 * n.y);
     return albedo * (hemi + KEY_RGB * d1 + FILL_RGB * d2) + KEY_RGB * s1 + FILL_RGB * s2;
+}
+
+// The catchlights: the key and fill lights mirrored by the cornea, whose normal (in the eye's
+// frame, z the axis) turns CORNEA_CURVE times faster than the direction from the eye's centre.
+// Approximates the eye frame by the camera's (gaze turns the eyes by at most ~25°).
+vec3 emogenCatchlight(vec4 eye, vec3 v) {
+    vec3 e = normalize(eye.xyz);
+    vec3 c = normalize(vec3(e.xy * CORNEA_CURVE, e.z));
+    float k = pow(max(dot(c, normalize(normalize(KEY_DIR) + v)), 0.0), CATCH_SHININESS);
+    float f = pow(max(dot(c, normalize(normalize(FILL_DIR) + v)), 0.0), CATCH_SHININESS);
+    float onCornea = 1.0 - smoothstep(IRIS_DEG - 2.0, IRIS_DEG + 1.0, emogenEyeAngle(eye));
+    return CATCH_STRENGTH * onCornea * (KEY_RGB * k + 0.5 * FILL_RGB * f);
 }
 
 // Normal perturbed by a height field h (cm) from screen-space derivatives (no tangents needed).
@@ -174,6 +189,10 @@ vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v
     // No shadows: deep in the mouth gets darker with depth behind the lips instead.
     float depth = smoothstep(CAVITY_Z_BACK, CAVITY_Z_FRONT, pos.z);
     float cavity = mix(1.0, mix(CAVITY_MIN, 1.0, depth), clamp(surface.z, 0.0, 1.0));
-    float wrap = isEye ? 0.0 : WRAP;
-    return emogenToSrgb(emogenLight(n, v, base * cavity, surface.x * cavity, surface.y, wrap));
+    vec3 wrap = isEye ? vec3(0.0) : SKIN_WRAP_RGB;
+    vec3 lit = emogenLight(n, v, base * cavity, surface.x * cavity, surface.y, wrap);
+    if (abs(part - PART_IRIS) < 0.5 && eye.w > 0.5) {
+        lit += emogenCatchlight(eye, v);
+    }
+    return emogenToSrgb(lit);
 }
