@@ -51,7 +51,7 @@ def textured_sheets(out: Path, tag: str) -> None:
     """The textured look under each framing, 512² and tile size: stimuli_TAG_FRAMING_SIZE.png
     (``--tag round1`` run with the previous release, ``round2`` with this one)."""
     model = emogen.load_model()
-    for framing in ("face", "head"):
+    for framing in ("face", "oval", "head"):
         for size, name in ((512, "512"), (256, "tile")):
             path = out / f"stimuli_{tag}_{framing}_{name}.png"
             Image.fromarray(sheet(model, size, True, framing)).save(path, optimize=True)
