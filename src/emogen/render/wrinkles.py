@@ -40,28 +40,38 @@ __all__ = [
 
 @dataclass(frozen=True, eq=False)
 class StrainOperator:
-    """Linear strain of the drawn skin vertices of one mesh.
+    """Linear strain of the drawn skin vertices of one mesh, as one sparse matrix.
 
     triangles : (T, 3) skin triangles in drawn-vertex numbering
-    jacobian : (T, 3, 2) rest chart Jacobian F (cm per UV unit) over the rows' s²
-    inverse_uv : (T, 2, 2) A⁻¹
-    average : (R, T) sparse area-weighted mean over a drawn vertex's skin triangles
+    matrix : (3R, 3R) sparse: flattened displacements (R·3) → flattened vertex strains (R·3),
+        the area-weighted mean of the per-triangle strains
     """
 
     triangles: np.ndarray
-    jacobian: np.ndarray
-    inverse_uv: np.ndarray
-    average: sparse.csr_matrix
+    matrix: sparse.csr_matrix
 
     def strain(self, displacement: np.ndarray) -> np.ndarray:
         """Drawn-vertex displacements (R, 3) cm → strain (R, 3) float32 (εuu, εvv, εuv)."""
-        d = np.asarray(displacement, dtype=np.float32)
-        tri = self.triangles
-        edges = np.stack([d[tri[:, 1]] - d[tri[:, 0]], d[tri[:, 2]] - d[tri[:, 0]]], axis=2)
-        fd = np.matmul(edges, self.inverse_uv)  # (T, 3, 2)
-        e = np.einsum("tki,tkj->tij", self.jacobian, fd)
-        per_tri = np.stack([e[:, 0, 0], e[:, 1, 1], 0.5 * (e[:, 0, 1] + e[:, 1, 0])], axis=1)
-        return np.asarray(self.average @ per_tri, dtype=np.float32)
+        d = np.asarray(displacement, dtype=np.float32).reshape(-1)
+        return np.asarray(self.matrix @ d, dtype=np.float32).reshape(-1, 3)
+
+
+def _triangle_strains(
+    jac: np.ndarray, inv: np.ndarray, tri: np.ndarray, n: int
+) -> sparse.csr_matrix:
+    """(3T, 3n) sparse: displacements → per-triangle (εuu, εvv, εuv). With edges d1 − d0 and
+    d2 − d0, E[i, a] = Σ_j J[j, i] (A⁻¹[0, a] (d1 − d0)_j + A⁻¹[1, a] (d2 − d0)_j)."""
+    n_tri = len(tri)
+    # coefficient of corner k (1, 2) component j in E[i, a]: J[t, j, i] · A⁻¹[t, k − 1, a]
+    e = np.einsum("tji,tka->tiakj", jac, inv)  # (T, 2, 2, 2 corners, 3)
+    out = np.stack([e[:, 0, 0], e[:, 1, 1], 0.5 * (e[:, 0, 1] + e[:, 1, 0])], axis=1)
+    coef = np.concatenate([-out.sum(axis=2, keepdims=True), out], axis=2)  # (T, 3, 3, 3)
+    rows = 3 * np.arange(n_tri)[:, None, None, None] + np.arange(3)[None, :, None, None]
+    cols = 3 * tri[:, None, :, None] + np.arange(3)[None, None, None, :]
+    rows, cols = np.broadcast_arrays(rows, cols)
+    return sparse.csr_matrix(
+        (coef.reshape(-1), (rows.reshape(-1), cols.reshape(-1))), shape=(3 * n_tri, 3 * n)
+    )
 
 
 def strain_operator(
@@ -91,12 +101,11 @@ def strain_operator(
     m = sparse.csr_matrix((np.repeat(area, 3), (rows, cols)), shape=(n_vertices, len(tri)))
     total = np.asarray(m.sum(axis=1)).ravel()
     scale = np.divide(1.0, total, out=np.zeros_like(total), where=total > 0)
-    average = sparse.diags(scale) @ m
+    average = sparse.kron(sparse.diags(scale) @ m, sparse.identity(3), format="csr")
+    per_tri = _triangle_strains(f / s2[:, None, None], inv, tri, n_vertices)
     return StrainOperator(
         triangles=tri.astype(np.int32),
-        jacobian=(f / s2[:, None, None]).astype(np.float32),
-        inverse_uv=inv.astype(np.float32),
-        average=sparse.csr_matrix(average, dtype=np.float32),
+        matrix=sparse.csr_matrix(average @ per_tri, dtype=np.float32),
     )
 
 

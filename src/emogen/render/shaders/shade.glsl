@@ -143,15 +143,21 @@ vec2 emogenWrinkles(vec2 uv, vec3 strain) {
     float mean = 0.5 * (strain.x + strain.y);
     vec4 c = -vec4(strain.x, strain.y, mean + strain.z, mean - strain.z);
     float cmax = max(max(c.x, c.y), max(c.z, c.w));
-    vec4 share = clamp(c / max(cmax, 1e-4), 0.0, 1.0);
-    share *= share;
-    vec4 a = smoothstep(vec4(WRINKLE_START), vec4(WRINKLE_FULL), c) * share * share;
-    float r = 0.70710678;
-    float f = a.x * emogenFurrows(uv.x, uv.y) + a.y * emogenFurrows(uv.y, uv.x)
-        + a.z * emogenFurrows((uv.x + uv.y) * r, (uv.x - uv.y) * r)
-        + a.w * emogenFurrows((uv.x - uv.y) * r, (uv.x + uv.y) * r);
-    float fold = smoothstep(WRINKLE_START, WRINKLE_FULL, cmax);
-    return vec2(WRINKLE_DEPTH_CM * f, WRINKLE_SHADE * f + FOLD_SHADE * fold);
+    vec2 out_ = vec2(0.0);
+    // Most skin is not compressed: skip the furrows there (the caller's derivatives of the
+    // result are taken outside this branch, in uniform control flow).
+    if (cmax > WRINKLE_START) {
+        vec4 share = clamp(c / cmax, 0.0, 1.0);
+        share *= share;
+        vec4 a = smoothstep(vec4(WRINKLE_START), vec4(WRINKLE_FULL), c) * share * share;
+        float r = 0.70710678;
+        float f = a.x * emogenFurrows(uv.x, uv.y) + a.y * emogenFurrows(uv.y, uv.x)
+            + a.z * emogenFurrows((uv.x + uv.y) * r, (uv.x - uv.y) * r)
+            + a.w * emogenFurrows((uv.x - uv.y) * r, (uv.x + uv.y) * r);
+        float fold = smoothstep(WRINKLE_START, WRINKLE_FULL, cmax);
+        out_ = vec2(WRINKLE_DEPTH_CM * f, WRINKLE_SHADE * f + FOLD_SHADE * fold);
+    }
+    return out_;
 }
 
 // Final sRGB colour of a fragment.
