@@ -126,13 +126,20 @@ vec3 emogenBump(vec3 pos, vec3 n, float h) {
     return len > 1e-12 ? bumped / len : n;
 }
 
+// A smooth periodic wave in [0, 1], 1 at the integers (the shape of 0.5 + 0.5 cos 2πx, at a
+// few operations instead of a sine's polynomial: the rasteriser may be software).
+float emogenWave(float x) {
+    float t = abs(fract(x) - 0.5) * 2.0;
+    return t * t * (3.0 - 2.0 * t);
+}
+
 // Furrows across lines of constant x (UV units): 1 in a furrow, 0 between. The lines wander
 // and fade along y so that they do not look ruled.
 float emogenFurrows(float x, float y) {
     float k = 1.0 / WRINKLE_PERIOD_UV;
-    float ph = x * k + 0.35 * sin(y * k * 0.45 + 1.3) + 0.12 * sin(y * k * 1.3 + 0.4);
-    float s = 0.5 + 0.5 * cos(6.2831853 * ph);
-    float along = 0.55 + 0.45 * sin(y * k * 0.8 + 2.7 * floor(ph + 0.5));
+    float ph = x * k + 0.35 * sin(y * k * 0.45 + 1.3) + 0.24 * emogenWave(y * k * 0.207);
+    float s = emogenWave(ph);
+    float along = 0.55 + 0.45 * emogenWave(y * k * 0.127 + 0.43 * floor(ph + 0.5));
     return s * s * along;
 }
 
