@@ -89,20 +89,13 @@ def identity_model(ict_model: Any, name: str = IDENTITY) -> tuple[Any, Any]:
 
 
 def offscreen_renderer(
-    ict_model: Any,
-    size: int,
-    name: str = IDENTITY,
-    supersample: int | None = None,
-    framing: str | None = None,
+    ict_model: Any, size: int, name: str = IDENTITY, supersample: int | None = None
 ) -> Any:
-    """The offscreen renderer of what the site's GLB shows: same identity, appearance, camera
-    (``oval``: the same camera, through the oval)."""
+    """The offscreen renderer of what the site's GLB shows: same identity, appearance, camera."""
     from emogen.render.renderer import Renderer
 
     model, appearance = identity_model(ict_model, name)
-    return Renderer(
-        model, size=size, appearance=appearance, supersample=supersample, framing=framing
-    )
+    return Renderer(model, size=size, appearance=appearance, supersample=supersample)
 
 
 def export_site_glb(ict_model: Any, path: Path, name: str = IDENTITY) -> Any:
