@@ -13,12 +13,14 @@ from emogen.analysis.replication.intervals import (
     Equivalence,
     Evidence,
     NotWorse,
+    Number,
     Share,
     SpreadDirection,
     decided,
     tost_p,
 )
 from emogen.analysis.replication.verdicts import (
+    band_verdict,
     chain_verdict,
     ci_verdict,
     combine,
@@ -88,9 +90,48 @@ def test_rule_level(lo: float, hi: float, verdict: str) -> None:
     assert level_verdict(lo, hi, 0.9, 0.7) == verdict
 
 
-@pytest.mark.parametrize(("mu", "verdict"), [(0.21, "holds"), (0.25, "partly"), (0.106, "differs")])
-def test_rule_number(mu: float, verdict: str) -> None:
-    assert number_verdict(mu, 0.06, 0.2, 0.065)[0] == verdict
+@pytest.mark.parametrize(
+    ("lo", "hi", "verdict"),
+    [
+        (0.19, 0.22, "holds"),  # the whole CI within 0.5 pooled σ (0.031) of 0.2
+        (0.22, 0.25, "partly"),  # within 1 σ (0.063) only
+        (0.09, 0.12, "differs"),  # wholly beyond 1 σ
+        (0.15, 0.30, "inconclusive"),  # from inside 0.5 σ to beyond 1 σ
+    ],
+)
+def test_rule_number(lo: float, hi: float, verdict: str) -> None:
+    assert number_verdict(lo, hi, 0.06, 0.2, 0.065) == verdict
+
+
+@pytest.mark.parametrize(
+    ("lo", "hi", "verdict"),
+    [(0.1, 0.4, "holds"), (0.3, 0.8, "partly"), (1.2, 2.0, "differs"), (0.4, 1.5, "inconclusive")],
+)
+def test_rule_band(lo: float, hi: float, verdict: str) -> None:
+    assert band_verdict(lo, hi, 0.5, 1.0) == verdict
+
+
+def test_rule_band_refuses_levels_in_the_wrong_order() -> None:
+    with pytest.raises(ValueError, match="weaker level must be ≥"):
+        band_verdict(0.1, 0.2, 1.0, 0.5)
+
+
+@pytest.mark.parametrize(
+    ("centre", "verdict"), [(0.2, "holds"), (0.245, "partly"), (0.1, "differs"), (0.25, None)]
+)
+def test_number_test_reaches_each_verdict(centre: float, verdict: str | None) -> None:
+    """Two targets' runs (paired), σ 0.06 each, their per-run mean centred at ``centre``: the
+    t-interval of the mean against the paper's 0.2 ± 0.065 in pooled σ (0.0627)."""
+    rng = np.random.default_rng(5)
+    n = 400 if verdict else 12  # few runs: the interval spans the levels
+    a = centre + rng.normal(0, 0.06, n)
+    b = centre + rng.normal(0, 0.06, n)
+    got = Number(0.2, 0.065)(a, b)
+    per_run = (a + b) / 2
+    ci = stats.ttest_1samp(per_run, 0.2).confidence_interval(0.95)
+    assert (got.lo, got.hi) == pytest.approx((ci.low, ci.high))
+    assert got.estimate == pytest.approx(per_run.mean())
+    assert got.verdict == (verdict or "inconclusive"), got.text()
 
 
 @pytest.mark.parametrize(("d", "verdict"), [(0.1, "holds"), (-0.3, "partly"), (0.7, "differs")])

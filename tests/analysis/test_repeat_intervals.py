@@ -147,6 +147,21 @@ def test_bin_shares_reach_each_verdict(
     assert got.verdict == verdict, got.text()
 
 
+@pytest.mark.parametrize(
+    ("tight", "weaker", "verdict"),
+    [(True, 20, "holds"), (False, 20, "differs"), (False, 150, "partly")],
+)
+def test_bin_shares_against_a_reference_row(tight: bool, weaker: float, verdict: str) -> None:
+    """``tvd_to``: one row's bins against a stated row (the paper's), here a row's own bins
+    computed plainly by repeatability_bins (TVD 0 up to resampling) for tight faces."""
+    rng = np.random.default_rng(21)
+    group = np.repeat([1, 2], 20)
+    faces = _faces(rng, 40, tight)
+    reference = tuple(repeatability_bins(_faces(np.random.default_rng(22), 40, True)) * 100)
+    got = BinShares("tvd_to", 10, weaker, reference=reference, resamples=100)(group, faces)
+    assert got.verdict == verdict, got.text()
+
+
 def test_bin_shares_inconclusive_and_refusals() -> None:
     """A mixed row (half tight): its first-bin share near a level set at its own value."""
     rng = np.random.default_rng(13)
@@ -160,3 +175,5 @@ def test_bin_shares_inconclusive_and_refusals() -> None:
         BinShares("median")
     with pytest.raises(ValueError, match="needs a group array and the rows"):
         BinShares("tvd_below", 10, 20)(group, mixed)
+    with pytest.raises(ValueError, match="the reference needs 4 bins"):
+        BinShares("tvd_to", 10, 20, reference=(50.0, 50.0))(group, mixed)

@@ -38,12 +38,26 @@ class FaceGeometry:
     def intensity_fit(self, face: np.ndarray, target: np.ndarray) -> tuple[float, float]:
         """How well ``face`` lies on the target's intensity line, geometrically: the scale s*
         that best maps the target's vertex displacement (from the neutral) onto the face's, and
-        the residual ‖d_face − s* d_target‖ / ‖d_target‖ (0: exactly a scaled target)."""
-        v = self.model.evaluate(np.stack([face, target, np.zeros_like(target)]).astype(np.float32))
-        d_face = (v[0] - v[2]).astype(np.float64).ravel()
-        d_target = (v[1] - v[2]).astype(np.float64).ravel()
-        s = float(d_face @ d_target / (d_target @ d_target))
-        return s, float(np.linalg.norm(d_face - s * d_target) / np.linalg.norm(d_target))
+        the share of the face's own displacement off the line, ‖d_face − s* d_target‖ /
+        ‖d_face‖ (the sine of the angle between the two displacements: 0 exactly a scaled
+        target, 1 at right angles; 1 for a neutral face, which has no direction)."""
+        s, r = self.intensity_fits(np.asarray(face)[None], target)
+        return float(s[0]), float(r[0])
+
+    def intensity_fits(
+        self, faces: np.ndarray, target: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`intensity_fit` of each of ``faces`` (k, S): (scales (k,), residuals (k,))."""
+        t = np.asarray(target)
+        v = self.model.evaluate(
+            np.vstack([faces, t[None], np.zeros_like(t)[None]]).astype(np.float32)
+        )
+        v = v.astype(np.float64).reshape(len(v), -1)
+        d_faces, d_target = v[:-2] - v[-1], v[-2] - v[-1]
+        s = d_faces @ d_target / (d_target @ d_target)
+        off = np.linalg.norm(d_faces - s[:, None] * d_target, axis=1)
+        size = np.linalg.norm(d_faces, axis=1)
+        return s, np.divide(off, size, out=np.ones_like(off), where=size > 0)
 
     def gene_ratio(self, w: np.ndarray, gene: str, over: str) -> float:
         """Mean weight of ``gene``'s shapes over that of ``over``'s (NaN when ``over`` is off)."""

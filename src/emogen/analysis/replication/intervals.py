@@ -15,7 +15,9 @@ The tests (scipy's; the verdict rules they feed are
   90% interval shown, rule ``tost``;
 * :class:`NotWorse` — "not worse than": one-sided, the 90% interval's upper end against the
   margin, rule ``noninferior``;
-* :class:`Share` — a share of runs past a level: the Wilson 95% interval, rule ``level``.
+* :class:`Share` — a share of runs past a level: the Wilson 95% interval, rule ``level``;
+* :class:`Number` — our mean against a value the paper gives (μ ± σ): the 95% t-interval,
+  rule ``number``.
 
 Margins are stated in the data's own unit or as a share of the pooled SD (``margin_sd``: 0.2 is
 Cohen's "small"); a margin from the pooled SD is computed on the pooled runs.
@@ -36,6 +38,7 @@ from emogen.analysis.replication.verdicts import (
     ci_verdict,
     level_verdict,
     noninferior_verdict,
+    number_verdict,
     parts_verdict,
     tost_verdict,
 )
@@ -231,6 +234,29 @@ class Share:
             0.95,
             f"Wilson, {k} of {len(x)}",
         )
+
+
+@dataclass(frozen=True)
+class Number:
+    """Our μ against the paper's ``paper_mu`` ± ``paper_sd``, rule ``number`` on the 95%
+    t-interval of our mean. ``arrays``: one or more per-run arrays whose runs pair up (several
+    targets averaged the paper's way: a run's value is the mean of its targets' values, σ the
+    mean of the targets' SDs)."""
+
+    paper_mu: float
+    paper_sd: float
+
+    def __call__(self, *arrays: np.ndarray) -> Decision:
+        xs = [_as(a) for a in arrays]
+        if len({len(x) for x in xs}) != 1:
+            raise ValueError(f"paired runs must match in number; got {[len(x) for x in xs]}")
+        per_run = np.mean(xs, axis=0)
+        sd = float(np.mean([x.std(ddof=1) for x in xs]))
+        ci = stats.ttest_1samp(per_run, self.paper_mu).confidence_interval(0.95)
+        lo, hi = float(ci.low), float(ci.high)
+        said = f"t over runs, n = {len(per_run)}; σ {sd:.3g} against the paper's {self.paper_sd}"
+        verdict = number_verdict(lo, hi, sd, self.paper_mu, self.paper_sd)
+        return Decision(verdict, float(per_run.mean()), lo, hi, 0.95, said)
 
 
 @dataclass(frozen=True, eq=False)

@@ -14,7 +14,12 @@ and the statistic with them; 95% percentile intervals. Over seeds the runs are p
   ``sign`` (which face keeps the target's ratio better);
 * ``ratio`` — noseSneer/jawOpen of mean(a) minus that of mean(b), against ``sign``;
 * ``jaw`` — the largest vertex distance (cm) of mean(a) from the target minus that of mean(b)
-  (the paper's "local error"), against ``sign``.
+  (the paper's "local error"), against ``sign``;
+* ``between`` — vertex RMS (cm) between mean(a) and mean(b) over the smaller of their RMS to
+  the target ("nearly identical" relative to how far both are from the target), rule ``band``
+  against ``level`` and ``weaker``.
+
+:class:`LineFit` decides on the intensity line of one condition's mean face (Fig. 18).
 
 ``arrays``: (faces a (runs × S), faces b (runs × S), the target repeated per run (runs × S)).
 """
@@ -27,9 +32,9 @@ import numpy as np
 
 from emogen.analysis.replication.geometry import FaceGeometry
 from emogen.analysis.replication.intervals import Decision
-from emogen.analysis.replication.verdicts import ci_verdict
+from emogen.analysis.replication.verdicts import band_verdict, ci_verdict
 
-KINDS = ("rms", "rms_below", "ratio_gap", "ratio", "jaw")
+KINDS = ("rms", "rms_below", "ratio_gap", "ratio", "jaw", "between")
 
 
 @dataclass(frozen=True)
@@ -42,6 +47,7 @@ class MeanFaceTest:
     seed: int = 0
     resamples: int = 200
     geometry: FaceGeometry | None = field(default=None, compare=False)
+    weaker: float = 0.0
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -55,6 +61,9 @@ class MeanFaceTest:
         if self.kind in ("rms", "rms_below"):
             rms_a = np.array([g.rms_cm(x, t) for x in a])
             return rms_a if self.kind == "rms_below" else rms_a - [g.rms_cm(x, t) for x in b]
+        if self.kind == "between":
+            near = [min(g.rms_cm(x, t), g.rms_cm(y, t)) for x, y in zip(a, b, strict=True)]
+            return np.array([g.rms_cm(x, y) for x, y in zip(a, b, strict=True)]) / near
         if self.kind == "jaw":
             return np.array([g.max_cm(x, t) - g.max_cm(y, t) for x, y in zip(a, b, strict=True)])
 
@@ -70,20 +79,81 @@ class MeanFaceTest:
         n = len(a)
         if len(arrays) != 3 or a.ndim != 2 or a.shape != b.shape or targets.shape != a.shape:
             raise ValueError("a mean-face test needs faces a, faces b and the target, runs × S")
-        if np.ptp(targets, axis=0).max() > 0:
-            raise ValueError("a mean-face test needs one target for every run")
-        rng = np.random.default_rng(self.seed)
-        idx = rng.integers(n, size=(self.resamples, n))
-        counts = np.stack([np.bincount(i, minlength=n) for i in idx]) / n
-        target = targets[0]
+        target = _one_target(targets)
+        counts = _weights(n, self.resamples, self.seed)
         est = float(self._stat(a.mean(0)[None], b.mean(0)[None], target)[0])
         boot = self._stat(counts @ a, counts @ b, target)
         lo, hi = (float(q) for q in np.quantile(boot, [0.025, 0.975]))
         if self.kind == "rms_below":
-            verdict = (
-                "holds" if hi < self.level else "differs" if lo > self.level else "inconclusive"
-            )
+            verdict = band_verdict(lo, hi, self.level, self.level)
+        elif self.kind == "between":
+            verdict = band_verdict(lo, hi, self.level, self.weaker)
         else:
             verdict = ci_verdict(lo, hi, self.sign)
         said = f"bootstrap of the mean faces over runs ({self.kind}), n = {n}"
         return Decision(verdict, est, lo, hi, 0.95, said)
+
+
+def _one_target(targets: np.ndarray) -> np.ndarray:
+    if np.ptp(targets, axis=0).max() > 0:
+        raise ValueError("a mean-face test needs one target for every run")
+    return np.asarray(targets[0])
+
+
+def _weights(n: int, resamples: int, seed: int) -> np.ndarray:
+    """Bootstrap weights over n runs (resamples × n), each row summing to 1: the rows times
+    the runs' faces are the resampled mean faces."""
+    idx = np.random.default_rng(seed).integers(n, size=(resamples, n))
+    return np.stack([np.bincount(i, minlength=n) for i in idx]) / n
+
+
+LINE_KINDS = ("residual", "scale")
+
+
+@dataclass(frozen=True)
+class LineFit:
+    """Fig. 18: where one condition's mean final face lies against the target's intensity
+    line (:meth:`FaceGeometry.intensity_fits`), bootstrapped over runs (95% percentile
+    interval). ``arrays``: (faces (runs × S), the target repeated per run (runs × S)).
+
+    * ``residual`` — the share of the mean face's displacement off the line (the sine of its
+      angle to the target's displacement: 0 exactly a scaled target, 1 at right angles), rule
+      ``band``: **holds** below ``level``, **differs** when the interval lies at or above it;
+    * ``scale`` — the intensity s* of the mean face along the line against the range
+      [``level``, ``upper``]: **holds** when the interval lies inside it, **differs** when it
+      lies wholly outside, **inconclusive** otherwise."""
+
+    kind: str
+    level: float
+    upper: float = 0.0
+    seed: int = 0
+    resamples: int = 200
+    geometry: FaceGeometry | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.kind not in LINE_KINDS:
+            raise ValueError(f"kind must be one of {LINE_KINDS}; got {self.kind!r}")
+        if self.kind == "scale" and not self.level < self.upper:
+            raise ValueError(f"a scale range needs level < upper; got {self.level}, {self.upper}")
+
+    def __call__(self, *arrays: np.ndarray) -> Decision:
+        if len(arrays) != 2:
+            raise ValueError("a line fit needs the faces and the target, runs × S")
+        faces, targets = (np.asarray(x, dtype=np.float64) for x in arrays)
+        if faces.ndim != 2 or targets.shape != faces.shape:
+            raise ValueError("a line fit needs the faces and the target, runs × S")
+        if self.geometry is None:
+            raise ValueError("a line fit needs the face geometry")
+        target = _one_target(targets)
+        means = np.vstack([faces.mean(0), _weights(len(faces), self.resamples, self.seed) @ faces])
+        scale, residual = self.geometry.intensity_fits(means, target)
+        stat = residual if self.kind == "residual" else scale
+        lo, hi = (float(q) for q in np.quantile(stat[1:], [0.025, 0.975]))
+        if self.kind == "residual":
+            verdict = band_verdict(lo, hi, self.level, self.level)
+        elif self.level <= lo and hi <= self.upper:
+            verdict = "holds"
+        else:
+            verdict = "differs" if hi < self.level or lo > self.upper else "inconclusive"
+        said = f"bootstrap of the mean face over runs ({self.kind}), n = {len(faces)}"
+        return Decision(verdict, float(stat[0]), lo, hi, 0.95, said)

@@ -24,7 +24,7 @@ import numpy as np
 
 from emogen.analysis.repeatability import BIN_EDGES
 from emogen.analysis.replication.intervals import Decision
-from emogen.analysis.replication.verdicts import ci_verdict
+from emogen.analysis.replication.verdicts import band_verdict, ci_verdict
 
 FIRST_BIN = BIN_EDGES[1]
 KINDS = ("slope", "matched")
@@ -111,7 +111,7 @@ class BinContrast:
         return Decision(ci_verdict(lo, hi, self.sign), float(est[0]), lo, hi, 0.95, said)
 
 
-SHARE_KINDS = ("first_at_least", "first_above", "tvd_below")
+SHARE_KINDS = ("first_at_least", "first_above", "tvd_below", "tvd_to")
 
 
 def bin_pairs(faces: np.ndarray, group: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
@@ -132,15 +132,19 @@ class BinShares:
     * ``first_at_least`` — the first-bin share (points) of the row against ``level``: **holds**
       when the interval lies at or above it, **differs** when below, else **inconclusive**;
     * ``first_above`` — first-bin share of row 1 − row 2 (points), rule ``ci`` with sign +1;
-    * ``tvd_below`` — the total variation distance of the two rows' bins (points): **holds**
-      when the interval's upper end is below ``level``, **partly** below ``weaker``,
-      **differs** when its lower end is at or above ``weaker``, else **inconclusive**."""
+    * ``tvd_below`` — the total variation distance of the two rows' bins (points), rule
+      ``band``: **holds** when the interval's upper end is below ``level``, **partly** below
+      ``weaker``, **differs** when its lower end is at or above ``weaker``, else
+      **inconclusive**;
+    * ``tvd_to`` — the same between one row's bins and ``reference`` (the paper's row, in
+      points)."""
 
     kind: str
     level: float = 0.0
     weaker: float = 0.0
     seed: int = 0
     resamples: int = 400
+    reference: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         if self.kind not in SHARE_KINDS:
@@ -149,7 +153,7 @@ class BinShares:
     def __call__(self, *arrays: np.ndarray) -> Decision:
         group = np.asarray(arrays[0])
         rows = arrays[1:]
-        if len(rows) != (1 if self.kind == "first_at_least" else 2):
+        if len(rows) != (1 if self.kind in ("first_at_least", "tvd_to") else 2):
             raise ValueError(f"{self.kind} needs a group array and the rows it compares")
         w = _counts(group, self.resamples, np.random.default_rng(self.seed))
         shares = []
@@ -161,7 +165,8 @@ class BinShares:
         elif self.kind == "first_above":
             est = shares[0][:, 0] - shares[1][:, 0]
         else:
-            est = 0.5 * np.abs(shares[0] - shares[1]).sum(axis=1)
+            other = shares[1] if self.kind == "tvd_below" else self._reference(shares[0])
+            est = 0.5 * np.abs(shares[0] - other).sum(axis=1)
         lo, hi = (float(q) for q in np.quantile(est[1:], [0.025, 0.975]))
         if self.kind == "first_at_least":
             verdict = (
@@ -169,11 +174,13 @@ class BinShares:
             )
         elif self.kind == "first_above":
             verdict = ci_verdict(lo, hi, +1)
-        elif hi < self.level:
-            verdict = "holds"
         else:
-            verdict = (
-                "partly" if hi < self.weaker else "differs" if lo >= self.weaker else "inconclusive"
-            )
+            verdict = band_verdict(lo, hi, self.level, self.weaker)
         said = f"bootstrap over runs within seeds, {self.kind}, points, n = {len(group)}"
         return Decision(verdict, float(est[0]), lo, hi, 0.95, said)
+
+    def _reference(self, shares: np.ndarray) -> np.ndarray:
+        ref = np.asarray(self.reference, dtype=np.float64)
+        if ref.shape != shares.shape[1:]:
+            raise ValueError(f"the reference needs {shares.shape[1]} bins; got {self.reference}")
+        return ref

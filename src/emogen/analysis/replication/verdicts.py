@@ -29,8 +29,9 @@ RULES: dict[str, str] = {
     "the other side",
     "negligible": "no difference claimed: **holds** when |Cohen's d| < 0.2; **partly** when "
     "< 0.5; **differs** otherwise",
-    "number": "a value the paper gives: **holds** when our μ is within 0.5 pooled σ of the "
-    "paper's (|Δμ| / σ < 0.5); **partly** within 1 σ; **differs** beyond",
+    "number": "a value the paper gives (μ ± σ): the 95% CI of our μ, as a distance from the "
+    "paper's μ in pooled σ: **holds** when the whole CI lies within 0.5 σ; **partly** within "
+    "1 σ; **differs** when it lies wholly beyond 1 σ; **inconclusive** otherwise",
     "direction": "a qualitative claim: **partly** when our direction agrees (the paper's "
     "qualitative magnitude — 'excellent', 'cannot match' — cannot be scored), **differs** "
     "otherwise",
@@ -54,6 +55,9 @@ RULES: dict[str, str] = {
     "every group does; **partly** when at least the stated number of groups do (one, unless "
     "the claim says); **differs** when fewer do and some link lies on the other side of 0; "
     "**inconclusive** otherwise",
+    "band": "a distance or residual (lower is better) against stated levels: **holds** when "
+    "its 95% CI lies below the level; **partly** when below the weaker level only; "
+    "**differs** when it lies wholly at or beyond the weaker level; **inconclusive** otherwise",
     "kl": "KL steps: a rise counts only where KL(P_g ‖ P_g−1) grows by more than the KL "
     "noise floor (95th percentile of the KL of two same-size samples of one distribution); "
     "**holds** when the paper's pattern of rises holds for both initialisations, **partly** "
@@ -95,11 +99,27 @@ def level_verdict(lo: float, hi: float, level: float, weaker: float) -> str:
     return "differs" if hi < weaker else "inconclusive"
 
 
-def number_verdict(mu: float, sd: float, paper_mu: float, paper_sd: float) -> tuple[str, float]:
-    """Rule 'number': (verdict, |Δμ| / pooled σ)."""
+def band_verdict(lo: float, hi: float, level: float, weaker: float) -> str:
+    """Rule 'band': the 95% CI (lo, hi) of a quantity where lower is better against
+    ``level`` and ``weaker`` (≥ ``level``)."""
+    if not level <= weaker:
+        raise ValueError(f"the weaker level must be ≥ the level; got {weaker!r} < {level!r}")
+    if hi < level:
+        return "holds"
+    if hi < weaker:
+        return "partly"
+    return "differs" if lo >= weaker else "inconclusive"
+
+
+def number_verdict(lo: float, hi: float, sd: float, paper_mu: float, paper_sd: float) -> str:
+    """Rule 'number': the 95% CI (lo, hi) of our μ, its distance from the paper's μ in pooled
+    σ (√((σ² + σ_paper²) / 2)) against 0.5 and 1 (rule 'band')."""
     pooled = float(np.sqrt((sd**2 + paper_sd**2) / 2))
-    z = abs(mu - paper_mu) / pooled if pooled > 0 else float("inf")
-    return ("holds" if z < 0.5 else "partly" if z < 1 else "differs"), z
+    if not pooled > 0:
+        raise ValueError(f"the pooled σ must be > 0; got σ {sd!r} and the paper's {paper_sd!r}")
+    near = 0.0 if lo <= paper_mu <= hi else min(abs(lo - paper_mu), abs(hi - paper_mu))
+    far = max(abs(lo - paper_mu), abs(hi - paper_mu))
+    return band_verdict(near / pooled, far / pooled, 0.5, 1.0)
 
 
 def negligible_verdict(d: float) -> str:
