@@ -27,7 +27,6 @@ from emogen.analysis.replication.verdicts import (
     compromise_verdict,
     level_verdict,
     main_part_verdict,
-    negligible_verdict,
     noninferior_verdict,
     number_verdict,
     parts_verdict,
@@ -132,11 +131,6 @@ def test_number_test_reaches_each_verdict(centre: float, verdict: str | None) ->
     assert (got.lo, got.hi) == pytest.approx((ci.low, ci.high))
     assert got.estimate == pytest.approx(per_run.mean())
     assert got.verdict == (verdict or "inconclusive"), got.text()
-
-
-@pytest.mark.parametrize(("d", "verdict"), [(0.1, "holds"), (-0.3, "partly"), (0.7, "differs")])
-def test_rule_negligible(d: float, verdict: str) -> None:
-    assert negligible_verdict(d) == verdict
 
 
 @pytest.mark.parametrize(

@@ -12,7 +12,6 @@ from emogen.analysis.replication.verdicts import (
     ci_verdict,
     combine,
     mean_ci,
-    negligible_verdict,
     number_verdict,
     parts_verdict,
 )
@@ -39,8 +38,7 @@ def test_number_rule_judges_the_table_v_threshold_as_different() -> None:
     assert number_verdict(0.24, 0.25, 0.06, 0.2, 0.065) == "partly"
 
 
-def test_negligible_and_parts() -> None:
-    assert [negligible_verdict(d) for d in (0.1, -0.3, 0.7)] == ["holds", "partly", "differs"]
+def test_parts() -> None:
     assert parts_verdict(["holds", "holds"]) == "holds"
     assert parts_verdict(["holds", "inconclusive"]) == "partly"
     assert parts_verdict(["differs", "inconclusive"]) == "differs"
@@ -78,5 +76,5 @@ def test_seeds_that_disagree_make_a_finding_inconclusive() -> None:
 
 
 def test_every_rule_a_finding_names_is_written_down() -> None:
-    assert set(RULES) >= {"order", "ci", "negligible", "number", "direction", "threshold", "kl"}
+    assert set(RULES) >= {"order", "ci", "number", "direction", "threshold", "kl"}
     assert set(RULES) >= {"tost", "noninferior", "level", "compromise"}

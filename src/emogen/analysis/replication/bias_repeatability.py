@@ -179,7 +179,7 @@ def _findings(
                     (group, *(conds[("fixed", o, "target 1")].final for o in (1, 3))),
                 )
             ],
-            "threshold on a bootstrap interval over runs within seeds (95%): the TVD of the two "
+            "band, bootstrap over runs within seeds (95%): the TVD of the two "
             "fixed sets' bins (target 1) below 10 points holds, below 20 partly, at or above 20 "
             "differs",
             note=chance,

@@ -27,8 +27,6 @@ RULES: dict[str, str] = {
     "ci": "a difference with a direction: **holds** when the 95% CI of our difference lies on "
     "the paper's side of 0; **inconclusive** when it includes 0; **differs** when it lies on "
     "the other side",
-    "negligible": "no difference claimed: **holds** when |Cohen's d| < 0.2; **partly** when "
-    "< 0.5; **differs** otherwise",
     "number": "a value the paper gives (μ ± σ): the 95% CI of our μ, as a distance from the "
     "paper's μ in pooled σ: **holds** when the whole CI lies within 0.5 σ; **partly** within "
     "1 σ; **differs** when it lies wholly beyond 1 σ; **inconclusive** otherwise",
@@ -120,11 +118,6 @@ def number_verdict(lo: float, hi: float, sd: float, paper_mu: float, paper_sd: f
     near = 0.0 if lo <= paper_mu <= hi else min(abs(lo - paper_mu), abs(hi - paper_mu))
     far = max(abs(lo - paper_mu), abs(hi - paper_mu))
     return band_verdict(near / pooled, far / pooled, 0.5, 1.0)
-
-
-def negligible_verdict(d: float) -> str:
-    """Rule 'negligible' on Cohen's d."""
-    return "holds" if abs(d) < 0.2 else "partly" if abs(d) < 0.5 else "differs"
 
 
 def mean_ci(values: list[float]) -> tuple[float, float]:
