@@ -27,17 +27,11 @@ import numpy as np
 from emogen.ga.algorithm import classical_next_generation, next_generation
 from emogen.ga.draws import CURRENT_STREAM, block_size, generation_draws
 from emogen.ga.engine import Engine
-from emogen.ga.init import first_generation
+from emogen.ga.init import first_generations
 from emogen.metrics import cosine_distance
 from emogen.rng import generation_rngs, observer_rng, observer_rngs
 from emogen.simulate.observer import Observer, choice_order, selection_count
 from emogen.simulate.problem import Problem, RunArrays
-
-
-def _initial(problem: Problem, seeds: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, int]]:
-    """Generation 0 of each run, as the engine makes it."""
-    ga, rig, fixed = problem.config.ga, problem.rig, problem.fixed_sets
-    return [first_generation(ga, rig, fixed, rng=rng) for rng in generation_rngs(seeds, 0, 0)]
 
 
 def _measure(problem: Problem, shown: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -65,9 +59,9 @@ def simulate_runs(
     ga = cfg.ga
     seeds = np.asarray(seeds, dtype=np.int64)
     r_count, n_gen = len(seeds), problem.n_generations
-    first = _initial(problem, seeds)
-    genes = np.stack([f[0] for f in first])
-    operators = np.stack([f[1] for f in first])
+    genes, operators, options = first_generations(  # generation 0 of each run, as the engine's
+        ga, rig, problem.fixed_sets, rngs=generation_rngs(seeds, 0, 0)
+    )
     n = genes.shape[1]
     expansion = rig.expansion_matrix(ga.eye_motion)
     obs = observer_rngs(seeds, 0) if cfg.noise_temperature > 0 else []
@@ -117,7 +111,7 @@ def simulate_runs(
         rank,
         ops,
         shown_all,
-        np.array([f[2] for f in first], dtype=np.int64),
+        options,
     )
 
 
