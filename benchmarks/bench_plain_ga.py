@@ -23,6 +23,11 @@ picks the faces closest by cosine distance; runs advanced together as arrays. Tw
 Target: EmoGen's compute (``compute_seconds``: the runs, not the tables) ≤ 1.2 × the plain
 per-run version's. Timed interleaved, median of ``REPEAT``.
 
+Figures (shared 2-core VM under load 4–6, three runs each, medians of 9): before #30's speed
+work EmoGen 0.118–0.176 s against plain per-run 0.096–0.136 s, 1.21–1.29×; after it
+0.101–0.192 s against 0.093–0.182 s, 1.05–1.16× (1.07–1.10× in three more runs); the
+one-generator version 0.034–0.068 s (ours 2.8–3.1× it). See docs/ga.md.
+
 Run: ``python benchmarks/bench_plain_ga.py`` (EMOGEN_MODEL names the model; the rig is enough).
 """
 
