@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Sequence
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
@@ -24,6 +26,66 @@ def emotion_label(emotion: str) -> str:
 
 
 # ---- protocol generation ------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Protocol:
+    """What protocol initialisation draws from, worked out once for a rig and its settings:
+    each emotion face's (core, optional) gene blocks, the labels before shuffling."""
+
+    blocks: tuple[tuple[np.ndarray, np.ndarray], ...]
+    n_genes: int
+    lo: int
+    hi: int
+    arbitrary: int
+    labels: np.ndarray
+
+    def draw(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """(genes (n_faces, n_genes) before shuffling, the shuffling permutation) of one
+        population, drawn from ``rng`` in the documented order (:func:`protocol_init`)."""
+        lo, hi = self.lo, self.hi
+        genes = np.zeros((len(self.labels), self.n_genes))
+        face = 0
+        for core, optional in self.blocks:
+            n = int(rng.integers(lo, hi + 1))
+            order = np.concatenate((rng.permutation(core), rng.permutation(optional)))[:n]
+            genes[face, order] = rng.random(len(order))
+            face += 1
+        for _ in range(self.arbitrary):
+            n = int(rng.integers(lo, hi + 1))
+            chosen = rng.choice(self.n_genes, size=min(n, self.n_genes), replace=False)
+            genes[face, chosen] = rng.random(len(chosen))
+            face += 1
+        return genes, rng.permutation(len(self.labels))
+
+
+def _protocol(
+    rig: Rig,
+    eye_motion: bool,
+    activation_range: tuple[int, int],
+    emotions: tuple[str, ...],
+    faces_per_emotion: int,
+    arbitrary: int,
+) -> _Protocol:
+    lo, hi = activation_range
+    if not 1 <= lo <= hi:
+        raise ConfigError(f"activation_range must be [lo, hi] with 1 <= lo <= hi; got {lo}-{hi}")
+    names = rig.gene_names(eye_motion)
+    index = {g: i for i, g in enumerate(names)}
+    blocks, labels = [], []
+    for emotion in emotions:
+        if emotion not in rig.emotions:
+            raise ConfigError(
+                f"init.emotions: unknown emotion '{emotion}'; rig '{rig.name}' defines: "
+                f"{', '.join(rig.emotions) or 'none'}"
+            )
+        spec = rig.emotions[emotion]
+        core = np.array([index[g] for g in spec.core if g in index], dtype=np.int64)
+        optional = np.array([index[g] for g in spec.optional if g in index], dtype=np.int64)
+        blocks += [(core, optional)] * faces_per_emotion
+        labels += [emotion_label(emotion)] * faces_per_emotion
+    labels += [ARBITRARY] * arbitrary + [NEUTRAL]
+    return _Protocol(tuple(blocks), len(names), lo, hi, arbitrary, np.asarray(labels))
+
+
 def protocol_init(
     rig: Rig,
     *,
@@ -53,38 +115,9 @@ def protocol_init(
     Draw order: per face in the order above, n, then the block order (core, then optional) or
     the gene indices, then the values; finally the permutation that shuffles the slots.
     """
-    lo, hi = activation_range
-    if not 1 <= lo <= hi:
-        raise ConfigError(f"activation_range must be [lo, hi] with 1 <= lo <= hi; got {lo}-{hi}")
-    names = rig.gene_names(eye_motion)
-    index = {g: i for i, g in enumerate(names)}
-    blocks = []
-    for emotion in emotions:
-        if emotion not in rig.emotions:
-            raise ConfigError(
-                f"init.emotions: unknown emotion '{emotion}'; rig '{rig.name}' defines: "
-                f"{', '.join(rig.emotions) or 'none'}"
-            )
-        spec = rig.emotions[emotion]
-        core = np.array([index[g] for g in spec.core if g in index], dtype=np.int64)
-        optional = np.array([index[g] for g in spec.optional if g in index], dtype=np.int64)
-        blocks.append((emotion_label(emotion), core, optional))
-    genes = np.zeros((len(emotions) * faces_per_emotion + arbitrary + 1, len(names)))
-    labels: list[str] = []
-    for label, core, optional in blocks:
-        for _ in range(faces_per_emotion):
-            n = int(rng.integers(lo, hi + 1))
-            order = np.concatenate((rng.permutation(core), rng.permutation(optional)))[:n]
-            genes[len(labels), order] = rng.random(len(order))
-            labels.append(label)
-    for _ in range(arbitrary):
-        n = int(rng.integers(lo, hi + 1))
-        chosen = rng.choice(len(names), size=min(n, len(names)), replace=False)
-        genes[len(labels), chosen] = rng.random(len(chosen))
-        labels.append(ARBITRARY)
-    labels.append(NEUTRAL)
-    perm = rng.permutation(len(labels))
-    return genes[perm], np.asarray(labels)[perm]
+    plan = _protocol(rig, eye_motion, activation_range, emotions, faces_per_emotion, arbitrary)
+    genes, perm = plan.draw(rng)
+    return genes[perm], plan.labels[perm]
 
 
 # ---- fixed sets ----------------------------------------------------------------------------
@@ -184,22 +217,45 @@ def fixed_init(
     return genes, np.full(len(genes), FIXED), option
 
 
+def first_generations(
+    config: GAConfig,
+    rig: Rig,
+    fixed_sets: np.ndarray | None,
+    *,
+    rngs: Sequence[np.random.Generator],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Generation 0 of R runs as ``config.init`` says, run r from ``rngs[r]``: one of the
+    ``fixed_sets`` (when given; see :func:`fixed_init`) or protocol initialisation (the set
+    of building blocks worked out once, then each run's draws). Returns (genes (R, N, K),
+    labels (R, N), fixed options (R,), −1 for protocol populations)."""
+    init = config.init
+    if fixed_sets is not None:
+        made = [fixed_init(fixed_sets, init.fixed_option, rng=rng) for rng in rngs]
+        n = fixed_sets.shape[1]
+        return (
+            np.array([m[0] for m in made]).reshape(len(made), *fixed_sets.shape[1:]),
+            np.array([m[1] for m in made], dtype=str).reshape(len(made), n),
+            np.array([m[2] for m in made], dtype=np.int64),
+        )
+    plan = _protocol(
+        rig,
+        config.eye_motion,
+        init.activation_range,
+        init.emotions,
+        init.faces_per_emotion,
+        config.arbitrary_faces(),
+    )
+    drawn = [plan.draw(rng) for rng in rngs]
+    perms = np.array([d[1] for d in drawn], dtype=np.int64).reshape(len(drawn), -1)
+    genes = np.array([d[0] for d in drawn]).reshape(len(drawn), *perms.shape[1:], plan.n_genes)
+    genes = np.take_along_axis(genes, perms[:, :, None], axis=1)
+    return genes, plan.labels[perms], np.full(len(drawn), -1, dtype=np.int64)
+
+
 def first_generation(
     config: GAConfig, rig: Rig, fixed_sets: np.ndarray | None, *, rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray, int]:
-    """Generation 0 as ``config.init`` says: one of the ``fixed_sets`` (when given; see
-    :func:`fixed_init`) or protocol initialisation. Returns (genes, labels, fixed option, or −1
-    for a protocol population)."""
-    init = config.init
-    if fixed_sets is not None:
-        return fixed_init(fixed_sets, init.fixed_option, rng=rng)
-    genes, labels = protocol_init(
-        rig,
-        eye_motion=config.eye_motion,
-        activation_range=init.activation_range,
-        emotions=init.emotions,
-        faces_per_emotion=init.faces_per_emotion,
-        arbitrary=config.arbitrary_faces(),
-        rng=rng,
-    )
-    return genes, labels, -1
+    """Generation 0 of one run (:func:`first_generations` of one): (genes, labels, fixed
+    option, or −1 for a protocol population)."""
+    genes, labels, options = first_generations(config, rig, fixed_sets, rngs=[rng])
+    return genes[0], labels[0], int(options[0])

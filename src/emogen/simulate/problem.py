@@ -119,7 +119,9 @@ class RunArrays:
 
     @staticmethod
     def concatenate(parts: list[RunArrays]) -> RunArrays:
-        """Parts of one simulation, in run order."""
+        """Parts of one simulation, in run order (one part is returned as it is, uncopied)."""
+        if len(parts) == 1:
+            return parts[0]
         parts = sorted(parts, key=lambda p: int(p.runs[0]) if len(p.runs) else 0)
 
         def cat(name: str) -> np.ndarray:
