@@ -1,7 +1,7 @@
 """Section III-A (Figs. 1–3): do our correctives remove the interpenetration of the faces the GA
 shows?
 
-Faces (half as many per seed as a condition has runs: 50 at --quick, 250 in the full run;
+Faces (a third as many per seed as a condition has runs: 33 at --quick, 166 in the full run;
 measuring costs ~20 ms a face): every distinct face shown in a few simulated runs toward each of the replication's
 targets (generations 0–10: initial populations, children, mutants), a random sample of
 sample of them per seed. Each is measured uncorrected (the core weights, as the other
@@ -171,7 +171,7 @@ def implausible_finding(before: np.ndarray, after: np.ndarray) -> Finding:
 
 
 def interpenetration(runner: ConditionRunner, model: FaceModel) -> Measured:
-    count = max(30, runner.settings.runs // 2)  # quick: 50 faces per seed, full: 250
+    count = max(30, runner.settings.runs // 3)  # quick: 33 faces per seed, full: 166
     faces = shown_faces(runner, count, np.random.default_rng(runner.settings.seed * 1000 + 3))
     m = measure_faces(model, faces)
     findings = [
