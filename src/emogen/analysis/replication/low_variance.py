@@ -5,7 +5,8 @@ low-variance mode (component 31 of 46). Our target 1 (an open jaw) does not: the
 participants open the jaw often, so it lies in a high-variance mode. Here a target is built
 that does. Candidates: for each component in the lower-variance half (variance below the
 median component's), either sign, the positive part of the component mapped onto the genes
-(left/right averaged), scaled to a largest gene weight of 1, genes below ``SMALLEST`` dropped
+(left/right averaged; the eye genes left out — gaze is no expression, and the paper's targets
+are expressions), scaled to a largest gene weight of 1, genes below ``SMALLEST`` dropped
 — a face the GA can reach. The candidate kept has the largest share of its PCA offset
 Δβ = β(target) − β(neutral) in the lower-variance half, among those the PCA space captures
 (|Δβ| / |α| ≥ ``CAPTURED``: a direction outside the 99% space is seen by neither metric).
@@ -79,11 +80,13 @@ def _offset_stats(space: PCASpace, w: np.ndarray) -> tuple[float, float, int, fl
 def low_variance_target(space: PCASpace, rig: Rig) -> LowVarianceTarget:
     """The candidate of the module docstring with the largest low-variance share."""
     names = rig.gene_names()
+    eye = np.array([g.eye for g in rig.genes])
     median = float(np.median(space.variances))
     best: tuple[float, LowVarianceTarget] | None = None
     for j in np.flatnonzero(space.variances < median):
         for sign in (1.0, -1.0):
             genes = np.maximum(rig.contract(sign * space.components[j][None])[0], 0.0)
+            genes[eye] = 0.0  # an expression: gaze is no part of one
             if genes.max() <= 0:
                 continue
             genes = np.round(genes / genes.max(), 2)

@@ -137,8 +137,8 @@ def write_empirical(
         "Fig. 11's explanation — std_ED(β) helps for targets in low-variance modes — needs a "
         "target that lies in them, which our target 1 does not. The **low-variance target** "
         "(built on this seed's PCA space: the positive part of a lower-variance component, on "
-        f"the genes): {res.low_target.describe(k)}. ED(β) and std_ED(β) select toward it with "
-        "the same runs' seeds."
+        f"the genes, eye genes left out): {res.low_target.describe(k)}. ED(β) and std_ED(β) "
+        "select toward it with the same runs' seeds."
     )
     r.table(res.convergence, "empirical_convergence", "Elite CD error, μ ± σ, generations 0 and 10")
     sims = res.conditions
