@@ -11,9 +11,9 @@ toward the group's true target — for a mixture the least favourable of its two
 either p < α / 2 (Bonferroni over the two statistics, α = 0.05): a calibrated test flags a
 one-target group with probability ≤ α — the chance level of a flag.
 
-Groups of three kinds, ``groups`` of each per seed (1 at --quick, 20 in the full run): one target (target 2, dense: 12 genes), one
-target (target 1, sparse: 1 gene) and a two-target mixture (half toward target 1, half toward
-target 2).
+Groups of three kinds, ``groups`` of each per seed (1 at --quick, 30 in the full run): one
+target (target 2, dense: 12 genes), one target (target 1, sparse: 1 gene) and a two-target
+mixture (half toward target 1, half toward target 2).
 """
 
 from __future__ import annotations
@@ -46,8 +46,10 @@ KINDS = {
     "one target: target 1 (1 gene)": ("target 1",),
     "mixture: targets 1 + 2": ("target 1", "target 2"),
 }
-#: one-target groups: not flagged in ≥ 90% (≥ 80% partly); mixtures flagged in ≥ 80% (≥ 50%)
-QUIET, QUIET_WEAKER = 0.90, 0.80
+#: one-target groups: not flagged in ≥ 85% (≥ 70% partly) — a calibrated test leaves 95%, and
+#: 90 groups (the full run) put the Wilson interval's lower end near 0.88; mixtures flagged in
+#: ≥ 80% (≥ 50% partly)
+QUIET, QUIET_WEAKER = 0.85, 0.70
 FOUND, FOUND_WEAKER = 0.80, 0.50
 
 
@@ -201,7 +203,7 @@ class InterSample:
 
 
 def intersample(runner: ConditionRunner) -> InterSample:
-    tests = simulate_groups(runner, 1 if runner.settings.quick else 20)
+    tests = simulate_groups(runner, 1 if runner.settings.quick else 30)
     return InterSample(tests, [intersample_finding(tests[r], r) for r in READINGS])
 
 
