@@ -36,6 +36,8 @@ from emogen.analysis.replication.intervals import Direction, Evidence, Share, ju
 from emogen.analysis.replication.verdicts import main_part_verdict
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     from emogen.analysis.replication.conditions import ConditionRunner
     from emogen.analysis.report import Report
     from emogen.model.face import FaceModel
@@ -182,8 +184,6 @@ def interpenetration(runner: ConditionRunner, model: FaceModel) -> Measured:
 
 
 def write_interpenetration(r: Report, res: Measured) -> None:
-    from emogen.correct.measure import CONTACT
-
     r.heading("Interpenetration and plausibility of the shown faces (Section III-A, Figs. 1–3)")
     r.paragraph(
         f"A random sample of {len(res.depth_before)} distinct faces shown in {RUNS} simulated "
@@ -194,14 +194,37 @@ def write_interpenetration(r: Report, res: Measured) -> None:
         "Depths are in our mesh's cm (model-specific)."
     )
     r.table(res.table(), "interpenetration", "Shown faces, uncorrected and corrected")
-    hit = res.depth_before > CONTACT
     r.figure(
-        plots.final_distributions(
-            {"uncorrected": res.depth_before[hit], "corrected": res.depth_after[hit]},
-            r.figures / "interpenetration.png",
-            xlabel="deepest penetration into the lower lip [cm, our mesh]",
-            title="Faces that interpenetrate uncorrected",
-        ),
-        "Deepest penetration of the faces that interpenetrate uncorrected, before and after "
-        "the correctives (Fig. 2 analogue, in numbers).",
+        _figure(res, r.figures / "interpenetration.png"),
+        "Deepest penetration into the lower lip of every measured face, uncorrected (x) against "
+        "corrected (y); dashed: the contact tolerance (0.02 cm) — Fig. 2 analogue, in numbers.",
     )
+
+
+def _figure(res: Measured, path: Path) -> Path:
+    from emogen.correct.measure import CONTACT
+
+    fig = plots.new_figure(4.6, 3.4)
+    ax = fig.subplots()
+    hit = res.depth_before > CONTACT
+    ax.scatter(
+        res.depth_before[~hit],
+        res.depth_after[~hit],
+        s=10,
+        color=plots.colour(1),
+        alpha=0.6,
+        label=f"not penetrating uncorrected ({(~hit).sum()})",
+    )
+    ax.scatter(res.depth_before[hit], res.depth_after[hit], s=14, color=plots.colour(0),
+               label=f"penetrating uncorrected ({hit.sum()})")  # fmt: skip
+    ax.axhline(CONTACT, color="0.4", ls="--", lw=1)
+    ax.axvline(CONTACT, color="0.4", ls="--", lw=1)
+    top = max(float(res.depth_before.max()), 0.05) * 1.05
+    ax.set_xlim(-0.01, top)
+    ax.set_ylim(-0.01, top)
+    ax.set_title("deepest penetration into the lower lip (our mesh)", fontsize=9)
+    ax.set_xlabel("uncorrected [cm]")
+    ax.set_ylabel("corrected [cm]")
+    ax.legend(fontsize=7, loc="upper left", frameon=False)
+    ax.grid(alpha=0.3)
+    return plots.save_figure(fig, path)

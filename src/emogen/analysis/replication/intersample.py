@@ -218,7 +218,7 @@ def _figure(tests: dict[str, list[GroupTest]], path: Path) -> Path:
             c = plots.colour(i)
             for null in t.nulls:
                 ax.scatter(null[:, 0], null[:, 1], s=4, alpha=0.25, color=c)
-            ax.scatter(*t.observed, s=90, marker="*", color=c, edgecolor="k", lw=0.6,
+            ax.scatter(*t.observed, s=90, marker="*", color=c, edgecolor="k", lw=0.6, zorder=3,
                        label=f"{kind}{' (flagged)' if t.flagged else ''}")  # fmt: skip
         ax.set_title(READINGS[reading][1], fontsize=8)
         ax.set_xlabel("mean inter-sample distance [CD]")
@@ -245,5 +245,6 @@ def write_intersample(r: Report, res: InterSample) -> None:
         _figure(res.tests, r.figures / "intersample.png"),
         "First group of each kind: its null — mean and SD of the inter-sample CD of "
         "n-subsets of runs toward a consistent target (dots) — and its own statistic (star); "
-        "left: toward the group's mean face, right: toward its true target(s).",
+        "left: toward the group's mean face, right: toward its true target(s) (the mixture: "
+        "both of its targets' clouds).",
     )
