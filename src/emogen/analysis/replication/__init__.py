@@ -11,10 +11,15 @@ Each section is an experiment taking typed inputs (a :class:`ConditionRunner` th
 conditions, the training set, …) and returning a typed result (its tables, the data of its
 figures, its findings); the report is written from those results:
 
-* :mod:`.theoretical_metrics`, :mod:`.empirical_metrics` — Section IV-B (Tables I–II);
+* :mod:`.theoretical_metrics`, :mod:`.empirical_metrics` — Section IV-B (Tables I–II), with
+  :mod:`.low_variance` (Fig. 11 on a target in low-variance PCA modes) and
+  :mod:`.std_clustering` (IV-B2: std_ED for clustering);
 * :mod:`.initialisation`, :mod:`.bias_repeatability`, :mod:`.ga_settings` — Section IV-C
-  (Tables III–V, Figs. 14–18, selection pressure);
+  (Tables III–V, Figs. 14–18, selection pressure); :mod:`.intersample` — IV-C's suggested
+  inter-sample statistic against simulation;
 * :mod:`.correctives` — the simulations with Section III-A's correctives on;
+  :mod:`.interpenetration` — the shown faces' interpenetration and plausibility before and
+  after correction (Figs. 1–2);
 * :mod:`.analysis_tools` — our GA-noise test and separability on simulated participants, a
   power analysis;
 * :mod:`.write_report`, :mod:`.write_metrics`, :mod:`.write_ga`, :mod:`.write_tools` — the

@@ -31,6 +31,13 @@ from emogen.analysis.replication.intervals import (
     SpreadDirection,
     judged,
 )
+from emogen.analysis.replication.low_variance import (
+    LABEL,
+    LowVarianceTarget,
+    low_variance_finding,
+    low_variance_target,
+)
+from emogen.analysis.replication.std_clustering import Clustering, clustering_finding, std_readings
 from emogen.analysis.replication.theoretical_metrics import METRIC_NAMES
 from emogen.analysis.replication.verdicts import parts_verdict
 from emogen.metrics import cosine_distance
@@ -71,7 +78,8 @@ class EmpiricalMetrics:
     """``components``: PCA components for 99% of the training variance; ``low``: the
     low-variance component of the control experiment; ``matches``: its table (Table II);
     conditions[(metric, target)]; ``largest_component`` of each target; ``convergence``: the
-    elite error table (Figs. 11–12); the findings."""
+    elite error table (Figs. 11–12); the findings; the low-variance target and its ED(β) and
+    std_ED(β) conditions (:mod:`.low_variance`); std_ED's clustering (:mod:`.std_clustering`)."""
 
     components: int
     low: int
@@ -80,6 +88,9 @@ class EmpiricalMetrics:
     largest_component: dict[str, int]
     convergence: pd.DataFrame
     findings: list[Finding]
+    low_target: LowVarianceTarget
+    low_conditions: dict[str, Condition]
+    clustering: list[Clustering]
 
 
 def empirical_metrics(
@@ -98,21 +109,36 @@ def empirical_metrics(
     beta_n = space.transform(np.zeros((1, len(rig.shape_names))))[0]
     matches, control = _control_experiment(space, training.faces, beta_n, low)
     targets = paper_targets(rig)
-    sims: dict[tuple[str, str], Condition] = {}
-    for t in TARGETS:
-        for m in EMPIRICAL:
-            spec = (
-                ConditionSpec(metric=m)
-                if m == "cd"
-                else ConditionSpec(metric=m, training=path, training_weights=training.faces)
-            )
-            sims[(m, t)] = runner.condition(f"{m} {t}", targets[t], spec)
+
+    def spec(m: str) -> ConditionSpec:
+        if m == "cd":
+            return ConditionSpec(metric=m)
+        return ConditionSpec(metric=m, training=path, training_weights=training.faces)
+
+    sims = {
+        (m, t): runner.condition(f"{m} {t}", targets[t], spec(m))
+        for t in TARGETS
+        for m in EMPIRICAL
+    }
     comp = {}
     for t in TARGETS:
         beta = np.abs(space.transform(runner.weights(targets[t])[None])[0] - beta_n)
         comp[t] = int(np.argmax(beta)) + 1
-    findings = _control_findings(control) + _simulation_findings(sims, comp, k)
-    return EmpiricalMetrics(k, low, matches, sims, comp, _convergence(sims), findings)
+    lt = low_variance_target(space, rig)
+    lc = {m: runner.condition(f"{m} {LABEL}", lt.named, spec(m)) for m in ("pca_ed", "std_ed")}
+    table_i = [
+        runner.condition(f"cd {t}", targets[t]).final for t in ("target 1", "target 2", "target 3")
+    ]
+    clusters = std_readings(
+        space, table_i, [training.finals[e].faces for e in EMOTIONS], seed=runner.settings.seed
+    )
+    findings = (
+        _control_findings(control)
+        + _simulation_findings(sims, comp, k)
+        + [low_variance_finding(lc["pca_ed"], lc["std_ed"], lt), clustering_finding(clusters)]
+    )
+    convergence = _convergence(sims | {(m, LABEL): c for m, c in lc.items()})
+    return EmpiricalMetrics(k, low, matches, sims, comp, convergence, findings, lt, lc, clusters)
 
 
 def _control_experiment(

@@ -28,6 +28,8 @@ from emogen.analysis.replication.ga_settings import (
 )
 from emogen.analysis.replication.geometry import FaceGeometry
 from emogen.analysis.replication.initialisation import initialisation
+from emogen.analysis.replication.interpenetration import interpenetration, write_interpenetration
+from emogen.analysis.replication.intersample import intersample, write_intersample
 from emogen.analysis.replication.settings import ReplicateSettings
 from emogen.analysis.replication.theoretical_metrics import targets_summary, theoretical_metrics
 from emogen.analysis.replication.verdicts import combine
@@ -105,6 +107,12 @@ def _complexity(b: Bench, r: Report) -> list[Finding]:
     return res.findings
 
 
+def _intersample(b: Bench, r: Report) -> list[Finding]:
+    res = intersample(b.runner)
+    write_intersample(r, res)
+    return res.findings
+
+
 def _selection(b: Bench, r: Report) -> list[Finding]:
     res = selection_pressure(b.runner)
     write_ga.write_selection_pressure(r, res)
@@ -123,6 +131,12 @@ def _correctives(b: Bench, r: Report) -> list[Finding]:
     return res.findings
 
 
+def _interpenetration(b: Bench, r: Report) -> list[Finding]:
+    res = interpenetration(b.runner, b.runner.model)
+    write_interpenetration(r, res)
+    return res.findings
+
+
 def _power(b: Bench, r: Report) -> list[Finding]:
     write_tools.write_power(r, power_study(b.runner), b.settings)
     return []
@@ -136,8 +150,10 @@ SECTIONS: list[tuple[str, Section]] = [
     ("bias and repeatability (Table III)", _bias),
     ("activation ranges (Table IV)", _ranges),
     ("target complexity and GA noise (Table V, Fig. 18)", _complexity),
+    ("inter-sample distance against simulation (Section IV-C)", _intersample),
     ("selection pressure", _selection),
     ("correctives (Section III-A)", _correctives),
+    ("interpenetration (Section III-A, Figs. 1-3)", _interpenetration),
     ("analysis tools on simulated participants", _tools),
     ("power analysis", _power),
 ]
