@@ -30,7 +30,7 @@ def test_look_json_is_consistent() -> None:
     assert look.shader["PART_SCLERA"] == names.index("sclera")
     assert look.shader["PART_IRIS"] == names.index("iris")
     defines = look.glsl_defines()
-    assert "#define KEY_DIR vec3(-0.350000, 0.450000, 1.000000)" in defines
+    assert "#define KEY_DIR vec3(-0.250000, 0.350000, 1.000000)" in defines
     assert "#define PART_IRIS 6.000000" in defines
     assert look.footer.startswith("ICT-FaceKit © 2020 USC ICT, MIT licence")
     broken = json.loads(json.dumps(look_json()))

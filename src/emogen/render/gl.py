@@ -25,6 +25,7 @@ in float in_part;
 in vec4 in_surface;
 in vec4 in_eye;
 in vec2 in_uv;
+in vec3 in_strain;
 uniform mat4 u_view_proj;
 out vec3 v_world;
 out vec3 v_normal;
@@ -33,8 +34,10 @@ out float v_part;
 out vec4 v_surface;
 out vec4 v_eye;
 out vec2 v_uv;
+out vec3 v_strain;
 void main() {
     v_uv = in_uv;
+    v_strain = in_strain;
     v_world = in_position;
     v_normal = in_normal;
     v_albedo = in_albedo;
@@ -54,6 +57,7 @@ in float v_part;
 in vec4 v_surface;
 in vec4 v_eye;
 in vec2 v_uv;
+in vec3 v_strain;
 out vec4 f_colour;
 void main() {
 #ifdef EMOGEN_DISCARD
@@ -61,7 +65,8 @@ void main() {
 #endif
     vec3 n = normalize(v_normal);
     vec3 v = normalize(u_camera - v_world);
-    vec3 c = emogenShade(v_part, v_albedo, v_surface.xyz, v_world, n, v, v_eye, gl_FrontFacing, v_uv);
+    vec3 c = emogenShade(v_part, v_albedo, v_surface.xyz, v_world, n, v, v_eye, gl_FrontFacing, v_uv,
+                          v_strain);
     f_colour = vec4(c, v_surface.w);
 }
 """
@@ -122,7 +127,7 @@ class GLRenderer:
             raise RenderError(f"shader failed to compile: {exc}") from None
         n_v = len(mesh.source)
         src = mesh.source
-        self.vbo_geometry = ctx.buffer(reserve=n_v * 24, dynamic=True)
+        self.vbo_geometry = ctx.buffer(reserve=n_v * 36, dynamic=True)
         self.vbo_albedo = ctx.buffer(mesh.albedo[src].tobytes(), dynamic=True)
         static = np.concatenate(
             [mesh.part[src, None], mesh.surface[src], mesh.eye[src], mesh.uv], axis=1
@@ -133,7 +138,7 @@ class GLRenderer:
             cutout: ctx.vertex_array(
                 program,
                 [
-                    (self.vbo_geometry, "3f 3f", "in_position", "in_normal"),
+                    (self.vbo_geometry, "3f 3f 3f", "in_position", "in_normal", "in_strain"),
                     (self.vbo_albedo, "3f", "in_albedo"),
                     (
                         self.vbo_static,
@@ -204,12 +209,17 @@ class GLRenderer:
             self.vbo_albedo.write(np.ascontiguousarray(drawn).tobytes())
             self._albedo_is_default = False
 
-    def draw(self, vertices: np.ndarray, normals: np.ndarray) -> np.ndarray:
-        """One face: vertices and normals (V, 3) → (size, size, 3) uint8 sRGB, top row first."""
+    def draw(
+        self, vertices: np.ndarray, normals: np.ndarray, strain: np.ndarray | None = None
+    ) -> np.ndarray:
+        """One face: vertices and normals (V, 3) and the skin's strain at the drawn vertices
+        (R, 3; None: unstrained) → (size, size, 3) uint8 sRGB, top row first."""
         src = self.mesh.source
-        geometry = np.empty((len(src), 6), dtype="f4")
+        geometry = np.zeros((len(src), 9), dtype="f4")
         geometry[:, :3] = vertices[src]
-        geometry[:, 3:] = normals[src]
+        geometry[:, 3:6] = normals[src]
+        if strain is not None:
+            geometry[:, 6:] = strain
         with self.ctx:  # several renderers (contexts) may live in one thread
             data = self._draw(geometry)
         side = self.size * self.supersample

@@ -22,9 +22,10 @@ from emogen.correct.faces import evaluate_corrected
 from emogen.errors import ShapeError
 from emogen.model.face import FaceModel
 from emogen.render.gl import GLRenderer
-from emogen.render.images import contact_sheet
+from emogen.render.images import apply_oval, contact_sheet
 from emogen.render.look import Look, default_look, fitted_look
 from emogen.render.scene import FaceMesh, face_mesh
+from emogen.render.wrinkles import StrainOperator, skin_strain_operator
 
 
 @cache
@@ -40,8 +41,9 @@ class Renderer:
     appearance : the skin's look (:class:`~emogen.appearance.Appearance`: tone, brows, lips,
         hair, stubble), painted once into a texture and cached; None draws flat part colours
         (also for models without ICT's landmarks and UV layout)
-    framing : ``face`` (default: hairline to chin fills ≥ 80% of the height) or ``head``
-        (head and shoulders), from ``look.json``
+    framing : ``face`` (default: hairline to chin fills ≥ 80% of the height), ``oval`` (the
+        face framing through an oval: hair, ears and neck hidden) or ``head`` (head and
+        shoulders), from ``look.json``
     size : image side in pixels (default ``look.size_px``, 512)
     supersample : anti-aliasing factor (default ``look.supersample``, 2: 4 samples a pixel; 1: none)
     background : sRGB triple in [0, 1]; fov_y_deg : vertical field of view in degrees
@@ -74,7 +76,9 @@ class Renderer:
         )
         self.appearance = appearance
         self.textures: SkinTextures | None = None
+        self.strain: StrainOperator | None = None
         if appearance is not None:
+            self.strain = skin_strain_operator(model, self.mesh, self.look)
             self.textures = skin_textures(
                 model, appearance, irradiance=self.look.front_irradiance()
             )
@@ -139,14 +143,20 @@ class Renderer:
                 )
         out = np.empty((len(v), self.size, self.size, 3), dtype=np.uint8)
         normals = self.mesh.normals(v)
+        src = self.mesh.source
         try:
             for i in range(len(v)):
                 if albedo is not None:
                     self._gl.set_albedo(albedo if albedo.ndim == 2 else albedo[i])
-                out[i] = self._gl.draw(v[i], normals[i])
+                strain = None
+                if self.strain is not None and albedo is None:
+                    strain = self.strain.strain(v[i][src] - self.model.neutral[src])
+                out[i] = self._gl.draw(v[i], normals[i], strain)
         finally:
             if albedo is not None:
                 self._gl.set_albedo(None)
+        if self.look.oval is not None:
+            out = apply_oval(out, self.look.oval, self.look.background_srgb)
         return out
 
     def sheet(

@@ -10,6 +10,8 @@
 //   eye     : xyz = unit direction from the eyeball centre in the eye's rest frame (z = eye axis),
 //             w = side (1 left, 2 right, 0 not an eye)
 //   uv      : glTF texture coordinates (u counts UDIM tiles: face 0-1, head 1-2; v down)
+//   strain  : linear strain of the skin in UV axes (εuu, εvv, εuv; −0.2: compressed by 20 %),
+//             from the face's own displacement (emogen/render/wrinkles.py, viewer/strain.js)
 //
 // Textures (skin and eye-socket parts, when emogenTextured > 0.5): emogenSkin, the identity's skin atlas
 // (SKIN_TILES tiles side by side, sRGB); emogenDetail, a tileable micro-relief (R height,
@@ -72,17 +74,41 @@ vec3 emogenIris(vec4 eye, vec3 scleraLinear) {
     return c;
 }
 
-vec3 emogenLight(vec3 n, vec3 v, vec3 albedo, float spec, float shin, float wrap) {
+// The eyeball's own shading (no shadows are cast): darker toward the corners, away from the
+// eye axis, and under the upper lid, which shades the top of the visible ball.
+float emogenEyeShade(vec4 eye) {
+    vec3 e = normalize(eye.xyz);
+    float corner = 1.0 - EYE_CORNER_SHADE * smoothstep(IRIS_DEG, 55.0, emogenEyeAngle(eye));
+    float lid = 1.0 - EYE_LID_SHADE * smoothstep(0.10, 0.45, e.y);
+    return corner * lid;
+}
+
+// Two lights and a sky/ground ambient. wrap (per channel) lets light reach past the terminator:
+// skin's soft light bleed, wider in red than in blue (wrap lighting as a cheap stand-in for
+// subsurface scattering; Green 2004, GPU Gems ch. 16). Eyes take no wrap.
+vec3 emogenLight(vec3 n, vec3 v, vec3 albedo, float spec, float shin, vec3 wrap) {
     vec3 l1 = normalize(KEY_DIR);
     vec3 l2 = normalize(FILL_DIR);
     float n1 = dot(n, l1);
     float n2 = dot(n, l2);
-    float d1 = max((n1 + wrap) / (1.0 + wrap), 0.0);
-    float d2 = max((n2 + wrap) / (1.0 + wrap), 0.0);
+    vec3 d1 = max((vec3(n1) + wrap) / (1.0 + wrap), 0.0);
+    vec3 d2 = max((vec3(n2) + wrap) / (1.0 + wrap), 0.0);
     float s1 = n1 > 0.0 ? spec * pow(max(dot(n, normalize(l1 + v)), 0.0), shin) : 0.0;
     float s2 = n2 > 0.0 ? spec * pow(max(dot(n, normalize(l2 + v)), 0.0), shin) : 0.0;
     vec3 hemi = mix(GROUND_RGB, SKY_RGB, 0.5 + 0.5 * n.y);
     return albedo * (hemi + KEY_RGB * d1 + FILL_RGB * d2) + KEY_RGB * s1 + FILL_RGB * s2;
+}
+
+// The catchlights: the key and fill lights mirrored by the cornea, whose normal (in the eye's
+// frame, z the axis) turns CORNEA_CURVE times faster than the direction from the eye's centre.
+// Approximates the eye frame by the camera's (gaze turns the eyes by at most ~25°).
+vec3 emogenCatchlight(vec4 eye, vec3 v) {
+    vec3 e = normalize(eye.xyz);
+    vec3 c = normalize(vec3(e.xy * CORNEA_CURVE, e.z));
+    float k = pow(max(dot(c, normalize(normalize(KEY_DIR) + v)), 0.0), CATCH_SHININESS);
+    float f = pow(max(dot(c, normalize(normalize(FILL_DIR) + v)), 0.0), CATCH_SHININESS);
+    float onCornea = 1.0 - smoothstep(IRIS_DEG - 2.0, IRIS_DEG + 1.0, emogenEyeAngle(eye));
+    return CATCH_STRENGTH * onCornea * (KEY_RGB * k + 0.5 * FILL_RGB * f);
 }
 
 // Normal perturbed by a height field h (cm) from screen-space derivatives (no tangents needed).
@@ -100,16 +126,58 @@ vec3 emogenBump(vec3 pos, vec3 n, float h) {
     return len > 1e-12 ? bumped / len : n;
 }
 
+// A smooth periodic wave in [0, 1], 1 at the integers (the shape of 0.5 + 0.5 cos 2πx, at a
+// few operations instead of a sine's polynomial: the rasteriser may be software).
+float emogenWave(float x) {
+    float t = abs(fract(x) - 0.5) * 2.0;
+    return t * t * (3.0 - 2.0 * t);
+}
+
+// Furrows across lines of constant x (UV units): 1 in a furrow, 0 between. The lines wander
+// and fade along y so that they do not look ruled.
+float emogenFurrows(float x, float y) {
+    float k = 1.0 / WRINKLE_PERIOD_UV;
+    float ph = x * k + 0.35 * sin(y * k * 0.45 + 1.3) + 0.24 * emogenWave(y * k * 0.207);
+    float s = emogenWave(ph);
+    float along = 0.55 + 0.45 * emogenWave(y * k * 0.127 + 0.43 * floor(ph + 0.5));
+    return s * s * along;
+}
+
+// Wrinkles of skin under strain: (furrow depth in cm, furrow shade in [0, 1]). Compression c
+// along four directions of the UV plane (c = −eᵀ ε e) makes furrows across each, from
+// WRINKLE_START to full depth at WRINKLE_FULL; the sharpening keeps the dominant direction.
+vec2 emogenWrinkles(vec2 uv, vec3 strain) {
+    float mean = 0.5 * (strain.x + strain.y);
+    vec4 c = -vec4(strain.x, strain.y, mean + strain.z, mean - strain.z);
+    float cmax = max(max(c.x, c.y), max(c.z, c.w));
+    vec2 out_ = vec2(0.0);
+    // Most skin is not compressed: skip the furrows there (the caller's derivatives of the
+    // result are taken outside this branch, in uniform control flow).
+    if (cmax > WRINKLE_START) {
+        vec4 share = clamp(c / cmax, 0.0, 1.0);
+        share *= share;
+        vec4 a = smoothstep(vec4(WRINKLE_START), vec4(WRINKLE_FULL), c) * share * share;
+        float r = 0.70710678;
+        float f = a.x * emogenFurrows(uv.x, uv.y) + a.y * emogenFurrows(uv.y, uv.x)
+            + a.z * emogenFurrows((uv.x + uv.y) * r, (uv.x - uv.y) * r)
+            + a.w * emogenFurrows((uv.x - uv.y) * r, (uv.x + uv.y) * r);
+        float fold = smoothstep(WRINKLE_START, WRINKLE_FULL, cmax);
+        out_ = vec2(WRINKLE_DEPTH_CM * f, WRINKLE_SHADE * f + FOLD_SHADE * fold);
+    }
+    return out_;
+}
+
 // Final sRGB colour of a fragment.
 vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v, vec4 eye,
-                 bool front, vec2 uv) {
+                 bool front, vec2 uv, vec3 strain) {
     vec3 skin = texture(emogenSkin, vec2(uv.x / SKIN_TILES, uv.y)).rgb;
     vec3 detail = texture(emogenDetail, uv * DETAIL_TILES).rgb;
-    vec3 bumped = emogenBump(pos, n, (detail.r - 0.5) * DETAIL_BUMP_CM);
+    vec2 wrinkle = emogenWrinkles(uv, strain);
+    vec3 bumped = emogenBump(pos, n, (detail.r - 0.5) * DETAIL_BUMP_CM - wrinkle.x);
     bool textured = emogenTextured > 0.5
         && (abs(part - PART_SKIN) < 0.5 || abs(part - PART_EYE_SOCKET) < 0.5);
     if (textured) {
-        albedo = emogenToLinear(skin);
+        albedo = emogenToLinear(skin) * (1.0 - wrinkle.y);
         surface.x *= 1.0 + DETAIL_SPECULAR * (2.0 * detail.g - 1.0);
         n = bumped;
     }
@@ -128,9 +196,16 @@ vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v
         }
         base = emogenIris(eye, albedo);
     }
+    if (isEye && eye.w > 0.5) {
+        base *= emogenEyeShade(eye);
+    }
     // No shadows: deep in the mouth gets darker with depth behind the lips instead.
     float depth = smoothstep(CAVITY_Z_BACK, CAVITY_Z_FRONT, pos.z);
     float cavity = mix(1.0, mix(CAVITY_MIN, 1.0, depth), clamp(surface.z, 0.0, 1.0));
-    float wrap = isEye ? 0.0 : WRAP;
-    return emogenToSrgb(emogenLight(n, v, base * cavity, surface.x * cavity, surface.y, wrap));
+    vec3 wrap = isEye ? vec3(0.0) : SKIN_WRAP_RGB;
+    vec3 lit = emogenLight(n, v, base * cavity, surface.x * cavity, surface.y, wrap);
+    if (abs(part - PART_IRIS) < 0.5 && eye.w > 0.5) {
+        lit += emogenCatchlight(eye, v);
+    }
+    return emogenToSrgb(lit);
 }
