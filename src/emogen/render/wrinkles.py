@@ -192,8 +192,17 @@ def principal_compression(strain: np.ndarray) -> np.ndarray:
 
 
 def wrinkle_amount(strain: np.ndarray, look: Look) -> np.ndarray:
-    """(n,) in [0, 1]: how strongly ``shade.glsl`` furrows skin of strain (n, 3) — 0 below
-    ``WRINKLE_START`` compression, 1 from ``WRINKLE_FULL`` (a smoothstep, as the shader)."""
-    lo, hi = float(look.shader["WRINKLE_START"]), float(look.shader["WRINKLE_FULL"])
-    x = np.clip((principal_compression(strain) - lo) / (hi - lo), 0.0, 1.0)
-    return x * x * (3 - 2 * x)
+    """(n,) in [0, 1]: how strongly ``shade.glsl`` furrows skin of strain (n, 3) across its most
+    compressed direction — 0 below ``WRINKLE_START`` compression, 1 from ``WRINKLE_FULL`` (a
+    smoothstep, as the shader), times the slack across it (1 up to ``TAUT_START`` stretch, 0
+    from ``TAUT_FULL``: taut skin stays smooth)."""
+    sh = look.shader
+    s = np.asarray(strain, dtype=np.float64)
+    across = 0.5 * (s[:, 0] + s[:, 1]) + np.hypot(0.5 * (s[:, 0] - s[:, 1]), s[:, 2])
+
+    def step(lo: str, hi: str, x: np.ndarray) -> np.ndarray:
+        t = np.clip((x - float(sh[lo])) / (float(sh[hi]) - float(sh[lo])), 0.0, 1.0)
+        return np.asarray(t * t * (3 - 2 * t))
+
+    compressed = step("WRINKLE_START", "WRINKLE_FULL", principal_compression(s))
+    return compressed * (1.0 - step("TAUT_START", "TAUT_FULL", across))

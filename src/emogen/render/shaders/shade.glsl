@@ -10,8 +10,9 @@
 //   eye     : xyz = unit direction from the eyeball centre in the eye's rest frame (z = eye axis),
 //             w = side (1 left, 2 right, 0 not an eye)
 //   uv      : glTF texture coordinates (u counts UDIM tiles: face 0-1, head 1-2; v down)
-//   strain  : linear strain of the skin in UV axes (εuu, εvv, εuv; −0.2: compressed by 20 %),
-//             from the face's own displacement (emogen/render/wrinkles.py, viewer/strain.js)
+//   strain  : rotation-free (Biot) strain of the skin in UV axes (εuu, εvv, εuv; −0.2:
+//             compressed by 20 %), the face's morph targets' strains blended by its weights
+//             (emogen/render/wrinkles.py, viewer/strain.js)
 //
 // Textures (skin and eye-socket parts, when emogenTextured > 0.5): emogenSkin, the identity's skin atlas
 // (SKIN_TILES tiles side by side, sRGB); emogenDetail, a tileable micro-relief (R height,
@@ -144,8 +145,10 @@ float emogenFurrows(float x, float y) {
 }
 
 // Wrinkles of skin under strain: (furrow depth in cm, furrow shade in [0, 1]). Compression c
-// along four directions of the UV plane (c = −eᵀ ε e) makes furrows across each, from
-// WRINKLE_START to full depth at WRINKLE_FULL; the sharpening keeps the dominant direction.
+// along four directions of the UV plane (c = −eᵀ ε e; ε the rotation-free strain) makes furrows
+// across each, from WRINKLE_START to full depth at WRINKLE_FULL; the sharpening keeps the
+// dominant direction. Skin held taut across that direction (stretched from TAUT_START, flat
+// from TAUT_FULL: the jaw's sides under jawOpen) stays smooth: only slack skin buckles.
 vec2 emogenWrinkles(vec2 uv, vec3 strain) {
     float mean = 0.5 * (strain.x + strain.y);
     vec4 c = -vec4(strain.x, strain.y, mean + strain.z, mean - strain.z);
@@ -156,12 +159,13 @@ vec2 emogenWrinkles(vec2 uv, vec3 strain) {
     if (cmax > WRINKLE_START) {
         vec4 share = clamp(c / cmax, 0.0, 1.0);
         share *= share;
-        vec4 a = smoothstep(vec4(WRINKLE_START), vec4(WRINKLE_FULL), c) * share * share;
+        vec4 slack = vec4(1.0) - smoothstep(vec4(TAUT_START), vec4(TAUT_FULL), -c.yxwz);
+        vec4 a = smoothstep(vec4(WRINKLE_START), vec4(WRINKLE_FULL), c) * share * share * slack;
         float r = 0.70710678;
         float f = a.x * emogenFurrows(uv.x, uv.y) + a.y * emogenFurrows(uv.y, uv.x)
             + a.z * emogenFurrows((uv.x + uv.y) * r, (uv.x - uv.y) * r)
             + a.w * emogenFurrows((uv.x - uv.y) * r, (uv.x + uv.y) * r);
-        float fold = smoothstep(WRINKLE_START, WRINKLE_FULL, cmax);
+        float fold = max(max(a.x, a.y), max(a.z, a.w));
         out_ = vec2(WRINKLE_DEPTH_CM * f, WRINKLE_SHADE * f + FOLD_SHADE * fold);
     }
     return out_;
