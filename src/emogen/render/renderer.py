@@ -164,7 +164,6 @@ class Renderer:
                 )
         out = np.empty((len(v), self.size, self.size, 3), dtype=np.uint8)
         normals = self.mesh.normals(v)
-        src = self.mesh.source
         try:
             for i in range(len(v)):
                 if albedo is not None:

@@ -120,7 +120,9 @@ def strain_operator(
     a = _edges(np.asarray(uv, dtype=np.float64), tri)
     det = a[:, 0, 0] * a[:, 1, 1] - a[:, 0, 1] * a[:, 1, 0]
     safe = np.where(np.abs(det) > 1e-12, det, 1.0)
-    inv = np.stack([np.stack([a[:, 1, 1], -a[:, 0, 1]], 1), np.stack([-a[:, 1, 0], a[:, 0, 0]], 1)], 1)
+    inv = np.stack(
+        [np.stack([a[:, 1, 1], -a[:, 0, 1]], 1), np.stack([-a[:, 1, 0], a[:, 0, 0]], 1)], 1
+    )
     inv = inv / safe[:, None, None]
     f0 = _edges(p, tri) @ inv
     l11 = np.linalg.norm(f0[:, :, 0], axis=1)
