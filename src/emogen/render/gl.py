@@ -12,7 +12,7 @@ from emogen.render.errors import RenderError
 from emogen.render.look import Look, shade_glsl
 
 if TYPE_CHECKING:
-    from emogen.render.scene import FaceMesh
+    from emogen.render.scene import DrawGroup, FaceMesh
 
 log = logging.getLogger(__name__)
 
@@ -112,16 +112,13 @@ class GLRenderer:
         self.mesh, self.look, self.size, self.supersample = mesh, look, size, supersample
         ctx = self.ctx
         fragment = look.glsl_defines() + shade_glsl() + _FRAGMENT
+        # One program per kind of draw group: cutouts discard (llvmpipe tests depth before
+        # shading only in shaders without discard), and each compiles only the parts it draws.
+        self.group_kinds = [_group_kind(mesh, look, g) for g in mesh.groups]
         try:
-            # Two programs: llvmpipe tests depth before shading only in shaders without discard.
             self.programs = {
-                cutout: ctx.program(
-                    vertex_shader=_VERTEX,
-                    fragment_shader="#version 330\n"
-                    + ("#define EMOGEN_DISCARD\n" if cutout else "")
-                    + fragment,
-                )
-                for cutout in (False, True)
+                kind: ctx.program(vertex_shader=_VERTEX, fragment_shader=_header(kind) + fragment)
+                for kind in dict.fromkeys(self.group_kinds)
             }
         except Exception as exc:
             raise RenderError(f"shader failed to compile: {exc}") from None
@@ -135,7 +132,7 @@ class GLRenderer:
         self.vbo_static = ctx.buffer(np.ascontiguousarray(static, dtype="f4").tobytes())
         self.ibo = ctx.buffer(mesh.drawn_triangles.astype("i4").tobytes())
         self.vaos = {
-            cutout: ctx.vertex_array(
+            kind: ctx.vertex_array(
                 program,
                 [
                     (self.vbo_geometry, "3f 3f 3f", "in_position", "in_normal", "in_strain"),
@@ -151,8 +148,9 @@ class GLRenderer:
                 ],
                 index_buffer=self.ibo,
                 index_element_size=4,
+                skip_errors=True,  # attributes a program compiled out (in_eye in skin programs)
             )
-            for cutout, program in self.programs.items()
+            for kind, program in self.programs.items()
         }
         self.textures: list[Any] = []
         side = size * supersample
@@ -235,7 +233,7 @@ class GLRenderer:
         ctx.clear(*self.look.background_srgb, 1.0, depth=1.0)
         for unit, tex in enumerate(self.textures):
             tex.use(location=unit)
-        for g in self.mesh.groups:
+        for g, kind in zip(self.mesh.groups, self.group_kinds, strict=True):
             if g.double_sided:
                 ctx.disable(ctx.CULL_FACE)
             else:
@@ -244,7 +242,7 @@ class GLRenderer:
                 ctx.enable(ctx.BLEND)
                 ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA
                 ctx.depth_mask = False
-            self.vaos[g.cutout].render(vertices=3 * g.count, first=3 * g.first)
+            self.vaos[kind].render(vertices=3 * g.count, first=3 * g.first)
             if g.blended:
                 ctx.disable(ctx.BLEND)
                 ctx.depth_mask = True
@@ -253,6 +251,30 @@ class GLRenderer:
 
     def release(self) -> None:
         self.ctx.release()
+
+
+def _group_kind(mesh: FaceMesh, look: Look, group: DrawGroup) -> tuple[bool, bool, bool]:
+    """(cutout, skin, eyes) of a draw group: whether it discards, and whether any fragment of
+    it can be skin (skin, eye socket) or eyeball (sclera, iris). The part code is interpolated
+    across a triangle, so the range between its corners' smallest and largest code counts."""
+    tris = mesh.drawn_triangles[group.first : group.first + group.count]
+    part = mesh.part[mesh.source][tris]
+    lo, hi = float(part.min()) - 0.5, float(part.max()) + 0.5
+    sh = look.shader
+
+    def holds(*names: str) -> bool:
+        return any(lo < float(sh[n]) < hi for n in names)
+
+    return group.cutout, holds("PART_SKIN", "PART_EYE_SOCKET"), holds("PART_SCLERA", "PART_IRIS")
+
+
+def _header(kind: tuple[bool, bool, bool]) -> str:
+    cutout, skin, eyes = kind
+    return (
+        "#version 330\n"
+        + ("#define EMOGEN_DISCARD\n" if cutout else "")
+        + f"#define EMOGEN_SKIN {int(skin)}\n#define EMOGEN_EYES {int(eyes)}\n"
+    )
 
 
 def downsample(image: np.ndarray, factor: int) -> np.ndarray:

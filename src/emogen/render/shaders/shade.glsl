@@ -19,6 +19,17 @@
 // G roughness) repeated DETAIL_TILES times per tile. Both are sampled unconditionally (mipmap
 // derivatives need uniform control flow) and used only on skin.
 
+// Which kinds of part a draw holds: the offscreen renderer compiles one program per draw group
+// with the kinds its triangles have (gl.py); the browser's one material keeps both. A software
+// rasteriser (llvmpipe) runs both sides of every branch, so the code that no fragment of a group
+// needs is compiled out rather than branched around (the result is the same).
+#ifndef EMOGEN_SKIN
+#define EMOGEN_SKIN 1 // skin and eye-socket parts: skin texture, micro-relief, wrinkles
+#endif
+#ifndef EMOGEN_EYES
+#define EMOGEN_EYES 1 // eyeballs (sclera, iris): iris, eyeball shade, catchlights
+#endif
+
 uniform sampler2D emogenSkin;
 uniform sampler2D emogenDetail;
 uniform float emogenTextured;
@@ -174,6 +185,7 @@ vec2 emogenWrinkles(vec2 uv, vec3 strain) {
 // Final sRGB colour of a fragment.
 vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v, vec4 eye,
                  bool front, vec2 uv, vec3 strain) {
+#if EMOGEN_SKIN
     vec3 skin = texture(emogenSkin, vec2(uv.x / SKIN_TILES, uv.y)).rgb;
     vec3 detail = texture(emogenDetail, uv * DETAIL_TILES).rgb;
     vec2 wrinkle = emogenWrinkles(uv, strain);
@@ -185,7 +197,9 @@ vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v
         surface.x *= 1.0 + DETAIL_SPECULAR * (2.0 * detail.g - 1.0);
         n = bumped;
     }
-    bool isEye = emogenIsEye(part);
+#endif
+    bool isEye = EMOGEN_EYES != 0 && emogenIsEye(part);
+    bool isIris = isEye && abs(part - PART_IRIS) < 0.5 && eye.w > 0.5;
     if (!front) {
         if (isEye) {
             return EYE_INTERIOR_SRGB;
@@ -193,7 +207,7 @@ vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v
         n = -n;
     }
     vec3 base = albedo;
-    if (abs(part - PART_IRIS) < 0.5 && eye.w > 0.5) {
+    if (isIris) {
         // The back of the inner ball is only ever seen through the pupil: the eye's interior.
         if (emogenEyeAngle(eye) > 90.0) {
             return EYE_INTERIOR_SRGB;
@@ -208,7 +222,7 @@ vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v
     float cavity = mix(1.0, mix(CAVITY_MIN, 1.0, depth), clamp(surface.z, 0.0, 1.0));
     vec3 wrap = isEye ? vec3(0.0) : SKIN_WRAP_RGB;
     vec3 lit = emogenLight(n, v, base * cavity, surface.x * cavity, surface.y, wrap);
-    if (abs(part - PART_IRIS) < 0.5 && eye.w > 0.5) {
+    if (isIris) {
         lit += emogenCatchlight(eye, v);
     }
     return emogenToSrgb(lit);
