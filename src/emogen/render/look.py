@@ -125,6 +125,8 @@ class Look:
     fits: dict[str, tuple[float, float]]  # framing → (fill, top) for cameras fitted to a face
     #: framing → oval mask (centre x, centre y, radius x, radius y) as fractions of the image
     ovals: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+    #: the wet lower lid margin and the caruncle on the skin (look.json "lid_margin")
+    lid_margin: dict[str, float] = field(default_factory=dict)
 
     @property
     def oval(self) -> tuple[float, float, float, float] | None:
@@ -271,6 +273,7 @@ def look_from_dict(d: dict[str, Any]) -> Look:
             framing=str(d["framing"]),
             fits=fits,
             ovals=ovals,
+            lid_margin={k: float(v) for k, v in d.get("lid_margin", {}).items() if k != "about"},
         )
     except KeyError as exc:
         raise ConfigError(f"look.json lacks {exc}") from None

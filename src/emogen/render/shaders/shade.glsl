@@ -8,7 +8,8 @@
 //   surface : (specular, shininess, cavity) per vertex
 //   pos     : world position in cm; n: unit normal; v: unit direction to the camera
 //   eye     : xyz = unit direction from the eyeball centre in the eye's rest frame (z = eye axis),
-//             w = side (1 left, 2 right, 0 not an eye)
+//             w = side (1 left, 2 right, 0 not an eye); on skin (w = 0): x the lower lid's wet
+//             margin, y the inner eye corner, in [0, 1] (look.json lid_margin)
 //   uv      : glTF texture coordinates (u counts UDIM tiles: face 0-1, head 1-2; v down)
 //   strain  : rotation-free (Biot) strain of the skin in UV axes (εuu, εvv, εuv; −0.2:
 //             compressed by 20 %), the face's morph targets' strains blended by its weights
@@ -197,6 +198,12 @@ vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v
         surface.x *= 1.0 + DETAIL_SPECULAR * (2.0 * detail.g - 1.0);
         n = bumped;
     }
+    // The lower lid's wet margin (the tear line, with its highlight) and the inner corner (the
+    // caruncle): weights on the skin vertices that touch the eyeball, in eye.xy (eye.w = 0;
+    // scene.py and mesh.js from look.json's lid_margin). Branch-free: most fragments have 0.
+    vec2 lid = eye.xy * (1.0 - step(0.5, eye.w));
+    albedo *= mix(vec3(1.0), TEAR_TINT_RGB, lid.x) * mix(vec3(1.0), CARUNCLE_TINT_RGB, lid.y);
+    surface.xy = mix(surface.xy, vec2(WET_SPECULAR, WET_SHININESS), max(lid.x, lid.y));
 #endif
     bool isEye = EMOGEN_EYES != 0 && emogenIsEye(part);
     bool isIris = isEye && abs(part - PART_IRIS) < 0.5 && eye.w > 0.5;
@@ -215,6 +222,9 @@ vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v
         base = emogenIris(eye, albedo);
     }
     if (isEye && eye.w > 0.5) {
+        // The caruncle's pink flesh in the eye's inner corner (nasal: −x on the left eye).
+        float nasal = (eye.w < 1.5 ? -eye.x : eye.x) / length(eye.xyz);
+        base = mix(base, emogenToLinear(CARUNCLE_SRGB), smoothstep(CARUNCLE_FROM, CARUNCLE_FULL, nasal));
         base *= emogenEyeShade(eye);
     }
     // No shadows: deep in the mouth gets darker with depth behind the lips instead.
