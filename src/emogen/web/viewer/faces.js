@@ -164,6 +164,7 @@ export class FaceGrid {
       copies.forEach((mesh, k) => {
         mesh.material = faceMaterial(
           prims[k].part, centres(meshes[k]), this.shapeNames.length, textures, strains[k],
+          prims[k].codes,
         );
         mesh.renderOrder = order(prims[k].part);
         mesh.frustumCulled = false;

@@ -3,7 +3,7 @@
 // textured by the identity's atlas and detail tile from the GLB (see faces.js), sampled with
 // glTF's TEXCOORD_0 (three's built-in `uv` attribute).
 import { DoubleSide, FrontSide, Matrix3, NormalBlending, ShaderMaterial, Vector3 } from 'three';
-import { glslDefines, shadeGlsl } from './look.js';
+import { glslDefines, look, shadeGlsl } from './look.js';
 import { STRAIN_WIDTH } from './strain.js';
 
 const vertexShader = /* glsl */ `
@@ -96,13 +96,20 @@ void main() {
  * or null: every part in its flat look.json colour. strain: the primitive's {texture, vertices}
  * from strainTexture (strain.js), or null: unstrained.
  */
-export function faceMaterial(part, eyeCentres, nShapes, textures = null, strain = null) {
+export function faceMaterial(part, eyeCentres, nShapes, textures = null, strain = null, codes = null) {
   const blended = part.opacity < 1 || part.fringe_cm > 0;
+  // Compile out what no fragment of the primitive runs (as gl.py per draw group): SwiftShader,
+  // like llvmpipe, runs both sides of a branch. codes: [lowest, highest] part code it holds.
+  const holds = (...names) =>
+    !codes || names.some((n) => codes[0] - 0.5 < look.shader[n] && look.shader[n] < codes[1] + 0.5);
+  const kinds =
+    `#define EMOGEN_SKIN ${holds('PART_SKIN', 'PART_EYE_SOCKET') ? 1 : 0}\n` +
+    `#define EMOGEN_EYES ${holds('PART_SCLERA', 'PART_IRIS') ? 1 : 0}\n`;
   const maxActive = Math.max(1, nShapes);
   return new ShaderMaterial({
     vertexShader: `#define MAX_ACTIVE ${maxActive}\n#define STRAIN_WIDTH ${STRAIN_WIDTH}\n${vertexShader}`,
     fragmentShader:
-      (part.cutout ? '#define EMOGEN_DISCARD\n' : '') + glslDefines() + shadeGlsl + fragmentMain,
+      (part.cutout ? '#define EMOGEN_DISCARD\n' : '') + kinds + glslDefines() + shadeGlsl + fragmentMain,
     uniforms: {
       uEyeRotLeft: { value: new Matrix3() },
       uEyeRotRight: { value: new Matrix3() },

@@ -223,7 +223,9 @@ export function addShadingAttributes(meshes, regions) {
     g.setAttribute('aSurface', new BufferAttribute(aSurface, 4));
     g.setAttribute('aEye', new BufferAttribute(aEye, 4));
     const first = g.index ? g.index.getX(0) : 0;
-    out.push({ mesh: p.mesh, part: parts[aPart[first] | 0] });
+    let lo = Infinity, hi = -Infinity; // the part codes a fragment can interpolate between
+    for (const c of aPart) (lo = Math.min(lo, c)), (hi = Math.max(hi, c));
+    out.push({ mesh: p.mesh, part: parts[aPart[first] | 0], codes: [lo, hi] });
   }
   return out;
 }
