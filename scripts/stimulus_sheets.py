@@ -32,14 +32,14 @@ def prototypes(model: emogen.FaceModel) -> tuple[list[str], np.ndarray]:
     return names, np.asarray(rows)
 
 
-def sheet(model: emogen.FaceModel, size: int, after: bool) -> np.ndarray:
+def sheet(model: emogen.FaceModel, size: int, after: bool, framing: str = "face") -> np.ndarray:
     names, w = prototypes(model)
     images, labels = [], []
     for preset in PRESET_NAMES:
         ident = PRESETS[preset]
         m = model.with_identity(ident.shape)
         options = (
-            {"appearance": ident.appearance, "framing": "face"} if after else {"framing": "head"}
+            {"appearance": ident.appearance, "framing": framing} if after else {"framing": "head"}
         )
         with Renderer(m, size=size, **options) as r:  # type: ignore[arg-type]
             images.append(r.render(w, correct=True))
@@ -47,8 +47,22 @@ def sheet(model: emogen.FaceModel, size: int, after: bool) -> np.ndarray:
     return contact_sheet(np.concatenate(images), labels, columns=len(names))
 
 
+def textured_sheets(out: Path, tag: str) -> None:
+    """The textured look under each framing, 512² and tile size: stimuli_TAG_FRAMING_SIZE.png
+    (``--tag round1`` run with the previous release, ``round2`` with this one)."""
+    model = emogen.load_model()
+    for framing in ("face", "oval", "head"):
+        for size, name in ((512, "512"), (256, "tile")):
+            path = out / f"stimuli_{tag}_{framing}_{name}.png"
+            Image.fromarray(sheet(model, size, True, framing)).save(path, optimize=True)
+            print(path)
+
+
 def main() -> None:
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/images")
+    if "--tag" in sys.argv:
+        textured_sheets(out, sys.argv[sys.argv.index("--tag") + 1])
+        return
     model = emogen.load_model()
     for after in (False, True):
         for size, tag in ((512, "512"), (256, "tile")):

@@ -30,7 +30,7 @@ def test_look_json_is_consistent() -> None:
     assert look.shader["PART_SCLERA"] == names.index("sclera")
     assert look.shader["PART_IRIS"] == names.index("iris")
     defines = look.glsl_defines()
-    assert "#define KEY_DIR vec3(-0.350000, 0.450000, 1.000000)" in defines
+    assert "#define KEY_DIR vec3(-0.250000, 0.350000, 1.000000)" in defines
     assert "#define PART_IRIS 6.000000" in defines
     assert look.footer.startswith("ICT-FaceKit © 2020 USC ICT, MIT licence")
     broken = json.loads(json.dumps(look_json()))
@@ -121,3 +121,34 @@ def test_normals_match_the_reference(ict_model) -> None:  # type: ignore[no-unty
     slow = vertex_normals(v, mesh.triangles)
     used = np.unique(mesh.triangles)
     assert np.allclose(fast[:, used], slow[:, used], atol=1e-4)
+
+
+def test_lid_margin_weights_lie_on_the_lower_lid_and_inner_corner(ict_model) -> None:  # type: ignore[no-untyped-def]
+    """The tear-line and caruncle weights (the skin's ``eye`` attribute) against a plain loop:
+    only skin vertices within far_cm of a drawn shell vertex carry them, tear weights below the
+    eye's centre, caruncle weights on the nose's side of it, and every eye has both."""
+    look = default_look()
+    mesh = face_mesh(ict_model, look)
+    lm = look.lid_margin
+    eye = mesh.eye
+    skin = mesh.part == look.shader["PART_SKIN"]
+    carrying = np.flatnonzero((eye[:, 3] == 0) & (eye[:, :2].max(1) > 0))
+    assert np.all(skin[carrying])
+    drawn = set(mesh.source.tolist())
+    for e in look.eyes:
+        shell_ids = [i for i in ict_model.regions[e.shell].vertex_indices() if i in drawn]
+        shell = ict_model.neutral[shell_ids].astype(np.float64)
+        centre = sphere_centre(shell)
+        near = []
+        for v in carrying:
+            p = ict_model.neutral[v].astype(np.float64)
+            if np.linalg.norm(p - centre) < 2.5:
+                near.append(v)
+                assert min(np.linalg.norm(q - p) for q in shell) < lm["far_cm"]
+        near_ids = np.array(near)
+        assert len(near_ids) > 20
+        offset = ict_model.neutral[near_ids] - centre
+        tear, caruncle = eye[near_ids, 0], eye[near_ids, 1]
+        assert np.all(offset[tear > 0, 1] < 0.2)  # below the centre (eye frame tilts a little)
+        assert np.all(np.sign(offset[caruncle > 0, 0]) == -np.sign(centre[0]))  # nose's side
+        assert tear.max() > 0.9 and caruncle.max() > 0.5

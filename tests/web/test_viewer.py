@@ -145,6 +145,35 @@ def test_browser_and_offscreen_agree(chromium: Any, site: Site, ict_model) -> No
     context.close()
 
 
+def test_oval_framing_agrees_with_offscreen(chromium: Any, site: Site, ict_model) -> None:  # type: ignore[no-untyped-def]
+    """framing=oval: the page lays look.json's oval over each face (CSS), the offscreen
+    renderer masks its images (emogen.render.images.apply_oval); same face, same limits as
+    above. Outside the oval both are the bare background; the same face without the oval
+    differs by far more than the limit (the check can fail)."""
+    from emogen.render.gl import downsample
+
+    context, page, _ = open_viewer(
+        chromium, site, "?faces=1&size=512&columns=1&framing=oval", width=600, scale=2
+    )
+    _, smile = example_weights(ict_model, "smile")
+    w = np.concatenate([np.array(weights_of(ict_model, {})), smile])
+    with vs.offscreen_renderer(ict_model, 512, supersample=2, framing="oval") as r:
+        offscreen = r.render(w).astype(int)
+    with vs.offscreen_renderer(ict_model, 512, supersample=2) as r:
+        bare = r.render(w[:1]).astype(int)[0]
+    slot = page.locator(".face").first
+    background = np.round(255 * np.array(r.look.background_srgb)).astype(int)
+    for i in range(len(w)):
+        page.evaluate("w => window.emogen.setFaces([w])", w[i].tolist())
+        shot = downsample(screenshot(slot), 2).astype(int)
+        d = np.abs(shot - offscreen[i])
+        assert d.mean() < MAX_MEAN_ABS, (i, d.mean())
+        assert (d.max(-1) > OFF_LEVELS).mean() < MAX_FRACTION_OFF, i
+        assert np.all(shot[:, :40] == background) and np.all(offscreen[i][:, :40] == background)
+    assert np.abs(offscreen[0] - bare).mean() > 10 * MAX_MEAN_ABS
+    context.close()
+
+
 def test_webgl_less_fallback_shows_server_pngs(playwright_api: Any, site: Site, ict_model) -> None:  # type: ignore[no-untyped-def]
     browser = vs.launch(playwright_api, "--disable-3d-apis")
     try:

@@ -89,13 +89,20 @@ def identity_model(ict_model: Any, name: str = IDENTITY) -> tuple[Any, Any]:
 
 
 def offscreen_renderer(
-    ict_model: Any, size: int, name: str = IDENTITY, supersample: int | None = None
+    ict_model: Any,
+    size: int,
+    name: str = IDENTITY,
+    supersample: int | None = None,
+    framing: str | None = None,
 ) -> Any:
-    """The offscreen renderer of what the site's GLB shows: same identity, appearance, camera."""
+    """The offscreen renderer of what the site's GLB shows: same identity, appearance, camera
+    (``oval``: the same camera, through the oval)."""
     from emogen.render.renderer import Renderer
 
     model, appearance = identity_model(ict_model, name)
-    return Renderer(model, size=size, appearance=appearance, supersample=supersample)
+    return Renderer(
+        model, size=size, appearance=appearance, supersample=supersample, framing=framing
+    )
 
 
 def export_site_glb(ict_model: Any, path: Path, name: str = IDENTITY) -> Any:

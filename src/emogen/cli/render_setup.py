@@ -67,6 +67,7 @@ IdentityOpt = Annotated[
 
 class Framing(StrEnum):
     face = "face"
+    oval = "oval"
     head = "head"
 
 
@@ -74,7 +75,7 @@ FramingOpt = Annotated[
     Framing,
     typer.Option(
         "--framing",
-        help="face: hairline to chin fills the image; head: head and shoulders.",
+        help="face: hairline to chin fills the image; oval: the face through an oval (hair, ears and neck hidden); head: head and shoulders.",
     ),
 ]
 PlainOpt = Annotated[

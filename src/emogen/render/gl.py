@@ -12,7 +12,7 @@ from emogen.render.errors import RenderError
 from emogen.render.look import Look, shade_glsl
 
 if TYPE_CHECKING:
-    from emogen.render.scene import FaceMesh
+    from emogen.render.scene import DrawGroup, FaceMesh
 
 log = logging.getLogger(__name__)
 
@@ -25,6 +25,7 @@ in float in_part;
 in vec4 in_surface;
 in vec4 in_eye;
 in vec2 in_uv;
+in vec3 in_strain;
 uniform mat4 u_view_proj;
 out vec3 v_world;
 out vec3 v_normal;
@@ -33,8 +34,10 @@ out float v_part;
 out vec4 v_surface;
 out vec4 v_eye;
 out vec2 v_uv;
+out vec3 v_strain;
 void main() {
     v_uv = in_uv;
+    v_strain = in_strain;
     v_world = in_position;
     v_normal = in_normal;
     v_albedo = in_albedo;
@@ -54,6 +57,7 @@ in float v_part;
 in vec4 v_surface;
 in vec4 v_eye;
 in vec2 v_uv;
+in vec3 v_strain;
 out vec4 f_colour;
 void main() {
 #ifdef EMOGEN_DISCARD
@@ -61,7 +65,8 @@ void main() {
 #endif
     vec3 n = normalize(v_normal);
     vec3 v = normalize(u_camera - v_world);
-    vec3 c = emogenShade(v_part, v_albedo, v_surface.xyz, v_world, n, v, v_eye, gl_FrontFacing, v_uv);
+    vec3 c = emogenShade(v_part, v_albedo, v_surface.xyz, v_world, n, v, v_eye, gl_FrontFacing, v_uv,
+                          v_strain);
     f_colour = vec4(c, v_surface.w);
 }
 """
@@ -107,22 +112,19 @@ class GLRenderer:
         self.mesh, self.look, self.size, self.supersample = mesh, look, size, supersample
         ctx = self.ctx
         fragment = look.glsl_defines() + shade_glsl() + _FRAGMENT
+        # One program per kind of draw group: cutouts discard (llvmpipe tests depth before
+        # shading only in shaders without discard), and each compiles only the parts it draws.
+        self.group_kinds = [_group_kind(mesh, look, g) for g in mesh.groups]
         try:
-            # Two programs: llvmpipe tests depth before shading only in shaders without discard.
             self.programs = {
-                cutout: ctx.program(
-                    vertex_shader=_VERTEX,
-                    fragment_shader="#version 330\n"
-                    + ("#define EMOGEN_DISCARD\n" if cutout else "")
-                    + fragment,
-                )
-                for cutout in (False, True)
+                kind: ctx.program(vertex_shader=_VERTEX, fragment_shader=_header(kind) + fragment)
+                for kind in dict.fromkeys(self.group_kinds)
             }
         except Exception as exc:
             raise RenderError(f"shader failed to compile: {exc}") from None
         n_v = len(mesh.source)
         src = mesh.source
-        self.vbo_geometry = ctx.buffer(reserve=n_v * 24, dynamic=True)
+        self.vbo_geometry = ctx.buffer(reserve=n_v * 36, dynamic=True)
         self.vbo_albedo = ctx.buffer(mesh.albedo[src].tobytes(), dynamic=True)
         static = np.concatenate(
             [mesh.part[src, None], mesh.surface[src], mesh.eye[src], mesh.uv], axis=1
@@ -130,10 +132,10 @@ class GLRenderer:
         self.vbo_static = ctx.buffer(np.ascontiguousarray(static, dtype="f4").tobytes())
         self.ibo = ctx.buffer(mesh.drawn_triangles.astype("i4").tobytes())
         self.vaos = {
-            cutout: ctx.vertex_array(
+            kind: ctx.vertex_array(
                 program,
                 [
-                    (self.vbo_geometry, "3f 3f", "in_position", "in_normal"),
+                    (self.vbo_geometry, "3f 3f 3f", "in_position", "in_normal", "in_strain"),
                     (self.vbo_albedo, "3f", "in_albedo"),
                     (
                         self.vbo_static,
@@ -146,8 +148,9 @@ class GLRenderer:
                 ],
                 index_buffer=self.ibo,
                 index_element_size=4,
+                skip_errors=True,  # attributes a program compiled out (in_eye in skin programs)
             )
-            for cutout, program in self.programs.items()
+            for kind, program in self.programs.items()
         }
         self.textures: list[Any] = []
         side = size * supersample
@@ -204,12 +207,17 @@ class GLRenderer:
             self.vbo_albedo.write(np.ascontiguousarray(drawn).tobytes())
             self._albedo_is_default = False
 
-    def draw(self, vertices: np.ndarray, normals: np.ndarray) -> np.ndarray:
-        """One face: vertices and normals (V, 3) → (size, size, 3) uint8 sRGB, top row first."""
+    def draw(
+        self, vertices: np.ndarray, normals: np.ndarray, strain: np.ndarray | None = None
+    ) -> np.ndarray:
+        """One face: vertices and normals (V, 3) and the skin's strain at the drawn vertices
+        (R, 3; None: unstrained) → (size, size, 3) uint8 sRGB, top row first."""
         src = self.mesh.source
-        geometry = np.empty((len(src), 6), dtype="f4")
+        geometry = np.zeros((len(src), 9), dtype="f4")
         geometry[:, :3] = vertices[src]
-        geometry[:, 3:] = normals[src]
+        geometry[:, 3:6] = normals[src]
+        if strain is not None:
+            geometry[:, 6:] = strain
         with self.ctx:  # several renderers (contexts) may live in one thread
             data = self._draw(geometry)
         side = self.size * self.supersample
@@ -225,7 +233,7 @@ class GLRenderer:
         ctx.clear(*self.look.background_srgb, 1.0, depth=1.0)
         for unit, tex in enumerate(self.textures):
             tex.use(location=unit)
-        for g in self.mesh.groups:
+        for g, kind in zip(self.mesh.groups, self.group_kinds, strict=True):
             if g.double_sided:
                 ctx.disable(ctx.CULL_FACE)
             else:
@@ -234,7 +242,7 @@ class GLRenderer:
                 ctx.enable(ctx.BLEND)
                 ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA
                 ctx.depth_mask = False
-            self.vaos[g.cutout].render(vertices=3 * g.count, first=3 * g.first)
+            self.vaos[kind].render(vertices=3 * g.count, first=3 * g.first)
             if g.blended:
                 ctx.disable(ctx.BLEND)
                 ctx.depth_mask = True
@@ -243,6 +251,30 @@ class GLRenderer:
 
     def release(self) -> None:
         self.ctx.release()
+
+
+def _group_kind(mesh: FaceMesh, look: Look, group: DrawGroup) -> tuple[bool, bool, bool]:
+    """(cutout, skin, eyes) of a draw group: whether it discards, and whether any fragment of
+    it can be skin (skin, eye socket) or eyeball (sclera, iris). The part code is interpolated
+    across a triangle, so the range between its corners' smallest and largest code counts."""
+    tris = mesh.drawn_triangles[group.first : group.first + group.count]
+    part = mesh.part[mesh.source][tris]
+    lo, hi = float(part.min()) - 0.5, float(part.max()) + 0.5
+    sh = look.shader
+
+    def holds(*names: str) -> bool:
+        return any(lo < float(sh[n]) < hi for n in names)
+
+    return group.cutout, holds("PART_SKIN", "PART_EYE_SOCKET"), holds("PART_SCLERA", "PART_IRIS")
+
+
+def _header(kind: tuple[bool, bool, bool]) -> str:
+    cutout, skin, eyes = kind
+    return (
+        "#version 330\n"
+        + ("#define EMOGEN_DISCARD\n" if cutout else "")
+        + f"#define EMOGEN_SKIN {int(skin)}\n#define EMOGEN_EYES {int(eyes)}\n"
+    )
 
 
 def downsample(image: np.ndarray, factor: int) -> np.ndarray:

@@ -212,3 +212,26 @@ def read_png(path: str | Path) -> np.ndarray:
     """(H, W, 3) uint8 of a PNG file."""
     with _pil().open(path) as im:
         return np.asarray(im.convert("RGB"))
+
+
+def oval_coverage(size: int, oval: tuple[float, float, float, float]) -> np.ndarray:
+    """(size, size) float32 in [0, 1]: how much of each pixel lies inside the oval (centre x,
+    centre y, radius x, radius y as fractions of the image, y down), its edge ramped over one
+    pixel by the distance of the pixel's centre to the ellipse (first order)."""
+    cx, cy, rx, ry = (v * size for v in oval)
+    centres = np.arange(size, dtype=np.float64) + 0.5
+    x = ((centres - cx) / rx)[None, :]
+    y = ((centres - cy) / ry)[:, None]
+    r = np.sqrt(x**2 + y**2)
+    grad = np.sqrt((x / rx) ** 2 + (y / ry) ** 2) / np.maximum(r, 1e-12)
+    return np.clip(0.5 - (r - 1) / np.maximum(grad, 1e-12), 0.0, 1.0).astype(np.float32)
+
+
+def apply_oval(
+    images: np.ndarray, oval: tuple[float, float, float, float], background: Sequence[float]
+) -> np.ndarray:
+    """Images (n, size, size, 3) uint8 seen through the oval on the background (sRGB)."""
+    cover = oval_coverage(images.shape[1], oval)[None, :, :, None]
+    bg = np.asarray(_rgb255(background), dtype=np.float32)
+    out = images.astype(np.float32) * cover + bg * (1 - cover)
+    return np.round(out).astype(np.uint8)

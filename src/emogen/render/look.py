@@ -7,7 +7,7 @@ renderer and the viewer frame, light and shade a face the same way.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import cache
 from importlib import resources
 from typing import Any
@@ -123,6 +123,15 @@ class Look:
     framings: dict[str, Camera]
     framing: str  # the framing of ``camera``
     fits: dict[str, tuple[float, float]]  # framing → (fill, top) for cameras fitted to a face
+    #: framing → oval mask (centre x, centre y, radius x, radius y) as fractions of the image
+    ovals: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+    #: the wet lower lid margin and the caruncle on the skin (look.json "lid_margin")
+    lid_margin: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def oval(self) -> tuple[float, float, float, float] | None:
+        """The oval mask of the current framing (None: the whole image shows)."""
+        return self.ovals.get(self.framing)
 
     def with_options(
         self,
@@ -153,7 +162,7 @@ class Look:
         ``emogenLight`` computes it: what the skin generator divides a target colour by."""
         sh = self.shader
         n = np.array([0.0, 0.0, 1.0])
-        wrap = float(sh["WRAP"])
+        wrap = float(sh["SKIN_WRAP_RGB"][1])
         total = 0.5 * (np.asarray(sh["GROUND_RGB"]) + np.asarray(sh["SKY_RGB"]))
         for d, rgb in (("KEY_DIR", "KEY_RGB"), ("FILL_DIR", "FILL_RGB")):
             direction = np.asarray(sh[d], dtype=np.float64)
@@ -183,6 +192,17 @@ def _triple(v: Any, what: str) -> tuple[float, float, float]:
     if not isinstance(v, list) or len(v) != 3:
         raise ConfigError(f"look.json: {what} must be 3 numbers; got {v!r}")
     return (float(v[0]), float(v[1]), float(v[2]))
+
+
+def _oval(mask: Any, name: str) -> tuple[float, float, float, float]:
+    cx, cy = mask["centre"]
+    rx, ry = mask["radii"]
+    values = (float(cx), float(cy), float(rx), float(ry))
+    if not all(0 < v <= 1 for v in values):
+        raise ConfigError(
+            f"look.json: framings.{name}.mask must be fractions in (0, 1]; got {mask}"
+        )
+    return values
 
 
 def fitted_look(look: Look, model: FaceModel, appearance: Appearance | None) -> Look:
@@ -219,6 +239,9 @@ def look_from_dict(d: dict[str, Any]) -> Look:
             for name, cam in d["framings"].items()
             if "fill" in cam
         }
+        ovals = {
+            name: _oval(cam["mask"], name) for name, cam in d["framings"].items() if "mask" in cam
+        }
         parts = tuple(
             Part(
                 name=p["name"],
@@ -249,6 +272,8 @@ def look_from_dict(d: dict[str, Any]) -> Look:
             framings=framings,
             framing=str(d["framing"]),
             fits=fits,
+            ovals=ovals,
+            lid_margin={k: float(v) for k, v in d.get("lid_margin", {}).items() if k != "about"},
         )
     except KeyError as exc:
         raise ConfigError(f"look.json lacks {exc}") from None

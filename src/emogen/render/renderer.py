@@ -18,13 +18,14 @@ import numpy as np
 
 from emogen.appearance.params import Appearance
 from emogen.appearance.textures import SkinTextures, skin_textures
-from emogen.correct.faces import evaluate_corrected
+from emogen.correct.faces import correct_faces, corrected_vertices, model_correctives
 from emogen.errors import ShapeError
 from emogen.model.face import FaceModel
 from emogen.render.gl import GLRenderer
-from emogen.render.images import contact_sheet
+from emogen.render.images import apply_oval, contact_sheet
 from emogen.render.look import Look, default_look, fitted_look
 from emogen.render.scene import FaceMesh, face_mesh
+from emogen.render.wrinkles import TargetStrains, skin_strain_operator
 
 
 @cache
@@ -40,8 +41,9 @@ class Renderer:
     appearance : the skin's look (:class:`~emogen.appearance.Appearance`: tone, brows, lips,
         hair, stubble), painted once into a texture and cached; None draws flat part colours
         (also for models without ICT's landmarks and UV layout)
-    framing : ``face`` (default: hairline to chin fills ≥ 80% of the height) or ``head``
-        (head and shoulders), from ``look.json``
+    framing : ``face`` (default: hairline to chin fills ≥ 80% of the height), ``oval`` (the
+        face framing through an oval: hair, ears and neck hidden) or ``head`` (head and
+        shoulders), from ``look.json``
     size : image side in pixels (default ``look.size_px``, 512)
     supersample : anti-aliasing factor (default ``look.supersample``, 2: 4 samples a pixel; 1: none)
     background : sRGB triple in [0, 1]; fov_y_deg : vertical field of view in degrees
@@ -74,11 +76,24 @@ class Renderer:
         )
         self.appearance = appearance
         self.textures: SkinTextures | None = None
+        self.strain: TargetStrains | None = None
         if appearance is not None:
+            op = skin_strain_operator(model, self.mesh, self.look)
+            self.strain = TargetStrains(op, len(self.mesh.source), self._target_delta)
             self.textures = skin_textures(
                 model, appearance, irradiance=self.look.front_irradiance()
             )
             self._gl.set_textures(self.textures.albedo, self.textures.detail)
+
+    def _target_delta(self, k: int) -> np.ndarray:
+        """Morph target ``k``'s displacement at the drawn vertices: the shapes, then the
+        correctives (combinational, then collision), as in the viewer's GLB."""
+        src = self.mesh.source
+        if k < self.model.n_shapes:
+            return self.model.deltas[k][src]
+        c = model_correctives(self.model)
+        deltas = np.concatenate([c.combinational_deltas, c.collision_deltas])
+        return deltas[k - self.model.n_shapes][src]
 
     # ---- context manager ---------------------------------------------------------------
     def __enter__(self) -> Self:
@@ -112,18 +127,28 @@ class Renderer:
         with _blas().limit(limits=1, user_api="blas"):
             w = np.asarray(weights, dtype=np.float32)
             if correct:
-                vertices = evaluate_corrected(self.model, w, gaze=gaze)
+                result = correct_faces(self.model, w)
+                vertices = corrected_vertices(self.model, result, gaze=gaze)
+                targets = np.concatenate([result.weights, result.correctives], axis=1)
             else:
                 vertices = self.model.evaluate(w, gaze=gaze)
-        return self.render_vertices(vertices)
+                targets = self.model.check_weights(w, np.float32)
+        return self.render_vertices(vertices, targets=targets)
 
     def render_vertices(
-        self, vertices: np.ndarray, *, albedo: np.ndarray | None = None
+        self,
+        vertices: np.ndarray,
+        *,
+        albedo: np.ndarray | None = None,
+        targets: np.ndarray | None = None,
     ) -> np.ndarray:
         """Meshes ``(n_faces, n_vertices, 3)`` in cm (the model's topology) → images.
 
         albedo : optional per-vertex linear RGB ``(n_vertices, 3)`` or ``(n_faces, n_vertices, 3)``
         replacing the look's part colours (error heatmaps).
+        targets : the faces' morph-target weights ``(n_faces, K)`` (shapes, then correctives) whose
+        per-target skin strains make the wrinkles (:class:`~emogen.render.wrinkles.TargetStrains`);
+        None: no wrinkles.
         """
         v = np.asarray(vertices, dtype=np.float32)
         if v.ndim != 3 or v.shape[1:] != (self.mesh.n_vertices, 3):
@@ -143,10 +168,15 @@ class Renderer:
             for i in range(len(v)):
                 if albedo is not None:
                     self._gl.set_albedo(albedo if albedo.ndim == 2 else albedo[i])
-                out[i] = self._gl.draw(v[i], normals[i])
+                strain = None
+                if self.strain is not None and albedo is None and targets is not None:
+                    strain = self.strain.face(targets[i])
+                out[i] = self._gl.draw(v[i], normals[i], strain)
         finally:
             if albedo is not None:
                 self._gl.set_albedo(None)
+        if self.look.oval is not None:
+            out = apply_oval(out, self.look.oval, self.look.background_srgb)
         return out
 
     def sheet(

@@ -142,6 +142,34 @@ def _eye_directions(model: FaceModel, look: Look) -> np.ndarray:
     return eye
 
 
+def _lid_margin(model: FaceModel, look: Look, code: np.ndarray, drawn: np.ndarray) -> np.ndarray:
+    """(V, 4) the ``eye`` attribute of skin vertices that lie on an eyeball (look.json
+    ``lid_margin``): x the lower lid's wet margin, y the inner corner; w stays 0 (not an eye).
+    Distances go to the shell's drawn vertices only, as the viewer (mesh.js) sees them."""
+    lm = look.lid_margin
+    out = np.zeros((model.n_vertices, 4), dtype=np.float64)
+    if not lm:
+        return out
+    skin = np.flatnonzero(code == int(look.shader["PART_SKIN"]))
+    for e in look.eyes:
+        if not {e.shell, e.ball} <= set(model.regions):
+            continue
+        centre, frame = eye_frame(
+            model.neutral[model.regions[e.shell].vertices], look.eye_axis_vertices
+        )
+        shell = np.intersect1d(model.regions[e.shell].vertex_indices(), drawn)
+        p = model.neutral[skin].astype(np.float64)
+        near = np.linalg.norm(p - centre, axis=1) < 2.5
+        dist, _ = cKDTree(model.neutral[shell]).query(p[near])
+        u = (p[near] - centre) @ frame.T
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        on = 1.0 - smoothstep(lm["near_cm"], lm["far_cm"], dist)
+        nasal = -u[:, 0] if e.side == 1 else u[:, 0]
+        out[skin[near], 0] = on * np.clip(-u[:, 1] / lm["lower_fade"], 0.0, 1.0)
+        out[skin[near], 1] = on * smoothstep(lm["caruncle_from"], lm["caruncle_full"], nasal)
+    return out
+
+
 def _opacity(model: FaceModel, look: Look, code: np.ndarray) -> np.ndarray:
     alpha = np.array([p.opacity for p in look.parts])[code]
     root = model.regions.get(look.fringe_root)
@@ -218,7 +246,9 @@ def face_mesh(model: FaceModel, look: Look) -> FaceMesh:
         part=code.astype(np.float32),
         albedo=albedo.astype(np.float32),
         surface=surface.astype(np.float32),
-        eye=_eye_directions(model, look).astype(np.float32),
+        eye=(_eye_directions(model, look) + _lid_margin(model, look, code, source)).astype(
+            np.float32
+        ),
         incidence=incidence,
         groups=groups,
         source=source,

@@ -22,6 +22,7 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { look } from './look.js';
 import { faceMaterial, gazeMatrix } from './material.js';
 import { addShadingAttributes } from './mesh.js';
+import { StrainField } from './strain.js';
 
 ColorManagement.enabled = false; // shade.glsl writes sRGB itself: no conversions anywhere
 
@@ -95,6 +96,7 @@ export class FaceGrid {
     this.camera = makeCamera();
     this.background = new Color(...look.background_srgb);
     this.faces = [];
+    this.strains = [];
     this.shapeNames = [];
     this.drawnSize = null;
     new ResizeObserver(() => {
@@ -121,6 +123,14 @@ export class FaceGrid {
     const t1 = performance.now();
     const prims = addShadingAttributes(meshes, extras.regions);
     this.timings.attributes_ms = performance.now() - t1;
+    // The skin's strain per target (wrinkles), on the textured parts only, as shade.glsl uses it.
+    const t3 = performance.now();
+    const skinCodes = [look.shader.PART_SKIN, look.shader.PART_EYE_SOCKET];
+    const strains = prims.map((p) =>
+      textures && skinCodes.includes(look.parts.indexOf(p.part)) ? StrainField.of(p.mesh.geometry) : null,
+    );
+    this.strains = strains.filter((s) => s !== null);
+    this.timings.strain_ms = performance.now() - t3;
     this.shapeNames = meshes[0].geometry.morphAttributes.position
       ? Object.keys(meshes[0].morphTargetDictionary ?? {}).sort(
           (a, b) => meshes[0].morphTargetDictionary[a] - meshes[0].morphTargetDictionary[b],
@@ -153,7 +163,8 @@ export class FaceGrid {
       copy.traverse((o) => o.isMesh && copies.push(o));
       copies.forEach((mesh, k) => {
         mesh.material = faceMaterial(
-          prims[k].part, centres(meshes[k]), this.shapeNames.length, textures,
+          prims[k].part, centres(meshes[k]), this.shapeNames.length, textures, strains[k],
+          prims[k].codes,
         );
         mesh.renderOrder = order(prims[k].part);
         mesh.frustumCulled = false;
@@ -192,6 +203,7 @@ export class FaceGrid {
     }
     const active = [];
     vector.forEach((x, k) => x !== 0 && active.push(k));
+    for (const field of this.strains) field.ensure(active);
     const [yaw, pitch] = this.gazeAngles(vector);
     for (const mesh of face.meshes) {
       const u = mesh.material.uniforms;

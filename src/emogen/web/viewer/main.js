@@ -2,7 +2,8 @@
 //
 // Query parameters: model (GLB URL, default face.glb), faces (default 10), size (pixels per
 // face, default 256), columns (default 5), fallback=1 (force the PNG fallback), png (fallback
-// URL template, default render.png?size={size}&weights={weights}), aa=0|1 (antialiasing).
+// URL template, default render.png?size={size}&weights={weights}), aa=0|1 (antialiasing),
+// framing=oval (each face seen through look.json's oval on the background, as offscreen).
 //
 // API: window.emogen.setFaces(weights) with weights[i] a vector in the GLB's shape order
 // (window.emogen.shapeNames) or a {shape: value} object; returns a Promise resolved once drawn.
@@ -10,6 +11,7 @@
 // a message if loading failed.
 import { FaceGrid, probeWebGL } from './faces.js';
 import { ImageGrid } from './fallback.js';
+import { look } from './look.js';
 
 const params = new URLSearchParams(window.location.search);
 const count = Math.max(1, Math.min(40, Number(params.get('faces') ?? 10) || 10));
@@ -19,6 +21,7 @@ const modelUrl = params.get('model') ?? 'face.glb';
 const template = params.get('png') ?? 'render.png?size={size}&weights={weights}';
 const forceFallback = params.get('fallback') === '1';
 const aaParam = params.get('aa');
+const oval = params.get('framing') === 'oval' ? look.framings.oval?.mask : null;
 
 const grid = document.getElementById('faces');
 grid.style.setProperty('--face-size', `${size}px`);
@@ -27,6 +30,17 @@ const slots = Array.from({ length: count }, (_, i) => {
   const slot = document.createElement('div');
   slot.className = 'face';
   slot.dataset.index = String(i);
+  if (oval) {
+    // emogen.render.images.apply_oval: the oval's edge ramps over about one pixel
+    const [cx, cy] = oval.centre, [rx, ry] = oval.radii;
+    const bg = look.background_srgb.map((c) => Math.round(255 * c)).join(', ');
+    slot.classList.add('oval');
+    slot.style.setProperty(
+      '--oval',
+      `radial-gradient(ellipse ${100 * rx}% ${100 * ry}% at ${100 * cx}% ${100 * cy}%, ` +
+        `rgba(${bg}, 0) calc(100% - 0.5px), rgb(${bg}) calc(100% + 0.5px))`,
+    );
+  }
   grid.appendChild(slot);
   return slot;
 });

@@ -3,7 +3,8 @@
 // textured by the identity's atlas and detail tile from the GLB (see faces.js), sampled with
 // glTF's TEXCOORD_0 (three's built-in `uv` attribute).
 import { DoubleSide, FrontSide, Matrix3, NormalBlending, ShaderMaterial, Vector3 } from 'three';
-import { glslDefines, shadeGlsl } from './look.js';
+import { glslDefines, look, shadeGlsl } from './look.js';
+import { STRAIN_WIDTH } from './strain.js';
 
 const vertexShader = /* glsl */ `
 #include <common>
@@ -19,6 +20,10 @@ uniform vec3 uEyeCentreRight;
 // Morph only the targets in use (three's own loop visits all 57 per vertex: slow in software GL).
 uniform int uActiveCount;
 uniform int uActive[MAX_ACTIVE];
+// The skin's strain per target (strain.js): texel target · uStrainVertices + vertex.
+uniform highp sampler2D uStrain;
+uniform int uStrainVertices;
+varying vec3 vStrain;
 varying vec3 vWorld;
 varying vec3 vNormal;
 varying float vPart;
@@ -29,6 +34,7 @@ varying vec2 vUv;
 void main() {
     vec3 objectNormal = vec3(normal);
     vec3 transformed = vec3(position);
+    vec3 strain = vec3(0.0);
 #ifdef USE_MORPHTARGETS
     for (int j = 0; j < MAX_ACTIVE; j++) {
         if (j >= uActiveCount) break;
@@ -38,8 +44,13 @@ void main() {
 #ifdef USE_MORPHNORMALS
         objectNormal += getMorph(gl_VertexID, i, 1).xyz * w;
 #endif
+        if (uStrainVertices > 0) {
+            int k = i * uStrainVertices + gl_VertexID;
+            strain += texelFetch(uStrain, ivec2(k % STRAIN_WIDTH, k / STRAIN_WIDTH), 0).xyz * w;
+        }
     }
 #endif
+    vStrain = strain;
     if (aEye.w > 0.5) {
         bool left = aEye.w < 1.5;
         mat3 r = left ? uEyeRotLeft : uEyeRotRight;
@@ -67,13 +78,14 @@ varying vec3 vAlbedo;
 varying vec4 vSurface;
 varying vec4 vEye;
 varying vec2 vUv;
+varying vec3 vStrain;
 void main() {
 #ifdef EMOGEN_DISCARD
     if (emogenHidden(vPart, vEye)) discard;
 #endif
     vec3 n = normalize(vNormal);
     vec3 v = normalize(cameraPosition - vWorld);
-    vec3 c = emogenShade(vPart, vAlbedo, vSurface.xyz, vWorld, n, v, vEye, gl_FrontFacing, vUv);
+    vec3 c = emogenShade(vPart, vAlbedo, vSurface.xyz, vWorld, n, v, vEye, gl_FrontFacing, vUv, vStrain);
     gl_FragColor = vec4(c, vSurface.w);
 }
 `;
@@ -81,15 +93,23 @@ void main() {
 /**
  * A material for one primitive whose vertices belong to `part` (a look.json part).
  * textures: {skin, detail} three.js Textures of the identity (see skinTextures in faces.js),
- * or null: every part in its flat look.json colour.
+ * or null: every part in its flat look.json colour. strain: the primitive's {texture, vertices}
+ * from strainTexture (strain.js), or null: unstrained.
  */
-export function faceMaterial(part, eyeCentres, nShapes, textures = null) {
+export function faceMaterial(part, eyeCentres, nShapes, textures = null, strain = null, codes = null) {
   const blended = part.opacity < 1 || part.fringe_cm > 0;
+  // Compile out what no fragment of the primitive runs (as gl.py per draw group): SwiftShader,
+  // like llvmpipe, runs both sides of a branch. codes: [lowest, highest] part code it holds.
+  const holds = (...names) =>
+    !codes || names.some((n) => codes[0] - 0.5 < look.shader[n] && look.shader[n] < codes[1] + 0.5);
+  const kinds =
+    `#define EMOGEN_SKIN ${holds('PART_SKIN', 'PART_EYE_SOCKET') ? 1 : 0}\n` +
+    `#define EMOGEN_EYES ${holds('PART_SCLERA', 'PART_IRIS') ? 1 : 0}\n`;
   const maxActive = Math.max(1, nShapes);
   return new ShaderMaterial({
-    vertexShader: `#define MAX_ACTIVE ${maxActive}\n${vertexShader}`,
+    vertexShader: `#define MAX_ACTIVE ${maxActive}\n#define STRAIN_WIDTH ${STRAIN_WIDTH}\n${vertexShader}`,
     fragmentShader:
-      (part.cutout ? '#define EMOGEN_DISCARD\n' : '') + glslDefines() + shadeGlsl + fragmentMain,
+      (part.cutout ? '#define EMOGEN_DISCARD\n' : '') + kinds + glslDefines() + shadeGlsl + fragmentMain,
     uniforms: {
       uEyeRotLeft: { value: new Matrix3() },
       uEyeRotRight: { value: new Matrix3() },
@@ -100,6 +120,8 @@ export function faceMaterial(part, eyeCentres, nShapes, textures = null) {
       emogenSkin: { value: textures?.skin ?? null },
       emogenDetail: { value: textures?.detail ?? null },
       emogenTextured: { value: textures ? 1 : 0 },
+      uStrain: { value: strain?.texture ?? null },
+      uStrainVertices: { value: textures && strain ? strain.vertices : 0 },
     },
     side: part.double_sided ? DoubleSide : FrontSide,
     transparent: blended,

@@ -68,6 +68,37 @@ const smoothstep = (e0, e1, x) => {
 };
 
 /**
+ * The eye attribute of skin vertices that lie on an eyeball (look.json lid_margin, as
+ * emogen.render.scene._lid_margin): [lower lid's wet margin, inner corner] by source vertex.
+ */
+function lidMargins(frames, regionPoints, restBySource, codeBySource) {
+  const lm = look.lid_margin;
+  const out = new Map();
+  if (!lm) return out;
+  const skin = look.shader.PART_SKIN;
+  for (const f of frames) {
+    const shell = regionPoints(f.shell);
+    for (const [s, p] of restBySource) {
+      if (codeBySource[s] !== skin) continue;
+      const d = [p[0] - f.centre[0], p[1] - f.centre[1], p[2] - f.centre[2]];
+      if (Math.hypot(d[0], d[1], d[2]) >= 2.5) continue;
+      let best = Infinity;
+      for (const q of shell) {
+        best = Math.min(best, (q[0] - p[0]) ** 2 + (q[1] - p[1]) ** 2 + (q[2] - p[2]) ** 2);
+      }
+      const on = 1 - smoothstep(lm.near_cm, lm.far_cm, Math.sqrt(best));
+      const u = unit([dot(f.rows[0], d), dot(f.rows[1], d), dot(f.rows[2], d)]);
+      const nasal = f.side === 1 ? -u[0] : u[0];
+      out.set(s, [
+        on * Math.min(Math.max(-u[1] / lm.lower_fade, 0), 1),
+        on * smoothstep(lm.caruncle_from, lm.caruncle_full, nasal),
+      ]);
+    }
+  }
+  return out;
+}
+
+/**
  * Add aPart, aAlbedo, aSurface and aEye attributes to every primitive of a loaded GLB.
  * meshes: the primitives' three.js Meshes (world matrices up to date); regions: the GLB's
  * asset.extras.emogen.regions. Returns {meshes: [{mesh, part, flags}]}.
@@ -153,6 +184,7 @@ export function addShadingAttributes(meshes, regions) {
     return Math.sqrt(best);
   };
 
+  const lids = lidMargins(frames, regionPoints, restBySource, codeBySource);
   const out = [];
   for (const p of prims) {
     const n = p.src.length;
@@ -181,6 +213,8 @@ export function addShadingAttributes(meshes, regions) {
         const d = [x - f.centre[0], y - f.centre[1], z - f.centre[2]];
         const e = unit([dot(f.rows[0], d), dot(f.rows[1], d), dot(f.rows[2], d)]);
         aEye.set([e[0], e[1], e[2], f.side], 4 * i);
+      } else if (lids.has(s)) {
+        aEye.set([...lids.get(s), 0, 0], 4 * i);
       }
     }
     const g = p.mesh.geometry;
@@ -189,7 +223,9 @@ export function addShadingAttributes(meshes, regions) {
     g.setAttribute('aSurface', new BufferAttribute(aSurface, 4));
     g.setAttribute('aEye', new BufferAttribute(aEye, 4));
     const first = g.index ? g.index.getX(0) : 0;
-    out.push({ mesh: p.mesh, part: parts[aPart[first] | 0] });
+    let lo = Infinity, hi = -Infinity; // the part codes a fragment can interpolate between
+    for (const c of aPart) (lo = Math.min(lo, c)), (hi = Math.max(hi, c));
+    out.push({ mesh: p.mesh, part: parts[aPart[first] | 0], codes: [lo, hi] });
   }
   return out;
 }
