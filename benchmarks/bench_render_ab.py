@@ -2,7 +2,7 @@
 e.g. main's and a branch's), asked in turn to render the same face, so that both see the same
 load on a shared machine. Prints medians, IQR and the ratio per configuration.
 
-    python benchmarks/bench_render_ab.py /work/main/src src [--repeat 21]
+    python benchmarks/bench_render_ab.py OLD_CHECKOUT/src src [--repeat 21]   # OLD_CHECKOUT: a git worktree of main
 
 Each worker builds a ``Renderer`` per configuration (flat: no appearance, the bench_render
 figure; textured: the generic preset, the default face framing) and times ``render`` of one
@@ -71,7 +71,7 @@ def _ask(p: subprocess.Popen[str], name: str) -> float:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("a", help="source tree A (PYTHONPATH), e.g. /work/main/src")
+    ap.add_argument("a", help="source tree A (PYTHONPATH), e.g. a worktree of main: ../main/src")
     ap.add_argument("b", help="source tree B")
     ap.add_argument("--repeat", type=int, default=21)
     ap.add_argument("--model", default=os.environ.get("EMOGEN_MODEL", ""))
