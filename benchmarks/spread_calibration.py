@@ -85,7 +85,6 @@ def cell(
 
     target = np.asarray(rig.weights_from_names(TARGETS[name]), dtype=np.float64)  # type: ignore[attr-defined]
     t_null = temperature if assumed is None else assumed
-    null = final_faces_simulator(_config(t_null), rig, 90_000 + seed)  # type: ignore[arg-type]
     flagged, excess, covered = [], [], []
     t0 = time.perf_counter()
     for k in range(groups):
@@ -94,6 +93,9 @@ def cell(
             faces = group_faces(rig, target, n, temperature, spread, s)
         else:  # one shared target: n runs of one simulator (each run its own generator)
             faces = final_faces_simulator(_config(temperature), rig, 50_000 + s)(target, n)  # type: ignore[arg-type]
+        # each group its own null simulation, as each study's analysis has (a shared one makes
+        # the groups' verdicts correlated and the binomial SE wrong)
+        null = final_faces_simulator(_config(t_null), rig, 90_000 + s)  # type: ignore[arg-type]
         test, _ = latent_spread_test(faces, null, rng=np.random.default_rng(s), **TEST_KW)  # type: ignore[arg-type]
         flagged.append(test.exceeds)
         excess.append(test.excess)

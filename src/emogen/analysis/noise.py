@@ -191,25 +191,7 @@ def spread_test(
                 f"noise pool has {noise.pool.shape[1]} weights per face, group '{group}' "
                 f"{f.shape[1]}"
             )
-        null = null_mean_proxy_errors(noise.pool, len(f), draws=draws, rng=rng)
-        p = float((1 + np.sum(null >= observed)) / (1 + draws))
-        q_lo, q_hi = (float(q) for q in np.quantile(null, [0.025, 0.975]))
-        return SpreadTest(
-            group,
-            len(f),
-            observed,
-            sd,
-            float(null.mean()),
-            float(np.quantile(null, 0.95)),
-            observed,
-            p,
-            f"simulated null ({draws} subsets of {len(noise.pool)} runs)",
-            alpha,
-            p < alpha,
-            observed - float(null.mean()),
-            observed - q_hi,
-            observed - q_lo,
-        )
+        return _pool_test(f, observed, sd, noise.pool, group, alpha, draws, rng)
     t = stats.ttest_1samp(err, noise.mean, alternative="greater")
     p = float(t.pvalue)
     q95 = noise.mean + 1.645 * noise.sd / np.sqrt(len(f))
@@ -230,6 +212,46 @@ def spread_test(
         observed - noise.mean,
         lo,
         hi,
+    )
+
+
+def _pool_test(
+    f: np.ndarray,
+    observed: float,
+    sd: float,
+    pool: np.ndarray,
+    group: str,
+    alpha: float,
+    draws: int,
+    rng: np.random.Generator,
+) -> SpreadTest:
+    """The simulated-null branch of :func:`spread_test` (module doc: p from n-subsets of the
+    group and the pool together, the excess and its interval from subsets of the pool)."""
+    n, size = len(f), len(pool)
+    combined = null_mean_proxy_errors(np.concatenate([f, pool]), n, draws=draws, rng=rng)
+    p = float((1 + np.sum(combined >= observed)) / (1 + draws))
+    null = null_mean_proxy_errors(pool, n, draws=draws, rng=rng)
+    centre = float(null.mean())
+    # subsets of a finite pool vary less than groups (× (1 − n/N)) and the pool's centre is
+    # itself estimated (+ n/N): the interval's half-widths scaled by both
+    fpc = 1.0 if n > size else max(1.0 - n / size, 0.2)
+    scale = float(np.sqrt((1.0 + n / size) / fpc))
+    q_lo, q_hi = (float(q) - centre for q in np.quantile(null, [0.025, 0.975]))
+    return SpreadTest(
+        group,
+        n,
+        observed,
+        sd,
+        centre,
+        float(np.quantile(null, 0.95)),
+        observed,
+        p,
+        f"permutation null ({draws} subsets of the group with {size} simulated runs)",
+        alpha,
+        p < alpha,
+        observed - centre,
+        observed - centre - scale * q_hi,
+        observed - centre - scale * q_lo,
     )
 
 
