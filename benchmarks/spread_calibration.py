@@ -50,13 +50,9 @@ def group_faces(
     from emogen.analysis.elites import final_faces_simulator
 
     rng = np.random.default_rng(seed)
-    cfg = _config(temperature)
-    out = []
-    for i in range(n):
-        own = np.clip(target * (1 + spread * rng.standard_normal(target.shape)), 0, None)
-        sim = final_faces_simulator(cfg, rig, seed * 1000 + i)  # type: ignore[arg-type]
-        out.append(sim(own if spread > 0 else target, 1)[0])
-    return np.stack(out)
+    owns = np.clip(target * (1 + spread * rng.standard_normal((n, *target.shape))), 0, None)
+    sim = final_faces_simulator(_config(temperature), rig, seed * 1000)  # type: ignore[arg-type]
+    return sim(owns, n)  # run i toward participant i's own target
 
 
 def _config(temperature: float) -> object:

@@ -7,14 +7,20 @@ informative about human behaviour only where its spread exceeds that noise.
 
 **The statistic.** A participant group's target is latent, so its mean final face serves as the
 proxy target (as the paper proposes), and its spread is the mean *proxy error*: the CD of each
-final face to the group's mean. The same statistic is computed on GA noise: random subsets of
-the same size n drawn from the final faces of simulated runs with one consistent target (the
-pool) give its null distribution — so the comparison is like for like (a mean estimated from n
-faces is closer to them when n is small). One-sided p = (1 + #{null ≥ observed}) / (1 + draws).
-The size of the effect is the **excess spread**, observed − the null's mean, reported with a
-95% interval: the null's 2.5–97.5% spread inverted around the observed value (the group's
-statistic taken to vary as the null's does, shifted), so a group shows how much, not only
-whether, its spread exceeds the noise.
+final face to the group's mean. The same statistic is computed on GA noise: random n-subsets of the
+final faces of simulated runs with one consistent target (the pool) give its null distribution
+— like for like (a mean estimated from n faces is closer to them when n is small). The subsets
+are drawn from the group's faces and the pool *together*: a permutation null, exact when the
+group and the pool share the target. Subsets of the pool alone vary less than groups do (by
+about 1 − n/N for a pool of N runs) and centre on the pool's own estimate of the null's mean
+(off by about n/N of a group's variance): with N = 5n they flagged ~10% of one-target groups
+at α = 0.05. One-sided p = (1 + #{null ≥ observed}) / (1 + draws).
+The size of the effect is the **excess spread**, observed − the mean over subsets of the pool,
+reported with a 95% interval: the pool null's 2.5–97.5% spread around its mean, widened by
+√((1 + n/N)/(1 − n/N)) for the two effects above, inverted around the observed value, so a
+group shows how much, not only whether, its spread exceeds the noise. Where participants
+repeated a group, the spread of their own repeated faces is an empirical null that needs no
+simulation (:mod:`emogen.analysis.noise_empirical`).
 
 **Which target to simulate** (:func:`latent_spread_test`). GA noise depends on the target: a
 sparse target (one shape) is matched far less consistently than a dense one. The group's mean
