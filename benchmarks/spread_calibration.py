@@ -5,9 +5,12 @@ T; the test (its latent target fitted from the group's mean, as in analyse) must
 group at a rate of at most α. K independent groups per cell: the flagged count is
 Binomial(K, p), its share has standard error sqrt(α(1 − α)/K); a cell passes when the share is
 ≤ α + 2 SE. Power: groups whose participants each evolve their own target (the shared target
-with every active gene scaled by 1 + N(0, sd), clipped at 0) must be flagged.
+with every active gene scaled by 1 + N(0, sd), clipped at 0) must be flagged. Every group has
+its own null simulation (seed), as every study's analysis has: groups sharing one null pool
+would share its sampling error, and their flags would not be independent draws.
 
     python -m benchmarks.spread_calibration --groups 40 --sizes 20 80 240 --out grid.csv
+    python -m benchmarks.spread_calibration --groups 20 --power-spread 0.2   # + power cells
     python -m benchmarks.spread_calibration --targets medium --sizes 80 \
         --temperatures 0.05 --assumed-temperatures 0 0.025 0.05 0.1   # sensitivity to T
 
