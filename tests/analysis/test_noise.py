@@ -146,3 +146,22 @@ def test_excess_spread_of_the_t_fallback_is_the_t_interval() -> None:
     assert res.excess == pytest.approx(err.mean() - 0.02)
     assert res.excess_lo == pytest.approx(err.mean() - half - 0.02)
     assert res.excess_hi == pytest.approx(err.mean() + half - 0.02)
+
+
+def test_no_consistent_target_takes_the_least_favourable_of_all() -> None:
+    """A simulator that always adds a gene the group lacks: no candidate reproduces the
+    group's mean, and the test reports the largest p of all candidates (not the best fit)."""
+    sim_rng = np.random.default_rng(9)
+    extra = np.r_[np.zeros(S - 1), 0.3]
+
+    def simulate(target: np.ndarray, runs: int) -> np.ndarray:
+        active = max(int((np.asarray(target) > 0).sum()), 1)
+        return fake_ga(np.asarray(target) + extra, runs, sim_rng, noise=0.03 / np.sqrt(active))
+
+    group = fake_ga(np.r_[1.0, 0.5, np.zeros(S - 2)], 60, np.random.default_rng(10), noise=0.04)
+    group[:, -1] = 0.0
+    res, cands = latent_spread_test(group, simulate, rng=np.random.default_rng(11), pool_runs=300)
+    assert not any(c.consistent for c in cands)
+    assert "none consistent" in res.method
+    assert res.p_value == max(c.test.p_value for c in cands)
+    assert res.p_value > min(c.test.p_value for c in cands)  # the choice matters here
