@@ -201,7 +201,8 @@ def _method_text(ds: Dataset, opts: AnalysisOptions, model: FaceModel | None) ->
         "choice noise T (a softmax chooser, CD units: the simulation's own, or given with "
         "--choice-noise). The latent target "
         "is the least favourable of the sparse-to-dense candidates that reproduce the group's mean "
-        "face (see emogen.analysis.noise); one-sided test at "
+        "face (of all candidates when none does; see emogen.analysis.noise); the null's subsets "
+        "are drawn from the group's faces and the simulated runs together; one-sided test at "
         f"α = {opts.alpha}. The paper's threshold for its model is {PAPER_NOISE.label} (CD to "
         "the true target)."
         + ("" if model is not None else " No face model was given: tested against the paper's μ.")
