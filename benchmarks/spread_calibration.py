@@ -5,9 +5,12 @@ T; the test (its latent target fitted from the group's mean, as in analyse) must
 group at a rate of at most α. K independent groups per cell: the flagged count is
 Binomial(K, p), its share has standard error sqrt(α(1 − α)/K); a cell passes when the share is
 ≤ α + 2 SE. Power: groups whose participants each evolve their own target (the shared target
-with every active gene scaled by 1 + N(0, sd), clipped at 0) must be flagged.
+with every active gene scaled by 1 + N(0, sd), clipped at 0) must be flagged. Every group has
+its own null simulation (seed), as every study's analysis has: groups sharing one null pool
+would share its sampling error, and their flags would not be independent draws.
 
     python -m benchmarks.spread_calibration --groups 40 --sizes 20 80 240 --out grid.csv
+    python -m benchmarks.spread_calibration --groups 20 --power-spread 0.2   # + power cells
     python -m benchmarks.spread_calibration --targets medium --sizes 80 \
         --temperatures 0.05 --assumed-temperatures 0 0.025 0.05 0.1   # sensitivity to T
 
@@ -50,13 +53,9 @@ def group_faces(
     from emogen.analysis.elites import final_faces_simulator
 
     rng = np.random.default_rng(seed)
-    cfg = _config(temperature)
-    out = []
-    for i in range(n):
-        own = np.clip(target * (1 + spread * rng.standard_normal(target.shape)), 0, None)
-        sim = final_faces_simulator(cfg, rig, seed * 1000 + i)  # type: ignore[arg-type]
-        out.append(sim(own if spread > 0 else target, 1)[0])
-    return np.stack(out)
+    owns = np.clip(target * (1 + spread * rng.standard_normal((n, *target.shape))), 0, None)
+    sim = final_faces_simulator(_config(temperature), rig, seed * 1000)  # type: ignore[arg-type]
+    return sim(owns, n)  # run i toward participant i's own target
 
 
 def _config(temperature: float) -> object:
@@ -85,7 +84,6 @@ def cell(
 
     target = np.asarray(rig.weights_from_names(TARGETS[name]), dtype=np.float64)  # type: ignore[attr-defined]
     t_null = temperature if assumed is None else assumed
-    null = final_faces_simulator(_config(t_null), rig, 90_000 + seed)  # type: ignore[arg-type]
     flagged, excess, covered = [], [], []
     t0 = time.perf_counter()
     for k in range(groups):
@@ -94,6 +92,9 @@ def cell(
             faces = group_faces(rig, target, n, temperature, spread, s)
         else:  # one shared target: n runs of one simulator (each run its own generator)
             faces = final_faces_simulator(_config(temperature), rig, 50_000 + s)(target, n)  # type: ignore[arg-type]
+        # each group its own null simulation, as each study's analysis has (a shared one makes
+        # the groups' verdicts correlated and the binomial SE wrong)
+        null = final_faces_simulator(_config(t_null), rig, 90_000 + s)  # type: ignore[arg-type]
         test, _ = latent_spread_test(faces, null, rng=np.random.default_rng(s), **TEST_KW)  # type: ignore[arg-type]
         flagged.append(test.exceeds)
         excess.append(test.excess)

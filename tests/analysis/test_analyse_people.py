@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import pytest
+from scipy.spatial.distance import cosine
 from typer.testing import CliRunner
 
 from emogen.cli.app import app
@@ -69,15 +70,20 @@ def test_reliability_and_groups_with_the_participant_as_unit(
     # the ICC in ED space by a plain computation on the exported faces
     faces = pd.read_parquet(export / "faces.parquet")
     trials = pd.read_parquet(export / "trials.parquet")
+    from emogen.model import load_model
+
     for emotion in ("happy", "sad"):
         done = trials[(trials["emotion"] == emotion) & (trials["status"] == "done")]
-        g, who = [], []
+        g, who, w = [], [], []
+        shape_names = set(load_model(ict_dir).shape_names)
         for t in done.itertuples():
             f = faces[(faces["session_id"] == t.session_id) & (faces["trial"] == t.trial)
                       & (faces["face_id"] == t.final_face_id)]  # fmt: skip
             f = f[f["attempt"] == f["attempt"].max()]
             f = f[f["generation"] == f["generation"].max()]
             g.append(f[[c for c in f.columns if c.startswith("g_")]].to_numpy(dtype=float)[0])
+            shapes = [c for c in f.columns if c.removeprefix("w_") in shape_names]
+            w.append(f[shapes].to_numpy(dtype=float)[0])
             who.append(t.participant_id)
         x, who_a = np.array(g), np.array(who)
         means = {p: x[who_a == p].mean(0) for p in set(who)}
@@ -88,6 +94,17 @@ def test_reliability_and_groups_with_the_participant_as_unit(
         row = rel[(rel["emotion"] == emotion) & (rel["space"] == "ed")].iloc[0]
         assert row["icc"] == pytest.approx(s2b / (s2b + s2w))
         assert row["icc_low"] < row["icc"] < row["icc_high"]
+        # the spread test's empirical null: within- and between-person CD by a plain loop
+        # over the shape weights (repeated faces of one participant against two participants)
+        emp = pd.read_csv(out / "tables" / "spread_empirical.csv").set_index("group")
+        d = [(cosine(w[a], w[b]), who[a] == who[b]) for a in range(24) for b in range(a + 1, 24)]
+        within = np.mean([v for v, same in d if same])
+        between = np.mean([v for v, same in d if not same])
+        assert emp.loc[emotion, "within_cd"] == pytest.approx(within)
+        assert emp.loc[emotion, "between_cd"] == pytest.approx(between)
+        assert emp.loc[emotion, "participants"] == 12 and emp.loc[emotion, "faces"] == 24
+        lo, hi = emp.loc[emotion, ["excess_ci_low", "excess_ci_high"]]
+        assert lo < emp.loc[emotion, "excess_between_variance"] < hi
     groups = pd.read_csv(out / "tables" / "participant_groups.csv")
     assert list(groups["emotion"]) == ["happy", "sad"] and (groups["participants"] == 12).all()
     readme = (out / "README.md").read_text()
@@ -104,7 +121,6 @@ def test_reliability_and_groups_with_the_participant_as_unit(
     assert "Warning: 48 faces for a 2-component mixture with 11 parameters" in readme
     # every face table the report writes reads in every command that reads faces
     from emogen.cli.correct import read_weights_csv as correct_reads
-    from emogen.model import load_model
     from emogen.render.weights import read_weights_csv as render_reads
 
     model = load_model(ict_dir)

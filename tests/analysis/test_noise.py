@@ -108,8 +108,10 @@ def test_latent_target_search_avoids_the_dense_mean_false_alarm() -> None:
 
 
 def test_excess_spread_interval_brackets_zero_only_within_noise() -> None:
-    """The excess (observed − the null's mean) and its interval: the null's 2.5–97.5%
-    spread inverted around the observed value (the same null drawn again from the same seed)."""
+    """p from n-subsets of the group and the pool together; the excess (observed − the mean
+    over subsets of the pool) and its interval: the pool null's 2.5–97.5% spread about its
+    mean, widened by √((1 + n/N)/(1 − n/N)), inverted around the observed value (the same
+    nulls drawn again from the same seed, in the same order)."""
     t1 = np.r_[np.ones(3), np.zeros(S - 3)]
     t2 = np.r_[np.zeros(3), np.ones(3), np.zeros(S - 6)]
     pool = fake_ga(t1, 2000, np.random.default_rng(5))
@@ -118,11 +120,19 @@ def test_excess_spread_interval_brackets_zero_only_within_noise() -> None:
     mixed = np.concatenate([same[:20], fake_ga(t2, 20, np.random.default_rng(7))])
     for group, exceeds in ((same, False), (mixed, True)):
         res = spread_test(group, noise, draws=500, rng=np.random.default_rng(8))
-        null = null_mean_proxy_errors(pool, len(group), draws=500, rng=np.random.default_rng(8))
+        rng = np.random.default_rng(8)
+        n = len(group)
+        both = null_mean_proxy_errors(np.vstack([group, pool]), n, draws=500, rng=rng)
+        null = null_mean_proxy_errors(pool, n, draws=500, rng=rng)
         observed = proxy_errors(group).mean()
-        assert res.excess == pytest.approx(observed - null.mean())
-        assert res.excess_lo == pytest.approx(observed - np.quantile(null, 0.975))
-        assert res.excess_hi == pytest.approx(observed - np.quantile(null, 0.025))
+        assert res.p_value == pytest.approx((1 + np.sum(both >= observed)) / 501)
+        scale = np.sqrt((1 + n / 2000) / (1 - n / 2000))
+        centre = null.mean()
+        assert res.excess == pytest.approx(observed - centre)
+        hi, lo = (
+            observed - centre - scale * (np.quantile(null, q) - centre) for q in (0.025, 0.975)
+        )
+        assert res.excess_lo == pytest.approx(lo) and res.excess_hi == pytest.approx(hi)
         assert (res.excess_lo > 0) == exceeds and res.exceeds == exceeds
     assert "excess [95% CI]" in res.row() and res.record()["excess_ci_low"] == res.excess_lo
 
@@ -136,3 +146,22 @@ def test_excess_spread_of_the_t_fallback_is_the_t_interval() -> None:
     assert res.excess == pytest.approx(err.mean() - 0.02)
     assert res.excess_lo == pytest.approx(err.mean() - half - 0.02)
     assert res.excess_hi == pytest.approx(err.mean() + half - 0.02)
+
+
+def test_no_consistent_target_takes_the_least_favourable_of_all() -> None:
+    """A simulator that always adds a gene the group lacks: no candidate reproduces the
+    group's mean, and the test reports the largest p of all candidates (not the best fit)."""
+    sim_rng = np.random.default_rng(9)
+    extra = np.r_[np.zeros(S - 1), 0.3]
+
+    def simulate(target: np.ndarray, runs: int) -> np.ndarray:
+        active = max(int((np.asarray(target) > 0).sum()), 1)
+        return fake_ga(np.asarray(target) + extra, runs, sim_rng, noise=0.03 / np.sqrt(active))
+
+    group = fake_ga(np.r_[1.0, 0.5, np.zeros(S - 2)], 60, np.random.default_rng(10), noise=0.04)
+    group[:, -1] = 0.0
+    res, cands = latent_spread_test(group, simulate, rng=np.random.default_rng(11), pool_runs=300)
+    assert not any(c.consistent for c in cands)
+    assert "none consistent" in res.method
+    assert res.p_value == max(c.test.p_value for c in cands)
+    assert res.p_value > min(c.test.p_value for c in cands)  # the choice matters here

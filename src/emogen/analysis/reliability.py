@@ -155,11 +155,20 @@ def icc_interval(
     participant-out pseudo-values' mean ± t(n − 1) × their standard error. Calibrated on
     Gaussian and on simulated GA data (tests/analysis/test_reliability.py); the participant
     bootstrap covers only ~75% at n = 12 (resampled copies of a person look like two people)."""
+    return jackknife_interval(x, participants, "icc", confidence=confidence)
+
+
+def jackknife_interval(
+    x: np.ndarray, participants: np.ndarray, which: str, *, confidence: float = 0.95
+) -> tuple[float, float]:
+    """Jackknife-t interval over participants of one component: ``icc``, ``within`` (σ²_w) or
+    ``between`` (σ²_b) — see :func:`icc_interval`."""
+    column = ("icc", "within", "between").index(which)
     codes, people = _codes(participants)
     k, within, p = _blocks(np.asarray(x, dtype=np.float64), codes)
     n = len(people)
-    theta = _components(k, within, p, np.ones(n))[0, 0]
-    leave_one_out = _components(k, within, p, 1.0 - np.eye(n))[:, 0]
+    theta = _components(k, within, p, np.ones(n))[0, column]
+    leave_one_out = _components(k, within, p, 1.0 - np.eye(n))[:, column]
     pseudo = n * theta - (n - 1) * leave_one_out
     se = pseudo.std(ddof=1) / np.sqrt(n)
     t = stats.t.ppf((1 + confidence) / 2, n - 1)
