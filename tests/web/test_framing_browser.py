@@ -1,4 +1,3 @@
-# ruff: noqa: F811  (pytest fixtures imported by name, then requested by name)
 """A study with ``framing = "oval"`` shows its participants every face through look.json's
 oval, in Debian's Chromium (Playwright): the 3D viewer's tiles and the rating face, and the
 server's PNGs for browsers without WebGL. Outside the oval a tile is the background colour
