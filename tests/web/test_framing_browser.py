@@ -1,6 +1,6 @@
 """A study with ``framing = "oval"`` shows its participants every face through look.json's
-oval, in Debian's Chromium (Playwright): the 3D viewer's tiles and the rating face, and the
-server's PNGs for browsers without WebGL. Outside the oval a tile is the background colour
+oval, in Debian's Chromium (Playwright): the 3D viewer's tiles and the rating face, the
+server's PNGs for browsers without WebGL, and the jsPsych plugin's categorise face. Outside the oval a tile is the background colour
 (128, 128, 128) to the pixel; the same tile with the oval layer taken away shows hair, ears and
 neck there, so the oval hides what the ``face`` framing shows. The session still replays (the
 framing is appearance, not GA state) and the export records the framing.
@@ -16,12 +16,14 @@ from typing import Any
 import numpy as np
 import pytest
 from benchmarks.bench_study import ServerProcess, write_study_toml
+from benchmarks.jspsych_site import ExperimentSite, build_plugin, one_trial_page
 from PIL import Image
 
 from emogen.render.look import default_look
 from emogen.study.export import export_tables
 from emogen.study.replay import replay_session
 from emogen.study.storage import Store
+from tests.web.test_jspsych_browser import open_page, serve, wait_stage
 from tests.web.test_study_browser import browser, viewer_bundle, wait_ready
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
@@ -165,3 +167,29 @@ def test_oval_study_png_fallback_is_masked(site: tuple[ServerProcess, str], brow
     shown = tile(page.locator("#grid > .cell:nth-child(1) .slot"))
     assert off_background(shown[outside_oval(shown.shape)]).max() <= 2
     context.close()
+
+
+def test_jspsych_plugin_shows_the_study_framing(
+    browser: Any, tmp_path: Path, ict_dir: Path, viewer_bundle: Path
+) -> None:
+    """The plugin reads the framing from GET /api/study: its categorise face is oval too."""
+    build_plugin()
+    site = ExperimentSite(tmp_path / "site")
+    study = {**OVAL_STUDY, "name": "oval-embedded", "emotions": ["happy", "sad"],
+             "blocks": [{"task": "categorise", "random": 1, "labels": ["happy", "sad"]}]}  # fmt: skip
+    srv, _url = serve(study, site, tmp_path, ict_dir)
+    try:
+        site.add("oval.html", one_trial_page(srv.url, [{"task": "categorise"}]))
+        page = open_page(browser, f"{site.origin}/oval.html?PROLIFIC_PID=oval-js", (1366, 768))
+        wait_stage(page, "categorise")
+        assert page.evaluate(
+            "document.querySelector('#categorise-slot canvas, .faces-canvas') !== null"
+        )
+        face = tile(page.locator("#categorise-slot"))
+        page.screenshot(path=str(SCREENSHOTS / "oval-jspsych-categorise-1366x768.png"))
+        assert off_background(face[outside_oval(face.shape)]).max() <= 2
+        assert (off_background(face[~outside_oval(face.shape, -0.4)]) > 10).mean() > 0.9
+        page.context.close()
+    finally:
+        srv.stop()
+        site.close()
