@@ -23,6 +23,7 @@ from emogen.render.look import default_look
 from emogen.study.export import export_tables
 from emogen.study.replay import replay_session
 from emogen.study.storage import Store
+from tests.web.test_devices import start
 from tests.web.test_jspsych_browser import open_page, serve, wait_stage
 from tests.web.test_study_browser import browser, viewer_bundle, wait_ready
 
@@ -90,13 +91,7 @@ def test_oval_study_shows_faces_through_the_oval(
     site: tuple[ServerProcess, str], browser: Any, ict_model: Any
 ) -> None:
     server, db = site
-    context = browser.new_context(viewport={"width": 1366, "height": 768})
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.goto(f"{server.url}/?PROLIFIC_PID=oval-1")
-    page.get_by_role("button", name="I agree").click()
-    wait_ready(page, "instructions")
+    page = start(browser, server, (1366, 768), "oval-1")  # a page error fails the test
     page.get_by_role("button", name="Begin").click()
     wait_ready(page, "trial")
     assert page.evaluate("window.emogenStudy.display") == "webgl"
@@ -113,10 +108,11 @@ def test_oval_study_shows_faces_through_the_oval(
         inside = off_background(pixels[~outside_oval(pixels.shape, -0.4)])
         assert (inside > 10).mean() > 0.9, f"tile {k}: no face inside the oval"
     # the same tile without the oval layer: the face framing's hair, ears and neck are there
-    page.evaluate("document.querySelector('#grid .slot').classList.remove('oval')")
+    layer = "document.querySelector('#grid .slot .oval-layer').style.visibility"
+    page.evaluate(f"{layer} = 'hidden'")
     bare = tile(slots.nth(0))
     assert (off_background(bare[outside_oval(bare.shape)]) > 10).mean() > 0.1
-    page.evaluate("document.querySelector('#grid .slot').classList.add('oval')")
+    page.evaluate(f"{layer} = ''")
     marks(page, "")
 
     for _ in range(2):  # rounds 1 and 2, then the rating's face
@@ -130,8 +126,7 @@ def test_oval_study_shows_faces_through_the_oval(
     page.get_by_label("5", exact=True).check()
     page.click("#rate")
     wait_ready(page, "done")
-    assert errors == []
-    context.close()
+    page.context.close()
 
     # the framing is appearance: the session replays; the export says what participants saw
     store = Store(db)
@@ -145,11 +140,7 @@ def test_oval_study_shows_faces_through_the_oval(
 
 def test_oval_study_png_fallback_is_masked(site: tuple[ServerProcess, str], browser: Any) -> None:
     server, _db = site
-    context = browser.new_context(viewport={"width": 1366, "height": 768})
-    page = context.new_page()
-    page.goto(f"{server.url}/?PROLIFIC_PID=oval-png")
-    page.get_by_role("button", name="I agree").click()
-    wait_ready(page, "instructions")
+    page = start(browser, server, (1366, 768), "oval-png")
     page.goto(page.url.split("?")[0] + "?render=png")  # the session page without WebGL
     wait_ready(page, "instructions")
     page.get_by_role("button", name="Begin").click()
@@ -166,7 +157,7 @@ def test_oval_study_png_fallback_is_masked(site: tuple[ServerProcess, str], brow
     marks(page, "hidden")
     shown = tile(page.locator("#grid > .cell:nth-child(1) .slot"))
     assert off_background(shown[outside_oval(shown.shape)]).max() <= 2
-    context.close()
+    page.context.close()
 
 
 def test_jspsych_plugin_shows_the_study_framing(

@@ -1,9 +1,10 @@
 // The 3D face display of the study pages: the viewer's FaceGrid (one WebGL canvas drawing every
 // face into its slot). Slots live in containers marked data-viewer-container (the grid, the
 // rating view); each container gets a FaceGrid over the GLB of the trial's identity. Under the
-// study's ``oval`` framing each slot is seen through look.json's oval (a CSS layer over the
-// canvas, as the viewer page's ?framing=oval; the server's PNGs are rendered through it).
-import { FaceGrid, ovalMask } from "./build/study-viewer.js";
+// study's ``oval`` framing each slot is seen through look.json's oval (a layer over the canvas,
+// as the viewer page's ?framing=oval, under the face's number and marks, which come after the
+// slot; the server's PNGs are rendered through the oval themselves).
+import { FaceGrid, ovalLayer } from "./build/study-viewer.js";
 
 function webgl2Available() {
   try {
@@ -69,7 +70,6 @@ class ViewerDisplay {
     this.kind = "webgl";
     this.base = base;
     this.framing = framing;
-    this.mask = ovalMask(framing);
     this.grids = new Map(); // container -> {url, count, ready: Promise<FaceGrid>}
   }
 
@@ -110,10 +110,7 @@ class ViewerDisplay {
    * follows the GLB's download (the first time a container shows an identity).
    */
   async show(slots, faces, identity = "generic", onProgress = () => {}) {
-    for (const slot of slots) {
-      slot.classList.toggle("oval", this.mask !== null);
-      if (this.mask) slot.style.setProperty("--oval", this.mask);
-    }
+    for (const slot of slots) ovalLayer(slot, this.framing);
     const container = slots[0].closest("[data-viewer-container]");
     const url = `${this.base}/api/model/${encodeURIComponent(identity)}.glb`;
     const grid = await this.gridFor(container, slots, url, onProgress);

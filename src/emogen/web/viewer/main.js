@@ -11,7 +11,7 @@
 // a message if loading failed.
 import { FaceGrid, probeWebGL } from './faces.js';
 import { ImageGrid } from './fallback.js';
-import { ovalMask } from './look.js';
+import { ovalLayer } from './look.js';
 
 const params = new URLSearchParams(window.location.search);
 const count = Math.max(1, Math.min(40, Number(params.get('faces') ?? 10) || 10));
@@ -21,7 +21,7 @@ const modelUrl = params.get('model') ?? 'face.glb';
 const template = params.get('png') ?? 'render.png?size={size}&weights={weights}';
 const forceFallback = params.get('fallback') === '1';
 const aaParam = params.get('aa');
-const oval = ovalMask(params.get('framing'));
+const framing = params.get('framing');
 
 const grid = document.getElementById('faces');
 grid.style.setProperty('--face-size', `${size}px`);
@@ -30,10 +30,7 @@ const slots = Array.from({ length: count }, (_, i) => {
   const slot = document.createElement('div');
   slot.className = 'face';
   slot.dataset.index = String(i);
-  if (oval) {
-    slot.classList.add('oval');
-    slot.style.setProperty('--oval', oval);
-  }
+  ovalLayer(slot, framing);
   grid.appendChild(slot);
   return slot;
 });
