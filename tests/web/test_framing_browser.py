@@ -25,7 +25,7 @@ from emogen.study.replay import replay_session
 from emogen.study.storage import Store
 from tests.web.test_devices import start
 from tests.web.test_jspsych_browser import open_page, serve, wait_stage
-from tests.web.test_study_browser import browser, viewer_bundle, wait_ready
+from tests.web.test_study_browser import CSP_PROBE, browser, viewer_bundle, wait_ready
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
 _ = (browser, viewer_bundle)  # fixtures, requested by name
@@ -92,6 +92,9 @@ def test_oval_study_shows_faces_through_the_oval(
 ) -> None:
     server, db = site
     page = start(browser, server, (1366, 768), "oval-1")  # a page error fails the test
+    page.context.add_init_script(CSP_PROBE)  # the oval layer is styled within the page's CSP
+    page.reload()
+    wait_ready(page, "instructions")
     page.get_by_role("button", name="Begin").click()
     wait_ready(page, "trial")
     assert page.evaluate("window.emogenStudy.display") == "webgl"
@@ -126,6 +129,7 @@ def test_oval_study_shows_faces_through_the_oval(
     page.get_by_label("5", exact=True).check()
     page.click("#rate")
     wait_ready(page, "done")
+    assert page.evaluate("window.__cspViolations") == []
     page.context.close()
 
     # the framing is appearance: the session replays; the export says what participants saw
