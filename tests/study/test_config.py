@@ -44,6 +44,13 @@ def test_demo_study_loads() -> None:
         ({"completion": {"redirect_url": "ftp://x"}}, "redirect_url must start with http"),
         ({"participant_param": "PROLIFIC PID"}, "participant_param"),
         ({"name": "has space"}, "'name'"),
+        (
+            {"framing": "ovl"},
+            r"'framing' must be 'face' or 'oval' \(did you mean 'oval'\?\); got 'ovl'",
+        ),
+        ({"framing": "Face"}, r"did you mean 'face'\?\); got 'Face'"),
+        ({"framing": "head"}, r"'framing' must be 'face' or 'oval': 'head' .* too small"),
+        ({"framing": "square"}, r"'framing' must be 'face' or 'oval'; got 'square'"),
     ],
 )
 def test_errors_name_the_key(data: dict, match: str) -> None:
@@ -120,6 +127,7 @@ def test_studies_without_own_identities_keep_their_hash() -> None:
     del dumped["blocks"]  # (schema 5) a study of one evolve block, written without [[blocks]]
     for key in ("custom_emotions", "participant_required", "counterbalance"):  # #32, at defaults
         del dumped[key]
+    del dumped["framing"]  # (#29) the face framing, as every study showed before
     del dumped["embed_origins"]  # where it may be embedded is no part of the hash (#33)
     text = json.dumps(dumped, sort_keys=True, separators=(",", ":"))
     assert cfg.config_hash() == hashlib.sha256(text.encode()).hexdigest()
@@ -210,3 +218,14 @@ def test_the_default_instructions_say_what_each_task_asks() -> None:
     assert own.instructions == "Mine."
     again = study_from_dict(both.model_dump(mode="json"))  # the stored config reads back alike
     assert again.instructions == both.instructions
+
+
+def test_framing_is_part_of_what_participants_saw() -> None:
+    face = study_from_dict({"name": "x"})
+    oval = study_from_dict({"name": "x", "framing": "oval"})
+    assert face.framing == "face" and oval.framing == "oval"
+    assert face.config_hash() == study_from_dict({"name": "x", "framing": "face"}).config_hash()
+    assert json.loads(oval.canonical_json())["framing"] == "oval"
+    assert oval.config_hash() != face.config_hash()
+    again = StudyConfig.model_validate(json.loads(oval.canonical_json()))
+    assert again == oval

@@ -111,6 +111,7 @@ def test_study_info_names_the_blocks(embedded: TestClient) -> None:
     info = embedded.get("/api/study").json()
     assert info["name"] == "small"
     assert info["participant_param"] == "PROLIFIC_PID"
+    assert info["framing"] == "face"
     assert info["blocks"] == [{"block": 0, "name": "block1", "task": "evolve", "trials": 2}]
     assert len(info["weight_names"]) > 50 and info["weight_names"][0] != ""
 
@@ -147,3 +148,10 @@ def test_trial_record_is_what_the_database_holds(embedded: TestClient) -> None:
             assert got["final_face"] == {"id": face.face_id, "weights": json.loads(face.weights)}
     assert embedded.get(f"/api/s/{token}/trials/9").status_code == 404
     assert embedded.get(f"/api/s/{'x' * 20}/trials/0").status_code == 404
+
+
+def test_study_info_says_the_framing(tmp_path: Path, ict_model: Any) -> None:
+    """The jsPsych plugin shows the faces in the study's framing: it reads it here."""
+    app = make_app(tmp_path, ict_model, study={**SMALL_STUDY, "framing": "oval"})
+    with TestClient(app) as client:
+        assert client.get("/api/study").json()["framing"] == "oval"

@@ -191,7 +191,7 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
     ui.display = await createFaceDisplay({
       token: made.token,
       base,
-      loadViewer: async () => (png ? null : createViewerDisplay({ base })),
+      loadViewer: async () => (png ? null : createViewerDisplay({ base, framing: info.framing })),
     });
     data.display = ui.display.kind;
     component = (params.task === "evolve" ? createEvolve : createCategorise)(page);

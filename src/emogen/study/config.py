@@ -39,6 +39,7 @@ from pydantic import (
 from emogen.appearance.identities import PRESETS, Identity, identity_from_dict
 from emogen.config import GAConfig, _Strict, read_toml, validate_config
 from emogen.errors import ConfigError
+from emogen.study.framing import check_framing
 from emogen.study.length import session_length
 from emogen.study.origins import check_origin
 from emogen.study.texts import (
@@ -128,6 +129,9 @@ class StudyConfig(_Strict):
     #: (combinational + lip/teeth collision correctives), the correctives' weights are stored
     #: after the shape weights, and the viewer / fallback PNGs draw the corrected face.
     correct: bool = True
+    #: What participants see around each face: ``face`` or ``oval`` (the face through an oval
+    #: on the background, hair, ears and neck hidden: :mod:`emogen.study.framing`).
+    framing: Annotated[str, AfterValidator(check_framing)] = "face"
     #: Face model folder or GLB, and rig TOML (default: $EMOGEN_MODEL / the packaged rig).
     model: Path | None = None
     rig: Path | None = None
@@ -347,7 +351,7 @@ class StudyConfig(_Strict):
         if not data["blocks"]:  # nor studies of one evolve block (written before blocks)
             del data["blocks"]
         for key, default in (("custom_emotions", []), ("participant_required", False),
-                             ("counterbalance", "hash")):  # fmt: skip
+                             ("counterbalance", "hash"), ("framing", "face")):  # fmt: skip
             if data[key] == default:  # studies without them keep their hash
                 del data[key]
         del data["embed_origins"]  # where it may be embedded is no part of what people do

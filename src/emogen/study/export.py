@@ -7,7 +7,7 @@ Tables (one row per …): ``sessions`` (session), ``trials`` (trial of a session
 ``shape_coefficients`` as a JSON list — and one column per appearance parameter, with
 ``appearance_generator``, so any stimulus can be re-rendered exactly; join on ``study`` and
 ``identity``), and ``study`` (study: its resolved config itself as ``config_json``, the model,
-gene and weight column names). Every row carries ``schema_version``, ``package_version`` (the version that
+gene and weight column names, ``framing``: what participants saw around each face). Every row carries ``schema_version``, ``package_version`` (the version that
 recorded the session; for ``identities``, the study), ``model_hash`` and ``study_config_hash``.
 A session's trial order is the ``trials`` table (``trial``: position, ``condition``).
 
@@ -273,6 +273,7 @@ def export_provenance(tables: dict[str, pd.DataFrame]) -> dict[str, Any]:
                 "study_config_hash": row["study_config_hash"],
                 "package_version": row["package_version"],
                 "seed": config.get("seed"),
+                "framing": config.get("framing", "face"),
                 "config": config,
             }
         )
@@ -304,7 +305,7 @@ def write_export(tables: dict[str, pd.DataFrame], out: Path, fmt: str = "parquet
 def study_rows(studies: list[StudyRow]) -> Iterator[Row]:
     """One row per study: its resolved config itself (``config_json``, canonical JSON: the
     exact config its sessions ran with, and replay from exported files reads), not only its
-    hash; the model, the gene and weight column names (JSON lists)."""
+    hash; the model, the gene and weight column names (JSON lists), the faces' framing."""
     for st in studies:
         yield {
             "study": st.name,
@@ -312,6 +313,8 @@ def study_rows(studies: list[StudyRow]) -> Iterator[Row]:
             "model_name": st.model_name,
             "gene_names": st.gene_names,
             "weight_names": st.weight_names,
+            # what participants saw around each face (appearance: no part of the GA's state)
+            "framing": json.loads(st.config_json).get("framing", "face"),
             "created_at": iso(st.created_at),
             "schema_version": SCHEMA_VERSION,
             "package_version": st.package_version,

@@ -61,7 +61,8 @@ TABLE_COLUMNS = {
                   "correct", "intensity", "confidence", "shown_at", "submitted_at",
                   "server_response_ms", "load_ms", "client_response_ms", "step_key"],
     "identities": ["study", "identity", "shape", "shape_coefficients"],
-    "study": ["study", "config_json", "model_name", "gene_names", "weight_names", "created_at"],
+    "study": ["study", "config_json", "model_name", "gene_names", "weight_names", "framing",
+              "created_at"],
 }  # fmt: skip
 
 

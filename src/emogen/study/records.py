@@ -9,6 +9,7 @@ exactly.
 from __future__ import annotations
 
 import json
+from typing import Literal
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session
@@ -31,12 +32,14 @@ class BlockInfo(TypedDict):
 
 
 class StudyInfo(TypedDict):
-    """The study as an embedding page needs it: its blocks, and the names of a face's weights
-    (shapes, then correctives: the order of every ``weights`` list)."""
+    """The study as an embedding page needs it: its blocks, the names of a face's weights
+    (shapes, then correctives: the order of every ``weights`` list) and the framing its faces
+    are shown in (``face`` or ``oval``: :mod:`emogen.study.framing`)."""
 
     name: str
     title: str
     participant_param: str
+    framing: Literal["face", "oval"]
     blocks: list[BlockInfo]
     weight_names: list[str]
 
@@ -76,6 +79,7 @@ def study_info(ctx: StudyContext) -> StudyInfo:
         "name": config.name,
         "title": config.title,
         "participant_param": config.participant_param,
+        "framing": "oval" if config.framing == "oval" else "face",
         "blocks": blocks,
         "weight_names": list(ctx.weight_names),
     }

@@ -166,7 +166,9 @@ def create_app(
     identities = config.study_identities()
     app.state.glbs = ModelGLBs(model, identities=identities)
     # no thread or OpenGL context until the first PNG is asked for
-    app.state.faces = FacePNGs(model, correct=config.correct, identities=identities)
+    app.state.faces = FacePNGs(
+        model, correct=config.correct, identities=identities, framing=config.framing
+    )
     app.state.session_buckets = TokenBuckets(session_limit)
     app.state.researcher_failures = SharedBuckets(
         store, burst=researcher_failure_limit.burst, per_minute=researcher_failure_limit.per_minute

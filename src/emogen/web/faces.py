@@ -4,7 +4,9 @@ OpenGL contexts belong to the thread that made them, so every render runs on one
 that owns one renderer per identity: the identity's shape with its appearance (skin tone, brows,
 lips, hair), as in the browser viewer. Recent images are cached by (identity, weights). With
 ``correct`` (the study's ``correct = true``) the faces are corrected as in the GA and the
-browser viewer (``Renderer.render(weights, correct=True)``) from their shape weights.
+browser viewer (``Renderer.render(weights, correct=True)``) from their shape weights. Each image
+has the study's framing (``oval``: seen through look.json's oval on the background, as the
+viewer's tiles are).
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ class FacePNGs:
 
     identities : the study's identities by name (``StudyConfig.study_identities()``); names not
         in it are looked up among the presets (``emogen.appearance.identities.PRESETS``)
+    framing : the study's framing (``face`` or ``oval``, :mod:`emogen.study.framing`)
     """
 
     def __init__(
@@ -38,11 +41,13 @@ class FacePNGs:
         *,
         correct: bool = True,
         identities: dict[str, Identity] | None = None,
+        framing: str = "face",
     ) -> None:
         self.model = model
         self.size = size
         self.correct = correct
         self.identities = dict(identities or {})
+        self.framing = framing
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="emogen-render")
         self._renderers: dict[str, Any] = {}
         self._cache: OrderedDict[str, bytes] = OrderedDict()
@@ -67,7 +72,9 @@ class FacePNGs:
         if identity not in self._renderers:
             ident = resolve_identity(identity, self.identities)
             model = self.model.with_identity(ident.shape)
-            self._renderers[identity] = Renderer(model, size=self.size, appearance=ident.appearance)
+            self._renderers[identity] = Renderer(
+                model, size=self.size, appearance=ident.appearance, framing=self.framing
+            )
         image = self._renderers[identity].render(weights[None, :], correct=self.correct)[0]
         return png_bytes(image)
 

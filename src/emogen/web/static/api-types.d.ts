@@ -615,12 +615,18 @@ export interface components {
         };
         /**
          * StudyInfo
-         * @description The study as an embedding page needs it: its blocks, and the names of a face's weights
-         *     (shapes, then correctives: the order of every ``weights`` list).
+         * @description The study as an embedding page needs it: its blocks, the names of a face's weights
+         *     (shapes, then correctives: the order of every ``weights`` list) and the framing its faces
+         *     are shown in (``face`` or ``oval``: :mod:`emogen.study.framing`).
          */
         StudyInfo: {
             /** Blocks */
             blocks: components["schemas"]["BlockInfo"][];
+            /**
+             * Framing
+             * @enum {string}
+             */
+            framing: "face" | "oval";
             /** Name */
             name: string;
             /** Participant Param */

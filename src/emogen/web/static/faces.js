@@ -66,7 +66,7 @@ class PngDisplay {
 async function loadOwnViewer() {
   if (document.body.dataset.viewer !== "yes") return null;
   const mod = await import("/static/viewer-adapter.js");
-  return mod.createViewerDisplay();
+  return mod.createViewerDisplay({ framing: document.body.dataset.framing || "face" });
 }
 
 /**

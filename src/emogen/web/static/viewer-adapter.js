@@ -1,7 +1,10 @@
 // The 3D face display of the study pages: the viewer's FaceGrid (one WebGL canvas drawing every
 // face into its slot). Slots live in containers marked data-viewer-container (the grid, the
-// rating view); each container gets a FaceGrid over the GLB of the trial's identity.
-import { FaceGrid } from "./build/study-viewer.js";
+// rating view); each container gets a FaceGrid over the GLB of the trial's identity. Under the
+// study's ``oval`` framing each slot is seen through look.json's oval (a layer over the canvas,
+// as the viewer page's ?framing=oval, under the face's number and marks, which come after the
+// slot; the server's PNGs are rendered through the oval themselves).
+import { FaceGrid, ovalLayer } from "./build/study-viewer.js";
 
 function webgl2Available() {
   try {
@@ -59,10 +62,14 @@ function release(grid) {
 const nextFrame = () => new Promise((resolve) => requestAnimationFrame(() => resolve()));
 
 class ViewerDisplay {
-  /** @param {string} base the study server's origin ("" on its own pages) */
-  constructor(base) {
+  /**
+   * @param {string} base the study server's origin ("" on its own pages)
+   * @param {string} framing the study's framing (``face``, ``oval``)
+   */
+  constructor(base, framing) {
     this.kind = "webgl";
     this.base = base;
+    this.framing = framing;
     this.grids = new Map(); // container -> {url, count, ready: Promise<FaceGrid>}
   }
 
@@ -103,6 +110,7 @@ class ViewerDisplay {
    * follows the GLB's download (the first time a container shows an identity).
    */
   async show(slots, faces, identity = "generic", onProgress = () => {}) {
+    for (const slot of slots) ovalLayer(slot, this.framing);
     const container = slots[0].closest("[data-viewer-container]");
     const url = `${this.base}/api/model/${encodeURIComponent(identity)}.glb`;
     const grid = await this.gridFor(container, slots, url, onProgress);
@@ -113,7 +121,10 @@ class ViewerDisplay {
   }
 }
 
-/** @param {{ base?: string }} [options] ``base``: the study server's origin on another site's page */
-export async function createViewerDisplay({ base = "" } = {}) {
-  return webgl2Available() ? new ViewerDisplay(base) : null;
+/**
+ * @param {{ base?: string, framing?: string }} [options] ``base``: the study server's origin on
+ * another site's page; ``framing``: the study's (``face``, ``oval``: GET /api/study)
+ */
+export async function createViewerDisplay({ base = "", framing = "face" } = {}) {
+  return webgl2Available() ? new ViewerDisplay(base, framing) : null;
 }

@@ -23,3 +23,29 @@ export function glslDefines(shader = look.shader) {
 export function srgbToLinear(c) {
   return c <= 0.04045 ? c / 12.92 : ((c + 0.055) / 1.055) ** 2.4;
 }
+
+// A layer over a face's square slot that shows it through a framing's oval (look.json's mask)
+// on the look's background, as emogen.render.images.apply_oval does offscreen: the oval's edge
+// ramps over about one pixel. Styled here (inline, no stylesheet rule), above the faces' canvas
+// (z-index 1) and below what the page draws after the slot. Nothing when the framing has no oval
+// (face, head); an earlier layer is kept (or taken away).
+export function ovalLayer(slot, framing) {
+  const oval = look.framings[framing]?.mask;
+  let layer = slot.querySelector(':scope > .oval-layer');
+  if (!oval) {
+    layer?.remove();
+    return null;
+  }
+  const [cx, cy] = oval.centre, [rx, ry] = oval.radii;
+  const bg = look.background_srgb.map((c) => Math.round(255 * c)).join(', ');
+  if (!layer) {
+    layer = document.createElement('div');
+    layer.className = 'oval-layer';
+    Object.assign(layer.style, { position: 'absolute', inset: '0', zIndex: '2', pointerEvents: 'none' });
+    slot.appendChild(layer);
+  }
+  layer.style.background =
+    `radial-gradient(ellipse ${100 * rx}% ${100 * ry}% at ${100 * cx}% ${100 * cy}%, ` +
+    `rgba(${bg}, 0) calc(100% - 0.5px), rgb(${bg}) calc(100% + 0.5px))`;
+  return layer;
+}

@@ -11,7 +11,7 @@
 // a message if loading failed.
 import { FaceGrid, probeWebGL } from './faces.js';
 import { ImageGrid } from './fallback.js';
-import { look } from './look.js';
+import { ovalLayer } from './look.js';
 
 const params = new URLSearchParams(window.location.search);
 const count = Math.max(1, Math.min(40, Number(params.get('faces') ?? 10) || 10));
@@ -21,7 +21,7 @@ const modelUrl = params.get('model') ?? 'face.glb';
 const template = params.get('png') ?? 'render.png?size={size}&weights={weights}';
 const forceFallback = params.get('fallback') === '1';
 const aaParam = params.get('aa');
-const oval = params.get('framing') === 'oval' ? look.framings.oval?.mask : null;
+const framing = params.get('framing');
 
 const grid = document.getElementById('faces');
 grid.style.setProperty('--face-size', `${size}px`);
@@ -30,17 +30,7 @@ const slots = Array.from({ length: count }, (_, i) => {
   const slot = document.createElement('div');
   slot.className = 'face';
   slot.dataset.index = String(i);
-  if (oval) {
-    // emogen.render.images.apply_oval: the oval's edge ramps over about one pixel
-    const [cx, cy] = oval.centre, [rx, ry] = oval.radii;
-    const bg = look.background_srgb.map((c) => Math.round(255 * c)).join(', ');
-    slot.classList.add('oval');
-    slot.style.setProperty(
-      '--oval',
-      `radial-gradient(ellipse ${100 * rx}% ${100 * ry}% at ${100 * cx}% ${100 * cy}%, ` +
-        `rgba(${bg}, 0) calc(100% - 0.5px), rgb(${bg}) calc(100% + 0.5px))`,
-    );
-  }
+  ovalLayer(slot, framing);
   grid.appendChild(slot);
   return slot;
 });
