@@ -187,7 +187,10 @@ DENSE, SPARSE, MIXED = KINDS
     ("flags", "verdict"),
     [
         ({DENSE: [False] * 60, SPARSE: [False] * 60, MIXED: [True] * 60}, "holds"),
-        ({DENSE: [False] * 60, SPARSE: [True] * 60, MIXED: [True] * 60}, "partly"),
+        # the mixtures found only partly: the point (no false alarms) holds
+        ({DENSE: [False] * 60, SPARSE: [False] * 60, MIXED: [True] * 40 + [False] * 20}, "partly"),
+        # one kind of one-target group flagged: the point fails whatever the mixtures do
+        ({DENSE: [False] * 60, SPARSE: [True] * 60, MIXED: [True] * 60}, "differs"),
         ({DENSE: [True] * 60, SPARSE: [True] * 60, MIXED: [False] * 60}, "differs"),
         ({DENSE: [False] * 3, SPARSE: [False] * 3, MIXED: [True] * 2 + [False]}, "inconclusive"),
     ],

@@ -4,6 +4,7 @@ sets and protocol initialisation (Table III)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import pandas as pd
@@ -16,7 +17,11 @@ from emogen.analysis.replication.conditions import Condition, ConditionRunner, C
 from emogen.analysis.replication.findings import Finding
 from emogen.analysis.replication.intervals import Direction, Evidence, judged
 from emogen.analysis.replication.repeat_intervals import BinContrast, BinShares
-from emogen.analysis.replication.verdicts import main_part_verdict, readings_parts_verdict
+from emogen.analysis.replication.verdicts import (
+    chain_verdict,
+    main_part_verdict,
+    readings_parts_verdict,
+)
 
 Row = tuple[str, int | None, str]  # (initialisation, fixed set, target)
 #: "far more" bias: half the paper's gap between protocol and fixed set 3 (0.55 − 0.38)
@@ -276,7 +281,9 @@ def _absolute(
         evidence,
         "band per row, bootstrap over runs within seeds (95%): the TVD of our row's bins from "
         "the paper's below 10 points holds, below 20 partly, at or above 20 differs; rows "
-        "joined: all hold → holds, some → partly",
+        "joined: all hold → holds, at least half hold → partly, fewer → differs (when some row "
+        "differs)",
+        parts=partial(chain_verdict, groups=len(evidence), partly_at=len(evidence) // 2),
         note="a model-specific absolute comparison: our model and targets differ from the "
         "paper's (different bias per row), so absolute shares are expected to move; " + chance,
         value=float(np.mean(list(tvds.values()))),

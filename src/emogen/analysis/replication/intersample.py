@@ -19,6 +19,7 @@ mixture (half toward target 1, half toward target 2).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -29,6 +30,7 @@ from emogen.analysis.paper_targets import paper_targets
 from emogen.analysis.replication.conditions import ConditionSpec
 from emogen.analysis.replication.findings import Finding
 from emogen.analysis.replication.intervals import Evidence, Share, judged
+from emogen.analysis.replication.verdicts import main_part_verdict
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -141,7 +143,8 @@ READINGS = {
 
 def intersample_finding(tests: list[GroupTest], reading: str) -> Finding:
     """The paper's statistic as a test in one reading: one-target groups not flagged (dense,
-    sparse), the mixture flagged; parts joined: all hold → holds, some → partly."""
+    sparse: the point — a test that flags groups without human-like variation separates
+    nothing), the mixture flagged (qualifies it); joined by :func:`main_part_verdict`."""
     by = {kind: [t for t in tests if t.kind == kind] for kind in KINDS}
     if any(not ts for ts in by.values()):
         raise ValueError(f"every kind of group is needed: {list(KINDS)}")
@@ -163,8 +166,10 @@ def intersample_finding(tests: list[GroupTest], reading: str) -> Finding:
         ],
         f"level (Wilson 95% CI): one-target groups not flagged ≥ {QUIET:.0%} holds, ≥ "
         f"{QUIET_WEAKER:.0%} partly (dense target 2, sparse target 1); mixtures flagged ≥ "
-        f"{FOUND:.0%} holds, ≥ {FOUND_WEAKER:.0%} partly; parts joined: all hold → holds, some "
-        "→ partly",
+        f"{FOUND:.0%} holds, ≥ {FOUND_WEAKER:.0%} partly; the one-target parts are the point "
+        "(they decide when they differ or are inconclusive), the mixture qualifies it (holds "
+        "only when it holds too, else partly)",
+        parts=partial(main_part_verdict, n_main=2),
         note=f"chance: a calibrated test flags a one-target group with probability ≤ {ALPHA}"
         + (
             "; the mean face is denser than the latent target and the GA matches dense "

@@ -136,4 +136,12 @@ WHY: dict[str, str] = {
     "arithmetic) they do not; the readings disagree",
     "for a mixed target β_m, ED(β) is better by CD": "Welch CI over the 5 matches of each "
     "metric, pooled over the seeds' training sets",
+    "the repeatability bins themselves (absolute shares per row)": "each row's TVD from the "
+    "paper's row with a bootstrap CI (rule band), rows joined (at least half must hold for "
+    "'partly'), instead of the mean TVD's point estimate; 1 of 6 rows agrees: differs",
+    "the mean final face lies on the target's intensity line; the dense target's even matches "
+    "its intensity": "the angle of the mean face off the line (its sine), bootstrapped over "
+    "runs, instead of the residual over the target's size, which a neutral face passed and "
+    "chance faces passed (0.07–0.22 against the level 0.35); the dense target's 0.25 (CI "
+    "0.24–0.27) straddles the level 0.25 (≈ 14°; chance 0.56): inconclusive",
 }
