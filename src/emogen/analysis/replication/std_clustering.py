@@ -77,7 +77,7 @@ def cluster(
     k = len(np.unique(labels))
     correct, predicted = {}, {}
     for m, x in geometries(space, np.asarray(faces, dtype=np.float64)).items():
-        gmm = GaussianMixture(k, covariance_type="spherical", n_init=2, random_state=seed)
+        gmm = GaussianMixture(k, covariance_type="spherical", n_init=10, random_state=seed)
         predicted[m] = gmm.fit(x).predict(x)
         correct[m] = matched_correct(labels, predicted[m])
     chance = permutation_chance(
