@@ -54,6 +54,27 @@ def test_figures_against_plain_loops() -> None:
     assert res.p_value < 0.01 and res.exceeds  # 6 distinct people, small repeat noise
 
 
+def test_neutral_faces_are_left_out_and_counted() -> None:
+    """A neutral face has no direction: the test on the group with two neutral faces added
+    equals the test without them (plain loops), and says how many it left out; a group whose
+    repeats are neutral faces is refused."""
+    rng = np.random.default_rng(3)
+    people = np.repeat(np.arange(5), 3)
+    x = np.abs(rng.normal(size=(5, 6)))[people] + 0.3 * np.abs(rng.normal(size=(15, 6)))
+    who = np.array([f"p{i}" for i in people])
+    with_neutral = np.vstack([x, np.zeros((2, 6))])
+    who_neutral = np.concatenate([who, ["p0", "p9"]])
+    res = empirical_spread_test(with_neutral, who_neutral, permutations=99,
+                                rng=np.random.default_rng(1))  # fmt: skip
+    within, between = _plain(x, who)
+    assert res.neutral == 2 and res.faces == 15 and res.participants == 5
+    assert res.within == pytest.approx(within) and res.between == pytest.approx(between)
+    assert not has_repeats(np.array(["a", "a", "b", "b"]), np.array([[1.0], [0], [1], [1]]))
+    with pytest.raises(DataError, match="neutral faces, which have no direction, not counted"):
+        empirical_spread_test(np.array([[1.0, 0], [0, 0], [1, 1], [1, 2]]),
+                              np.array(["a", "a", "b", "b"]), rng=np.random.default_rng(0))  # fmt: skip
+
+
 def test_needs_two_participants_with_repeats() -> None:
     assert not has_repeats(np.array(["a", "a", "b"]))
     with pytest.raises(DataError, match="at least 2 participants with 2 or more"):

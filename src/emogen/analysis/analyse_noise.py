@@ -158,10 +158,10 @@ def empirical_section(
     for g in ds.groups:
         final = ds.final[ds.final["group"] == g]
         who = final["participant"].to_numpy()
-        if not has_repeats(who):
-            continue
         fw = final[list(ds.columns)].to_numpy(dtype=np.float64)
         faces = fw if model is None else model_weights(fw, ds.columns, model)
+        if not has_repeats(who, faces):
+            continue
         test = empirical_spread_test(faces, who, group=g, alpha=opts.alpha, rng=rng)
         rows.append(test.row())
         records.append(test.record())

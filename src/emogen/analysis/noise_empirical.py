@@ -19,7 +19,9 @@ as faces of different participants lying further apart than faces of one partici
   spread makes it small. p = (1 + #{permuted ≤ observed}) / (1 + permutations).
 
 The test needs at least 2 participants with 2 or more faces; the comparison is within a group
-(one emotion, one identity), so no identity or emotion effect enters the within spread.
+(one emotion, one identity), so no identity or emotion effect enters the within spread. A
+neutral face (all weights 0) has no direction: it is left out of the test and counted
+(``neutral``), and the minimum applies to the faces that remain.
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ class EmpiricalSpread:
     icc: float
     p_value: float
     alpha: float
+    neutral: int = 0  # neutral faces left out (no direction)
 
     @property
     def ratio(self) -> float:
@@ -63,6 +66,7 @@ class EmpiricalSpread:
             "participants": self.participants,
             "with repeats": self.repeaters,
             "faces": self.faces,
+            "neutral faces left out": self.neutral,
             "within-person CD": round(self.within, 4),
             "between-person CD": round(self.between, 4),
             "between / within": round(self.ratio, 3),
@@ -81,6 +85,7 @@ class EmpiricalSpread:
             "participants": self.participants,
             "participants_with_repeats": self.repeaters,
             "faces": self.faces,
+            "neutral_faces_left_out": self.neutral,
             "within_cd": self.within,
             "between_cd": self.between,
             "between_within_ratio": self.ratio,
@@ -93,10 +98,19 @@ class EmpiricalSpread:
         }
 
 
-def has_repeats(participants: np.ndarray) -> bool:
-    """Whether at least 2 participants made 2 or more faces (the test's minimum)."""
-    _, counts = np.unique(np.asarray(participants).astype(str), return_counts=True)
+def has_repeats(participants: np.ndarray, faces: np.ndarray | None = None) -> bool:
+    """Whether at least 2 participants made 2 or more faces (the test's minimum); with
+    ``faces``, counting only those that are not neutral."""
+    who = np.asarray(participants).astype(str)
+    if faces is not None:
+        who = who[_directed(np.asarray(faces, dtype=np.float64))]
+    _, counts = np.unique(who, return_counts=True)
     return int((counts >= 2).sum()) >= 2
+
+
+def _directed(faces: np.ndarray) -> np.ndarray:
+    """Which faces (n, S) have a direction (are not neutral)."""
+    return np.asarray(np.linalg.norm(faces, axis=1) > 0)
 
 
 def empirical_spread_test(
@@ -115,28 +129,37 @@ def empirical_spread_test(
         raise DataError(
             f"group '{group}': faces {w.shape} and participants ({len(participants)}) differ"
         )
-    if not has_repeats(participants):
+    if not has_repeats(participants, w):
         raise DataError(
             f"group '{group}': the empirical null needs at least 2 participants with 2 or more "
-            "faces each"
+            "faces each (neutral faces, which have no direction, not counted)"
         )
-    norm = np.linalg.norm(w, axis=1, keepdims=True)
-    if np.any(norm == 0):
-        raise DataError(f"group '{group}': a neutral face (all weights 0) has no direction")
-    u = w / norm  # ‖u − v‖² / 2 = CD
-    codes, people = _codes(participants)
+    keep = _directed(w)
+    u = w[keep] / np.linalg.norm(w[keep], axis=1, keepdims=True)  # ‖u − v‖² / 2 = CD
+    codes, people = _codes(np.asarray(participants)[keep])
     k, within, p = _blocks(u, codes)
     icc, _, s2b, _ = _components(k, within, p, np.ones(len(people)))[0]
     pairs_within = float(np.sum(k * (k - 1) / 2))
     pairs_between = float((k.sum() ** 2 - np.sum(k**2)) / 2)
     within_cd = float(within.sum() / 2 / pairs_within)
     between_cd = float((p.sum() - np.trace(p)) / 4 / pairs_between)
-    lo, hi = jackknife_interval(u, participants, "between")
+    lo, hi = jackknife_interval(u, np.asarray(participants)[keep], "between")
     pval = _permutation_p(u, codes, k, permutations, rng)
     return EmpiricalSpread(
-        group, len(people), int((k >= 2).sum()), len(u), within_cd, between_cd,
-        float(s2b), lo, hi, float(icc), pval, alpha,
-    )  # fmt: skip
+        group=group,
+        participants=len(people),
+        repeaters=int((k >= 2).sum()),
+        faces=len(u),
+        within=within_cd,
+        between=between_cd,
+        excess=float(s2b),
+        excess_lo=lo,
+        excess_hi=hi,
+        icc=float(icc),
+        p_value=pval,
+        alpha=alpha,
+        neutral=int((~keep).sum()),
+    )
 
 
 def _permutation_p(
