@@ -125,7 +125,7 @@ def test_dashboard_numbers_generations_as_the_participant_saw_them(client: TestC
         return next(s for s in sessions if s["participant_id"] == "P-dash")
 
     assert line()["step"] == "instructions"
-    state = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()
+    state = client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}).json()
     # the page reads "Trial 1 of 2 · Round 1 of 3" (ga.generations = 2: generations 0 … 2)
     shown = line()
     assert (shown["trial"], shown["generation"]) == (1, 0)  # stored: generation from 0
@@ -134,7 +134,7 @@ def test_dashboard_numbers_generations_as_the_participant_saw_them(client: TestC
     for g in range(3):
         elite, others = choose(state)
         body = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
-        state = client.post(f"/api/s/{token}/select", json=body).json()
+        state = client.post(f"/api/s/{token}/step", json={"command": "select", **body}).json()
         if g < 2:
             assert line()["step"] == f"trial 1 of 2 · generation {g + 2} of 3"
     assert state["trial"]["status"] == "rating"
@@ -144,8 +144,10 @@ def test_dashboard_numbers_generations_as_the_participant_saw_them(client: TestC
             while state["trial"]["status"] == "active":
                 elite, others = choose(state)
                 body = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
-                state = client.post(f"/api/s/{token}/select", json=body).json()
+                state = client.post(
+                    f"/api/s/{token}/step", json={"command": "select", **body}
+                ).json()
         body = {"key": new_key(), "trial": t, "value": 5}
-        state = client.post(f"/api/s/{token}/rating", json=body).json()
+        state = client.post(f"/api/s/{token}/step", json={"command": "rate", **body}).json()
     assert state["stage"] == "done"
     assert (line()["step"], line()["trial"], line()["trials"]) == ("done", 2, 2)  # not 3 of 2
