@@ -185,7 +185,10 @@ def test_wrong_answers_are_refused_and_a_repeated_key_stores_one(mixed: StudySer
 def test_an_evolve_step_on_a_categorise_trial_and_back_is_a_conflict(mixed: StudyService) -> None:
     token, state = mixed.create_session("C-order")
     state = do(mixed, "begin", token, new_key())
-    with pytest.raises(StepConflict, match="trial 1 is an evolve trial: it takes select, restart or rate, not answer"):
+    with pytest.raises(
+        StepConflict,
+        match="trial 1 is an evolve trial: it takes select, restart or rate, not answer",
+    ):
         do(mixed, "categorise", token, new_key(), trial=0, label=LABELS[0], intensity=1)
     assert state["trial"]["task"] == "evolve" and step_args(state)["trial"] == 0
 

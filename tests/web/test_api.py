@@ -62,9 +62,10 @@ def test_bad_requests_get_4xx_with_a_clear_message(client: TestClient, app: Any)
     other, _ = start(client, "H-3")
     state = client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}).json()
     elite, others = choose(state)
-    good = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
+    good = {"command": "select", "key": new_key(), **step_args(state), "elite": elite,
+            "others": others}  # fmt: skip
     before = counts(app)
-    url = f"/api/s/{token}/select"
+    url = f"/api/s/{token}/step"
     cases: list[tuple[str, Any, int, str]] = [
         # (url, body, status, text in the message)
         (url, "not json", 422, "invalid request"),
@@ -81,12 +82,30 @@ def test_bad_requests_get_4xx_with_a_clear_message(client: TestClient, app: Any)
         (url, {**good, "others": list(range(100))}, 422, "not in the population"),
         (url, {**good, "generation": 5}, 409, "reload the page"),
         (url, {**good, "trial": 1}, 409, "trial 2"),
-        (f"/api/s/{other}/select", good, 409, "not in a trial"),  # another session's step
-        (f"/api/s/{'z' * 32}/select", good, 404, "no session"),
-        ("/api/s/short/select", good, 422, "token"),
-        (f"/api/s/{token}/rating", {"key": new_key(), "trial": 0, "value": 9}, 409, "rating"),
-        (f"/api/s/{token}/rating", {"key": new_key(), "trial": 0, "value": 0}, 422, "value"),
-        (f"/api/s/{token}/begin", {"key": new_key()}, 409, "past the instructions"),
+        (f"/api/s/{other}/step", good, 409, "not in a trial"),  # another session's step
+        (f"/api/s/{'z' * 32}/step", good, 404, "no session"),
+        ("/api/s/short/step", good, 422, "token"),
+        (url, {**good, "command": "selekt"}, 422, "command"),
+        (url, {**good, "command": "answer"}, 422, "label"),
+        (url, {k: v for k, v in good.items() if k != "command"}, 422, "command"),
+        (
+            f"/api/s/{token}/step",
+            {"command": "rate", "key": new_key(), "trial": 0, "value": 9},
+            409,
+            "rating",
+        ),
+        (
+            f"/api/s/{token}/step",
+            {"command": "rate", "key": new_key(), "trial": 0, "value": 0},
+            422,
+            "value",
+        ),
+        (
+            f"/api/s/{token}/step",
+            {"command": "begin", "key": new_key()},
+            409,
+            "past the instructions",
+        ),
         ("/api/sessions", {"participant_id": "has spaces"}, 422, "participant id"),
         ("/api/sessions", {"participant_id": "H-2"}, 409, "already has a session"),
         ("/api/sessions", {"participant_id": "x" * 500}, 422, "participant_id"),
@@ -128,10 +147,7 @@ def test_participants_cannot_reach_researcher_data(client: TestClient, app: Any)
     assert client.get("/api/researcher/export/secrets.csv", headers=AUTH).status_code == 422
     # a participant's state holds only their own session
     state = client.get(f"/api/s/{token}/state").json()
-    assert set(state) == {
-        "stage", "participant_id", "progress", "limits", "allow_restart", "trial",
-        "population", "rating", "categorise", "completion",
-    }  # fmt: skip
+    assert set(state) == {"stage", "participant_id", "progress", "trial", "view", "completion"}
     app.state.researcher_token = None
     r = client.get("/api/researcher/status", headers=AUTH)
     assert r.status_code == 403 and "EMOGEN_RESEARCHER_TOKEN" in r.json()["detail"]

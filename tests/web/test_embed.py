@@ -117,11 +117,22 @@ def test_study_info_names_the_blocks(embedded: TestClient) -> None:
     assert len(info["weight_names"]) > 50 and info["weight_names"][0] != ""
 
 
+def before_emotion(client: TestClient, token: str) -> str:
+    """The emotion trial 0 asks for, as the database holds it."""
+    store = client.app.state.store  # type: ignore[attr-defined]
+    with store.read() as db:
+        sess = db.scalar(select(SessionRow).where(SessionRow.token == token))
+        first = (TrialRow.session_id == sess.id, TrialRow.position == 0)
+        return str(db.scalar(select(TrialRow.emotion).where(*first)))
+
+
 def test_trial_record_is_what_the_database_holds(embedded: TestClient) -> None:
     made = embedded.post("/api/sessions", json={"participant_id": "rec-1"}).json()
     token = made["token"]
     before = embedded.get(f"/api/s/{token}/trials/0").json()
-    assert before["final_face"] is None and before["status"] == "pending"
+    emotion = before_emotion(embedded, token)
+    assert before["result"] == {"task": "evolve", "emotion": emotion, "final_face": None}
+    assert before["status"] == "pending"
 
     def post(kind: str, body: dict[str, Any]) -> dict[str, Any]:
         r = embedded.post(f"/api/s/{token}/step", json=command(kind, body))
@@ -145,8 +156,9 @@ def test_trial_record_is_what_the_database_holds(embedded: TestClient) -> None:
             assert got["seed"] == str(t.seed) and got["session_seed"] == str(sess.seed)
             assert int(got["seed"]) == t.seed  # exact, past 2**53
             assert got["status"] == "done" and got["task"] == "evolve"
-            assert got["emotion"] == t.emotion and got["block_name"] == "block1"
-            assert got["final_face"] == {"id": face.face_id, "weights": json.loads(face.weights)}
+            assert got["block_name"] == "block1" and "emotion" not in got
+            final = {"id": face.face_id, "weights": json.loads(face.weights)}
+            assert got["result"] == {"task": "evolve", "emotion": t.emotion, "final_face": final}
     assert embedded.get(f"/api/s/{token}/trials/9").status_code == 404
     assert embedded.get(f"/api/s/{'x' * 20}/trials/0").status_code == 404
 

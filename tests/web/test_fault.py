@@ -62,12 +62,18 @@ def test_sigkill_mid_session_loses_and_duplicates_nothing(
     try:
         created = post(server.url, "/api/sessions", {"participant_id": "K-1"})
         token = created["token"]
-        state = post(server.url, f"/api/s/{token}/begin", {"key": new_key()})
+        state = post(server.url, f"/api/s/{token}/step", {"command": "begin", "key": new_key()})
         elite, others = choose(state)
         state = post(
             server.url,
-            f"/api/s/{token}/select",
-            {"key": new_key(), **step_args(state), "elite": elite, "others": others},
+            f"/api/s/{token}/step",
+            {
+                "command": "select",
+                "key": new_key(),
+                **step_args(state),
+                "elite": elite,
+                "others": others,
+            },
         )
         assert state["view"]["generation"] == 1
 
@@ -81,10 +87,10 @@ def test_sigkill_mid_session_loses_and_duplicates_nothing(
         elite, others = choose(state)
         body = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
 
-        kill_with_step_in_flight(server, f"/api/s/{token}/select", body)
+        kill_with_step_in_flight(server, f"/api/s/{token}/step", {"command": "select", **body})
         before = httpx.get(f"{server.url}/api/s/{token}/state", timeout=30).json()
         assert before["view"]["generation"] in (1, 2)  # the step happened wholly or not at all
-        after = post(server.url, f"/api/s/{token}/select", body)
+        after = post(server.url, f"/api/s/{token}/step", {"command": "select", **body})
         assert after["view"]["generation"] == 2
         assert after.get("replayed", False) == (before["view"]["generation"] == 2)
         final = run_to_end(
@@ -116,7 +122,7 @@ def test_the_same_step_sent_at_once_to_two_workers_is_stored_once(
     try:
         assert server.ready_workers() == 2
         token = post(server.url, "/api/sessions", {"participant_id": "K-2"})["token"]
-        state = post(server.url, f"/api/s/{token}/begin", {"key": new_key()})
+        state = post(server.url, f"/api/s/{token}/step", {"command": "begin", "key": new_key()})
         elite, others = choose(state)
         body = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
         barrier = threading.Barrier(8)
@@ -168,7 +174,7 @@ def test_sigkill_during_categorisation_loses_and_duplicates_nothing(
 
     try:
         token = post(server.url, "/api/sessions", {"participant_id": "K-3"})["token"]
-        state = post(server.url, f"/api/s/{token}/begin", {"key": new_key()})
+        state = post(server.url, f"/api/s/{token}/step", {"command": "begin", "key": new_key()})
         state = run_to_end(state, call, stop=lambda s: s["stage"] == "trial"
                            and s["trial"]["task"] == "categorise")  # fmt: skip
         state = call("categorise", categorise_body(state))  # one answered
@@ -176,7 +182,7 @@ def test_sigkill_during_categorisation_loses_and_duplicates_nothing(
         server.start()
         assert httpx.get(f"{server.url}/api/s/{token}/state", timeout=30).json() == state
         body = categorise_body(state)  # 2. killed with an answer in flight: done once
-        kill_with_step_in_flight(server, f"/api/s/{token}/categorise", body)
+        kill_with_step_in_flight(server, f"/api/s/{token}/step", {"command": "answer", **body})
         before = httpx.get(f"{server.url}/api/s/{token}/state", timeout=30).json()
         after = call("categorise", body)
         moved = before["progress"]["trial"] != state["progress"]["trial"]

@@ -16,7 +16,7 @@ from fastapi.testclient import TestClient
 from emogen.errors import ConfigError
 from emogen.study.enrolment import checked_participant
 from emogen.study.export_stream import parse_since
-from tests.study.drive import choose, new_key, run_to_end, step_args
+from tests.study.drive import choose, command, new_key, run_to_end, step_args
 from tests.web.study_app import RESEARCHER_TOKEN, app, client, db_url, pg_cluster  # noqa: F401
 
 AUTH = {"Authorization": f"Bearer {RESEARCHER_TOKEN}"}
@@ -90,9 +90,11 @@ def test_the_final_face_is_served_while_the_trial_waits_for_its_rating(client: T
     state: dict[str, Any] = client.post(
         f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}
     ).json()
-    state = run_to_end(state, lambda kind, body: client.post(f"/api/s/{token}/step",
-                                                              json=body).json(),
-                       stop=lambda s: s["stage"] == "trial" and s["trial"]["status"] == "rating")  # fmt: skip
+    state = run_to_end(
+        state,
+        lambda kind, body: client.post(f"/api/s/{token}/step", json=command(kind, body)).json(),
+        stop=lambda s: s["stage"] == "trial" and s["trial"]["status"] == "rating",
+    )
     final = state["view"]["rating"]["face"]["id"]
     where = {"trial": state["progress"]["trial"], "attempt": state["trial"]["attempt"]}
     assert client.get(f"/api/s/{token}/faces/{final}.png", params=where).status_code == 200

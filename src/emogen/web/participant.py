@@ -7,7 +7,7 @@ from typing import Annotated, Any
 from urllib.parse import quote
 
 import orjson
-from fastapi import APIRouter, HTTPException, Path, Query, Request
+from fastapi import APIRouter, Body, HTTPException, Path, Query, Request
 from fastapi.responses import HTMLResponse, JSONResponse, RedirectResponse, Response
 
 from emogen.study.enrolment import missing_advice
@@ -18,9 +18,9 @@ from emogen.web.links import note_parameters, warn_never_matched
 from emogen.web.ratelimit import client_key, too_many
 from emogen.web.schemas import (
     TOKEN_PATTERN,
-    Created,
     NewSession,
     command_body,
+    created_model,
     error_responses,
     state_model,
 )
@@ -105,12 +105,6 @@ def session_page(request: Request, link: str) -> Response:
     return _page(request, "session.html", token=token)
 
 
-@router.post(
-    "/api/sessions",
-    status_code=201,
-    response_model=Created,
-    responses=error_responses(409, 413, 422, 429, 503),
-)
 def create_session(request: Request, body: NewSession) -> JSONResponse:
     """Consent given: start a session (or resume this browser's session of the participant).
 
@@ -143,31 +137,42 @@ def _json(state: SessionState) -> JSONResponse:
     return _StateResponse(state)
 
 
-@router.get(
-    "/api/s/{token}/state",
-    response_model=state_model(),
-    responses=error_responses(404, 409, 422, 503),
-)
 def get_state(request: Request, token: Token) -> JSONResponse:
     """Where the session is: stage, progress, the population shown, or the rating asked."""
     return _json(_service(request).state(token))
 
 
-def step_router() -> APIRouter:
-    """The one step route: its body is any command the registered tasks take (or ``begin``),
-    keyed by ``command``; made when the app is made, so every task registered by then is in
-    it (and in the OpenAPI document)."""
-    body = command_body()
+def session_router() -> APIRouter:
+    """The routes whose bodies the registered tasks make: the one step route (its body any
+    command the tasks take, or ``begin``, keyed by ``command``), and those answering the
+    session's state (its ``view`` any task's view, keyed by ``task``). Made when the app is
+    made, so every task registered by then is in them and in the OpenAPI document."""
+    routes = APIRouter()
     state = state_model()
-    steps = APIRouter()
 
-    @steps.post("/api/s/{token}/step", response_model=state, responses=STEP_ERRORS)
-    def step(request: Request, token: Token, command: body) -> JSONResponse:  # type: ignore[valid-type]
+    def step(request: Request, token: Token, command: Any) -> JSONResponse:
         """One step of the session: ``begin`` (the instructions read) or a command of the
         current trial's task (a conflict, 409, if its task does not take it)."""
         return _json(_service(request).step(token, command))
 
-    return steps
+    # the body's type is the registry's union of commands, known only now
+    step.__annotations__ = {
+        "request": Request,
+        "token": Token,
+        "command": Annotated[command_body(), Body()],
+        "return": JSONResponse,
+    }
+    routes.post(
+        "/api/sessions",
+        status_code=201,
+        response_model=created_model(state),
+        responses=error_responses(409, 413, 422, 429, 503),
+    )(create_session)
+    routes.get(
+        "/api/s/{token}/state", response_model=state, responses=error_responses(404, 409, 422, 503)
+    )(get_state)
+    routes.post("/api/s/{token}/step", response_model=state, responses=STEP_ERRORS)(step)
+    return routes
 
 
 @router.get(

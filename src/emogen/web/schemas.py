@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, NotRequired, Optional, Union, get_type_hints
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, create_model
 from typing_extensions import TypedDict
 
 from emogen.study.enrolment import PARTICIPANT_ID
@@ -61,13 +61,15 @@ def state_model() -> Any:
     return TypedDict("SessionState", fields)  # type: ignore[operator]
 
 
-class Created(BaseModel):
-    """A session made (or resumed): its secret token, its page and its state (the state's
-    schema is :func:`state_model`'s)."""
-
-    token: str
-    url: str
-    state: dict[str, Any]
+def created_model(state: Any) -> Any:
+    """A session made (or resumed): its secret token, its page and its ``state``."""
+    return create_model(
+        "Created",
+        __doc__="A session made (or resumed): its secret token, its page and its state.",
+        token=(str, ...),
+        url=(str, ...),
+        state=(state, ...),
+    )
 
 
 class Problem(BaseModel):
