@@ -126,17 +126,20 @@ def export(
     Written a few sessions at a time, in bounded memory whatever the study's size."""
     from emogen.study.export import TABLES
     from emogen.study.export_stream import export_study, parse_since
+    from emogen.study.export_tasks import task_export_tables
 
     start = None if since is None else parse_since(since)
-    unknown = [t for t in table or [] if t not in TABLES]
+    known = (*TABLES, *task_export_tables())
+    unknown = [t for t in table or [] if t not in known]
     if unknown:
-        raise ConfigError(f"--table must be one of {', '.join(TABLES)}; got {unknown[0]!r}")
+        raise ConfigError(f"--table must be one of {', '.join(known)}; got {unknown[0]!r}")
     check_out_folder(out, force=force)
     store = _store(database_url, config)
     try:
         with output_folder(out, force=force) as tmp:
-            result = export_study(store, tmp, fmt.value, study=study, since=start,
-                                  tables=tuple(table) if table else TABLES)  # fmt: skip
+            result = export_study(
+                store, tmp, fmt.value, study=study, since=start, tables=tuple(table or known)
+            )
     finally:
         store.dispose()
     paths = moved(result.paths, tmp, out)

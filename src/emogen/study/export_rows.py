@@ -15,10 +15,10 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from emogen.ga.state import collision_solver_of_state, stream_of_state
 from emogen.study.tables import SCHEMA_VERSION, SessionRow, StudyRow, TrialRow, as_utc
 from emogen.tasks.categorise.tables import ResponseRow, StimulusRow
 from emogen.tasks.evolve.tables import FaceRow, PopulationRow, RatingRow, RestartRow, SelectionRow
+from emogen.tasks.registry import task_named
 
 Row = dict[str, Any]
 
@@ -210,12 +210,7 @@ def trial_rows(rec: Records) -> Iterator[Row]:
             "identity": t.identity,
             "repetition": t.repetition,
             "seed": t.seed,
-            "ga_stream": stream_of_state(t.engine_state) if t.engine_state else None,
-            "collision_solver": (
-                collision_solver_of_state(t.engine_state)
-                if t.engine_state and rec.corrects(t)
-                else None
-            ),
+            **_state_facts(t, rec.corrects(t)),
             "status": t.status,
             "attempts": t.attempt + 1,
             "generation_reached": t.generation,
@@ -370,3 +365,13 @@ SESSION_TABLE_ROWS: dict[str, Callable[[Records], Iterator[Row]]] = {
     "ratings": rating_rows,
     "responses": response_rows,
 }
+
+
+def _state_facts(t: TrialRow, corrects: bool) -> dict[str, Any]:
+    """What the trial's task reads from its stored state for the trials table (the GA's stream
+    and, where faces are corrected, its collision solver); missing for other tasks."""
+    facts = task_named(t.task).state_facts(t.engine_state)
+    return {
+        "ga_stream": facts.get("ga_stream"),
+        "collision_solver": facts.get("collision_solver") if corrects else None,
+    }

@@ -50,6 +50,7 @@ from emogen.study.export import (
     table_extras,
 )
 from emogen.study.export_rows import SESSION_TABLE_ROWS, iso, load_records
+from emogen.study.export_tasks import task_export_tables, task_frame, task_rows
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, StudyRow, TrialRow, as_utc
 from emogen.tasks.evolve.tables import FaceRow, PopulationRow
@@ -136,8 +137,9 @@ class _Spill:
 
     def __init__(self, folder: Path) -> None:
         self.folder = folder
-        self.files: dict[str, list[Path]] = {name: [] for name in TABLES}
-        self.rows: dict[str, int] = dict.fromkeys(TABLES, 0)
+        names = (*TABLES, *task_export_tables())
+        self.files: dict[str, list[Path]] = {name: [] for name in names}
+        self.rows: dict[str, int] = dict.fromkeys(names, 0)
         self.empty: dict[str, pa.Table] = {}
 
     def add(self, name: str, frame: pd.DataFrame) -> None:
@@ -225,16 +227,18 @@ def export_study(
     *,
     study: str | None = None,
     since: datetime | None = None,
-    tables: tuple[str, ...] = TABLES,
+    tables: tuple[str, ...] | None = None,
     now: datetime | None = None,
 ) -> ExportResult:
     """Write ``<table>.<fmt>`` for ``tables`` into ``out`` in bounded memory (module doc);
     with ``since``, only the sessions completed in [since, now − SETTLE), and ``export.json``."""
     if fmt not in ("parquet", "csv"):
         raise ConfigError(f"--format must be parquet or csv; got {fmt!r}")
-    unknown = [t for t in tables if t not in TABLES]
+    known = (*TABLES, *task_export_tables())
+    tables = known if tables is None else tables
+    unknown = [t for t in tables if t not in known]
     if unknown:
-        raise ConfigError(f"--table must be one of {', '.join(TABLES)}; got {unknown[0]!r}")
+        raise ConfigError(f"--table must be one of {', '.join(known)}; got {unknown[0]!r}")
     studies = _studies(store, study)
     until = None
     if since is not None:
@@ -277,9 +281,14 @@ def _spill_sessions(
     per_session = [name for name in tables if name in SESSION_TABLE_ROWS]
     for name in per_session:
         spill.add(name, _frame(name, [], extras.get(name, [])))
+    records = {k: v for k, v in task_export_tables().items() if k in tables}
+    for name, row in records.items():
+        spill.add(name, task_frame(row, []))
     for ids in chunks:
         with store.read() as db:
             rec = load_records(db, studies, ids)
+            for name, row in records.items():
+                spill.add(name, task_frame(row, task_rows(db, row, ids)))
         for name in per_session:
             spill.add(name, _frame(name, list(SESSION_TABLE_ROWS[name](rec)), extras.get(name, [])))
         del rec

@@ -264,9 +264,12 @@ class Store:
         from sqlalchemy.exc import DBAPIError
 
         from emogen.study.migrations import upgrade
+        from emogen.study.tables import Base, task_tables
 
         try:
             upgrade(self._write_engine)
+            # a registered task's tables that no migration made (a lab's own task): made here
+            Base.metadata.create_all(self._write_engine, tables=task_tables(), checkfirst=True)
         except DBAPIError as exc:
             self.engine.dispose()
             if storage_problem(exc) is not None:

@@ -15,6 +15,7 @@ from sqlalchemy import (
     Index,
     Integer,
     String,
+    Table,
     Text,
     UniqueConstraint,
 )
@@ -30,6 +31,7 @@ from emogen.tasks.records import (
     numbers_json,
     utcnow,
 )
+from emogen.tasks.registry import TASKS
 
 __all__ = [
     "SCHEMA_VERSION",
@@ -43,6 +45,7 @@ __all__ = [
     "core_table",
     "dumps",
     "numbers_json",
+    "task_tables",
     "utcnow",
 ]
 
@@ -136,3 +139,8 @@ class StepRow(Base):
     kind: Mapped[str] = mapped_column(String(16))
     request_hash: Mapped[str] = mapped_column(String(64))
     created_at: Mapped[datetime] = mapped_column(Stamp)
+
+
+def task_tables() -> list[Table]:
+    """The record tables of every registered task (declared on :class:`Base` by the tasks)."""
+    return [core_table(row) for task in TASKS.values() for row in task.tables]

@@ -24,7 +24,7 @@ from __future__ import annotations
 import re
 from typing import Any, ClassVar, Literal, NamedTuple, Self
 
-from pydantic import field_validator
+from pydantic import Field, field_validator
 
 from emogen.config import _Strict
 
@@ -57,6 +57,10 @@ class TaskBlock(_Strict):
     makes_faces: ClassVar[bool] = False
 
     task: str
+    #: The identities its faces are shown with (None: as its task says, e.g. the study's).
+    identities: tuple[str, ...] | None = Field(default=None, min_length=1)
+    #: The order of its trials (None: random; ``latin_square`` only where it is counterbalanced).
+    order: Order | None = None
     #: A name for the block in the exports (default ``block<k>``, k counting from 1).
     name: str | None = None
 

@@ -168,6 +168,9 @@ class Task(Protocol):
     view_type: ClassVar[type]
     #: its record tables (rows on :class:`emogen.tasks.records.Base`)
     tables: ClassVar[tuple[type, ...]]
+    #: the record tables the study's export writes as they are (one export table each, keyed
+    #: by session, participant, block and trial: :mod:`emogen.study.export_tasks`)
+    exported: ClassVar[tuple[type, ...]]
     #: what the study's default instructions say of its blocks
     instructions: ClassVar[str]
     #: screens a trial shows a participant, and the seconds each takes (low, high): an
@@ -217,6 +220,10 @@ class Task(Protocol):
         """The command (a JSON body, without its key) a simulated participant sends to
         ``view`` (``who``: :class:`emogen.tasks.simulated.SimulatedPeople`)."""
 
+    def state_facts(self, state: str | None) -> dict[str, Any]:
+        """Facts of a trial's stored state the trials export table shows (the GA's stream and
+        collision solver), by column."""
+
     def progress_step(
         self, status: str, generation: int, generations: int
     ) -> tuple[str, int | None]:
@@ -231,3 +238,39 @@ def conditions_of(blocks: Sequence[TaskBlock], study: Any, rows: dict[int, int])
     for k, b in enumerate(blocks):
         out += b.trials(k, study, list(out), rows.get(k))
     return out
+
+
+class TaskDefaults:
+    """What a task that has no more to say answers (subclass it and write the rest): nothing
+    to prepare, no face table, no face served as PNG, no result for an embedding page, no
+    faces made, a replay that checks nothing, and its name on the dashboard."""
+
+    name: ClassVar[str]
+
+    def prepare(self, ctx: Any, k: int, block: Any) -> Any:
+        return None
+
+    def rows(self, prepared: Any) -> int | None:
+        return None
+
+    def face(
+        self, env: TaskEnv, db: Session, row: TrialRow, face_id: int
+    ) -> tuple[str, str] | None:
+        return None
+
+    def result(self, env: TaskEnv, db: Session, row: TrialRow) -> dict[str, Any] | None:
+        return None
+
+    def made_faces(self, db: Session, where: Sequence[Any]) -> list[MadeFace]:
+        return []
+
+    def replay(self, env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed:
+        return Replayed()
+
+    def state_facts(self, state: str | None) -> dict[str, Any]:
+        return {}
+
+    def progress_step(
+        self, status: str, generation: int, generations: int
+    ) -> tuple[str, int | None]:
+        return self.name, None

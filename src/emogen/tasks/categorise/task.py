@@ -67,6 +67,8 @@ class CategoriseTask:
     commands: ClassVar[tuple[type[TrialCommand], ...]] = (Answer,)
     view_type: ClassVar[type] = CategoriseView
     tables: ClassVar[tuple[type, ...]] = (StimulusRow, ResponseRow)
+    #: exported by the study's own typed tables (stimuli and answers)
+    exported: ClassVar[tuple[type, ...]] = ()
     #: what the default instructions say of its blocks (after "In this study " or "In another
     #: part of the study ")
     instructions: ClassVar[str] = (
@@ -181,6 +183,9 @@ class CategoriseTask:
             "intensity": intensity if view["intensity"] else None,
             "confidence": confidence if view["confidence"] else None,
         }
+
+    def state_facts(self, state: str | None) -> dict[str, Any]:
+        return {}
 
     def progress_step(
         self, status: str, generation: int, generations: int

@@ -20,6 +20,7 @@ from pydantic import Field
 from sqlalchemy.orm import Session
 
 from emogen.errors import SelectionError
+from emogen.ga.state import collision_solver_of_state, stream_of_state
 from emogen.tasks.blocks import Condition, TaskBlock
 from emogen.tasks.errors import StepConflict
 from emogen.tasks.evolve.block import EvolveBlock
@@ -103,6 +104,8 @@ class EvolveTask:
         RestartRow,
         RatingRow,
     )
+    #: exported by the study's own typed tables (faces, selections, restarts, ratings)
+    exported: ClassVar[tuple[type, ...]] = ()
     #: the default instructions of its blocks
     instructions: ClassVar[str] = (
         "You will see ten faces at a time. Click the face that best shows the emotion you are "
@@ -271,6 +274,15 @@ class EvolveTask:
             "generation": pop["generation"],
             "elite": faces[elite]["id"],
             "others": [faces[j]["id"] for j in others],
+        }
+
+    def state_facts(self, state: str | None) -> dict[str, Any]:
+        """The GA stream and collision solver the trial's engine state was recorded with."""
+        if not state:
+            return {}
+        return {
+            "ga_stream": stream_of_state(state),
+            "collision_solver": collision_solver_of_state(state),
         }
 
     def progress_step(
