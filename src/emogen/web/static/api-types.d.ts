@@ -323,6 +323,11 @@ export interface components {
     schemas: {
         /** Begin */
         Begin: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "begin";
             /** Key */
             key: string;
         };
@@ -341,11 +346,16 @@ export interface components {
             trials: number;
         };
         /**
-         * Categorisation
+         * Answer
          * @description The answer to a categorise trial's face: one of the labels it offered (or ``none`` where
          *     the block offers "none of these"), and the intensity / confidence ratings the block asks.
          */
-        Categorisation: {
+        Answer: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "answer";
             /** Confidence */
             confidence?: number | null;
             /** Intensity */
@@ -362,11 +372,31 @@ export interface components {
             trial: number;
         };
         /**
+         * CategoriseResult
+         * @description A categorise trial's answer and the face shown (its weights), once answered.
+         */
+        CategoriseResult: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            task: "categorise";
+            /** Label */
+            label: string;
+            /** Weights */
+            weights: number[];
+        };
+        /**
          * CategoriseView
          * @description What a categorise trial shows: the face, the question, the labels in their order, and the
          *     ratings asked (None when not asked).
          */
         CategoriseView: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            task: "categorise";
             confidence: components["schemas"]["RatingScale"] | null;
             face: components["schemas"]["FaceView"];
             intensity: components["schemas"]["RatingScale"] | null;
@@ -399,6 +429,42 @@ export interface components {
             token: string;
             /** Url */
             url: string;
+        };
+        /**
+         * EvolveResult
+         * @description An evolve trial's emotion and its final face (once done).
+         */
+        EvolveResult: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            task: "evolve";
+            /** Emotion */
+            emotion: string;
+            final_face: components["schemas"]["FaceView"] | null;
+        };
+        /**
+         * EvolveView
+         * @description What an evolve trial shows: its emotion, the generation, the faces or the rating.
+         */
+        EvolveView: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            task: "evolve";
+            /** Allow Restart */
+            allow_restart: boolean;
+            /** Emotion */
+            emotion: string;
+            /** Generation */
+            generation: number;
+            /** Generations */
+            generations: number;
+            limits: components["schemas"]["Limits"];
+            population: components["schemas"]["PopulationView"] | null;
+            rating: components["schemas"]["RatingView"] | null;
         };
         /**
          * FaceView
@@ -484,17 +550,18 @@ export interface components {
             block: number;
             /** Blocks */
             blocks: number;
-            /** Generation */
-            generation: number;
-            /** Generations */
-            generations: number;
             /** Trial */
             trial: number;
             /** Trials */
             trials: number;
         };
-        /** Rating */
-        Rating: {
+        /** Rate */
+        Rate: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "rate";
             /** Key */
             key: string;
             /** Response Ms */
@@ -536,6 +603,11 @@ export interface components {
         };
         /** Restart */
         Restart: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "restart";
             /** Attempt */
             attempt: number;
             /** Generation */
@@ -567,8 +639,13 @@ export interface components {
              */
             url: string;
         };
-        /** Selection */
-        Selection: {
+        /** Select */
+        Select: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "select";
             /** Attempt */
             attempt: number;
             /** Elite */
@@ -594,16 +671,10 @@ export interface components {
          * @description The participant's view of the session.
          */
         SessionState: {
-            /** Allow Restart */
-            allow_restart: boolean;
-            categorise: components["schemas"]["CategoriseView"] | null;
             completion: components["schemas"]["Completion"] | null;
-            limits: components["schemas"]["Limits"];
             /** Participant Id */
             participant_id: string;
-            population: components["schemas"]["PopulationView"] | null;
             progress: components["schemas"]["Progress"];
-            rating: components["schemas"]["RatingView"] | null;
             /** Replayed */
             replayed?: boolean;
             /**
@@ -612,6 +683,8 @@ export interface components {
              */
             stage: "instructions" | "trial" | "done";
             trial: components["schemas"]["TrialView"] | null;
+            /** View */
+            view: components["schemas"]["EvolveView"] | components["schemas"]["CategoriseView"] | null;
         };
         /**
          * StudyInfo
@@ -648,9 +721,6 @@ export interface components {
             block: number;
             /** Block Name */
             block_name: string;
-            /** Emotion */
-            emotion: string;
-            final_face: components["schemas"]["FaceView"] | null;
             /** Identity */
             identity: string;
             /** Participant Id */
@@ -659,6 +729,8 @@ export interface components {
             seed: string;
             /** Session Id */
             session_id: number;
+            /** Result */
+            result: components["schemas"]["EvolveResult"] | components["schemas"]["CategoriseResult"] | null;
             /** Session Seed */
             session_seed: string;
             /** Status */
@@ -680,8 +752,6 @@ export interface components {
             attempt: number;
             /** Block */
             block: number;
-            /** Emotion */
-            emotion: string;
             /** Identity */
             identity: string;
             /** Position */
