@@ -37,7 +37,9 @@ def test_dashboard_shows_the_participants_numbers_and_links(
 ) -> None:
     created = httpx.post(f"{server.url}/api/sessions", json={"participant_id": "DASH-1"}).json()
     token = created["token"]
-    httpx.post(f"{server.url}/api/s/{token}/begin", json={"key": new_key()}).raise_for_status()
+    httpx.post(
+        f"{server.url}/api/s/{token}/step", json={"command": "begin", "key": new_key()}
+    ).raise_for_status()
     page = browser.new_page()
     page.goto(f"{server.url}/researcher")
     page.fill("#token", BENCH_TOKEN)
