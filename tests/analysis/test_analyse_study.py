@@ -21,6 +21,7 @@ from typer.testing import CliRunner
 
 from emogen.cli.analysis import analysis_app
 from emogen.metrics import cosine_distance
+from tests.study.drive import do
 
 STUDY: dict[str, Any] = {
     "name": "analysis-e2e",
@@ -40,35 +41,44 @@ def key() -> str:
 def drive(service: Any, participant: str, targets: dict[str, np.ndarray], *, restart: bool = False,
           stop_after: int | None = None) -> None:  # fmt: skip
     token, _ = service.create_session(participant)
-    state = service.begin(token, key())
+    state = do(service, "begin", token, key())
     steps = 0
     while state["stage"] != "done":
         if stop_after is not None and steps >= stop_after:
             return
-        progress, trial = state["progress"], state["trial"]
+        progress, trial, view = state["progress"], state["trial"], state["view"]
         at = {
             "trial": progress["trial"],
             "attempt": trial["attempt"],
-            "generation": progress["generation"],
+            "generation": view["generation"],
         }
         if trial["status"] == "active":
             if (
                 restart
                 and progress["trial"] == 0
                 and trial["attempt"] == 0
-                and progress["generation"] == 1
+                and view["generation"] == 1
             ):
-                state = service.restart(token, key(), **at)
+                state = do(service, "restart", token, key(), **at)
                 continue
-            faces = state["population"]["faces"]
-            w = np.array([f["weights"] for f in faces])[:, : len(targets[trial["emotion"]])]
-            order = np.argsort(cosine_distance(w, targets[trial["emotion"]]), kind="stable")
+            faces = state["view"]["population"]["faces"]
+            w = np.array([f["weights"] for f in faces])[:, : len(targets[view["emotion"]])]
+            order = np.argsort(cosine_distance(w, targets[view["emotion"]]), kind="stable")
             ids = [faces[i]["id"] for i in order]
-            state = service.select(
-                token, key(), **at, elite=ids[0], others=ids[1:3], response_ms=900.0
+            state = do(
+                service,
+                "select",
+                token,
+                key(),
+                **at,
+                elite=ids[0],
+                others=ids[1:3],
+                response_ms=900.0,
             )
         else:
-            state = service.rate(token, key(), trial=progress["trial"], value=5, response_ms=500.0)
+            state = do(
+                service, "rate", token, key(), trial=progress["trial"], value=5, response_ms=500.0
+            )
         steps += 1
 
 

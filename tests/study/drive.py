@@ -13,10 +13,25 @@ def new_key() -> str:
     return f"test-key-{next(_keys):06d}"
 
 
+#: The step commands by the words the tests call them (``call(kind, body)``).
+COMMANDS = {"begin": "begin", "select": "select", "restart": "restart", "rating": "rate",
+            "rate": "rate", "categorise": "answer", "answer": "answer"}  # fmt: skip
+
+
+def command(kind: str, body: dict[str, Any]) -> dict[str, Any]:
+    """The step route's body of a test's ``call(kind, body)``."""
+    return {"command": COMMANDS[kind], **body}
+
+
+def do(service: Any, kind: str, token: str, key: str, **fields: Any) -> dict[str, Any]:
+    """One step through the service: ``kind`` as :data:`COMMANDS` names it, its key, its fields."""
+    return service.step(token, command(kind, {"key": key, **fields}))  # type: ignore[no-any-return]
+
+
 def choose(state: dict[str, Any], n_others: int = 2) -> tuple[int, list[int]]:
     """Elite: the face at position (generation mod 10); others: the next n_others faces."""
-    ids = [f["id"] for f in state["population"]["faces"]]
-    g = state["progress"]["generation"]
+    ids = [f["id"] for f in state["view"]["population"]["faces"]]
+    g = state["view"]["generation"]
     k = g % len(ids)
     return ids[k], [ids[(k + j) % len(ids)] for j in range(1, n_others + 1)]
 
@@ -25,7 +40,7 @@ def step_args(state: dict[str, Any]) -> dict[str, int]:
     return {
         "trial": state["progress"]["trial"],
         "attempt": state["trial"]["attempt"],
-        "generation": state["progress"]["generation"],
+        "generation": state["view"]["generation"],
     }
 
 
@@ -60,7 +75,7 @@ def run_to_end(
 def categorise_body(state: dict[str, Any]) -> dict[str, Any]:
     """An answer to a categorise trial: the label offered at (trial mod labels), the ratings
     asked (4 of 7)."""
-    view = state["categorise"]
+    view = state["view"]
     labels = view["labels"]
     return {
         "key": new_key(),
@@ -73,18 +88,10 @@ def categorise_body(state: dict[str, Any]) -> dict[str, Any]:
 
 
 def service_caller(service: Any, token: str) -> Callable[[str, dict[str, Any]], dict[str, Any]]:
+    """``call(kind, body)`` through the service's one step."""
+
     def call(kind: str, body: dict[str, Any]) -> dict[str, Any]:
-        body = dict(body)
-        key = body.pop("key")
-        if kind == "begin":
-            return service.begin(token, key)  # type: ignore[no-any-return]
-        if kind == "select":
-            return service.select(token, key, **body)  # type: ignore[no-any-return]
-        if kind == "rating":
-            return service.rate(token, key, **body)  # type: ignore[no-any-return]
-        if kind == "categorise":
-            return service.categorise(token, key, **body)  # type: ignore[no-any-return]
-        return service.restart(token, key, **body)  # type: ignore[no-any-return]
+        return service.step(token, command(kind, body))  # type: ignore[no-any-return]
 
     return call
 

@@ -24,9 +24,11 @@ from emogen.study.export import export_tables
 from emogen.study.replay import replay_session
 from emogen.study.sessions import StudyService
 from emogen.study.storage import Store
-from emogen.study.tables import ResponseRow, StimulusRow, TrialRow
+from emogen.study.tables import TrialRow
+from emogen.tasks.categorise.tables import ResponseRow, StimulusRow
 from tests.study.drive import (
     categorise_body,
+    do,
     new_key,
     run_to_end,
     service_caller,
@@ -75,16 +77,17 @@ def test_a_mixed_study_shows_own_faces_and_stores_every_answer(mixed: StudyServi
     categorised = [s for s in seen if s["stage"] == "trial" and s["trial"]["task"] == "categorise"]
     assert len(categorised) == 3 + 3 + 2  # own (3 evolve trials), others, random
     for s in categorised:
-        view = s["categorise"]
+        view = s["view"]
         assert sorted(view["labels"]) == sorted(LABELS)  # every label, in a drawn order
-        assert s["trial"]["emotion"] == "" and s["trial"]["prompt"] == view["question"]
+        assert "emotion" not in view and "emotion" not in s["trial"]  # never told
+        assert s["trial"]["prompt"] == view["question"]
         assert (
             view["none_option"] and view["intensity"]["points"] == 7 and view["confidence"] is None
         )
     tables = export_tables(mixed.store)
     resp = tables["responses"]
     assert len(resp) == 8 and resp["label"].notna().all()
-    assert list(resp["labels"]) == ["|".join(s["categorise"]["labels"]) for s in categorised]
+    assert list(resp["labels"]) == ["|".join(s["view"]["labels"]) for s in categorised]
     # the own faces are the participant's final faces, as the faces table recorded them
     faces, trials = tables["faces"], tables["trials"]
     w_cols = [c for c in faces.columns if c.startswith("w_")]
@@ -136,23 +139,44 @@ def test_wrong_answers_are_refused_and_a_repeated_key_stores_one(mixed: StudySer
     token, state = at_categorise(mixed, "C-bad")
     trial = state["progress"]["trial"]
     with pytest.raises(SelectionError, match=r"label must be one of .*none.*got 'surprised'"):
-        mixed.categorise(token, new_key(), trial=trial, label="surprised", intensity=3)
+        do(mixed, "categorise", token, new_key(), trial=trial, label="surprised", intensity=3)
     with pytest.raises(SelectionError, match="intensity is required"):
-        mixed.categorise(token, new_key(), trial=trial, label=LABELS[0])
+        do(mixed, "categorise", token, new_key(), trial=trial, label=LABELS[0])
     with pytest.raises(SelectionError, match=r"intensity must be an integer in \[1, 7\]; got 9"):
-        mixed.categorise(token, new_key(), trial=trial, label=LABELS[0], intensity=9)
+        do(mixed, "categorise", token, new_key(), trial=trial, label=LABELS[0], intensity=9)
     with pytest.raises(SelectionError, match="does not ask for confidence"):
-        mixed.categorise(token, new_key(), trial=trial, label=LABELS[0], intensity=3, confidence=2)
+        do(
+            mixed,
+            "categorise",
+            token,
+            new_key(),
+            trial=trial,
+            label=LABELS[0],
+            intensity=3,
+            confidence=2,
+        )
     with pytest.raises(StepConflict, match="is a categorise trial"):
-        mixed.select(token, new_key(), trial=trial, attempt=0, generation=0, elite=0, others=[])
+        do(
+            mixed,
+            "select",
+            token,
+            new_key(),
+            trial=trial,
+            attempt=0,
+            generation=0,
+            elite=0,
+            others=[],
+        )
     with pytest.raises(StepConflict, match="request is for trial"):
-        mixed.categorise(token, new_key(), trial=trial + 1, label=LABELS[0], intensity=3)
+        do(mixed, "categorise", token, new_key(), trial=trial + 1, label=LABELS[0], intensity=3)
     key = new_key()
-    after = mixed.categorise(token, key, trial=trial, label="none")  # no intensity for "none"
-    again = mixed.categorise(token, key, trial=trial, label="none")
+    after = do(
+        mixed, "categorise", token, key, trial=trial, label="none"
+    )  # no intensity for "none"
+    again = do(mixed, "categorise", token, key, trial=trial, label="none")
     assert again.get("replayed") and again["progress"] == after["progress"]
     with pytest.raises(StepConflict, match="already used for a different request"):
-        mixed.categorise(token, key, trial=trial, label=LABELS[1], intensity=2)
+        do(mixed, "categorise", token, key, trial=trial, label=LABELS[1], intensity=2)
     with mixed.store.read() as db:
         assert db.scalar(select(func.count()).select_from(ResponseRow)) == 1
         assert db.scalar(select(ResponseRow.label)) == "none"
@@ -160,9 +184,9 @@ def test_wrong_answers_are_refused_and_a_repeated_key_stores_one(mixed: StudySer
 
 def test_an_evolve_step_on_a_categorise_trial_and_back_is_a_conflict(mixed: StudyService) -> None:
     token, state = mixed.create_session("C-order")
-    state = mixed.begin(token, new_key())
-    with pytest.raises(StepConflict, match="trial 1 is an evolve trial: it makes a face"):
-        mixed.categorise(token, new_key(), trial=0, label=LABELS[0], intensity=1)
+    state = do(mixed, "begin", token, new_key())
+    with pytest.raises(StepConflict, match="trial 1 is an evolve trial: it takes select, restart or rate, not answer"):
+        do(mixed, "categorise", token, new_key(), trial=0, label=LABELS[0], intensity=1)
     assert state["trial"]["task"] == "evolve" and step_args(state)["trial"] == 0
 
 
@@ -217,7 +241,9 @@ def test_block_errors_name_the_key(ict_model: Any, tmp_path: Path) -> None:
         cfg = study_from_dict({"name": "bad", "emotions": LABELS, "blocks": blocks, **extra})
         return study_service(cfg, Store(f"sqlite:///{tmp_path / 'bad.sqlite'}"), ict_model)
 
-    with pytest.raises(ConfigError, match=r"blocks\[1\]: own = true, but no evolve block"):
+    with pytest.raises(
+        ConfigError, match=r"blocks\[1\]: own = true, but no block that makes faces \(evolve\)"
+    ):
         service([{"task": "categorise", "own": True}])
     with pytest.raises(ConfigError, match=r"blocks\[2\].labels: \['fearfull'\] not among"):
         service([{"task": "evolve"}, {"task": "categorise", "random": 2,
@@ -239,11 +265,11 @@ def test_block_errors_name_the_key(ict_model: Any, tmp_path: Path) -> None:
 def test_answers_of_a_categorise_body_fit_the_view(mixed: StudyService) -> None:
     token, state = at_categorise(mixed, "C-body")
     body = categorise_body(state)
-    assert body["label"] in state["categorise"]["labels"] and body["intensity"] == 4
-    labels_before = json.dumps(state["categorise"]["labels"])
+    assert body["label"] in state["view"]["labels"] and body["intensity"] == 4
+    labels_before = json.dumps(state["view"]["labels"])
     again = mixed.state(token)  # the state read again shows the same face and order
-    assert json.dumps(again["categorise"]["labels"]) == labels_before
-    assert again["categorise"]["face"] == state["categorise"]["face"]
+    assert json.dumps(again["view"]["labels"]) == labels_before
+    assert again["view"]["face"] == state["view"]["face"]
 
 
 def test_replay_checks_every_categorised_face_and_catches_a_changed_one(

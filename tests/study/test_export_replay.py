@@ -17,17 +17,18 @@ from emogen.cli.study import replay_command, study_app
 from emogen.study.export import STAMPS, TABLES, export_tables, write_export
 from emogen.study.replay import replay_session
 from emogen.study.sessions import StudyService
-from emogen.study.tables import SCHEMA_VERSION, FaceRow
-from tests.study.drive import new_key, run_to_end, service_caller, step_args
+from emogen.study.tables import SCHEMA_VERSION
+from emogen.tasks.evolve.tables import FaceRow
+from tests.study.drive import do, new_key, run_to_end, service_caller, step_args
 
 runner = CliRunner()
 
 
 def completed(service: StudyService, participant: str, restart: bool = False) -> str:
     token, _ = service.create_session(participant)
-    state = service.begin(token, new_key())
+    state = do(service, "begin", token, new_key())
     if restart:
-        state = service.restart(token, new_key(), **step_args(state))
+        state = do(service, "restart", token, new_key(), **step_args(state))
     run_to_end(state, service_caller(service, token))
     return token
 
@@ -35,10 +36,8 @@ def completed(service: StudyService, participant: str, restart: bool = False) ->
 def test_export_holds_every_generation_and_selection(service: StudyService, tmp_path: Path) -> None:
     completed(service, "E-1", restart=True)
     token, _ = service.create_session("E-2")  # stopped in the middle
-    state = service.begin(token, new_key())
-    run_to_end(
-        state, service_caller(service, token), stop=lambda s: s["progress"]["generation"] == 1
-    )
+    state = do(service, "begin", token, new_key())
+    run_to_end(state, service_caller(service, token), stop=lambda s: s["view"]["generation"] == 1)
     tables = export_tables(service.store)
     assert set(tables) == set(TABLES)
     for name, df in tables.items():

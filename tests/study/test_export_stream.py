@@ -21,7 +21,7 @@ from emogen.study.export_stream import SETTLE, export_study, parse_since
 from emogen.study.replay_export import replay_exported
 from emogen.study.sessions import StudyService
 from emogen.study.tables import SessionRow
-from tests.study.drive import new_key, run_to_end, service_caller
+from tests.study.drive import do, new_key, run_to_end, service_caller
 from tests.study.test_export_replay import completed
 
 runner = CliRunner()
@@ -47,7 +47,7 @@ def test_chunked_export_holds_what_one_table_holds(
     completed(service, "S-1", restart=True)
     completed(service, "S-2")
     token, _ = service.create_session("S-3")  # in the middle: NA in completed_at, ga_stream …
-    state = service.begin(token, new_key())
+    state = do(service, "begin", token, new_key())
     run_to_end(state, service_caller(service, token), stop=lambda s: s["progress"]["trial"] == 1)
     service.create_session("S-4")  # never began: no trials, no faces
     monkeypatch.setattr(export_stream, "CHUNK_FACES", 25)  # a chunk per session or so
@@ -78,7 +78,7 @@ def test_incremental_exports_appended_hold_each_completed_session_once(
     for p in ("I-1", "I-2", "I-3"):
         completed(service, p)
     token, _ = service.create_session("I-4")  # not completed: never in an incremental export
-    service.begin(token, new_key())
+    do(service, "begin", token, new_key())
     t0 = datetime(2026, 5, 1, 12, 0, tzinfo=UTC)
     with service.store.write() as db:  # completion times under the test's control
         for sid, minutes in ((1, 0), (2, 10), (3, 20)):

@@ -86,7 +86,7 @@ def test_a_session_recorded_mid_trial_continues_and_replays(tmp_path: Path, ict_
             config = StudyConfig.model_validate(json.loads(study.config_json))
         service = study_service(config, store, ict_model)
         state = service.state(OLD_2)
-        assert state["progress"]["generation"] == 3
+        assert state["view"]["generation"] == 3
         assert run_to_end(state, service_caller(service, OLD_2))["stage"] == "done"
         old_2 = _sessions(store)["OLD-2"]
         # trial 1 goes on with the stream it began with; trial 2 began after the upgrade

@@ -26,9 +26,11 @@ from emogen.cli.study import replay_command
 from emogen.study.export import export_tables, write_export
 from emogen.study.replay import replay_session
 from emogen.study.replay_export import replay_exported
-from emogen.study.rounding import WEIGHT_TOLERANCE, weight_deviation
 from emogen.study.storage import Store
-from emogen.study.tables import FaceRow, PopulationRow, SessionRow, StimulusRow, TrialRow
+from emogen.study.tables import SessionRow, TrialRow
+from emogen.tasks.categorise.tables import StimulusRow
+from emogen.tasks.evolve.tables import FaceRow, PopulationRow
+from emogen.tasks.rounding import WEIGHT_TOLERANCE, weight_deviation
 from tests.study.drive import run_to_end, service_caller
 from tests.study.test_categorise import mixed  # noqa: F401  (the fixture)
 

@@ -14,8 +14,9 @@ from emogen.ga.engine import Engine, correctives_of
 from emogen.study.errors import SessionNotFound, StepConflict
 from emogen.study.sessions import StudyService, full_weights
 from emogen.study.storage import Store
-from emogen.study.tables import FaceRow, PopulationRow, SelectionRow, StepRow, TrialRow
-from tests.study.drive import choose, new_key, run_to_end, service_caller, step_args
+from emogen.study.tables import StepRow, TrialRow
+from emogen.tasks.evolve.tables import FaceRow, PopulationRow, SelectionRow
+from tests.study.drive import choose, do, new_key, run_to_end, service_caller, step_args
 
 
 def count(store: Store, table: type) -> int:
@@ -26,11 +27,11 @@ def count(store: Store, table: type) -> int:
 def test_whole_session_stores_every_generation_and_selection(service: StudyService) -> None:
     token, state = service.create_session("P-001")
     assert state["stage"] == "instructions" and state["progress"]["trials"] == 2
-    state = service.begin(token, new_key())
-    assert state["stage"] == "trial" and len(state["population"]["faces"]) == 10
+    state = do(service, "begin", token, new_key())
+    assert state["stage"] == "trial" and len(state["view"]["population"]["faces"]) == 10
     n_columns = len(service.ctx.weight_names)
     assert n_columns > 57  # the shapes, then the correctives (correct = true)
-    assert len(state["population"]["faces"][0]["weights"]) == n_columns
+    assert len(state["view"]["population"]["faces"][0]["weights"]) == n_columns
     final = run_to_end(state, service_caller(service, token))
     assert final["stage"] == "done"
     assert final["completion"]["code"] == "DONE-42"
@@ -50,9 +51,9 @@ def test_state_is_committed_before_answering_and_survives_a_new_server(
     service: StudyService, small_study, ict_model
 ) -> None:
     token, _ = service.create_session("P-002")
-    state = service.begin(token, new_key())
+    state = do(service, "begin", token, new_key())
     elite, others = choose(state)
-    state = service.select(token, new_key(), **step_args(state), elite=elite, others=others)
+    state = do(service, "select", token, new_key(), **step_args(state), elite=elite, others=others)
     # a fresh service on the same database (a restarted server) sees exactly the same state
     other = StudyService(
         small_study,
@@ -70,42 +71,42 @@ def test_state_is_committed_before_answering_and_survives_a_new_server(
         engine = Engine.from_json(
             row.engine_state, ict_model.rig, corrector=correctives_of(ict_model)
         )
-    shown = [f["weights"] for f in state["population"]["faces"]]
+    shown = [f["weights"] for f in state["view"]["population"]["faces"]]
     assert full_weights(engine.ask()).tolist() == shown
     other.store.dispose()
 
 
 def test_repeated_key_is_one_step_and_stale_request_conflicts(service: StudyService) -> None:
     token, _ = service.create_session("P-003")
-    state = service.begin(token, new_key())
+    state = do(service, "begin", token, new_key())
     elite, others = choose(state)
     key = new_key()
     args = dict(**step_args(state), elite=elite, others=others)
-    after = service.select(token, key, **args)
-    again = service.select(token, key, **args)  # a double click / retried request
+    after = do(service, "select", token, key, **args)
+    again = do(service, "select", token, key, **args)  # a double click / retried request
     assert again.pop("replayed") is True
     assert again == after
     assert count(service.store, SelectionRow) == 1
     assert count(service.store, PopulationRow) == 2
     # the same generation again with a new key: the page was stale
     with pytest.raises(StepConflict, match=r"generation 0 .* generation 1"):
-        service.select(token, new_key(), **args)
+        do(service, "select", token, new_key(), **args)
     # the same key for a different request
     with pytest.raises(StepConflict, match="already used"):
-        service.select(token, key, **{**args, "generation": 1})
+        do(service, "select", token, key, **{**args, "generation": 1})
     assert count(service.store, SelectionRow) == 1
 
 
 def test_concurrent_double_submissions_make_one_generation(service: StudyService) -> None:
     token, _ = service.create_session("P-004")
-    state = service.begin(token, new_key())
+    state = do(service, "begin", token, new_key())
     elite, others = choose(state)
     args = dict(**step_args(state), elite=elite, others=others)
     results: list[object] = []
 
     def submit(key: str) -> None:
         try:
-            results.append(service.select(token, key, **args)["progress"]["generation"])
+            results.append(do(service, "select", token, key, **args)["view"]["generation"])
         except StepConflict as exc:
             results.append(exc)
 
@@ -122,19 +123,19 @@ def test_concurrent_double_submissions_make_one_generation(service: StudyService
 
 def test_invalid_selections_leave_no_trace(service: StudyService) -> None:
     token, _ = service.create_session("P-005")
-    state = service.begin(token, new_key())
-    ids = [f["id"] for f in state["population"]["faces"]]
+    state = do(service, "begin", token, new_key())
+    ids = [f["id"] for f in state["view"]["population"]["faces"]]
     where = step_args(state)
     with pytest.raises(SelectionError, match="not in the population"):
-        service.select(token, new_key(), **where, elite=999, others=[])
+        do(service, "select", token, new_key(), **where, elite=999, others=[])
     with pytest.raises(SelectionError, match=r"number of selections must be in \[1, 4\]"):
-        service.select(token, new_key(), **where, elite=ids[0], others=ids[1:6])
+        do(service, "select", token, new_key(), **where, elite=ids[0], others=ids[1:6])
     with pytest.raises(SelectionError, match="must not also be"):
-        service.select(token, new_key(), **where, elite=ids[0], others=[ids[0]])
+        do(service, "select", token, new_key(), **where, elite=ids[0], others=[ids[0]])
     with pytest.raises(StepConflict, match="trial 2"):
-        service.select(token, new_key(), **{**where, "trial": 1}, elite=ids[0], others=[])
+        do(service, "select", token, new_key(), **{**where, "trial": 1}, elite=ids[0], others=[])
     with pytest.raises(StepConflict, match="not waiting for a rating"):
-        service.rate(token, new_key(), trial=0, value=3)
+        do(service, "rate", token, new_key(), trial=0, value=3)
     assert count(service.store, SelectionRow) == 0
     assert count(service.store, StepRow) == 1  # the begin
     assert service.state(token) == {**state}
@@ -142,11 +143,11 @@ def test_invalid_selections_leave_no_trace(service: StudyService) -> None:
 
 def test_restart_makes_a_new_attempt(service: StudyService) -> None:
     token, _ = service.create_session("P-006")
-    state = service.begin(token, new_key())
+    state = do(service, "begin", token, new_key())
     elite, others = choose(state)
-    state = service.select(token, new_key(), **step_args(state), elite=elite, others=others)
-    state = service.restart(token, new_key(), **step_args(state), response_ms=10.0)
-    assert state["trial"]["attempt"] == 1 and state["progress"]["generation"] == 0
+    state = do(service, "select", token, new_key(), **step_args(state), elite=elite, others=others)
+    state = do(service, "restart", token, new_key(), **step_args(state), response_ms=10.0)
+    assert state["trial"]["attempt"] == 1 and state["view"]["generation"] == 0
     final = run_to_end(state, service_caller(service, token))
     assert final["stage"] == "done"
     with service.store.read() as db:
@@ -159,18 +160,18 @@ def test_restart_makes_a_new_attempt(service: StudyService) -> None:
 def test_rating_range_and_cross_session_tokens(service: StudyService) -> None:
     token_a, _ = service.create_session("P-007")
     token_b, _ = service.create_session("P-008")
-    state = service.begin(token_a, new_key())
+    state = do(service, "begin", token_a, new_key())
     state = run_to_end(
         state, service_caller(service, token_a), stop=lambda s: s["trial"]["status"] == "rating"
     )
-    assert state["rating"]["points"] == 7 and len(state["rating"]["face"]["weights"]) == len(
-        service.ctx.weight_names
-    )
+    assert state["view"]["rating"]["points"] == 7 and len(
+        state["view"]["rating"]["face"]["weights"]
+    ) == len(service.ctx.weight_names)
     with pytest.raises(SelectionError, match=r"rating must be an integer in \[1, 7\]"):
-        service.rate(token_a, new_key(), trial=0, value=8)
+        do(service, "rate", token_a, new_key(), trial=0, value=8)
     # B is still at the instructions: A's step with B's token does not touch A
     with pytest.raises(StepConflict, match="not in a trial"):
-        service.rate(token_b, new_key(), trial=0, value=3)
+        do(service, "rate", token_b, new_key(), trial=0, value=3)
     with pytest.raises(SessionNotFound):
         service.state("x" * 32)
     assert service.state(token_b)["stage"] == "instructions"
@@ -260,7 +261,9 @@ def test_correct_setting_decides_the_corrective_columns(db_url: str, ict_model) 
     )  # fmt: skip
     assert svc.ctx.weight_names == (*ict_model.shape_names, *model_correctives(ict_model).names)
     token, _ = svc.create_session("P-C1")
-    shown = np.array([f["weights"] for f in svc.begin(token, new_key())["population"]["faces"]])
+    shown = np.array(
+        [f["weights"] for f in do(svc, "begin", token, new_key())["view"]["population"]["faces"]]
+    )
     result = correct_faces(ict_model, shown[:, : ict_model.n_shapes])
     np.testing.assert_array_equal(shown[:, ict_model.n_shapes :], result.correctives)
     plain = study_from_dict({**SMALL_STUDY, "name": "plain", "correct": False})
@@ -269,6 +272,6 @@ def test_correct_setting_decides_the_corrective_columns(db_url: str, ict_model) 
     )
     assert svc.ctx.weight_names == ict_model.shape_names
     token, _ = svc.create_session("P-C2")
-    faces = svc.begin(token, new_key())["population"]["faces"]
+    faces = do(svc, "begin", token, new_key())["view"]["population"]["faces"]
     assert all(len(f["weights"]) == ict_model.n_shapes for f in faces)
     store.dispose()

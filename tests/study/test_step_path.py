@@ -14,8 +14,9 @@ from sqlalchemy import select
 
 from emogen.ga.engine import Engine, correctives_of
 from emogen.study.sessions import StudyService
-from emogen.study.tables import FaceRow, PopulationRow, TrialRow
-from tests.study.drive import choose, new_key, step_args
+from emogen.study.tables import TrialRow
+from emogen.tasks.evolve.tables import FaceRow, PopulationRow
+from tests.study.drive import choose, do, new_key, step_args
 
 
 @pytest.fixture
@@ -56,7 +57,7 @@ def test_each_step_stores_what_a_plain_engine_makes_whichever_worker_serves_it(
 ) -> None:
     a, b = two_services
     token, _ = a.create_session("PATH-1")
-    state = a.begin(token, new_key())
+    state = do(a, "begin", token, new_key())
     with a.store.read() as db:
         trial = db.scalars(select(TrialRow).where(TrialRow.position == 0)).one()
         seed, identity = trial.seed, trial.identity
@@ -69,19 +70,21 @@ def test_each_step_stores_what_a_plain_engine_makes_whichever_worker_serves_it(
     for g in range(1, 12):
         service = (a, b)[g % 2]
         elite, others = choose(state)
-        state = service.select(token, new_key(), **step_args(state), elite=elite, others=others)
+        state = do(
+            service, "select", token, new_key(), **step_args(state), elite=elite, others=others
+        )
         reference.tell(elite, others)
         if g == 2:
-            state = service.restart(token, new_key(), **step_args(state))
+            state = do(service, "restart", token, new_key(), **step_args(state))
             reference.reset()
         if state["trial"]["status"] == "rating":
             assert reference.done
             break
         pop = reference.ask()
-        where = (state["trial"]["attempt"], state["progress"]["generation"])
+        where = (state["trial"]["attempt"], state["view"]["generation"])
         engine_state, weights = stored(service, *where)
         assert engine_state == reference.to_json()
         np.testing.assert_array_equal(weights, np.hstack([pop.weights, pop.correctives]))
-        shown = np.array([f["weights"] for f in state["population"]["faces"]])
+        shown = np.array([f["weights"] for f in state["view"]["population"]["faces"]])
         np.testing.assert_array_equal(shown, weights)  # the answer shows what was stored
     assert state["trial"]["status"] == "rating"

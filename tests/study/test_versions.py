@@ -15,7 +15,7 @@ from emogen.study.errors import StepConflict
 from emogen.study.storage import Store
 from emogen.study.versions import changed_keys, design
 from tests.study.conftest import SMALL_STUDY
-from tests.study.drive import new_key, run_to_end, service_caller
+from tests.study.drive import do, new_key, run_to_end, service_caller
 from tests.study_fixtures import db_url, pg_cluster  # noqa: F401
 
 FIXED_CONSENT = {**SMALL_STUDY, "consent": "A one-word fix of the consent text.",
@@ -41,12 +41,15 @@ def test_text_keys_leave_the_design_and_everything_else_is_named() -> None:
 def test_a_text_change_keeps_running_sessions_going(db_url: str, ict_model: Any) -> None:
     first = serve(db_url, SMALL_STUDY, ict_model)
     token, state = first.create_session("V-1", create_key="v1-create-key-0001")
-    state = first.begin(token, new_key())
+    state = do(first, "begin", token, new_key())
     first.store.dispose()
     second = serve(db_url, FIXED_CONSENT, ict_model)  # the consent's one-word fix
     assert second.ctx.study_id != first.ctx.study_id  # a new config row (its own hash) …
     resumed = second.state(token)  # … but the session goes on, with the new texts
-    assert resumed["progress"] == state["progress"] and resumed["population"] == state["population"]
+    assert (
+        resumed["progress"] == state["progress"]
+        and resumed["view"]["population"] == state["view"]["population"]
+    )
     again, _ = second.create_session("V-1", resume_token=token)
     assert again == token
     with pytest.raises(StepConflict, match="personal session link"):
@@ -62,7 +65,7 @@ def test_a_design_change_is_refused_while_sessions_run_unless_they_are_ended(
 ) -> None:
     first = serve(db_url, SMALL_STUDY, ict_model)
     token, _ = first.create_session("V-2")
-    first.begin(token, new_key())
+    do(first, "begin", token, new_key())
     done, state = first.create_session("V-3")
     run_to_end(state, service_caller(first, done))
     first.store.dispose()

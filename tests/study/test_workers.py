@@ -17,8 +17,9 @@ from emogen.study.config import StudyConfig
 from emogen.study.errors import StepConflict
 from emogen.study.sessions import StudyService
 from emogen.study.storage import Store
-from emogen.study.tables import PopulationRow, SelectionRow, StepRow
-from tests.study.drive import choose, new_key, step_args, study_service
+from emogen.study.tables import StepRow
+from emogen.tasks.evolve.tables import PopulationRow, SelectionRow
+from tests.study.drive import choose, do, new_key, step_args, study_service
 
 
 @pytest.fixture
@@ -57,18 +58,18 @@ def count(store: Store, table: type, *where: Any) -> int:
 
 def test_the_same_step_in_two_workers_is_stored_once(workers: list[StudyService]) -> None:
     token, _ = workers[0].create_session("W-1")
-    state = workers[1].begin(token, new_key())
+    state = do(workers[1], "begin", token, new_key())
     elite, others = choose(state)
     key, args = new_key(), step_args(state)
     results, errors = at_once(
         [
-            lambda w=w: w.select(token, key, **args, elite=elite, others=others)
+            lambda w=w: do(w, "select", token, key, **args, elite=elite, others=others)
             for w in (workers[0], workers[1], workers[0], workers[1])
         ]
     )
     assert errors == []
     assert sorted(bool(r.get("replayed", False)) for r in results) == [False, True, True, True]
-    faces = {str(r["population"]) for r in results}
+    faces = {str(r["view"]["population"]) for r in results}
     assert len(faces) == 1  # every answer shows the one generation stored
     store = workers[0].store
     assert count(store, SelectionRow) == 1
@@ -84,13 +85,15 @@ def test_the_same_step_in_two_workers_is_stored_once(workers: list[StudyService]
 
 def test_two_different_steps_for_one_generation_one_wins(workers: list[StudyService]) -> None:
     token, _ = workers[0].create_session("W-2")
-    state = workers[0].begin(token, new_key())
+    state = do(workers[0], "begin", token, new_key())
     elite, others = choose(state)
     args = step_args(state)
     results, errors = at_once(
         [
-            lambda: workers[0].select(token, new_key(), **args, elite=elite, others=others),
-            lambda: workers[1].select(token, new_key(), **args, elite=others[0], others=[elite]),
+            lambda: do(workers[0], "select", token, new_key(), **args, elite=elite, others=others),
+            lambda: do(
+                workers[1], "select", token, new_key(), **args, elite=others[0], others=[elite]
+            ),
         ]
     )
     assert len(results) == 1 and len(errors) == 1

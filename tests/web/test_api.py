@@ -10,8 +10,9 @@ from fastapi.testclient import TestClient
 from sqlalchemy import func, select
 
 from emogen.correct import correct_faces, model_correctives
-from emogen.study.tables import FaceRow, PopulationRow, SelectionRow, StepRow
-from tests.study.drive import choose, new_key, run_to_end, step_args
+from emogen.study.tables import StepRow
+from emogen.tasks.evolve.tables import FaceRow, PopulationRow, SelectionRow
+from tests.study.drive import choose, command, new_key, run_to_end, step_args
 from tests.web.study_app import RESEARCHER_TOKEN, app, client, db_url, pg_cluster  # noqa: F401
 
 AUTH = {"Authorization": f"Bearer {RESEARCHER_TOKEN}"}
@@ -27,7 +28,7 @@ def start(client: TestClient, participant: str | None) -> tuple[str, dict[str, A
 
 def http_caller(client: TestClient, token: str):  # type: ignore[no-untyped-def]
     def call(kind: str, body: dict[str, Any]) -> dict[str, Any]:
-        r = client.post(f"/api/s/{token}/{kind}", json=body)
+        r = client.post(f"/api/s/{token}/step", json=command(kind, body))
         assert r.status_code == 200, r.text
         assert r.headers["server-timing"].startswith("app;dur=")
         return r.json()  # type: ignore[no-any-return]
@@ -59,7 +60,7 @@ def test_pages_and_whole_session_over_http(client: TestClient) -> None:
 def test_bad_requests_get_4xx_with_a_clear_message(client: TestClient, app: Any) -> None:
     token, _ = start(client, "H-2")
     other, _ = start(client, "H-3")
-    state = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()
+    state = client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}).json()
     elite, others = choose(state)
     good = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
     before = counts(app)
@@ -144,8 +145,8 @@ def test_model_glb_and_face_images_are_scoped(client: TestClient) -> None:
     r = client.get(f"/api/s/{token}/faces/0.png")
     assert r.status_code == 404  # no faces before the trial starts
     other, _ = start(client, "H-6")
-    state = client.post(f"/api/s/{other}/begin", json={"key": new_key()}).json()
-    face = state["population"]["faces"][0]["id"]
+    state = client.post(f"/api/s/{other}/step", json={"command": "begin", "key": new_key()}).json()
+    face = state["view"]["population"]["faces"][0]["id"]
     assert client.get(f"/api/s/{token}/faces/{face}.png").status_code == 404
 
 
@@ -161,8 +162,8 @@ def test_shown_and_stored_faces_carry_their_correctives(
     from emogen.study.tables import StudyRow
 
     token, _ = start(client, "H-9")
-    state = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()
-    faces = state["population"]["faces"]
+    state = client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}).json()
+    faces = state["view"]["population"]["faces"]
     shown = np.array([f["weights"] for f in faces])
     n = ict_model.n_shapes
     result = correct_faces(ict_model, shown[:, :n])

@@ -26,7 +26,7 @@ from benchmarks.bench_study import ServerProcess, write_study_toml
 from emogen.study.export import export_tables
 from emogen.study.replay import replay_session
 from emogen.study.storage import Store
-from tests.study.drive import run_to_end
+from tests.study.drive import command, run_to_end
 from tests.web.test_devices import inside_viewport, no_horizontal_overflow
 from tests.web.test_study_browser import CSP_PROBE, browser, viewer_bundle, wait_for, wait_ready
 from tests.web.viewer_site import screenshot_folder
@@ -73,7 +73,7 @@ def site(
 
     token = post("/api/sessions", {"participant_id": "first"})["token"]
     state = httpx.get(f"{srv.url}/api/s/{token}/state", timeout=30).json()
-    done = run_to_end(state, lambda kind, body: post(f"/api/s/{token}/{kind}", body))
+    done = run_to_end(state, lambda kind, body: post(f"/api/s/{token}/step", command(kind, body)))
     assert done["stage"] == "done"
     yield srv, url
     srv.stop()

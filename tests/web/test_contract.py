@@ -69,7 +69,7 @@ def session(client: TestClient) -> Iterator[tuple[str, dict[str, Any]]]:
     r = client.post("/api/sessions", json={"participant_id": "contract-1"})
     assert r.status_code == 201
     token = r.json()["token"]
-    state = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()
+    state = client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}).json()
     yield token, state
 
 
@@ -81,12 +81,12 @@ def test_success_bodies_match_the_schema(
     conforms(openapi, "/api/sessions", "post", created)
     r = client.get(f"/api/s/{token}/state")
     conforms(openapi, "/api/s/{token}/state", "get", r)
-    assert r.json()["population"]["faces"], "a trial's state shows its population"
+    assert r.json()["view"]["population"]["faces"], "a trial's state shows its population"
     elite, others = choose(state)
     body = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
-    r = client.post(f"/api/s/{token}/select", json=body)
+    r = client.post(f"/api/s/{token}/step", json={"command": "select", **body})
     conforms(openapi, "/api/s/{token}/select", "post", r)
-    replayed = client.post(f"/api/s/{token}/select", json=body)
+    replayed = client.post(f"/api/s/{token}/step", json={"command": "select", **body})
     assert replayed.json()["replayed"] is True
     conforms(openapi, "/api/s/{token}/select", "post", replayed)
 
@@ -102,9 +102,9 @@ def test_every_error_code_matches_the_schema(
         ("/api/researcher/status", "get", client.get("/api/researcher/status"), 403),
         ("/api/s/{token}/state", "get", client.get(f"/api/s/{'x' * 20}/state"), 404),
         ("/api/sessions", "post", client.post("/api/sessions", json={"participant_id": "contract-1"}), 409),
-        (select, "post", client.post(f"/api/s/{token}/select", json={**good, "generation": 3}), 409),
-        (select, "post", client.post(f"/api/s/{token}/select", json={**good, "elite": "3"}), 422),
-        (select, "post", client.post(f"/api/s/{token}/select", json={**good, "elite": 999}), 422),
+        (select, "post", client.post(f"/api/s/{token}/step", json={"command": "select", **good, "generation": 3}), 409),
+        (select, "post", client.post(f"/api/s/{token}/step", json={"command": "select", **good, "elite": "3"}), 422),
+        (select, "post", client.post(f"/api/s/{token}/step", json={"command": "select", **good, "elite": 999}), 422),
         (select, "post", client.post(f"/api/s/{token}/select", content=b"{" * 70_000), 413),
     ]  # fmt: skip
     for template, method, response, status in cases:
@@ -117,7 +117,9 @@ def test_invalid_requests_name_the_bad_field(
     client: TestClient, session: tuple[str, dict[str, Any]]
 ) -> None:
     token, _state = session
-    r = client.post(f"/api/s/{token}/rating", json={"key": new_key(), "trial": 0, "value": 0})
+    r = client.post(
+        f"/api/s/{token}/step", json={"command": "rate", "key": new_key(), "trial": 0, "value": 0}
+    )
     body = r.json()
     assert r.status_code == 422 and "value" in body["detail"]
     assert [e["loc"] for e in body["errors"]] == [["body", "value"]]
@@ -141,10 +143,10 @@ def test_request_bodies_over_the_limit_are_refused_unread(
     ):
         assert response.status_code == 413, response.text
         assert "65536 bytes" in response.json()["detail"]
-    assert client.get(f"/api/s/{token}/state").json()["progress"]["generation"] == 0
-    small = client.post(f"/api/s/{token}/select", json=body)
+    assert client.get(f"/api/s/{token}/state").json()["view"]["generation"] == 0
+    small = client.post(f"/api/s/{token}/step", json={"command": "select", **body})
     assert small.status_code == 200, small.text
-    assert small.json()["progress"]["generation"] == 1
+    assert small.json()["view"]["generation"] == 1
 
 
 def test_the_schema_documents_the_error_codes(openapi: dict[str, Any]) -> None:

@@ -19,7 +19,7 @@ from emogen.study.config import study_from_dict
 from emogen.study.export import TABLES, export_tables
 from emogen.web.ratelimit import RateLimit
 from tests.study.conftest import SMALL_STUDY
-from tests.study.drive import new_key, run_to_end
+from tests.study.drive import command, new_key, run_to_end
 
 TOKEN = "researcher-secret-0123456789-abcdefghij"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
@@ -48,15 +48,18 @@ def _start(client: TestClient, pid: str | None) -> str:
 
 
 def _finish(client: TestClient, token: str) -> None:
-    state = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()
-    run_to_end(state, lambda kind, body: client.post(f"/api/s/{token}/{kind}", json=body).json())
+    state = client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}).json()
+    run_to_end(
+        state,
+        lambda kind, body: client.post(f"/api/s/{token}/step", json=command(kind, body)).json(),
+    )
 
 
 def test_status_has_durations_conditions_rows_and_the_exports_numbers(latin: TestClient) -> None:
     tokens = [_start(latin, f"D-{k}") for k in range(3)]
     _finish(latin, tokens[0])
     _finish(latin, tokens[2])
-    latin.post(f"/api/s/{tokens[1]}/begin", json={"key": new_key()})
+    latin.post(f"/api/s/{tokens[1]}/step", json={"command": "begin", "key": new_key()})
     status = latin.get("/api/researcher/status", headers=AUTH).json()
     tables = export_tables(latin.app.state.store)
     sessions, trials = tables["sessions"], tables["trials"]

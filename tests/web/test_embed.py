@@ -16,10 +16,11 @@ from sqlalchemy import select
 
 from emogen.errors import ConfigError
 from emogen.study.config import study_from_dict
-from emogen.study.tables import FaceRow, PopulationRow, SessionRow, TrialRow
+from emogen.study.tables import SessionRow, TrialRow
+from emogen.tasks.evolve.tables import FaceRow, PopulationRow
 from emogen.web.limits import CONTENT_SECURITY_POLICY
 from tests.study.conftest import SMALL_STUDY
-from tests.study.drive import run_to_end
+from tests.study.drive import command, run_to_end
 from tests.web.test_security import make_app
 
 SITE = "https://experiments.example.org"
@@ -123,7 +124,7 @@ def test_trial_record_is_what_the_database_holds(embedded: TestClient) -> None:
     assert before["final_face"] is None and before["status"] == "pending"
 
     def post(kind: str, body: dict[str, Any]) -> dict[str, Any]:
-        r = embedded.post(f"/api/s/{token}/{kind}", json=body)
+        r = embedded.post(f"/api/s/{token}/step", json=command(kind, body))
         assert r.status_code == 200, r.text
         return r.json()  # type: ignore[no-any-return]
 

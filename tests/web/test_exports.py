@@ -12,7 +12,7 @@ import pandas as pd
 from fastapi.testclient import TestClient
 
 from emogen.study.export import export_tables
-from tests.study.drive import new_key, run_to_end
+from tests.study.drive import command, new_key, run_to_end
 from tests.web.study_app import RESEARCHER_TOKEN, app, client, db_url, pg_cluster  # noqa: F401
 
 AUTH = {"Authorization": f"Bearer {RESEARCHER_TOKEN}"}
@@ -20,8 +20,11 @@ AUTH = {"Authorization": f"Bearer {RESEARCHER_TOKEN}"}
 
 def test_dashboard_csv_is_the_export_table(client: TestClient, app: Any) -> None:
     token = client.post("/api/sessions", json={"participant_id": "D-1"}).json()["token"]
-    state = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()
-    run_to_end(state, lambda kind, body: client.post(f"/api/s/{token}/{kind}", json=body).json())
+    state = client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}).json()
+    run_to_end(
+        state,
+        lambda kind, body: client.post(f"/api/s/{token}/step", json=command(kind, body)).json(),
+    )
     whole = export_tables(app.state.store)
     for table in ("faces", "selections", "sessions"):
         r = client.get(f"/api/researcher/export/{table}.csv", headers=AUTH)

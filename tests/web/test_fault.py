@@ -24,7 +24,7 @@ from emogen.study.export import export_tables
 from emogen.study.replay import replay_session
 from emogen.study.storage import Store
 from tests.study.conftest import SMALL_STUDY
-from tests.study.drive import categorise_body, choose, new_key, run_to_end, step_args
+from tests.study.drive import categorise_body, choose, command, new_key, run_to_end, step_args
 from tests.study_fixtures import db_url, pg_cluster  # noqa: F401
 
 pytestmark = pytest.mark.slow
@@ -69,7 +69,7 @@ def test_sigkill_mid_session_loses_and_duplicates_nothing(
             f"/api/s/{token}/select",
             {"key": new_key(), **step_args(state), "elite": elite, "others": others},
         )
-        assert state["progress"]["generation"] == 1
+        assert state["view"]["generation"] == 1
 
         # 1. killed between steps: everything answered was committed
         server.kill()
@@ -83,13 +83,13 @@ def test_sigkill_mid_session_loses_and_duplicates_nothing(
 
         kill_with_step_in_flight(server, f"/api/s/{token}/select", body)
         before = httpx.get(f"{server.url}/api/s/{token}/state", timeout=30).json()
-        assert before["progress"]["generation"] in (1, 2)  # the step happened wholly or not at all
+        assert before["view"]["generation"] in (1, 2)  # the step happened wholly or not at all
         after = post(server.url, f"/api/s/{token}/select", body)
-        assert after["progress"]["generation"] == 2
-        assert after.get("replayed", False) == (before["progress"]["generation"] == 2)
+        assert after["view"]["generation"] == 2
+        assert after.get("replayed", False) == (before["view"]["generation"] == 2)
         final = run_to_end(
             after,
-            lambda kind, b: post(server.url, f"/api/s/{token}/{kind}", b),
+            lambda kind, b: post(server.url, f"/api/s/{token}/step", command(kind, b)),
         )
         assert final["stage"] == "done"
     finally:
@@ -125,7 +125,9 @@ def test_the_same_step_sent_at_once_to_two_workers_is_stored_once(
         def send() -> None:
             with httpx.Client(timeout=60) as client:  # a connection of its own
                 barrier.wait()
-                r = client.post(f"{server.url}/api/s/{token}/select", json=body)
+                r = client.post(
+                    f"{server.url}/api/s/{token}/step", json={"command": "select", **body}
+                )
                 answers.append({"status": r.status_code, **r.json()})
 
         threads = [threading.Thread(target=send) for _ in range(8)]
@@ -137,7 +139,7 @@ def test_the_same_step_sent_at_once_to_two_workers_is_stored_once(
         server.stop()
     assert [a["status"] for a in answers] == [200] * 8
     assert sorted(a.get("replayed", False) for a in answers) == [False] + [True] * 7
-    assert len({str(a["population"]) for a in answers}) == 1
+    assert len({str(a["view"]["population"]) for a in answers}) == 1
     store = Store(db_url)
     tables = export_tables(store)
     store.dispose()
@@ -162,7 +164,7 @@ def test_sigkill_during_categorisation_loses_and_duplicates_nothing(
     server = ServerProcess(config, db_url, ict_dir, tmp_path / "server.log", workers).start()
 
     def call(kind: str, body: dict[str, Any]) -> dict[str, Any]:
-        return post(server.url, f"/api/s/{token}/{kind}", body)
+        return post(server.url, f"/api/s/{token}/step", command(kind, body))
 
     try:
         token = post(server.url, "/api/sessions", {"participant_id": "K-3"})["token"]

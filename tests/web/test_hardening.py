@@ -64,15 +64,17 @@ def test_api_errors_stay_json(client: TestClient) -> None:
 
 def test_faces_of_earlier_generations_are_not_served(client: TestClient) -> None:
     token = client.post("/api/sessions", json={"participant_id": "G-1"}).json()["token"]
-    state: dict[str, Any] = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()
-    first = [f["id"] for f in state["population"]["faces"]]
+    state: dict[str, Any] = client.post(
+        f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}
+    ).json()
+    first = [f["id"] for f in state["view"]["population"]["faces"]]
     where = {"trial": state["progress"]["trial"], "attempt": state["trial"]["attempt"]}
     assert client.get(f"/api/s/{token}/faces/{first[0]}.png", params=where).status_code == 200
     elite, others = choose(state)
     body = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
-    state = client.post(f"/api/s/{token}/select", json=body).json()
-    assert state["progress"]["generation"] == 1
-    now = {f["id"] for f in state["population"]["faces"]}
+    state = client.post(f"/api/s/{token}/step", json={"command": "select", **body}).json()
+    assert state["view"]["generation"] == 1
+    now = {f["id"] for f in state["view"]["population"]["faces"]}
     gone = [i for i in first if i not in now]
     assert gone, "generation 1 should have new faces"
     for face in gone:
@@ -85,11 +87,13 @@ def test_faces_of_earlier_generations_are_not_served(client: TestClient) -> None
 
 def test_the_final_face_is_served_while_the_trial_waits_for_its_rating(client: TestClient) -> None:
     token = client.post("/api/sessions", json={"participant_id": "G-2"}).json()["token"]
-    state: dict[str, Any] = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()
-    state = run_to_end(state, lambda kind, body: client.post(f"/api/s/{token}/{kind}",
+    state: dict[str, Any] = client.post(
+        f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}
+    ).json()
+    state = run_to_end(state, lambda kind, body: client.post(f"/api/s/{token}/step",
                                                               json=body).json(),
                        stop=lambda s: s["stage"] == "trial" and s["trial"]["status"] == "rating")  # fmt: skip
-    final = state["rating"]["face"]["id"]
+    final = state["view"]["rating"]["face"]["id"]
     where = {"trial": state["progress"]["trial"], "attempt": state["trial"]["attempt"]}
     assert client.get(f"/api/s/{token}/faces/{final}.png", params=where).status_code == 200
     others = [i for i in range(final + 1) if i != final][:3]

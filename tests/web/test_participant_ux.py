@@ -11,7 +11,7 @@ from fastapi.testclient import TestClient
 from typer.testing import CliRunner
 
 from emogen.cli import app as cli
-from tests.study.drive import new_key
+from tests.study.drive import choose, new_key, step_args
 from tests.web.study_app import RESEARCHER_TOKEN, app, client, db_url, pg_cluster  # noqa: F401
 
 AUTH = {"Authorization": f"Bearer {RESEARCHER_TOKEN}"}
@@ -125,26 +125,16 @@ def test_dashboard_numbers_generations_as_the_participant_saw_them(client: TestC
         return next(s for s in sessions if s["participant_id"] == "P-dash")
 
     assert line()["step"] == "instructions"
-
-    def step(command: str, **body: Any) -> dict[str, Any]:
-        r = client.post(f"/api/s/{token}/step", json={"command": command, "key": new_key(), **body})
-        assert r.status_code == 200, r.text
-        return r.json()  # type: ignore[no-any-return]
-
-    def select(state: dict[str, Any]) -> dict[str, Any]:
-        view, trial = state["view"], state["trial"]
-        ids = [f["id"] for f in view["population"]["faces"]]
-        where = {"trial": trial["position"], "attempt": trial["attempt"]}
-        return step("select", **where, generation=view["generation"], elite=ids[0], others=ids[1:3])
-
-    state = step("begin")
+    state = client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}).json()
     # the page reads "Trial 1 of 2 · Round 1 of 3" (ga.generations = 2: generations 0 … 2)
     shown = line()
     assert (shown["trial"], shown["generation"]) == (1, 0)  # stored: generation from 0
     assert (shown["generation_shown"], shown["generations_shown"]) == (1, 3)
     assert shown["step"] == "trial 1 of 2 · generation 1 of 3"
     for g in range(3):
-        state = select(state)
+        elite, others = choose(state)
+        body = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
+        state = client.post(f"/api/s/{token}/step", json={"command": "select", **body}).json()
         if g < 2:
             assert line()["step"] == f"trial 1 of 2 · generation {g + 2} of 3"
     assert state["trial"]["status"] == "rating"
@@ -152,7 +142,12 @@ def test_dashboard_numbers_generations_as_the_participant_saw_them(client: TestC
     for t in range(2):
         if t:
             while state["trial"]["status"] == "active":
-                state = select(state)
-        state = step("rate", trial=t, value=5)
+                elite, others = choose(state)
+                body = {"key": new_key(), **step_args(state), "elite": elite, "others": others}
+                state = client.post(
+                    f"/api/s/{token}/step", json={"command": "select", **body}
+                ).json()
+        body = {"key": new_key(), "trial": t, "value": 5}
+        state = client.post(f"/api/s/{token}/step", json={"command": "rate", **body}).json()
     assert state["stage"] == "done"
     assert (line()["step"], line()["trial"], line()["trials"]) == ("done", 2, 2)  # not 3 of 2

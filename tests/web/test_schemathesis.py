@@ -16,7 +16,8 @@ from hypothesis import HealthCheck, given, settings
 from schemathesis.specs.openapi.checks import positive_data_acceptance
 from sqlalchemy import func, select
 
-from emogen.study.tables import FaceRow, PopulationRow, SelectionRow, StepRow
+from emogen.study.tables import StepRow
+from emogen.tasks.evolve.tables import FaceRow, PopulationRow, SelectionRow
 from tests.study.drive import new_key
 from tests.web.study_app import app, client, db_url, pg_cluster  # noqa: F401
 
@@ -33,7 +34,7 @@ def live_tokens(client: Any) -> list[str]:
         r = client.post("/api/sessions", json={"participant_id": f"fuzz-{i}"})
         token = r.json()["token"]
         if begin:
-            client.post(f"/api/s/{token}/begin", json={"key": new_key()})
+            client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()})
         tokens.append(token)
     return tokens
 

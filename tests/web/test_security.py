@@ -328,11 +328,13 @@ def test_user_agent_is_not_stored_unless_the_study_collects_it(
 def test_export_carries_the_config_and_load_time_is_apart(client: TestClient) -> None:
     r = client.post("/api/sessions", json={"participant_id": "E-1"})
     token = r.json()["token"]
-    state = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()
-    shown = state["population"]
+    state = client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}).json()
+    shown = state["view"]["population"]
     body = {"key": new_key(), "trial": 0, "attempt": 0, "generation": 0,
             "elite": shown["faces"][0]["id"], "others": [], "load_ms": 3_600_000.0}  # fmt: skip
-    assert client.post(f"/api/s/{token}/select", json=body).status_code == 200
+    assert (
+        client.post(f"/api/s/{token}/step", json={"command": "select", **body}).status_code == 200
+    )
     tables = export_tables(client.app.state.store)
     study = tables["study"].iloc[0]
     config = StudyConfig.model_validate(json.loads(study["config_json"]))

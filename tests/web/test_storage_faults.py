@@ -80,13 +80,16 @@ def test_a_read_only_database_is_503_naming_it(app: Any, client: TestClient) -> 
     token = client.post("/api/sessions", json={"participant_id": "RO-1"}).json()["token"]
     undo = read_only(app.state.store)
     try:
-        r = client.post(f"/api/s/{token}/begin", json={"key": new_key()})
+        r = client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()})
         assert r.status_code == 503 and "read-only" in r.json()["detail"], r.text
         health = client.get("/healthz")
         assert health.status_code == 503 and "read-only" in health.json()["problem"]
     finally:
         undo()
-    assert client.post(f"/api/s/{token}/begin", json={"key": new_key()}).status_code == 200
+    assert (
+        client.post(f"/api/s/{token}/step", json={"command": "begin", "key": new_key()}).status_code
+        == 200
+    )
     assert client.get("/healthz").status_code == 200
 
 

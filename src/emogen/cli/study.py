@@ -277,7 +277,7 @@ def _echo_report(report: Any) -> None:
     )
     deviation = getattr(report, "weight_deviation", 0.0)
     if report.faces or stimuli:
-        from emogen.study.rounding import WEIGHT_TOLERANCE
+        from emogen.tasks.rounding import WEIGHT_TOLERANCE
 
         typer.echo(
             f"  largest weight deviation {deviation:.3g} (floating-point rounding up to "

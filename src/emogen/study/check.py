@@ -26,7 +26,6 @@ from emogen.appearance.identities import PRESETS
 from emogen.errors import ConfigError, EmoGenError
 from emogen.study.config import StudyConfig
 from emogen.study.length import SessionLength, session_length
-from emogen.tasks.blocks import CategoriseBlock, EvolveBlock
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
@@ -172,13 +171,7 @@ def texts(config: StudyConfig) -> dict[str, str]:
     if config.completion.redirect_url is not None:
         out["completion.redirect_url"] = config.completion.redirect_url
     for k, block in enumerate(config.blocks):
-        if isinstance(block, CategoriseBlock):
-            for key in ("question", "intensity_question", "confidence_question"):
-                out[f"blocks[{k}].{key}"] = getattr(block, key)
-            for key in ("intensity_labels", "confidence_labels"):
-                out.update(
-                    {f"blocks[{k}].{key}[{j}]": t for j, t in enumerate(getattr(block, key))}
-                )
+        out.update({f"blocks[{k}].{key}": text for key, text in block.texts().items()})
     return out
 
 
@@ -221,10 +214,7 @@ def study_emotions(config: StudyConfig) -> list[str]:
     """Every emotion word of the study: its emotions, its blocks' emotions and labels."""
     words = dict.fromkeys(config.emotions)
     for block in config.blocks:
-        if isinstance(block, EvolveBlock):
-            words.update(dict.fromkeys(block.emotions or ()))
-        elif isinstance(block, CategoriseBlock):
-            words.update(dict.fromkeys(block.labels or ()))
+        words.update(dict.fromkeys(block.words()))
     return list(words)
 
 

@@ -31,6 +31,7 @@ from pydantic import (
     AfterValidator,
     Field,
     ModelWrapValidatorHandler,
+    SerializeAsAny,
     field_serializer,
     field_validator,
     model_validator,
@@ -50,7 +51,9 @@ from emogen.study.texts import (
     default_consent,
     default_instructions,
 )
-from emogen.tasks.blocks import Block, CategoriseBlock, Condition, EvolveBlock, check_blocks
+from emogen.tasks.blocks import Condition, TaskBlock
+from emogen.tasks.protocol import conditions_of
+from emogen.tasks.registry import DEFAULT_TASK, blocks_from, task_named
 
 STUDY_SCHEMA = "emogen.study/1"
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")
@@ -140,12 +143,18 @@ class StudyConfig(_Strict):
     ga: GAConfig = GAConfig()
     rating: RatingConfig = RatingConfig()
     completion: CompletionConfig = CompletionConfig()
-    #: ``[[blocks]]``: the study's blocks in order, each running one task (``evolve`` or
-    #: ``categorise``, :mod:`emogen.tasks.blocks`); none: one evolve block of the keys above.
-    blocks: tuple[Block, ...] = ()
+    #: ``[[blocks]]``: the study's blocks in order, each running one task (``task`` names it:
+    #: :mod:`emogen.tasks.registry`); none: one block of the default task (the GA) made of the
+    #: keys above.
+    blocks: tuple[SerializeAsAny[TaskBlock], ...] = ()
     #: Web origins whose pages may call the participant API (jsPsych plugin, docs/jspsych.md):
     #: exact ``scheme://host[:port]``; none by default. Not part of the config hash.
     embed_origins: tuple[Annotated[str, AfterValidator(check_origin)], ...] = ()
+
+    @field_validator("blocks", mode="before")
+    @classmethod
+    def _blocks(cls, v: Any) -> tuple[TaskBlock, ...]:
+        return blocks_from(v)
 
     @field_validator("name")
     @classmethod
@@ -241,7 +250,8 @@ class StudyConfig(_Strict):
                 "participants: name the browser's 'user agent' in it (or leave consent out for "
                 f"the default text that does); got consent = {self.consent[:80]!r}"
             )
-        check_blocks(self.emotions, self.blocks)
+        for k, block in enumerate(self.blocks):
+            block.check(k + 1, self.emotions, self.blocks[:k])
         if self.n_trials > 500:
             raise ValueError(
                 f"a study must have at most 500 trials (evolve: emotions × repetitions × "
@@ -255,59 +265,16 @@ class StudyConfig(_Strict):
         counts as 0 here: its rows are counted when the server reads the file)."""
         return len(self.conditions())
 
-    def study_blocks(self) -> tuple[EvolveBlock | CategoriseBlock, ...]:
-        """The blocks with the study's defaults filled in (an evolve block's emotions,
-        identities, repetitions and order; a categorise block's labels and identities)."""
-        if not self.blocks:
-            return (self._evolve(EvolveBlock()),)
-        return tuple(
-            self._evolve(b) if isinstance(b, EvolveBlock) else self._categorise(b)
-            for b in self.blocks
-        )
-
-    def _evolve(self, b: EvolveBlock) -> EvolveBlock:
-        return b.model_copy(update={
-            "emotions": b.emotions or self.emotions,
-            "identities": b.identities or self.identities,
-            "repetitions": b.repetitions or self.repetitions,
-            "order": b.order or self.order,
-        })  # fmt: skip
-
-    def _categorise(self, b: CategoriseBlock) -> CategoriseBlock:
-        """Labels default to the study's emotions; identities to those of its evolve blocks."""
-        evolve = [
-            x.identities or self.identities for x in self.blocks if isinstance(x, EvolveBlock)
-        ]
-        shown = tuple(dict.fromkeys(i for ids in evolve for i in ids)) or self.identities
-        return b.model_copy(
-            update={"labels": b.labels or self.emotions, "identities": b.identities or shown}
-        )
+    def study_blocks(self) -> tuple[Any, ...]:
+        """The blocks with the study's defaults filled in (each task's block says which:
+        :meth:`emogen.tasks.blocks.TaskBlock.resolved`)."""
+        blocks = self.blocks or (task_named(DEFAULT_TASK).block.model_validate({}),)
+        return tuple(b.resolved(self) for b in blocks)
 
     def conditions(self, file_rows: dict[int, int] | None = None) -> list[Condition]:
         """Every trial in config order, block by block (``file_rows``: the number of rows of
-        each categorise block's ``file``, by block index, where ``file_faces`` is not set)."""
-        out: list[Condition] = []
-        for k, b in enumerate(self.study_blocks()):
-            if isinstance(b, EvolveBlock):
-                out += [
-                    Condition(k, "evolve", e, i, r)
-                    for e in b.emotions or ()
-                    for i in b.identities or ()
-                    for r in range(b.repetitions or 1)
-                ]
-                continue
-            counts = {
-                "own": sum(c.task == "evolve" for c in out) if b.own else 0,
-                "other": b.others,
-                "file": b.file_faces or (file_rows or {}).get(k, 0) if b.file else 0,
-                "random": b.random,
-            }
-            out += [
-                Condition(k, "categorise", "", "", j, source)
-                for source, n in counts.items()
-                for j in range(n)
-            ]
-        return out
+        each block's face table, by block index, where its trials are its rows)."""
+        return conditions_of(self.study_blocks(), self, file_rows or {})
 
     def identity_of(self, name: str) -> Identity:
         """The identity called ``name``: the lab's own, a preset, or else a rig shape preset of

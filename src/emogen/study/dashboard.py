@@ -20,7 +20,7 @@ from emogen.study.design import balanced_latin_square
 from emogen.study.length import session_length
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, TrialRow
-from emogen.tasks.blocks import EvolveBlock
+from emogen.tasks.registry import task_named
 
 
 def seconds_between(start: datetime | None, end: datetime | None) -> float | None:
@@ -52,23 +52,22 @@ def durations(store: Store, study_ids: tuple[int, ...]) -> dict[str, Any]:
 
 def condition_progress(store: Store, study_ids: tuple[int, ...]) -> list[dict[str, Any]]:
     """Per condition (block, task, emotion, identity): trials assigned, started and done over
-    the study's sessions (a categorise block counts as one condition)."""
+    the study's sessions (a block whose trials are not the design's counterbalanced
+    conditions, e.g. faces to label, counts as one condition)."""
+    columns = (TrialRow.block, TrialRow.task, TrialRow.emotion, TrialRow.identity)
     with store.read() as db:
         rows = db.execute(
-            select(TrialRow.block, TrialRow.task, TrialRow.emotion, TrialRow.identity,
-                   TrialRow.status, func.count())
+            select(*columns, TrialRow.status, func.count())
             .join(SessionRow, TrialRow.session_id == SessionRow.id)
             .where(SessionRow.study_id.in_(study_ids))
-            .group_by(TrialRow.block, TrialRow.task, TrialRow.emotion, TrialRow.identity,
-                      TrialRow.status)
-        ).all()  # fmt: skip
+            .group_by(*columns, TrialRow.status)
+        ).all()
     table: dict[tuple[int, str, str, str], dict[str, Any]] = {}
     for block, task, emotion, identity, status, n in rows:
         key = (int(block), str(task), str(emotion or ""), str(identity or ""))
-        if task != "evolve":
+        if not task_named(str(task)).block.counterbalanced:
             key = (int(block), str(task), "", "")
-        line = table.setdefault(key, {"block": key[0], "task": key[1], "emotion": key[2],
-                                      "identity": key[3], "assigned": 0, "started": 0, "done": 0})  # fmt: skip
+        line = table.setdefault(key, _line(key))
         line["assigned"] += int(n)
         if status == "done":
             line["done"] += int(n)
@@ -77,21 +76,30 @@ def condition_progress(store: Store, study_ids: tuple[int, ...]) -> list[dict[st
     return [table[k] for k in sorted(table)]
 
 
+def _line(key: tuple[int, str, str, str]) -> dict[str, Any]:
+    names = ("block", "task", "emotion", "identity")
+    return {**dict(zip(names, key, strict=True)), "assigned": 0, "started": 0, "done": 0}
+
+
 def in_config_order(lines: list[dict[str, Any]], config: StudyConfig) -> list[dict[str, Any]]:
     """Condition lines in the config's order (block, then emotion, then identity)."""
     rank = {(c.block, c.emotion, c.identity): k for k, c in enumerate(config.conditions())}
-    return sorted(lines, key=lambda x: (x["block"], rank.get((x["block"], x["emotion"],
-                                                              x["identity"]), len(rank))))  # fmt: skip
+
+    def place(x: dict[str, Any]) -> tuple[int, int]:
+        return x["block"], rank.get((x["block"], x["emotion"], x["identity"]), len(rank))
+
+    return sorted(lines, key=place)
 
 
 def row_counts(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) -> dict[str, Any]:
-    """Latin-square rows of the first evolve block: how many sessions (and completed ones) got
-    each row, every row listed (``rows``: None when the study does not use a Latin square)."""
-    evolve = [(k, b) for k, b in enumerate(config.study_blocks()) if isinstance(b, EvolveBlock)]
-    if not evolve or evolve[0][1].order != "latin_square":
-        return {"order": evolve[0][1].order if evolve else None, "counterbalance": None,
-                "rows": None}  # fmt: skip
-    n_trials = sum(1 for c in config.conditions() if c.block == evolve[0][0])
+    """Latin-square rows of the first counterbalanced block: how many sessions (and completed
+    ones) got each row, every row listed (``rows``: None when the study does not use a Latin
+    square)."""
+    balanced = [(k, b) for k, b in enumerate(config.study_blocks()) if b.counterbalanced]
+    if not balanced or balanced[0][1].order != "latin_square":
+        order = balanced[0][1].order if balanced else None
+        return {"order": order, "counterbalance": None, "rows": None}
+    n_trials = sum(1 for c in config.conditions() if c.block == balanced[0][0])
     n_rows = len(balanced_latin_square(n_trials))
     with store.read() as db:
         rows = db.execute(

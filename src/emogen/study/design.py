@@ -20,7 +20,7 @@ import numpy as np
 
 from emogen.rng import fresh_seed
 from emogen.study.config import StudyConfig
-from emogen.tasks.blocks import Condition, EvolveBlock
+from emogen.tasks.blocks import Condition
 
 #: Domain of the keyed hashes (changing it would change every new participant's assignment).
 ASSIGNMENT_KEY = b"emogen.study/assignment/1"
@@ -101,10 +101,10 @@ def trial_order(
     rng: np.random.Generator,
 ) -> TrialOrder:
     """The order of a session's trials (indices into ``conditions``): block after block, each
-    block's trials in its own order, drawn with ``rng`` in block order. An evolve block's
-    Latin-square row is ``slot`` modulo its rows (``slot`` is :func:`participant_slot`;
+    block's trials in its own order, drawn with ``rng`` in block order. A counterbalanced
+    block's Latin-square row is ``slot`` modulo its rows (``slot`` is :func:`participant_slot`;
     sessions recorded before it used their number). ``kind`` and ``row`` are those of the first
-    evolve block (a categorise block's order is ``random`` or ``fixed``)."""
+    counterbalanced block (another block's order is ``random`` or ``fixed``)."""
     conditions = config.conditions() if conditions is None else conditions
     order: list[int] = []
     kind, row = "", -1
@@ -112,6 +112,6 @@ def trial_order(
         indices = [i for i, c in enumerate(conditions) if c.block == k]
         local = _block_order(block.order or "random", len(indices), slot, rng)
         order += [indices[j] for j in local.order]
-        if not kind and isinstance(block, EvolveBlock):
+        if not kind and block.counterbalanced:
             kind, row = local.kind, local.row
     return TrialOrder(tuple(order), kind or "random", row)

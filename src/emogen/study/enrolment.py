@@ -32,6 +32,7 @@ from emogen.study.queries import (
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, TrialRow, dumps, utcnow
 from emogen.study.view import SessionState, session_state
+from emogen.tasks.protocol import TaskEnv
 
 #: Matched whole (``fullmatch``): ``$`` would also match before a trailing newline.
 PARTICIPANT_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9._:@+-]{0,127}")
@@ -167,7 +168,7 @@ def _existing(
 
 def create_session(
     store: Store,
-    ctx: StudyContext,
+    env: TaskEnv,
     participant_id: str | None,
     *,
     resume_token: str | None = None,
@@ -185,6 +186,7 @@ def create_session(
     study collects it (``collect_user_agent``). ``source`` records where the id came from
     instead of the URL (``simulated``).
     """
+    ctx: StudyContext = env.ctx
     cfg = ctx.config
     required = cfg.participant_param if cfg.participant_required and source is None else None
     pid, given = checked_participant(participant_id, required_param=required)
@@ -196,7 +198,7 @@ def create_session(
         existing = _existing(db, ctx, pid, given, resume_token, hashed)
         if existing is None:
             existing = _new_session(db, ctx, pid, source, user_agent, hashed)
-        return existing.token, session_state(db, ctx.config, existing)
+        return existing.token, session_state(db, env, existing)
 
     for _ in range(3):
         try:

@@ -1,29 +1,7 @@
-"""Errors of the study server; the web layer maps each to an HTTP status (never 500)."""
+"""Errors of the study server (:mod:`emogen.tasks.errors`, where its tasks raise them too)."""
 
 from __future__ import annotations
 
-from emogen.errors import EmoGenError
+from emogen.tasks.errors import Forbidden, SessionNotFound, StepConflict, StudyError
 
-
-class StudyError(EmoGenError):
-    """A request the study cannot carry out (HTTP 400 unless a subclass says otherwise)."""
-
-    status = 400
-
-
-class SessionNotFound(StudyError):
-    """No session with that token (or id)."""
-
-    status = 404
-
-
-class StepConflict(StudyError):
-    """The request does not fit the session's state: stale page, replayed or reused key."""
-
-    status = 409
-
-
-class Forbidden(StudyError):
-    """Researcher endpoints without the right token, or a disabled action."""
-
-    status = 403
+__all__ = ["Forbidden", "SessionNotFound", "StepConflict", "StudyError"]

@@ -39,13 +39,8 @@ from emogen.study.export_rows import (
     load_records,
 )
 from emogen.study.storage import Store
-from emogen.study.tables import (
-    SCHEMA_VERSION,
-    SelectionRow,
-    SessionRow,
-    StudyRow,
-    TrialRow,
-)
+from emogen.study.tables import SCHEMA_VERSION, SessionRow, StudyRow, TrialRow
+from emogen.tasks.evolve.tables import SelectionRow
 
 TABLES = (
     "sessions",

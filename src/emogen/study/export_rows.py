@@ -16,20 +16,9 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from emogen.ga.state import collision_solver_of_state, stream_of_state
-from emogen.study.tables import (
-    SCHEMA_VERSION,
-    FaceRow,
-    PopulationRow,
-    RatingRow,
-    ResponseRow,
-    RestartRow,
-    SelectionRow,
-    SessionRow,
-    StimulusRow,
-    StudyRow,
-    TrialRow,
-    as_utc,
-)
+from emogen.study.tables import SCHEMA_VERSION, SessionRow, StudyRow, TrialRow, as_utc
+from emogen.tasks.categorise.tables import ResponseRow, StimulusRow
+from emogen.tasks.evolve.tables import FaceRow, PopulationRow, RatingRow, RestartRow, SelectionRow
 
 Row = dict[str, Any]
 

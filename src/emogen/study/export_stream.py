@@ -51,7 +51,8 @@ from emogen.study.export import (
 )
 from emogen.study.export_rows import SESSION_TABLE_ROWS, iso, load_records
 from emogen.study.storage import Store
-from emogen.study.tables import FaceRow, PopulationRow, SessionRow, StudyRow, TrialRow, as_utc
+from emogen.study.tables import SessionRow, StudyRow, TrialRow, as_utc
+from emogen.tasks.evolve.tables import FaceRow, PopulationRow
 
 #: How long before an incremental export's start its cut-off lies (see the module docstring).
 SETTLE = timedelta(seconds=60)

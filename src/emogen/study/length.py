@@ -25,13 +25,15 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from emogen.tasks.blocks import Condition
+from emogen.tasks.registry import TASKS, task_named
 
-#: Seconds a screen of each kind takes (low, high); see the module docstring for their source.
-SECONDS_PER_SCREEN: dict[str, tuple[float, float]] = {
-    "selection": (6.0, 9.0),
-    "rating": (3.0, 5.0),
-    "categorise": (4.0, 8.0),
-}
+
+def seconds_per_screen() -> dict[str, tuple[float, float]]:
+    """Seconds a screen of each kind takes (low, high), as each task states them (see the
+    module docstring for the built-in tasks' sources)."""
+    return {kind: secs for task in TASKS.values() for kind, secs in task.screens.items()}
+
+
 #: Consent, instructions and the end page, together (seconds, low and high).
 PAGES_SECONDS = (60.0, 120.0)
 
@@ -57,8 +59,9 @@ class SessionLength:
 
     def basis(self) -> str:
         """What the estimate counts: ``"88 selection screens × 6–9 s + … + 1–2 min of …"``."""
+        secs = seconds_per_screen()
         parts = [
-            f"{n} {kind} screens × {SECONDS_PER_SCREEN[kind][0]:g}–{SECONDS_PER_SCREEN[kind][1]:g} s"
+            f"{n} {kind} screens × {secs[kind][0]:g}–{secs[kind][1]:g} s"
             for kind, n in self.screens.items()
             if n
         ]
@@ -75,15 +78,13 @@ class SessionLength:
 
 def session_length(conditions: Sequence[Condition], generations: int) -> SessionLength:
     """The screens of a session of these trials (``StudyConfig.conditions()``; ``generations``:
-    ``ga.generations``) and the time they take (a categorise block's ``file`` without
-    ``file_faces`` counts no trials there: its rows are read when the server starts)."""
-    screens = {"selection": 0, "rating": 0, "categorise": 0}
+    ``ga.generations``) and the time they take, each trial's screens as its task counts them
+    (a block's face table read when the server starts counts no trials here)."""
+    screens = {kind: 0 for kind in seconds_per_screen()}
     for condition in conditions:
-        if condition.task == "evolve":
-            screens["selection"] += generations + 1  # generations 0 … G are shown
-            screens["rating"] += 1
-        else:
-            screens["categorise"] += 1
-    low = PAGES_SECONDS[0] + sum(n * SECONDS_PER_SCREEN[k][0] for k, n in screens.items())
-    high = PAGES_SECONDS[1] + sum(n * SECONDS_PER_SCREEN[k][1] for k, n in screens.items())
+        for kind, n in task_named(condition.task).screens_of(condition, generations).items():
+            screens[kind] += n
+    secs = seconds_per_screen()
+    low = PAGES_SECONDS[0] + sum(n * secs[k][0] for k, n in screens.items())
+    high = PAGES_SECONDS[1] + sum(n * secs[k][1] for k, n in screens.items())
     return SessionLength(screens, (low, high))

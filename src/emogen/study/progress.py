@@ -19,6 +19,7 @@ from emogen.study.errors import SessionNotFound
 from emogen.study.export import session_progress
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, StudyRow, TrialRow
+from emogen.tasks.registry import task_named
 
 
 def _generations(config_json: str) -> int:
@@ -26,32 +27,29 @@ def _generations(config_json: str) -> int:
 
 
 def shown_step(
-    line: dict[str, Any], generations: int, trial_status: str | None, task: str = "evolve"
+    line: dict[str, Any], generations: int, trial_status: str | None, task: str | None = None
 ) -> dict[str, Any]:
     """The participant's numbers of one :func:`session_progress` line (a new dict); ``task``:
-    the current trial's (a categorise trial has no generation: "… · categorise")."""
+    the current trial's, which says where in the trial the participant is
+    (:meth:`emogen.tasks.protocol.Task.progress_step`)."""
     trials = int(line["trials"])
     trial = min(int(line["trial"]), trials)  # a finished session has moved past its last trial
     out = {**line, "trial": trial, "generations_shown": generations + 1, "generation_shown": None}
-    if line["stage"] == "instructions":
-        out["step"] = "instructions"
-    elif line["stage"] == "done":
-        out["step"] = "done"
-    elif task != "evolve":
-        out["step"] = f"trial {trial} of {trials} · {task}"
-    elif trial_status == "rating":
-        out["step"] = f"trial {trial} of {trials} · rating"
-    else:
-        shown = int(line["generation"] or 0) + 1
-        out["generation_shown"] = shown
-        out["step"] = f"trial {trial} of {trials} · generation {shown} of {generations + 1}"
+    if line["stage"] in ("instructions", "done") or task is None:
+        out["step"] = str(line["stage"])
+        return out
+    where, shown = task_named(task).progress_step(
+        trial_status or "", int(line["generation"] or 0), generations
+    )
+    out["generation_shown"] = shown
+    out["step"] = f"trial {trial} of {trials} · {where}"
     return out
 
 
 def progress_as_shown(store: Store, study_id: int | None = None) -> list[dict[str, Any]]:
     """:func:`session_progress` with ``step`` ("trial 2 of 6 · generation 3 of 11", "… · rating",
-    "… · categorise", "instructions", "done"), ``generation_shown`` (from 1; none outside a generation) and
-    ``generations_shown`` (G + 1) as the participant's page shows them."""
+    "… · <task>", "instructions", "done"), ``generation_shown`` (from 1; none outside a
+    generation) and ``generations_shown`` (G + 1) as the participant's page shows them."""
     lines = session_progress(store, study_id)
     with store.read() as db:
         generations = {
@@ -71,7 +69,7 @@ def progress_as_shown(store: Store, study_id: int | None = None) -> list[dict[st
         shown_step(
             line,
             generations.get(line["study_id"], 0),
-            *current.get(line["session_id"], (None, "evolve")),
+            *current.get(line["session_id"], (None, None)),
         )
         for line in lines
     ]

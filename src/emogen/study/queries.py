@@ -3,35 +3,19 @@
 from __future__ import annotations
 
 import json
-from datetime import datetime
 from typing import NamedTuple
 
 from sqlalchemy import bindparam, func, select
-from sqlalchemy.orm import Session, selectinload
+from sqlalchemy.orm import Session
 
 from emogen.study.errors import SessionNotFound, StepConflict
-from emogen.study.tables import (
-    FaceRow,
-    PopulationRow,
-    SelectionRow,
-    SessionRow,
-    StepRow,
-    StimulusRow,
-    StudyRow,
-    TrialRow,
-)
+from emogen.study.tables import SessionRow, StepRow, StudyRow, TrialRow
 
 _BY_TOKEN = select(SessionRow).where(SessionRow.token == bindparam("token"))
 _BY_TOKEN_LOCKED = _BY_TOKEN.with_for_update()
 _TRIAL_AT = select(TrialRow).where(
     TrialRow.session_id == bindparam("session_id"), TrialRow.position == bindparam("position")
 )
-_POPULATION_AT = select(PopulationRow).where(
-    PopulationRow.trial_id == bindparam("trial_id"),
-    PopulationRow.attempt == bindparam("attempt"),
-    PopulationRow.generation == bindparam("generation"),
-)
-_POPULATION_AT_WITH_FACES = _POPULATION_AT.options(selectinload(PopulationRow.faces))
 _STEP_WITH_KEY = select(StepRow.kind, StepRow.request_hash).where(
     StepRow.session_id == bindparam("session_id"), StepRow.key == bindparam("key")
 )
@@ -121,36 +105,6 @@ def trial_at(db: Session, session_id: int, position: int) -> TrialRow | None:
     return db.scalar(_TRIAL_AT, {"session_id": session_id, "position": position})
 
 
-def population_at(
-    db: Session, trial_id: int, attempt: int, generation: int, *, with_faces: bool = False
-) -> PopulationRow | None:
-    """The stored population of a trial's attempt and generation (its faces loaded if asked)."""
-    query = _POPULATION_AT_WITH_FACES if with_faces else _POPULATION_AT
-    return db.scalar(query, {"trial_id": trial_id, "attempt": attempt, "generation": generation})
-
-
-def final_face(db: Session, trial: TrialRow) -> FaceRow | None:
-    """The trial's final face (the last elite) in its current attempt."""
-    return db.scalar(
-        select(FaceRow)
-        .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
-        .where(
-            PopulationRow.trial_id == trial.id,
-            PopulationRow.attempt == trial.attempt,
-            FaceRow.face_id == trial.final_face_id,
-        )
-    )
-
-
-def last_selection_time(db: Session, trial_id: int) -> datetime | None:
-    return db.scalar(
-        select(SelectionRow.submitted_at)
-        .where(SelectionRow.trial_id == trial_id)
-        .order_by(SelectionRow.id.desc())
-        .limit(1)
-    )
-
-
 class StepTaken(NamedTuple):
     """A step already taken: its kind and the hash of its request (idempotency)."""
 
@@ -165,50 +119,8 @@ def step_with_key(db: Session, session_id: int, key: str) -> StepTaken | None:
     return None if found is None else StepTaken(found[0], found[1])
 
 
-def current_face(
-    db: Session,
-    sess: SessionRow,
-    face_id: int,
-    *,
-    categorise_face: int = 0,
-    trial: int | None = None,
-    attempt: int | None = None,
-) -> tuple[str, str] | None:
-    """(weights JSON, identity) of a face of the generation the session shows now, if there is
-    one (a categorise trial's one face has id ``categorise_face``); None also when ``trial`` or
-    ``attempt`` is given and is not the current trial's position or attempt."""
-    if trial is not None and trial != sess.current_trial:
+def current_trial(db: Session, sess: SessionRow) -> TrialRow | None:
+    """The session's current trial (None before or after its trials)."""
+    if sess.stage != "trial":
         return None
-    current = trial_at(db, sess.id, sess.current_trial)
-    if current is None or (attempt is not None and current.attempt != attempt):
-        return None
-    if current.task == "categorise":
-        stim = db.execute(
-            select(StimulusRow.weights, StimulusRow.identity).where(
-                StimulusRow.trial_id == current.id
-            )
-        ).first()
-        if stim is None or face_id != categorise_face:
-            return None
-        return str(stim[0]), str(stim[1])
-    # only what the page shows now: the generation shown, or while the trial waits for its
-    # rating its final face; an earlier generation's faces are not served (404, as documented)
-    if current.status == "rating":
-        if face_id != current.final_face_id:
-            return None
-        shown = PopulationRow.generation <= current.generation
-    else:
-        shown = PopulationRow.generation == current.generation
-    found = db.execute(
-        select(FaceRow.weights)
-        .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
-        .where(
-            PopulationRow.trial_id == current.id,
-            PopulationRow.attempt == current.attempt,
-            shown,
-            FaceRow.face_id == face_id,
-        )
-        .order_by(PopulationRow.generation.desc())
-        .limit(1)
-    ).first()
-    return None if found is None else (str(found[0]), current.identity)
+    return trial_at(db, sess.id, sess.current_trial)

@@ -1,6 +1,7 @@
 """What a page embedding the study (the jsPsych plugin) reads besides the session's state: the
 study's blocks, and a trial's record as the server keeps it — the researcher's session id, the
-seeds, the final face — so the embedding experiment's own data carry them too.
+seeds, the trial's result as its task gives it (:meth:`emogen.tasks.protocol.Task.result`: only
+what the participant may know) — so the embedding experiment's own data carry them too.
 
 Seeds go out as decimal strings: they are 64-bit integers, past what a JavaScript number holds
 exactly.
@@ -8,18 +9,17 @@ exactly.
 
 from __future__ import annotations
 
-import json
-from typing import Literal
+from typing import Any, Literal
 
-from sqlalchemy import select
 from sqlalchemy.orm import Session
 from typing_extensions import TypedDict
 
 from emogen.study.context import StudyContext
 from emogen.study.errors import SessionNotFound
-from emogen.study.queries import final_face, trial_at
-from emogen.study.tables import SessionRow, StimulusRow, TrialRow
-from emogen.tasks.protocol import FaceView
+from emogen.study.queries import trial_at
+from emogen.study.tables import SessionRow
+from emogen.tasks.protocol import TaskEnv
+from emogen.tasks.registry import task_named
 
 
 class BlockInfo(TypedDict):
@@ -45,8 +45,8 @@ class StudyInfo(TypedDict):
 
 
 class TrialRecord(TypedDict):
-    """One trial of a session as recorded: where it is, its seeds and its final face (an evolve
-    trial's last elite; a categorise trial's face), the face only once the trial is done."""
+    """One trial of a session as recorded: where it is, its seeds and its result (by its
+    task, ``task`` first; None until the task has one)."""
 
     session_id: int
     participant_id: str
@@ -56,12 +56,11 @@ class TrialRecord(TypedDict):
     block_name: str
     task: str
     status: str
-    emotion: str
     identity: str
     attempt: int
     seed: str
     session_seed: str
-    final_face: FaceView | None
+    result: dict[str, Any] | None
 
 
 def study_info(ctx: StudyContext) -> StudyInfo:
@@ -90,23 +89,12 @@ def block_names(ctx: StudyContext) -> list[str]:
     return [b.name or f"block{k + 1}" for k, b in enumerate(ctx.config.study_blocks())]
 
 
-def _face(db: Session, row: TrialRow) -> FaceView | None:
-    if row.status != "done":
-        return None
-    if row.task == "categorise":
-        found = db.execute(
-            select(StimulusRow.weights).where(StimulusRow.trial_id == row.id)
-        ).scalar_one_or_none()
-        return None if found is None else {"id": 0, "weights": json.loads(found)}
-    face = final_face(db, row)
-    return None if face is None else {"id": face.face_id, "weights": json.loads(face.weights)}
-
-
-def trial_record(db: Session, ctx: StudyContext, sess: SessionRow, position: int) -> TrialRecord:
+def trial_record(db: Session, env: TaskEnv, sess: SessionRow, position: int) -> TrialRecord:
     """Trial ``position`` of the session as recorded (404 when the session has no such trial)."""
     row = trial_at(db, sess.id, position)
     if row is None:
         raise SessionNotFound(f"this session has no trial {position}")
+    ctx: StudyContext = env.ctx
     names = block_names(ctx)
     return {
         "session_id": sess.id,
@@ -117,10 +105,9 @@ def trial_record(db: Session, ctx: StudyContext, sess: SessionRow, position: int
         "block_name": names[row.block] if row.block < len(names) else f"block{row.block + 1}",
         "task": row.task,
         "status": row.status,
-        "emotion": row.emotion,
         "identity": row.identity,
         "attempt": row.attempt,
         "seed": str(row.seed),
         "session_seed": str(sess.seed),
-        "final_face": _face(db, row),
+        "result": task_named(row.task).result(env, db, row),
     }

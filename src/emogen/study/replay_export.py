@@ -5,7 +5,7 @@ gene and weight column names; ``trials`` the trial seeds and GA streams; ``faces
 shown; ``selections`` and ``restarts`` what the participant did. Each trial's engine is rebuilt
 from its seed and driven through the exported selections and restarts; every population it makes
 is compared with the exported faces (ids, parents, operators and genes exactly, weights within
-floating-point rounding: :mod:`emogen.study.rounding`).
+floating-point rounding: :mod:`emogen.tasks.rounding`).
 """
 
 from __future__ import annotations
@@ -24,8 +24,9 @@ from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
 from emogen.study.context import accepted_hashes
 from emogen.study.export import FORMULA_STARTS
-from emogen.study.replay import ReplayReport, StoredFaces, compare_population
+from emogen.study.replay import ReplayReport
 from emogen.study.weights import StudyCorrectors
+from emogen.tasks.evolve.replay import StoredFaces, compare_population
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel

@@ -29,9 +29,11 @@ from emogen.errors import ConfigError
 from emogen.study.config import StudyConfig
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow
+from emogen.tasks.registry import task_named
 from emogen.tasks.simulated import (
     SimulatedDesign,
     SimulatedParticipant,
+    SimulatedPeople,
     own_prototypes,
     population_prototypes,
 )
@@ -100,49 +102,24 @@ def run_participant(
     labeller = prototypes[(i + 1) % plan.participants] if plan.shuffle_prototypes else prototypes[i]
     maker = SimulatedParticipant(prototypes[i], plan.design, rig, plan.config.ga.eye_motion, rng)
     judge = SimulatedParticipant(labeller, plan.design, rig, plan.config.ga.eye_motion, rng)
+    who = SimulatedPeople(maker=maker, judge=judge)
     token, state = service.create_session(participant_id(i), source=SOURCE)
     counts: dict[str, int] = {}
     k = 0
     while state["stage"] != "done":
         k += 1
-        key = f"sim{i + 1:05d}s{k:05d}"
-        state, kind = _step(service, token, key, state, maker, judge)
-        counts[kind] = counts.get(kind, 0) + 1
+        body = _command(who, state)
+        state = service.step(token, {**body, "key": f"sim{i + 1:05d}s{k:05d}"})
+        counts[body["command"]] = counts.get(body["command"], 0) + 1
     return counts
 
 
-def _step(
-    service: StudyService, token: str, key: str, state: Any, maker: SimulatedParticipant,
-    judge: SimulatedParticipant,
-) -> tuple[Any, str]:  # fmt: skip
+def _command(who: SimulatedPeople, state: Any) -> dict[str, Any]:
+    """What the simulated participant sends to the state shown (its task answers)."""
     if state["stage"] == "instructions":
-        return service.begin(token, key), "begin"
-    trial, where = state["trial"], state["progress"]["trial"]
-    if trial["task"] == "categorise":
-        view = state["categorise"]
-        label, intensity, confidence = judge.categorise(
-            np.asarray(view["face"]["weights"]),
-            view["labels"],
-            (view["intensity"] or view["confidence"] or {"points": 7})["points"],
-        )
-        return service.categorise(
-            token, key, trial=where, label=label,
-            intensity=intensity if view["intensity"] else None,
-            confidence=confidence if view["confidence"] else None,
-        ), "categorise"  # fmt: skip
-    if trial["status"] == "rating":
-        face = state["rating"]["face"]
-        value = maker.rate(np.asarray(face["weights"]), trial["emotion"], state["rating"]["points"])
-        return service.rate(token, key, trial=where, value=value), "rate"
-    faces = state["population"]["faces"]
-    limits = (state["limits"]["min_selections"], state["limits"]["max_selections"])
-    elite, others = maker.select(
-        np.asarray([f["weights"] for f in faces]), trial["emotion"], limits
-    )
-    return service.select(
-        token, key, trial=where, attempt=trial["attempt"], generation=state["progress"]["generation"],
-        elite=faces[elite]["id"], others=[faces[j]["id"] for j in others],
-    ), "select"  # fmt: skip
+        return {"command": "begin"}
+    trial = state["trial"]
+    return task_named(trial["task"]).simulate(who, state["view"], state["progress"]["trial"])
 
 
 def _service(plan: SimulationPlan, model: FaceModel | None) -> tuple[StudyService, Store]:

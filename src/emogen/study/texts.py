@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from emogen.tasks.registry import DEFAULT_TASK, TASKS, task_named
+
 #: The consent text of studies written before the length was estimated (still accepted as
 #: "the default" when given explicitly); new studies get :func:`default_consent`.
 DEFAULT_CONSENT = (
@@ -30,29 +32,20 @@ def default_consent(minutes: str, *, user_agent: bool) -> str:
 
 #: A consent text of a study collecting user agents must name it with one of these (any case).
 USER_AGENT_WORDS = ("user agent", "user-agent", "useragent")
-DEFAULT_INSTRUCTIONS = (
-    "You will see ten faces at a time. Click the face that best shows the emotion you are asked "
-    "for: it is marked with a star (★). Then click any other faces that are also acceptable: "
-    "they are marked with a tick (✓); the ★ on a face makes that face the best. Press “Next "
-    "round” and new faces will be bred from the ones you chose. After the last round you rate "
-    "the final face.\n\nKeyboard: Tab or "
-    "the arrow keys move between faces, Enter or Space selects, B makes a face the best one."
-)
-
-#: What the default instructions add for a categorise block (and say alone without the GA).
-CATEGORISE_INSTRUCTIONS = (
-    "you will see one face at a time. Choose the emotion it shows (the number keys 1–9 choose "
-    "too); where you are asked, also say how intense the expression is and how sure you are, "
-    "then press “Continue”."
-)
+#: The default instructions: the default task's (the GA's).
+DEFAULT_INSTRUCTIONS: str = task_named(DEFAULT_TASK).instructions
 
 
 def default_instructions(blocks: Any) -> str | None:
     """The default instructions of a study of these ``[[blocks]]`` tables, where they differ
-    from the GA's (None: the GA's text; a study without categorise blocks keeps its hash)."""
-    tasks = [b.get("task", "evolve") if isinstance(b, dict) else None for b in blocks or ()]
-    if "categorise" not in tasks:
+    from the default task's (None: its text; a study of that task alone keeps its hash): each
+    other task's instructions, after the default task's where the study has both."""
+    names = [b.get("task", DEFAULT_TASK) if isinstance(b, dict) else None for b in blocks or ()]
+    others = [TASKS[n] for n in dict.fromkeys(names) if n in TASKS and n != DEFAULT_TASK]
+    if not others:
         return None
-    if "evolve" not in tasks:
-        return "In this study " + CATEGORISE_INSTRUCTIONS
-    return DEFAULT_INSTRUCTIONS + "\n\nIn another part of the study " + CATEGORISE_INSTRUCTIONS
+    if DEFAULT_TASK not in names:
+        return " ".join("In this study " + t.instructions for t in others)
+    return DEFAULT_INSTRUCTIONS + "".join(
+        "\n\nIn another part of the study " + t.instructions for t in others
+    )

@@ -1,59 +1,20 @@
-"""What a shown face's stored weights are: the model's shapes, then its correctives, if any.
-
-Also the per-identity correctors a study's engines use (:class:`StudyCorrectors`).
-"""
+"""The per-identity correctors a study's faces are corrected with (:class:`StudyCorrectors`);
+a face's full weights are :mod:`emogen.tasks.weights`."""
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-import numpy as np
-import numpy.typing as npt
-
 from emogen.errors import ConfigError
-from emogen.ga.engine import Corrector, Population, correctives_of
+from emogen.ga.engine import Corrector, Engine, correctives_of
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
+from emogen.tasks.weights import Floats, full_weights, weight_names
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
 
-Floats = npt.NDArray[np.float64]
-
-
-def _correctives(population: Population) -> tuple[list[str], Floats] | None:
-    """Corrective columns a population carries, if the engine corrects faces.
-
-    Either ``population.correction`` (an ``emogen.correct`` CorrectionResult: combinational then
-    collision weights) or ``population.correctives`` (n_faces, C) with ``corrective_names``.
-    """
-    correction = getattr(population, "correction", None)
-    if correction is not None:
-        names = [*correction.combinational_names, *correction.collision_names]
-        values = np.hstack([correction.combinational, correction.collision])
-        return names, np.asarray(values, dtype=np.float64).reshape(len(population), -1)
-    extra = getattr(population, "correctives", None)
-    if extra is None:
-        return None
-    values = np.asarray(extra, dtype=np.float64).reshape(len(population), -1)
-    given = getattr(population, "corrective_names", None)
-    names = (
-        list(given) if given is not None else [f"corrective_{i}" for i in range(values.shape[1])]
-    )
-    return names, values
-
-
-def full_weights(population: Population) -> Floats:
-    """(n_faces, n_columns) float: the population's full weights, then its correctives if any."""
-    w = np.asarray(population.weights, dtype=np.float64)
-    extra = _correctives(population)
-    return w if extra is None else np.hstack([w, extra[1]])
-
-
-def weight_names(population: Population, rig: Rig) -> list[str]:
-    """Column names of :func:`full_weights`: the model's shapes, then the correctives."""
-    extra = _correctives(population)
-    return list(rig.shape_names) + ([] if extra is None else extra[0])
+__all__ = ["Floats", "StudyCorrectors", "face_weight_names", "full_weights", "weight_names"]
 
 
 class StudyCorrectors:
@@ -88,3 +49,10 @@ class StudyCorrectors:
                 )
             self._made[(shape, solver)] = correctives_of(self._models[shape], solver)
         return self._made[(shape, solver)]
+
+
+def face_weight_names(config: StudyConfig, rig: Rig, correctors: StudyCorrectors) -> list[str]:
+    """The names of a study's face weights (the model's shapes, then the correctives of a
+    corrected study), from a probe generation of the GA on the generic identity."""
+    probe = Engine(config.ga_for("generic"), rig, 0, corrector=correctors("generic")).ask()
+    return weight_names(probe, rig)

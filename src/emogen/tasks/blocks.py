@@ -22,25 +22,20 @@ top-level values (``emotions``, ``identities``, ``repetitions``, ``order``).
 from __future__ import annotations
 
 import re
-from pathlib import Path
-from typing import Annotated, Literal, NamedTuple
+from typing import Any, ClassVar, Literal, NamedTuple, Self
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import field_validator
 
 from emogen.config import _Strict
 
-#: Where a categorised face comes from.
-Source = Literal["own", "other", "file", "random"]
-SOURCES: tuple[Source, ...] = ("own", "other", "file", "random")
-#: The answer of a categorisation that picks none of the labels (when the block offers it).
-NONE_LABEL = "none"
 _BLOCK_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 Order = Literal["random", "latin_square", "fixed"]
 
 
 class Condition(NamedTuple):
-    """One trial of a study in config order: its block and task; an evolve trial's emotion,
-    identity and repetition; a categorise trial's face source and its index in that source."""
+    """One trial of a study in config order: its block and task, the emotion and identity it
+    is for (where its task says), its repetition (or index), and where its stimulus comes from
+    (where its task draws one)."""
 
     block: int
     task: str
@@ -50,7 +45,18 @@ class Condition(NamedTuple):
     source: str = ""
 
 
-class _Block(_Strict):
+class TaskBlock(_Strict):
+    """A block of a study: one task over its trials. A task's block config subclasses it with
+    ``task: Literal[<its name>]`` and its own keys (:mod:`emogen.tasks.registry` finds the
+    class by the ``task`` key of a ``[[blocks]]`` table)."""
+
+    #: Its blocks' trial order can be counterbalanced across participants (a Latin square):
+    #: the first such block's row is the session's recorded ``order_row``.
+    counterbalanced: ClassVar[bool] = False
+    #: Its trials make a face of the participant's own (a later block may show it to them).
+    makes_faces: ClassVar[bool] = False
+
+    task: str
     #: A name for the block in the exports (default ``block<k>``, k counting from 1).
     name: str | None = None
 
@@ -61,106 +67,35 @@ class _Block(_Strict):
             raise ValueError(f"block name must be 1-64 letters, digits, '_' or '-'; got {v!r}")
         return v
 
-
-class EvolveBlock(_Block):
-    """The GA (paper Algorithm 1): one trial per emotion × identity × repetition; left-out keys
-    take the study's top-level values."""
-
-    task: Literal["evolve"] = "evolve"
-    emotions: tuple[str, ...] | None = Field(default=None, min_length=1)
-    identities: tuple[str, ...] | None = Field(default=None, min_length=1)
-    repetitions: Annotated[int, Field(ge=1, le=100)] | None = None
-    order: Order | None = None
-
-
-class CategoriseBlock(_Block):
-    """One face per trial, answered with one of ``labels`` (offered in an order drawn per trial
-    and recorded), optionally an intensity and a confidence rating."""
-
-    task: Literal["categorise"]
-    #: The labels offered (default: the study's emotions); each must be one of them.
-    labels: tuple[str, ...] | None = Field(default=None, min_length=2)
-    #: Offer "none of these" (answer ``none``).
-    none_option: bool = False
-    #: Ask how intense the expression is, and how confident the participant is (1 … points).
-    intensity: bool = False
-    confidence: bool = False
-    points: Annotated[int, Field(ge=2, le=11)] = 7
-    question: str = Field(default="Which emotion does this face show?", min_length=1)
-    #: The rating questions and the words at their ends (1 and ``points``), as shown.
-    intensity_question: str = Field(default="How intense is the expression?", min_length=1)
-    intensity_labels: tuple[str, str] = ("very weak", "very strong")
-    confidence_question: str = Field(default="How sure are you?", min_length=1)
-    confidence_labels: tuple[str, str] = ("guessing", "certain")
-    #: The participant's own finished faces of the evolve blocks before this one (one trial each).
-    own: bool = False
-    #: Finished faces of other participants of this study (drawn when the block starts, from
-    #: the sessions completed by then, balanced over the labels); too few: ``others_fallback``.
-    others: Annotated[int, Field(ge=0, le=500)] = 0
-    #: A face table standing in for others' faces while too few sessions are complete (without
-    #: it: random draws, ``random_kind``); recorded as a fallback face.
-    others_fallback: Path | None = None
-    #: A face table (CSV or Parquet: shape/gene columns, optional ``identity`` and ``label`` or
-    #: ``emotion`` columns) and how many of its rows each participant sees (default: all).
-    file: Path | None = None
-    file_faces: Annotated[int, Field(ge=1, le=500)] | None = None
-    #: Random faces: ``protocol`` (the GA's protocol initialisation, its emotion and arbitrary
-    #: faces) or ``uniform`` (U{lo..hi} genes active, values U(0, 1): reverse correlation).
-    random: Annotated[int, Field(ge=0, le=500)] = 0
-    random_kind: Literal["protocol", "uniform"] = "protocol"
-    random_genes: tuple[Annotated[int, Field(ge=1)], Annotated[int, Field(ge=1)]] = (3, 8)
-    #: Identities of random faces and of file rows without one (cycled; default: the study's).
-    identities: tuple[str, ...] | None = Field(default=None, min_length=1)
-    order: Literal["random", "fixed"] = "random"
-
-    @model_validator(mode="after")
-    def _has_faces(self) -> CategoriseBlock:
-        if not (self.own or self.others or self.file is not None or self.random):
-            raise ValueError(
-                "a categorise block needs faces: set own = true, others = N, file = PATH "
-                "or random = N"
-            )
-        if self.file_faces is not None and self.file is None:
-            raise ValueError("file_faces is set but file is not: name the face table (file = …)")
-        if self.others_fallback is not None and not self.others:
-            raise ValueError("others_fallback is set but others is 0")
-        lo, hi = self.random_genes
-        if lo > hi:
-            raise ValueError(f"random_genes must be [lo, hi] with lo <= hi; got [{lo}, {hi}]")
-        if self.labels is not None:
-            dup = sorted({x for x in self.labels if self.labels.count(x) > 1})
-            if dup:
-                raise ValueError(f"labels must not repeat entries; got {dup} more than once")
-            if NONE_LABEL in self.labels:
-                raise ValueError(f"'{NONE_LABEL}' is the answer of none_option = true, not a label")
+    def resolved(self, study: Any) -> Self:
+        """The block with the study's defaults filled in (``study``: the StudyConfig)."""
         return self
 
+    def words(self) -> tuple[str, ...]:
+        """The emotion words the block names (checked against the known emotions)."""
+        return ()
 
-Block = Annotated[EvolveBlock | CategoriseBlock, Field(discriminator="task")]
+    def texts(self) -> dict[str, str]:
+        """The block's texts participants read, by key (``key[j]`` for a list's entries)."""
+        return {}
+
+    def check(self, k: int, emotions: tuple[str, ...], earlier: tuple[TaskBlock, ...]) -> None:
+        """Raise ValueError naming ``blocks[k]`` and the key where the block does not fit the
+        study (its ``emotions``, the blocks before it)."""
+
+    def trials(
+        self, k: int, study: Any, earlier: list[Condition], rows: int | None
+    ) -> list[Condition]:
+        """The block's trials in config order (``k``: its index; ``earlier``: the trials of the
+        blocks before it; ``rows``: the rows of its face table where it reads one)."""
+        raise NotImplementedError
 
 
-def check_blocks(
-    emotions: tuple[str, ...], blocks: tuple[EvolveBlock | CategoriseBlock, ...]
-) -> None:
-    """The blocks fit the study: an evolve block's emotions and a categorise block's labels are
-    among the study's ``emotions``; ``own`` faces come from an evolve block before it.
-    Raises ValueError naming the block (``blocks[k]``, counting from 1) and the key."""
-    known = set(emotions)
-    seen_evolve = False
-    for k, b in enumerate(blocks, start=1):
-        words = b.emotions if isinstance(b, EvolveBlock) else b.labels
-        key = "emotions" if isinstance(b, EvolveBlock) else "labels"
-        bad = [w for w in words or () if w not in known]
-        if bad:
-            raise ValueError(
-                f"blocks[{k}].{key}: {bad} not among the study's emotions "
-                f"({', '.join(emotions)}); add them to 'emotions' or correct the spelling"
-            )
-        if isinstance(b, EvolveBlock):
-            seen_evolve = True
-        elif b.own and not seen_evolve:
-            raise ValueError(
-                f"blocks[{k}]: own = true, but no evolve block comes before it: the "
-                "participant has no faces of their own yet (move the block after an evolve "
-                "block, or draw others' / file / random faces)"
-            )
+def check_words(k: int, key: str, words: tuple[str, ...] | None, emotions: tuple[str, ...]) -> None:
+    """A block's emotion words must be among the study's ``emotions``."""
+    bad = [w for w in words or () if w not in emotions]
+    if bad:
+        raise ValueError(
+            f"blocks[{k}].{key}: {bad} not among the study's emotions "
+            f"({', '.join(emotions)}); add them to 'emotions' or correct the spelling"
+        )

@@ -1,19 +1,33 @@
-"""The task protocol: what the study layer asks of every task, and the registry of tasks.
+"""The task protocol: what the study layer asks of every task.
 
-A task (``evolve``: the GA; ``categorise``: one face, one label) is one module: its block
-config (:mod:`emogen.tasks.blocks`), the view of a trial it sends the page, the step commands
-it accepts, and a simulated participant (:mod:`emogen.tasks.simulated`). The study layer keeps
-a session's sequence of trials and drives each trial through its task's runner
-(:class:`TaskRunner`): starting it (what it shows is stored before it is shown), its view, its
-commands. Adding a task adds a module here, a runner in the study layer, a page component and
-an export table — not fields threaded through the session.
+A study is a sequence of blocks; a block runs one **task** over its trials. A task is one
+module (``emogen/tasks/<task>/``) implementing :class:`Task`: its block config (a
+:class:`~emogen.tasks.blocks.TaskBlock`), its record tables (rows on
+:class:`~emogen.tasks.records.Base`), the commands a participant sends (pydantic models keyed by
+``command``), how a trial starts (what it shows is stored before it is shown), the
+participant's view of a trial (only what the participant may know), how a command is accepted
+(the records it makes and whether the trial is done), the trial's record for an embedding page,
+its replay and its simulated participant. The study service, the web layer, the export and the
+page drive tasks only through this protocol and :mod:`emogen.tasks.registry` — after pymoo's
+ask/tell and jsPsych's plugins (typed ``info``, ``trial()``, ``simulate()``).
+
+Each method gets a :class:`TaskEnv` (the study's config, rig, correctors and what the task
+prepared when the service started) and, where it reads or stores records, the step's open
+database session: the study holds the lock and the transaction; a task adds its rows to it.
 """
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Annotated, Any, ClassVar, Literal, Protocol
 
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from sqlalchemy.orm import Session
 from typing_extensions import TypedDict
+
+from emogen.tasks.blocks import Condition, TaskBlock
+from emogen.tasks.records import TrialRow
 
 
 class FaceView(TypedDict):
@@ -24,22 +38,196 @@ class FaceView(TypedDict):
     weights: list[float]
 
 
-#: The step commands each task accepts (the page's POST routes and the steps' ``kind``).
-COMMANDS: dict[str, frozenset[str]] = {
-    "evolve": frozenset({"select", "restart", "rate"}),
-    "categorise": frozenset({"categorise"}),
-}
-TASKS: tuple[str, ...] = tuple(COMMANDS)
+# ---- commands ----------------------------------------------------------------------------
+def _whole_number(value: Any) -> Any:
+    """JSON Schema counts 3.0 as an integer: take it as 3 (3.5 stays a float and is refused)."""
+    return int(value) if isinstance(value, float) and value.is_integer() else value
 
 
-class TaskRunner(Protocol):
-    """A task as the study layer runs it over a session's trials (one runner per task,
-    registered in ``SessionSteps.runners``; its part of the participant's state is registered in
-    ``emogen.study.view.TRIAL_VIEWS``; its step commands in :data:`COMMANDS`)."""
+#: A client-made key per step (e.g. a UUID); the same key again is the same step.
+StepKey = Annotated[str, Field(pattern=r"^[A-Za-z0-9_-]{8,64}$")]
+Index = Annotated[int, Field(ge=0, le=100_000), BeforeValidator(_whole_number)]
+FaceId = Annotated[int, Field(ge=0, le=2**31 - 1), BeforeValidator(_whole_number)]
+Millis = Annotated[float, Field(ge=0, le=86_400_000, allow_inf_nan=False)]
+Points = Annotated[int, Field(ge=1, le=11), BeforeValidator(_whole_number)]
 
-    #: the task's name, as in ``[[blocks]] task = …`` and ``trials.task``
-    task: str
 
-    def start(self, db: Any, sess: Any, row: Any) -> Any:
-        """Start the session's trial ``row``: store what it shows (before it is shown); return
-        the population it has just shown, if any (the view then need not read it back)."""
+class Command(BaseModel):
+    """A participant's step: ``command`` names it (each subclass narrows it to a Literal),
+    ``key`` makes it idempotent. Strict: a wrong type or an unknown key is refused."""
+
+    model_config = ConfigDict(extra="forbid", strict=True, frozen=True)
+
+    command: str
+    key: StepKey
+
+    def payload(self) -> dict[str, Any]:
+        """What the request held besides its key and name (hashed to tell a replayed key from a
+        reused one); ``load_ms`` only when given, as keys recorded before it was sent."""
+        data = self.model_dump(exclude={"key", "command"})
+        if data.get("load_ms", 0) is None:
+            del data["load_ms"]
+        return data
+
+
+class Begin(Command):
+    """Instructions read: the first trial starts (the study's own command, not a task's)."""
+
+    command: Literal["begin"]
+
+
+class TrialCommand(Command):
+    """A command of a task: for the session's trial at ``trial`` (0-based), with the page's
+    times (``response_ms``: the screen visible → the answer; ``load_ms``: what was shown
+    received → drawn, for a first screen page, model and textures)."""
+
+    trial: Index
+    response_ms: Millis | None = None
+
+    @property
+    def load(self) -> float | None:
+        return getattr(self, "load_ms", None)
+
+
+class MadeFace(TypedDict):
+    """A face a participant made in a finished trial (a later block may show it)."""
+
+    session_id: int
+    trial: int
+    condition: int
+    emotion: str
+    identity: str
+    face_id: int
+    genes: list[float]
+    weights: list[float]
+
+
+# ---- what a task gets and gives ---------------------------------------------------------------
+@dataclass(frozen=True)
+class TaskEnv:
+    """What a task knows of the study it runs in.
+
+    ctx : the study's context (config, rig, conditions, the accepted study rows)
+    correctors : ``correctors(identity, collision_solver=None)`` — the corrector of a
+        corrected study's faces of that identity (None when faces are not corrected)
+    prepared : what each block's task prepared when the service started, by block index
+    made_faces : ``made_faces(db, where)`` — the faces participants made in the finished
+        trials matching ``where`` (SQL conditions on :class:`TrialRow`), by every task that
+        makes faces
+    sessions_done : ``sessions_done(session_id)`` — a SELECT of the ids of this study's
+        completed sessions other than ``session_id`` (other participants' faces come from them)
+    """
+
+    ctx: Any
+    correctors: Callable[..., Any]
+    prepared: dict[int, Any] = field(default_factory=dict)
+    made_faces: Callable[[Session, Sequence[Any]], list[MadeFace]] = lambda db, where: []
+    sessions_done: Callable[[int], Any] = lambda session_id: ()
+
+    @property
+    def config(self) -> Any:
+        return self.ctx.config
+
+    def block(self, row: TrialRow) -> Any:
+        """The (resolved) block config of a trial."""
+        return self.ctx.config.study_blocks()[row.block]
+
+
+@dataclass
+class Outcome:
+    """What a task's start or accepted command did: ``done`` when the trial is finished (the
+    study then starts the next one); ``shown``: what it has just stored to show, handed to
+    :meth:`Task.view` so the view need not read it back."""
+
+    done: bool = False
+    shown: Any = None
+
+
+@dataclass
+class Replayed:
+    """A trial's replay: what was checked and what differed (``deviation``: the largest
+    weight deviation, :mod:`emogen.tasks.rounding`)."""
+
+    populations: int = 0
+    faces: int = 0
+    stimuli: int = 0
+    problems: list[str] = field(default_factory=list)
+    deviation: float = 0.0
+
+
+class Task(Protocol):
+    """One task: registered in :mod:`emogen.tasks.registry` under :attr:`name`."""
+
+    #: as in ``[[blocks]] task = …`` and ``trials.task``
+    name: ClassVar[str]
+    #: its block config
+    block: ClassVar[type[TaskBlock]]
+    #: the commands it accepts (each a :class:`TrialCommand` with its own ``command`` Literal)
+    commands: ClassVar[tuple[type[TrialCommand], ...]]
+    #: what :meth:`view` answers (a TypedDict whose ``task`` is ``Literal[name]``)
+    view_type: ClassVar[type]
+    #: its record tables (rows on :class:`emogen.tasks.records.Base`)
+    tables: ClassVar[tuple[type, ...]]
+    #: what the study's default instructions say of its blocks
+    instructions: ClassVar[str]
+    #: screens a trial shows a participant, and the seconds each takes (low, high): an
+    #: estimate of the session's length (:mod:`emogen.study.length`)
+    screens: ClassVar[dict[str, tuple[float, float]]]
+
+    def screens_of(self, condition: Condition, generations: int) -> dict[str, int]:
+        """The screens of each kind (:attr:`screens`) a trial of ``condition`` shows."""
+
+    def prepare(self, ctx: Any, k: int, block: Any) -> Any:
+        """What block ``k`` needs read once when the service starts (a face table), checked
+        before anyone starts; None when nothing."""
+
+    def rows(self, prepared: Any) -> int | None:
+        """The rows of the block's face table (its trials where it shows them all)."""
+
+    def start(self, env: TaskEnv, db: Session, row: TrialRow, session_id: int) -> Outcome:
+        """Start the session's trial ``row``: store what it shows first, then mark it active."""
+
+    def accept(self, env: TaskEnv, db: Session, row: TrialRow, cmd: TrialCommand) -> Outcome:
+        """Take the participant's command (raise StepConflict / SelectionError where it does
+        not fit); store what it makes."""
+
+    def view(self, env: TaskEnv, db: Session, row: TrialRow, shown: Any) -> dict[str, Any]:
+        """What the participant is shown of the trial now (``task`` key first): only what they
+        may know."""
+
+    def prompt(self, env: TaskEnv, row: TrialRow) -> str:
+        """The trial's instruction line."""
+
+    def face(
+        self, env: TaskEnv, db: Session, row: TrialRow, face_id: int
+    ) -> tuple[str, str] | None:
+        """(weights JSON, identity) of a face the trial shows now, else None."""
+
+    def result(self, env: TaskEnv, db: Session, row: TrialRow) -> dict[str, Any] | None:
+        """The trial's outcome as the participant's page may record it (None before there is
+        one): never what the participant may not know."""
+
+    def made_faces(self, db: Session, where: Sequence[Any]) -> list[MadeFace]:
+        """The faces this task's finished trials made (trials matching ``where``)."""
+
+    def replay(self, env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed:
+        """Re-run the trial from its seed and recorded commands; compare with its records."""
+
+    def simulate(self, who: Any, view: dict[str, Any], trial: int) -> dict[str, Any]:
+        """The command (a JSON body, without its key) a simulated participant sends to
+        ``view`` (``who``: :class:`emogen.tasks.simulated.SimulatedPeople`)."""
+
+    def progress_step(
+        self, status: str, generation: int, generations: int
+    ) -> tuple[str, int | None]:
+        """Where in a trial of this status a participant is, for the researcher's dashboard
+        ("generation 3 of 11", "rating", the task's name), and the generation shown (from 1),
+        if any."""
+
+
+def conditions_of(blocks: Sequence[TaskBlock], study: Any, rows: dict[int, int]) -> list[Condition]:
+    """Every trial in config order, block by block (``rows``: each block's face-table rows)."""
+    out: list[Condition] = []
+    for k, b in enumerate(blocks):
+        out += b.trials(k, study, list(out), rows.get(k))
+    return out

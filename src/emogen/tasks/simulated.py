@@ -143,3 +143,13 @@ class SimulatedParticipant:
         intensity = round(1 + (points - 1) * min(1.0, max(0.0, along)))
         confidence = round(1 + (points - 1) * float(p[k]))
         return labels[k], intensity, confidence
+
+
+@dataclass(frozen=True)
+class SimulatedPeople:
+    """Who answers a simulated session's screens: the ``maker`` of faces (the GA's choices and
+    ratings) and the ``judge`` of faces (labels; the same person unless the study simulates
+    judges whose prototypes are another participant's)."""
+
+    maker: SimulatedParticipant
+    judge: SimulatedParticipant

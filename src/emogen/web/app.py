@@ -99,6 +99,7 @@ def _routes(app: FastAPI, store: Store, config: StudyConfig) -> None:
                             status_code=200 if why is None else 503)  # fmt: skip
 
     app.include_router(participant.router)
+    app.include_router(participant.step_router())
     app.include_router(embed.router)
     app.include_router(assets.router)
     app.include_router(researcher.router)

@@ -18,14 +18,11 @@ from emogen.web.links import note_parameters, warn_never_matched
 from emogen.web.ratelimit import client_key, too_many
 from emogen.web.schemas import (
     TOKEN_PATTERN,
-    Begin,
-    Categorisation,
     Created,
     NewSession,
-    Rating,
-    Restart,
-    Selection,
+    command_body,
     error_responses,
+    state_model,
 )
 
 router = APIRouter()
@@ -148,7 +145,7 @@ def _json(state: SessionState) -> JSONResponse:
 
 @router.get(
     "/api/s/{token}/state",
-    response_model=SessionState,
+    response_model=state_model(),
     responses=error_responses(404, 409, 422, 503),
 )
 def get_state(request: Request, token: Token) -> JSONResponse:
@@ -156,69 +153,21 @@ def get_state(request: Request, token: Token) -> JSONResponse:
     return _json(_service(request).state(token))
 
 
-@router.post("/api/s/{token}/begin", response_model=SessionState, responses=STEP_ERRORS)
-def begin(request: Request, token: Token, body: Begin) -> JSONResponse:
-    """Instructions read: the first trial starts."""
-    return _json(_service(request).begin(token, body.key))
+def step_router() -> APIRouter:
+    """The one step route: its body is any command the registered tasks take (or ``begin``),
+    keyed by ``command``; made when the app is made, so every task registered by then is in
+    it (and in the OpenAPI document)."""
+    body = command_body()
+    state = state_model()
+    steps = APIRouter()
 
+    @steps.post("/api/s/{token}/step", response_model=state, responses=STEP_ERRORS)
+    def step(request: Request, token: Token, command: body) -> JSONResponse:  # type: ignore[valid-type]
+        """One step of the session: ``begin`` (the instructions read) or a command of the
+        current trial's task (a conflict, 409, if its task does not take it)."""
+        return _json(_service(request).step(token, command))
 
-@router.post("/api/s/{token}/select", response_model=SessionState, responses=STEP_ERRORS)
-def select_faces(request: Request, token: Token, body: Selection) -> JSONResponse:
-    """The best face (elite) and the other acceptable faces of the shown generation."""
-    state = _service(request).select(
-        token,
-        body.key,
-        trial=body.trial,
-        attempt=body.attempt,
-        generation=body.generation,
-        elite=body.elite,
-        others=list(body.others),
-        response_ms=body.response_ms,
-        load_ms=body.load_ms,
-    )
-    return _json(state)
-
-
-@router.post("/api/s/{token}/restart", response_model=SessionState, responses=STEP_ERRORS)
-def restart(request: Request, token: Token, body: Restart) -> JSONResponse:
-    """Start the current trial again at generation 0."""
-    state = _service(request).restart(
-        token,
-        body.key,
-        trial=body.trial,
-        attempt=body.attempt,
-        generation=body.generation,
-        response_ms=body.response_ms,
-        load_ms=body.load_ms,
-    )
-    return _json(state)
-
-
-@router.post("/api/s/{token}/rating", response_model=SessionState, responses=STEP_ERRORS)
-def rate(request: Request, token: Token, body: Rating) -> JSONResponse:
-    """The satisfaction rating (1 … points) of the trial's final face."""
-    return _json(
-        _service(request).rate(
-            token, body.key, trial=body.trial, value=body.value, response_ms=body.response_ms
-        )
-    )
-
-
-@router.post("/api/s/{token}/categorise", response_model=SessionState, responses=STEP_ERRORS)
-def categorise(request: Request, token: Token, body: Categorisation) -> JSONResponse:
-    """The label (and the ratings the block asks) given to a categorise trial's face."""
-    return _json(
-        _service(request).categorise(
-            token,
-            body.key,
-            trial=body.trial,
-            label=body.label,
-            intensity=body.intensity,
-            confidence=body.confidence,
-            response_ms=body.response_ms,
-            load_ms=body.load_ms,
-        )
-    )
+    return steps
 
 
 @router.get(

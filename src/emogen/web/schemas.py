@@ -1,31 +1,23 @@
 """The participant API's bodies: requests (strict pydantic models), responses, error bodies.
 
-The session state is :class:`emogen.study.view.SessionState` (a TypedDict the study core
-answers with); pydantic derives its schema, so the OpenAPI document and the JS types generated
-from it (``src/emogen/web/static/api-types.d.ts``) follow the core's view.
+A step's body is one of the registered commands (:mod:`emogen.tasks.registry`); the session
+state is :class:`emogen.study.view.SessionState` (a TypedDict the study core answers with) whose
+``view`` is one of the registered tasks' views. pydantic derives their schemas, so the OpenAPI
+document and the JS types generated from it (``src/emogen/web/static/api-types.d.ts``) follow
+the core's commands and views.
 """
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, NotRequired, Optional, Union, get_type_hints
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field
+from typing_extensions import TypedDict
 
 from emogen.study.enrolment import PARTICIPANT_ID
 from emogen.study.view import SessionState
+from emogen.tasks.registry import TASKS, command_names
 
-#: A client-made key per step (e.g. a UUID); the same key again is the same step.
-StepKey = Annotated[str, Field(pattern=r"^[A-Za-z0-9_-]{8,64}$")]
-
-
-def _whole_number(value: Any) -> Any:
-    """JSON Schema counts 3.0 as an integer: take it as 3 (3.5 stays a float and is refused)."""
-    return int(value) if isinstance(value, float) and value.is_integer() else value
-
-
-Index = Annotated[int, Field(ge=0, le=100_000), BeforeValidator(_whole_number)]
-FaceId = Annotated[int, Field(ge=0, le=2**31 - 1), BeforeValidator(_whole_number)]
-Millis = Annotated[float, Field(ge=0, le=86_400_000, allow_inf_nan=False)]
 TOKEN_PATTERN = r"^[A-Za-z0-9_-]{16,64}$"
 #: The largest request body the API reads (bytes); a larger one is answered 413.
 MAX_BODY_BYTES = 64 * 1024
@@ -52,63 +44,30 @@ class NewSession(_Body):
     create_key: Annotated[str, Field(pattern=r"^[A-Za-z0-9_-]{16,64}$")] | None = None
 
 
-class Begin(_Body):
-    key: StepKey
+def command_body() -> Any:
+    """The step route's body: every registered command (``begin`` and each task's), a union
+    keyed by ``command`` (each a strict model: an unknown key or a wrong type is refused)."""
+    commands: Any = tuple(command_names().values())
+    return Annotated[Union[commands], Field(discriminator="command")]  # noqa: UP007
 
 
-class Selection(_Body):
-    key: StepKey
-    trial: Index
-    attempt: Index
-    generation: Index
-    elite: FaceId
-    others: Annotated[list[FaceId], Field(max_length=100)] = []
-    response_ms: Millis | None = None
-    #: Page's time from receiving this population to all its faces drawn (the first faces a
-    #: freshly opened page shows: from the page's start, so page, model and textures); the
-    #: server's ``server_response_ms`` excludes it.
-    load_ms: Millis | None = None
-
-
-class Restart(_Body):
-    key: StepKey
-    trial: Index
-    attempt: Index
-    generation: Index
-    response_ms: Millis | None = None
-    #: Page's time from receiving this population to all its faces drawn (the first faces a
-    #: freshly opened page shows: from the page's start, so page, model and textures); the
-    #: server's ``server_response_ms`` excludes it.
-    load_ms: Millis | None = None
-
-
-class Rating(_Body):
-    key: StepKey
-    trial: Index
-    value: Annotated[int, Field(ge=1, le=11), BeforeValidator(_whole_number)]
-    response_ms: Millis | None = None
-
-
-class Categorisation(_Body):
-    """The answer to a categorise trial's face: one of the labels it offered (or ``none`` where
-    the block offers "none of these"), and the intensity / confidence ratings the block asks."""
-
-    key: StepKey
-    trial: Index
-    label: Annotated[str, Field(min_length=1, max_length=64)]
-    intensity: Annotated[int, Field(ge=1, le=11), BeforeValidator(_whole_number)] | None = None
-    confidence: Annotated[int, Field(ge=1, le=11), BeforeValidator(_whole_number)] | None = None
-    response_ms: Millis | None = None
-    #: Page's time from receiving the face to it drawn (see ``Selection.load_ms``).
-    load_ms: Millis | None = None
+def state_model() -> Any:
+    """The session state as answered (:class:`emogen.study.view.SessionState`) with ``view``
+    the union of the registered tasks' views, keyed by ``task``."""
+    views: Any = tuple(task.view_type for task in TASKS.values())
+    view = Annotated[Union[views], Field(discriminator="task")]  # noqa: UP007
+    fields = {**get_type_hints(SessionState), "view": Optional[view]}  # noqa: UP045
+    fields["replayed"] = NotRequired[bool]
+    return TypedDict("SessionState", fields)  # type: ignore[operator]
 
 
 class Created(BaseModel):
-    """A session made (or resumed): its secret token, its page and its state."""
+    """A session made (or resumed): its secret token, its page and its state (the state's
+    schema is :func:`state_model`'s)."""
 
     token: str
     url: str
-    state: SessionState
+    state: dict[str, Any]
 
 
 class Problem(BaseModel):

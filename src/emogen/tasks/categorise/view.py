@@ -1,18 +1,20 @@
 """The ``categorise`` task: one face per trial, answered with one of the study's emotion labels
 (offered in an order drawn per trial), optionally an intensity and a confidence rating.
 
-Its block config is :class:`emogen.tasks.blocks.CategoriseBlock`; where its faces come from is
-:mod:`emogen.tasks.sources`; a simulated participant labels a face by its distance to their own
+Its block config is :class:`emogen.tasks.categorise.block.CategoriseBlock`; where its faces
+come from is :mod:`emogen.tasks.categorise.sources`; a simulated participant labels a face by its distance to their own
 prototypes (:mod:`emogen.tasks.simulated`). This module holds what the page is sent and what an
 answer must be.
 """
 
 from __future__ import annotations
 
+from typing import Literal
+
 from typing_extensions import TypedDict
 
 from emogen.errors import SelectionError
-from emogen.tasks.blocks import NONE_LABEL, CategoriseBlock
+from emogen.tasks.categorise.block import NONE_LABEL, CategoriseBlock
 from emogen.tasks.protocol import FaceView
 
 
@@ -28,8 +30,10 @@ class RatingScale(TypedDict):
 
 class CategoriseView(TypedDict):
     """What a categorise trial shows: the face, the question, the labels in their order, and the
-    ratings asked (None when not asked)."""
+    ratings asked (None when not asked); never the emotion the face was made for, nor whose face
+    it is."""
 
+    task: Literal["categorise"]
     question: str
     face: FaceView
     labels: list[str]
@@ -53,6 +57,7 @@ def _scale(
 
 def categorise_view(block: CategoriseBlock, face: FaceView, labels: list[str]) -> CategoriseView:
     return {
+        "task": "categorise",
         "question": block.question,
         "face": face,
         "labels": labels,

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from sqlalchemy import select
@@ -25,20 +26,25 @@ from sqlalchemy.orm import Session
 from emogen.errors import EmoGenError
 from emogen.model.face_table import read_face_table
 from emogen.model.rig import Rig
-from emogen.study.config import StudyConfig
-from emogen.study.rounding import WEIGHT_TOLERANCE, weight_deviation, within_rounding
-from emogen.study.tables import FaceRow, PopulationRow, StimulusRow, TrialRow
-from emogen.study.weights import StudyCorrectors
-from emogen.tasks.blocks import CategoriseBlock
-from emogen.tasks.sources import label_order
+from emogen.tasks.categorise.block import CategoriseBlock
+from emogen.tasks.categorise.sources import label_order
+from emogen.tasks.categorise.tables import StimulusRow
+from emogen.tasks.protocol import Replayed, TaskEnv
+from emogen.tasks.records import TrialRow, numbers_json
+from emogen.tasks.rounding import WEIGHT_TOLERANCE, weight_deviation, within_rounding
 
 Checked = tuple[list[str], float]  # problems, largest weight deviation
 
 
-def check_stimulus(
-    db: Session, trial: TrialRow, config: StudyConfig, rig: Rig, correctors: StudyCorrectors
-) -> tuple[int, list[str], float]:
-    """(faces checked, problems, largest weight deviation) of a categorise trial's stored face."""
+def check_stimulus(env: TaskEnv, db: Session, trial: TrialRow, rig: Rig) -> Replayed:
+    """A categorise trial's stored face checked against its source (faces checked, problems,
+    largest weight deviation)."""
+    n, problems, deviation = _check(env, db, trial, rig)
+    return Replayed(stimuli=n, problems=problems, deviation=deviation)
+
+
+def _check(env: TaskEnv, db: Session, trial: TrialRow, rig: Rig) -> tuple[int, list[str], float]:
+    config, correctors = env.config, env.correctors
     stim = db.scalar(select(StimulusRow).where(StimulusRow.trial_id == trial.id))
     where = f"trial {trial.position + 1} ({stim.source if stim else 'no'} face)"
     if stim is None:
@@ -54,7 +60,7 @@ def check_stimulus(
     weights = np.asarray(json.loads(stim.weights), dtype=np.float64)
     checked: Checked = [], 0.0
     if stim.source_face_id is not None:
-        checked = _made_face(db, stim, weights, where)
+        checked = _made_face(env, db, stim, weights, where)
     elif stim.genes is not None:
         genes = np.asarray(json.loads(stim.genes), dtype=np.float64)[None, :]
         shapes = rig.expand(genes, config.ga.eye_motion)
@@ -64,22 +70,22 @@ def check_stimulus(
     return 1, problems + checked[0], checked[1]
 
 
-def _made_face(db: Session, stim: StimulusRow, weights: np.ndarray, where: str) -> Checked:
-    made = db.execute(
-        select(FaceRow.weights, FaceRow.genes)
-        .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
-        .join(TrialRow, PopulationRow.trial_id == TrialRow.id)
-        .where(
-            TrialRow.session_id == stim.source_session_id,
-            TrialRow.position == stim.source_trial,
-            FaceRow.face_id == stim.source_face_id,
-        )
-        .order_by(PopulationRow.attempt.desc(), PopulationRow.generation.desc())
-        .limit(1)
-    ).first()
+def _made_face(
+    env: TaskEnv, db: Session, stim: StimulusRow, weights: np.ndarray, where: str
+) -> Checked:
+    source = (
+        TrialRow.session_id == stim.source_session_id,
+        TrialRow.position == stim.source_trial,
+    )
+    found = [f for f in env.made_faces(db, source) if f["face_id"] == stim.source_face_id]
+    made = (
+        None if not found else (numbers_json(found[0]["weights"]), numbers_json(found[0]["genes"]))
+    )
     if made is None:
-        return [f"{where}: its source face (session {stim.source_session_id}, trial "
-                f"{(stim.source_trial or 0) + 1}, face {stim.source_face_id}) is not stored"], 0.0  # fmt: skip
+        return [
+            f"{where}: its source face (session {stim.source_session_id}, trial "
+            f"{(stim.source_trial or 0) + 1}, face {stim.source_face_id}) is not stored"
+        ], 0.0
     if made[1] != stim.genes:
         return [f"{where}: genes differ from its source face"], 0.0
     problems, worst = _compare(where, weights, np.asarray(json.loads(made[0]), dtype=np.float64))
@@ -104,7 +110,7 @@ def _file_face(
     return _compare(where, weights[: table.weights.shape[1]], table.weights[row])
 
 
-def _corrected(shapes: np.ndarray, identity: str, correctors: StudyCorrectors) -> np.ndarray:
+def _corrected(shapes: np.ndarray, identity: str, correctors: Any) -> np.ndarray:
     corrector = correctors(identity)
     face = np.asarray(shapes[0], dtype=np.float64)
     if corrector is None:

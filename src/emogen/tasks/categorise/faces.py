@@ -1,0 +1,64 @@
+"""A categorise block's face tables (``file``, ``others_fallback``): read and checked once when
+the service starts (:meth:`emogen.tasks.categorise.task.CategoriseTask.prepare`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from emogen.errors import ConfigError
+from emogen.model.face_table import read_face_table
+from emogen.tasks.categorise.block import CategoriseBlock
+
+
+@dataclass(frozen=True)
+class FileFaces:
+    """A face table's rows: shape weights (n, n_shapes), and per row its identity (or None)
+    and its label (the emotion it was made for, or None)."""
+
+    path: Path
+    weights: np.ndarray
+    identities: list[str | None]
+    labels: list[str | None]
+
+
+def _column(frame: object, names: tuple[str, ...]) -> list[str | None] | None:
+    cols = {str(c).lower(): c for c in getattr(frame, "columns", [])}
+    for name in names:
+        if name in cols:
+            values = frame[cols[name]].tolist()  # type: ignore[index]
+            return [None if v is None or str(v).strip() in ("", "nan") else str(v).strip()
+                    for v in values]  # fmt: skip
+    return None
+
+
+def read_file_faces(path: Path, ctx: Any, where: str) -> FileFaces:
+    """A categorise block's face table (``file`` or ``others_fallback``), checked: its rows'
+    identities must be the study's (errors name the block key, the file and the row)."""
+    table = read_face_table(
+        path, ctx.rig, what=where, label_columns=("label", "emotion", "identity")
+    )
+    n = len(table.weights)
+    identities = _column(table.frame, ("identity",)) or [None] * n
+    labels = _column(table.frame, ("label", "emotion")) or [None] * n
+    known = set(ctx.config.all_identities())
+    for row, name in enumerate(identities):
+        if name is not None and name not in known:
+            raise ConfigError(
+                f"{where} {path} row {row + 1}: identity {name!r} is not one of the study's "
+                f"identities ({', '.join(sorted(known))})"
+            )
+    return FileFaces(path, table.weights, identities, labels)
+
+
+def block_files(ctx: Any, k: int, block: CategoriseBlock) -> dict[str, FileFaces]:
+    """Block ``k``'s face tables by key (``file``, ``others_fallback``), read and checked."""
+    out: dict[str, FileFaces] = {}
+    for key in ("file", "others_fallback"):
+        path = getattr(block, key)
+        if path is not None:
+            out[key] = read_file_faces(Path(path), ctx, f"blocks[{k + 1}].{key}")
+    return out

@@ -1,0 +1,303 @@
+"""The ``evolve`` task: the paper's GA (Algorithm 1, :class:`emogen.ga.engine.Engine`) over the
+trial's generations, then the rating of the final face.
+
+A trial starts with its generation 0 made and stored; each selection is stored and the next
+generation made and stored (or, after the last, the trial waits for its rating); "start again"
+stores the restart and a new attempt's generation 0; the rating ends the trial. The engine's
+JSON state is kept with the trial, so a reload or a server restart resumes exactly where the
+participant was. Commands: :class:`Select`, :class:`Restart`, :class:`Rate`.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import replace
+from typing import Annotated, Any, ClassVar, Literal
+
+import numpy as np
+from pydantic import Field
+from sqlalchemy.orm import Session
+
+from emogen.errors import SelectionError
+from emogen.tasks.blocks import Condition, TaskBlock
+from emogen.tasks.errors import StepConflict
+from emogen.tasks.evolve.block import EvolveBlock
+from emogen.tasks.evolve.replay import replay_trial
+from emogen.tasks.evolve.store import (
+    final_face,
+    final_faces,
+    last_selection_time,
+    new_engine,
+    population_at,
+    restore,
+    shown_face,
+    store_population,
+)
+from emogen.tasks.evolve.tables import (
+    FaceRow,
+    PopulationRow,
+    RatingRow,
+    RestartRow,
+    SelectionRow,
+)
+from emogen.tasks.evolve.view import EvolveView, evolve_view
+from emogen.tasks.protocol import (
+    FaceId,
+    Index,
+    MadeFace,
+    Millis,
+    Outcome,
+    Points,
+    Replayed,
+    TaskEnv,
+    TrialCommand,
+)
+from emogen.tasks.records import TrialRow, dumps, elapsed_ms, server_ms, utcnow
+
+
+class _Shown(TrialCommand):
+    """A command about the generation shown: its attempt and generation (a stale page's are
+    refused), and the page's time to draw it (``load_ms``)."""
+
+    attempt: Index
+    generation: Index
+    #: Page's time from receiving this population to all its faces drawn (the first faces a
+    #: freshly opened page shows: from the page's start, so page, model and textures); the
+    #: server's ``server_response_ms`` excludes it.
+    load_ms: Millis | None = None
+
+
+class Select(_Shown):
+    """The best face (elite) and the other acceptable faces of the shown generation."""
+
+    command: Literal["select"]
+    elite: FaceId
+    others: Annotated[list[FaceId], Field(default_factory=list, max_length=100)]
+
+
+class Restart(_Shown):
+    """Start the current trial again at generation 0."""
+
+    command: Literal["restart"]
+
+
+class Rate(TrialCommand):
+    """The satisfaction rating (1 … points) of the trial's final face."""
+
+    command: Literal["rate"]
+    value: Points
+
+
+class EvolveTask:
+    """The GA: selections over generations, then a rating."""
+
+    name: ClassVar[str] = "evolve"
+    block: ClassVar[type[TaskBlock]] = EvolveBlock
+    commands: ClassVar[tuple[type[TrialCommand], ...]] = (Select, Restart, Rate)
+    view_type: ClassVar[type] = EvolveView
+    tables: ClassVar[tuple[type, ...]] = (
+        PopulationRow,
+        FaceRow,
+        SelectionRow,
+        RestartRow,
+        RatingRow,
+    )
+    #: the default instructions of its blocks
+    instructions: ClassVar[str] = (
+        "You will see ten faces at a time. Click the face that best shows the emotion you are "
+        "asked for: it is marked with a star (★). Then click any other faces that are also "
+        "acceptable: they are marked with a tick (✓); the ★ on a face makes that face the best. "
+        "Press “Next round” and new faces will be bred from the ones you chose. After the last "
+        "round you rate the final face.\n\nKeyboard: Tab or the arrow keys move between faces, "
+        "Enter or Space selects, B makes a face the best one."
+    )
+    #: seconds a screen takes (low, high): :mod:`emogen.study.length`'s sources
+    screens: ClassVar[dict[str, tuple[float, float]]] = {
+        "selection": (6.0, 9.0),
+        "rating": (3.0, 5.0),
+    }
+
+    def screens_of(self, condition: Condition, generations: int) -> dict[str, int]:
+        """Generations 0 … G are shown, then the rating."""
+        return {"selection": generations + 1, "rating": 1}
+
+    def prepare(self, ctx: Any, k: int, block: EvolveBlock) -> None:
+        return None
+
+    def rows(self, prepared: None) -> int | None:
+        return None
+
+    def start(self, env: TaskEnv, db: Session, row: TrialRow, session_id: int) -> Outcome:
+        """Generation 0 is made and stored."""
+        engine = new_engine(env, row)
+        row.status = "active"
+        row.started_at = utcnow()
+        row.attempt = engine.trial
+        row.generation = engine.generation
+        shown = store_population(db, row, engine.ask())
+        row.engine_state = engine.to_json()
+        return Outcome(shown=shown)
+
+    def accept(self, env: TaskEnv, db: Session, row: TrialRow, cmd: TrialCommand) -> Outcome:
+        if isinstance(cmd, Select):
+            return self._select(env, db, row, cmd)
+        if isinstance(cmd, Restart):
+            return self._restart(env, db, row, cmd)
+        if isinstance(cmd, Rate):
+            return self._rate(env, db, row, cmd)
+        raise StepConflict(f"an evolve trial does not take {cmd.command}")  # pragma: no cover
+
+    def _select(self, env: TaskEnv, db: Session, row: TrialRow, cmd: Select) -> Outcome:
+        """The participant's selection of the shown generation; the next one is stored (or the
+        trial waits for its rating)."""
+        pop = _shown(db, row, cmd)
+        engine = restore(env, row)
+        engine.tell(cmd.elite, list(cmd.others))
+        now = utcnow()
+        db.add(
+            SelectionRow(
+                population_id=pop.id,
+                trial_id=row.id,
+                elite_face_id=cmd.elite,
+                other_face_ids=dumps(list(cmd.others)),
+                submitted_at=now,
+                server_response_ms=server_ms(now, pop.shown_at, cmd.load_ms),
+                client_response_ms=cmd.response_ms,
+                load_ms=cmd.load_ms,
+                step_key=cmd.key,
+            )
+        )
+        row.generation = engine.generation
+        row.engine_state = engine.to_json()
+        if engine.done:
+            row.status = "rating"
+            row.final_face_id = int(engine.result.ids[0])
+            return Outcome()
+        return Outcome(shown=replace(store_population(db, row, engine.ask()), trial=row))
+
+    def _restart(self, env: TaskEnv, db: Session, row: TrialRow, cmd: Restart) -> Outcome:
+        """'Start again': a new attempt of the trial at generation 0 (reinitialised or kept)."""
+        if not env.config.allow_restart:
+            raise StepConflict("this study does not allow starting a trial again")
+        pop = _shown(db, row, cmd)
+        engine = restore(env, row)
+        now = utcnow()
+        db.add(
+            RestartRow(
+                population_id=pop.id,
+                trial_id=row.id,
+                submitted_at=now,
+                server_response_ms=server_ms(now, pop.shown_at, cmd.load_ms),
+                client_response_ms=cmd.response_ms,
+                load_ms=cmd.load_ms,
+                step_key=cmd.key,
+            )
+        )
+        shown = store_population(db, row, engine.reset())
+        row.attempt = engine.trial
+        row.generation = engine.generation
+        row.engine_state = engine.to_json()
+        return Outcome(shown=replace(shown, trial=row))
+
+    def _rate(self, env: TaskEnv, db: Session, row: TrialRow, cmd: Rate) -> Outcome:
+        """The rating of the trial's final face; the trial is done."""
+        points = env.config.rating.points
+        if row.status != "rating":
+            raise StepConflict(
+                f"trial {row.position + 1} is not waiting for a rating (it is at generation "
+                f"{row.generation}); reload the page"
+            )
+        if not 1 <= cmd.value <= points:
+            raise SelectionError(f"rating must be an integer in [1, {points}]; got {cmd.value}")
+        now = utcnow()
+        db.add(
+            RatingRow(
+                trial_id=row.id,
+                face_id=int(row.final_face_id if row.final_face_id is not None else -1),
+                value=cmd.value,
+                points=points,
+                submitted_at=now,
+                server_response_ms=elapsed_ms(now, last_selection_time(db, row.id)),
+                client_response_ms=cmd.response_ms,
+                step_key=cmd.key,
+            )
+        )
+        row.status = "done"
+        row.finished_at = now
+        return Outcome(done=True)
+
+    def view(self, env: TaskEnv, db: Session, row: TrialRow, shown: Any) -> dict[str, Any]:
+        return dict(evolve_view(env, db, row, shown))
+
+    def prompt(self, env: TaskEnv, row: TrialRow) -> str:
+        return str(env.config.prompt_for(row.emotion))
+
+    def face(
+        self, env: TaskEnv, db: Session, row: TrialRow, face_id: int
+    ) -> tuple[str, str] | None:
+        weights = shown_face(db, row, face_id)
+        return None if weights is None else (weights, row.identity)
+
+    def result(self, env: TaskEnv, db: Session, row: TrialRow) -> dict[str, Any] | None:
+        """The emotion made and, once the trial is done, its final face."""
+        face = final_face(db, row) if row.status == "done" else None
+        final = None if face is None else {"id": face.face_id, "weights": json.loads(face.weights)}
+        return {"task": self.name, "emotion": row.emotion, "final_face": final}
+
+    def made_faces(self, db: Session, where: Sequence[Any]) -> list[MadeFace]:
+        return final_faces(db, self.name, where)
+
+    def replay(self, env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed:
+        return replay_trial(env, db, row, rig)
+
+    def simulate(self, who: Any, view: dict[str, Any], trial: int) -> dict[str, Any]:
+        """The maker's selection of the shown faces, or their rating of the final face."""
+        if view["rating"] is not None:
+            face = view["rating"]["face"]
+            value = who.maker.rate(
+                np.asarray(face["weights"]), view["emotion"], view["rating"]["points"]
+            )
+            return {"command": "rate", "trial": trial, "value": value}
+        pop = view["population"]
+        faces = pop["faces"]
+        limits = (view["limits"]["min_selections"], view["limits"]["max_selections"])
+        weights = np.asarray([f["weights"] for f in faces])
+        elite, others = who.maker.select(weights, view["emotion"], limits)
+        return {
+            "command": "select",
+            "trial": trial,
+            "attempt": pop["attempt"],
+            "generation": pop["generation"],
+            "elite": faces[elite]["id"],
+            "others": [faces[j]["id"] for j in others],
+        }
+
+    def progress_step(
+        self, status: str, generation: int, generations: int
+    ) -> tuple[str, int | None]:
+        """Where in the trial the participant is: the generation shown (from 1), or the rating."""
+        if status == "rating":
+            return "rating", None
+        return f"generation {generation + 1} of {generations + 1}", generation + 1
+
+
+def _shown(db: Session, row: TrialRow, cmd: _Shown) -> PopulationRow:
+    """The population a selection or restart is for (a conflict if the request is not for what
+    the session shows now)."""
+    trial = row.position + 1
+    if row.status != "active":
+        raise StepConflict(
+            f"trial {trial} has no generation to select from (it is waiting for the rating); "
+            "reload the page"
+        )
+    if (cmd.attempt, cmd.generation) != (row.attempt, row.generation):
+        raise StepConflict(
+            f"this request is for generation {cmd.generation} (attempt {cmd.attempt + 1}) of "
+            f"trial {trial}, but generation {row.generation} (attempt {row.attempt + 1}) is "
+            "shown now; reload the page"
+        )
+    pop = population_at(db, row.id, row.attempt, row.generation)
+    if pop is None:  # pragma: no cover - stored with the engine state
+        raise StepConflict("the shown generation was not stored; reload the page")
+    return pop
