@@ -75,7 +75,7 @@ function create(page) {
   }
 
   // A click (toggle) or the star (makeBest): the pure rule decides, the page shows the result.
-  function choose(rule, id) {
+  function decide(rule, id) {
     const { choice, refused } = rule({ elite: sel.elite, others: sel.others }, id, view().limits);
     if (refused) {
       page.say(refused);
@@ -87,8 +87,8 @@ function create(page) {
     paint();
   }
 
-  const toggle = (id) => choose(selection.toggle, id);
-  const makeBest = (id) => choose(selection.makeBest, id);
+  const toggle = (id) => decide(selection.toggle, id);
+  const makeBest = (id) => decide(selection.makeBest, id);
 
   function paint() {
     if (!(ui.state && ui.state.stage === "trial" && ui.state.view.task === "evolve")) return;
