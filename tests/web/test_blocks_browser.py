@@ -144,6 +144,7 @@ def test_a_study_of_evolve_and_categorise_blocks_runs_to_completion(
         wait_ready(page, "categorise")
         state = state_of(page, srv)
         view = state["view"]
+        assert view["task"] == "categorise" and "emotion" not in view  # not given away
         labels = labels_shown(page)
         assert labels == [*view["labels"], "none"]  # in the order drawn, "none of these" last
         assert page.inner_text("#prompt") == "Which emotion does this face show?"

@@ -201,8 +201,9 @@ def test_a_lost_connection_is_said_at_once_and_retried_until_the_server_answers(
     wait_ready(page, "trial")
     before = page.eval_on_selector("#grid > .cell", "c => c.dataset.face")
     sent: list[str] = []
-    page.on("request", lambda r: sent.append(r.url) if r.url.endswith("/select") else None)
-    page.route("**/select", lambda route: route.abort("internetdisconnected"))
+    # after Begin, the one step route carries only the selection
+    page.on("request", lambda r: sent.append(r.url) if r.url.endswith("/step") else None)
+    page.route("**/step", lambda route: route.abort("internetdisconnected"))
     choose_two(page)
     page.click("#next")
     wait_for(
@@ -218,7 +219,7 @@ def test_a_lost_connection_is_said_at_once_and_retried_until_the_server_answers(
     page.wait_for_timeout(3500)
     assert len(sent) >= 3
     assert "retrying" in page.inner_text("#message")
-    page.unroute("**/select")
+    page.unroute("**/step")
     wait_for(
         page, f"document.querySelector('#grid > .cell').dataset.face !== '{before}'", timeout=15_000
     )

@@ -52,5 +52,5 @@ def test_js_types_match_the_openapi_schema(client: TestClient, tmp_path: Path) -
         f"{TYPES.name} is stale: the API changed; regenerate it with "
         "EMOGEN_UPDATE_API_TYPES=1 python -m pytest tests/web/test_js.py"
     )
-    for name in ("SessionState", "Selection", "InvalidRequest", "Problem"):
+    for name in ("SessionState", "Select", "InvalidRequest", "Problem"):
         assert f"        {name}: {{" in fresh, name

@@ -154,6 +154,9 @@ def test_the_readme_page_runs_and_its_data_agree_with_the_export(
     assert evolve["display"] == "webgl"
     assert evolve["session_id"] == categorise["session_id"]
     assert evolve["participant_id"] == categorise["participant_id"] == pid
+    assert evolve["emotion"] == "happy"  # from the evolve result of the trial's record
+    # a categorise trial's record has no face id and no emotion: the face is shown, not made
+    assert categorise["final_face_id"] is None and categorise["emotion"] is None
 
     store = Store(url)
     tables = export_tables(store)

@@ -1,24 +1,28 @@
-// jsPsych 8 plugin: an EmoGen trial — an evolve trial (one GA trial of a study block: the ten
-// faces, the selections, "Start again", generation after generation, the rating) or a
-// categorise trial (one face, one label) — run by the study server, shown by the study page's
-// own components. See README.md and docs/jspsych.md.
+// jsPsych 8 plugin: an EmoGen trial — one trial of a study block, of the task the block runs
+// (the registry's tasks: static/tasks/index.js; an evolve trial is one GA trial — the ten faces,
+// the selections, "Start again", generation after generation, the rating; a categorise trial
+// one face, one label) — run by the study server, shown by the study page's own components.
+// See README.md and docs/jspsych.md.
 import { ParameterType } from "jspsych";
+import { TASK_NAMES, taskOf } from "../../../src/emogen/web/static/tasks/index.js";
 import { serverBase, studyInfo } from "./connect.js";
 import { observerDriver, targetVector } from "./driver.js";
-import { simulateCategorise, simulateEvolve } from "./observer.js";
-import { emptyData } from "./record.js";
+import { DATA_FIELDS, emptyData } from "./record.js";
 import { runTrial } from "./run.js";
 
 const VERSION = "0.1.0";
-const generation = {
-  attempt: { type: ParameterType.INT },
-  generation: { type: ParameterType.INT },
-  shown: { type: ParameterType.INT, array: true },
-  elite: { type: ParameterType.INT },
-  others: { type: ParameterType.INT, array: true },
-  rt: { type: ParameterType.INT },
-  load_ms: { type: ParameterType.INT },
-};
+
+/**
+ * A data field in jsPsych's terms (its type from ParameterType by name, nested fields too).
+ * @param {import("./record.js").Field} field
+ * @returns {any}
+ */
+function declared({ type, array, nested }) {
+  const out = /** @type {any} */ ({ type: /** @type {any} */ (ParameterType)[type] });
+  if (array) out.array = true;
+  if (nested) out.nested = Object.fromEntries(Object.entries(nested).map(([k, f]) => [k, declared(f)]));
+  return out;
+}
 
 const info = /** @type {const} */ ({
   name: "emogen",
@@ -27,8 +31,9 @@ const info = /** @type {const} */ ({
     /** The study server's address (``https://study.example.org``); its study config must list
      * this page's origin in ``embed_origins``. */
     server: { type: ParameterType.STRING, default: undefined },
-    /** ``evolve`` or ``categorise``: the study's next trial must be of this task. */
-    task: { type: ParameterType.SELECT, options: ["evolve", "categorise"], default: "evolve" },
+    /** The task of the trial (the registry's: ``evolve`` or ``categorise``): the study's next
+     * trial must be of this task. */
+    task: { type: ParameterType.SELECT, options: TASK_NAMES, default: TASK_NAMES[0] },
     /** The participant id; null: from the URL (the study's participant_param, e.g.
      * PROLIFIC_PID, else ``participant``; JATOS: the study link's query), else one is made. */
     participant_id: { type: ParameterType.STRING, default: null },
@@ -43,48 +48,8 @@ const info = /** @type {const} */ ({
      * Continue). */
     failure_wait_ms: { type: ParameterType.INT, default: null },
   },
-  data: {
-    task: { type: ParameterType.STRING },
-    /** false: the trial could not run; ``reason`` says why, ``failure`` names the kind
-     * (unreachable, origin, block, server, finished). */
-    success: { type: ParameterType.BOOL },
-    reason: { type: ParameterType.STRING },
-    failure: { type: ParameterType.STRING },
-    simulated: { type: ParameterType.BOOL },
-    server: { type: ParameterType.STRING },
-    study: { type: ParameterType.STRING },
-    /** The researcher's session id: ``session_id`` in every table of ``emogen study export``. */
-    session_id: { type: ParameterType.INT },
-    participant_id: { type: ParameterType.STRING },
-    /** The trial's position in the session (``trial`` in the export), its block and name. */
-    trial: { type: ParameterType.INT },
-    block: { type: ParameterType.INT },
-    block_name: { type: ParameterType.STRING },
-    emotion: { type: ParameterType.STRING },
-    identity: { type: ParameterType.STRING },
-    display: { type: ParameterType.STRING },
-    /** The trial's and the session's seeds (decimal strings: 64-bit integers). */
-    seed: { type: ParameterType.STRING },
-    session_seed: { type: ParameterType.STRING },
-    attempt: { type: ParameterType.INT },
-    generations: { type: ParameterType.COMPLEX, array: true, nested: generation },
-    restarts: { type: ParameterType.COMPLEX, array: true },
-    rating: { type: ParameterType.INT },
-    rating_rt: { type: ParameterType.INT },
-    labels: { type: ParameterType.STRING, array: true },
-    label: { type: ParameterType.STRING },
-    intensity: { type: ParameterType.INT },
-    confidence: { type: ParameterType.INT },
-    response_rt: { type: ParameterType.INT },
-    load_ms: { type: ParameterType.INT },
-    /** The final face (evolve: the last best face; categorise: the face shown): its id and its
-     * weights in the study's weight order (GET /api/study: weight_names). */
-    final_face_id: { type: ParameterType.INT },
-    final_weights: { type: ParameterType.FLOAT, array: true },
-    /** Trial start → first faces drawn (ms), and the whole trial's duration. */
-    first_faces_ms: { type: ParameterType.INT },
-    rt: { type: ParameterType.INT },
-  },
+  /** Every trial's fields and each task's own (record.js; tasks/<task>.js: ``data``). */
+  data: Object.fromEntries(Object.entries(DATA_FIELDS).map(([name, field]) => [name, declared(field)])),
 });
 
 /** The default target of simulate(): a smile (ICT-FaceKit's shape names). */
@@ -120,9 +85,10 @@ class EmogenPlugin {
   }
 
   /**
-   * ``data-only``: the simulated observer against a stand-in GA, no server (options: target —
-   * an array, or weights by name —, generations, chosen, noise, seed; categorise: labels,
-   * prototypes, label). ``visual``: the observer at the real trial, against the server.
+   * ``data-only``: the simulated observer without a server, as the trial's task simulates it
+   * (tasks/<task>.js: ``simulate``; evolve: a stand-in GA — options target, an array or weights
+   * by name, generations, chosen, noise, seed; categorise: labels, prototypes, face). ``visual``:
+   * the observer at the real trial, against the server.
    * @param {any} trial
    * @param {"data-only" | "visual"} mode
    * @param {any} options
@@ -138,15 +104,7 @@ class EmogenPlugin {
     load();
     const data = { ...emptyData(trial.task, String(trial.server)), simulated: true, token: undefined };
     delete data.token;
-    const seed = options.seed ?? 1;
-    if (trial.task === "categorise") {
-      Object.assign(data, simulateCategorise({ ...options, seed }));
-    } else {
-      const target = Array.isArray(options.target) ? options.target : Object.values(options.target ?? SMILE);
-      Object.assign(data, simulateEvolve({ ...options, target, seed }));
-      data.rating = options.rating ?? null;
-    }
-    data.rt = data.task === "categorise" ? data.response_rt : data.generations.reduce((t, g) => t + g.rt, 0);
+    Object.assign(data, taskOf(trial.task).simulate({ ...options, target: options.target ?? SMILE, seed: options.seed ?? 1 }));
     return this.jsPsych.pluginAPI.mergeSimulationData(data, options);
   }
 }

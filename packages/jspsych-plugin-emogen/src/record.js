@@ -1,92 +1,89 @@
 // The trial's data, as jsPsych stores it: what the page showed and the participant chose, step
 // by step (only steps the server accepted), and the trial's record from the server (the
-// researcher's session id, the seeds, the final face) — the same rows `emogen study export`
-// writes, so the two can be joined on session_id and trial.
+// researcher's session id, the seeds, its task's result) — the same rows `emogen study export`
+// writes, so the two can be joined on session_id and trial. The fields every trial has are
+// here; each task adds its own (tasks/<task>.js: `data`, `record`, `result`).
+import { TASKS, taskOf } from "../../../src/emogen/web/static/tasks/index.js";
+
+/**
+ * A data field: its jsPsych type by name (ParameterType's: STRING, INT …) and its value before
+ * the trial; a task's fields have the same form.
+ * @typedef {{ type: string, array?: boolean, nested?: Record<string, any>, value?: any }} Field
+ */
+
+/** @type {Record<string, Field>} the fields before the tasks' own */
+const HEAD = {
+  task: { type: "STRING", value: null },
+  /** false: the trial could not run; ``reason`` says why, ``failure`` names the kind
+   * (unreachable, origin, block, server, finished). */
+  success: { type: "BOOL", value: true },
+  reason: { type: "STRING", value: null },
+  failure: { type: "STRING", value: null },
+  simulated: { type: "BOOL", value: false },
+  server: { type: "STRING", value: null },
+  study: { type: "STRING", value: null },
+  /** The researcher's session id: ``session_id`` in every table of ``emogen study export``. */
+  session_id: { type: "INT", value: null },
+  participant_id: { type: "STRING", value: null },
+  /** The trial's position in the session (``trial`` in the export), its block and name. */
+  trial: { type: "INT", value: null },
+  block: { type: "INT", value: null },
+  block_name: { type: "STRING", value: null },
+  identity: { type: "STRING", value: null },
+  display: { type: "STRING", value: null },
+  /** The trial's and the session's seeds (decimal strings: 64-bit integers). */
+  seed: { type: "STRING", value: null },
+  session_seed: { type: "STRING", value: null },
+  attempt: { type: "INT", value: null },
+};
+
+/** @type {Record<string, Field>} the fields after the tasks' own */
+const TAIL = {
+  /** The trial's final face (its task's: the last best face; the face shown, whose id is null)
+   * and its weights in the study's weight order (GET /api/study: weight_names). */
+  final_face_id: { type: "INT", value: null },
+  final_weights: { type: "FLOAT", array: true, value: null },
+  /** Trial start → first faces drawn (ms), and the whole trial's duration. */
+  first_faces_ms: { type: "INT", value: null },
+  rt: { type: "INT", value: null },
+};
+
+/** Every data field of the plugin's trials: the shared ones and each task's, in that order. */
+export const DATA_FIELDS = /** @type {Record<string, Field>} */ (
+  Object.assign({}, HEAD, ...Object.values(TASKS).map((task) => task.data), TAIL)
+);
+
+/** A field's value before the trial (a fresh array where it is a list). @param {Field} field */
+const initial = (field) => (Array.isArray(field.value) ? [...field.value] : (field.value ?? null));
 
 /**
  * The data of a trial before it starts (a failed trial keeps what it had).
  * @param {string} task
  * @param {string} server
+ * @returns {Record<string, any>}
  */
 export function emptyData(task, server) {
-  return {
-    task,
-    success: true,
-    reason: /** @type {string | null} */ (null),
-    failure: /** @type {string | null} */ (null),
-    simulated: false,
-    server,
-    study: /** @type {string | null} */ (null),
-    session_id: /** @type {number | null} */ (null),
-    participant_id: /** @type {string | null} */ (null),
-    token: /** @type {string | undefined} */ (undefined),
-    trial: /** @type {number | null} */ (null),
-    block: /** @type {number | null} */ (null),
-    block_name: /** @type {string | null} */ (null),
-    emotion: /** @type {string | null} */ (null),
-    identity: /** @type {string | null} */ (null),
-    display: /** @type {string | null} */ (null),
-    seed: /** @type {string | null} */ (null),
-    session_seed: /** @type {string | null} */ (null),
-    attempt: /** @type {number | null} */ (null),
-    /** evolve: one entry per generation answered: {attempt, generation, shown, elite, others, rt, load_ms} */
-    generations: /** @type {any[]} */ ([]),
-    /** evolve: "Start again" presses: {attempt, generation, rt} */
-    restarts: /** @type {any[]} */ ([]),
-    rating: /** @type {number | null} */ (null),
-    rating_rt: /** @type {number | null} */ (null),
-    /** categorise: the labels offered, in the order shown */
-    labels: /** @type {string[] | null} */ (null),
-    label: /** @type {string | null} */ (null),
-    intensity: /** @type {number | null} */ (null),
-    confidence: /** @type {number | null} */ (null),
-    /** categorise: face drawn → answer sent (ms), and the face's drawing time */
-    response_rt: /** @type {number | null} */ (null),
-    load_ms: /** @type {number | null} */ (null),
-    final_face_id: /** @type {number | null} */ (null),
-    final_weights: /** @type {number[] | null} */ (null),
-    first_faces_ms: /** @type {number | null} */ (null),
-    rt: /** @type {number | null} */ (null),
-  };
+  /** @type {Record<string, any>} */
+  const data = Object.fromEntries(Object.entries(DATA_FIELDS).map(([name, field]) => [name, initial(field)]));
+  data.task = task;
+  data.server = server;
+  data.token = undefined;
+  return data;
 }
 
 /**
- * A step the server accepted, recorded from its body and the state it answered.
- * @param {ReturnType<typeof emptyData>} data
- * @param {string} kind select | restart | rating | categorise
- * @param {any} body
+ * A step the server accepted, recorded by its task from its body and the state it answered.
+ * @param {Record<string, any>} data
+ * @param {any} body the step's body (its ``command`` names it)
  * @param {any} state the state the step answered (what the page showed)
  */
-export function recordStep(data, kind, body, state) {
-  if (kind === "select") {
-    data.generations.push({
-      attempt: body.attempt,
-      generation: body.generation,
-      shown: state.population.faces.map((/** @type {any} */ f) => f.id),
-      elite: body.elite,
-      others: [...body.others],
-      rt: body.response_ms ?? null,
-      load_ms: body.load_ms ?? null,
-    });
-  } else if (kind === "restart") {
-    data.restarts.push({ attempt: body.attempt, generation: body.generation, rt: body.response_ms ?? null });
-  } else if (kind === "rating") {
-    data.rating = body.value;
-    data.rating_rt = body.response_ms ?? null;
-  } else if (kind === "categorise") {
-    const view = state.categorise;
-    data.labels = view.none_option ? [...view.labels, "none"] : [...view.labels];
-    data.label = body.label;
-    data.intensity = body.intensity ?? null;
-    data.confidence = body.confidence ?? null;
-    data.response_rt = body.response_ms ?? null;
-    data.load_ms = body.load_ms ?? null;
-  }
+export function recordStep(data, body, state) {
+  if (state && state.view) taskOf(state.view.task).record(data, body, state.view);
 }
 
 /**
- * The server's record of the finished trial, added to its data.
- * @param {ReturnType<typeof emptyData>} data
+ * The server's record of the finished trial, added to its data (its task's result by its task).
+ * @param {Record<string, any>} data
  * @param {any} record GET /api/s/{token}/trials/{n}
  */
 export function withRecord(data, record) {
@@ -97,13 +94,11 @@ export function withRecord(data, record) {
     trial: record.trial,
     block: record.block,
     block_name: record.block_name,
-    emotion: record.emotion || null,
     identity: record.identity,
     seed: record.seed,
     session_seed: record.session_seed,
     attempt: record.attempt,
-    final_face_id: record.final_face ? record.final_face.id : null,
-    final_weights: record.final_face ? record.final_face.weights : null,
   });
+  if (record.result) Object.assign(data, taskOf(record.result.task).result(record.result));
   return data;
 }

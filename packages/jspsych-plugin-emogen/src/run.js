@@ -1,16 +1,15 @@
-// One emogen trial inside a jsPsych page: the study page's own task components (the ten-face
-// grid and its rating; one face and its labels) over the same face display, given the context
-// the study page's shell gives them (static/session.js: `page`), against the study server.
+// One emogen trial inside a jsPsych page: the study page's own task component (found by the
+// task registry, static/tasks/index.js) over the same face display, given the context the study
+// page's shell gives it (static/session.js: `page`), against the study server's one step route.
 // The trial ends when the server's session moves past it; what was shown and chosen, and the
-// trial's record (session id, seeds, final face), are its data. A failure ends it with
+// trial's record (session id, seeds, its task's result), are its data. A failure ends it with
 // success false and the reason, said in the page — never a trial that waits for ever.
 import { newKey } from "../../../src/emogen/web/static/api.js";
 import { statusText } from "../../../src/emogen/web/static/connection.js";
 import { createFaceDisplay } from "../../../src/emogen/web/static/faces.js";
-import { roundText, screenPrompt } from "../../../src/emogen/web/static/progress.js";
-import { createCategorise } from "../../../src/emogen/web/static/tasks/categorise.js";
-import { createEvolve } from "../../../src/emogen/web/static/tasks/evolve.js";
-import { STATUS_LINES, TASK_VIEWS } from "../../../src/emogen/web/static/tasks/markup.js";
+import { screenPrompt } from "../../../src/emogen/web/static/progress.js";
+import { SCREENS, TASK_VIEWS, taskOf } from "../../../src/emogen/web/static/tasks/index.js";
+import { STATUS_LINES } from "../../../src/emogen/web/static/tasks/markup.js";
 import { createDrawFaces, fillScale } from "../../../src/emogen/web/static/tasks/shell.js";
 import { createViewerDisplay } from "../../../src/emogen/web/static/viewer-adapter.js";
 import { TrialFailure, participantFromUrl, request, session, studyInfo } from "./connect.js";
@@ -34,7 +33,7 @@ const SHELL = `
     ${STATUS_LINES}
   </div>
 </div>`;
-const VIEWS = ["loading", "trial", "rating", "categorise", "failed"];
+const VIEWS = ["loading", ...SCREENS, "failed"];
 
 /**
  * Runs one trial; resolves with its data (never rejects).
@@ -99,7 +98,7 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
       }
     },
     elapsed: () => Math.max(0, Math.round(performance.now() - ui.shownAt)),
-    step: (path, body) => step(path, body),
+    step: (body) => step(body),
   };
 
   /** Shows ``state`` if it is still this trial; else the trial is over. */
@@ -110,25 +109,22 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
       finish({ ok: true });
       return;
     }
-    paintProgress(state);
+    const task = taskOf(state.view.task);
+    // the task's step within the trial ("Round 2 of 11"); the experiment says the rest
+    $("gen-progress").textContent = task.progress(state).step ?? "";
+    $("prompt").textContent = screenPrompt(state, state.trial.prompt, task);
     await component.render(state);
   }
 
-  function paintProgress(state) {
-    const p = state.progress;
-    const evolving = state.trial.task === "evolve";
-    $("gen-progress").textContent = evolving ? (state.trial.status === "active" ? roundText(p) : "Rating") : "";
-    $("prompt").textContent = screenPrompt(state, state.trial.prompt);
-  }
-
-  async function step(path, body) {
+  /** One step (its body names the command), sent to the one step route. */
+  async function step(body) {
     if (ui.busy) return;
     ui.busy = true;
     setReady(false);
     component.paint();
     try {
-      const state = await call(`/${path}`, { method: "POST", body });
-      recordStep(data, path, body, ui.state);
+      const state = await call("/step", { method: "POST", body });
+      recordStep(data, body, ui.state);
       ui.busy = false;
       say("");
       await render(state);
@@ -175,7 +171,9 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
     // the state the session was made with, for its first trial; the server's now, after that
     let state = made.used ? await call("/state") : made.state;
     made.used = true;
-    if (state.stage === "instructions") state = await call("/begin", { method: "POST", body: { key: newKey() } });
+    if (state.stage === "instructions") {
+      state = await call("/step", { method: "POST", body: { command: "begin", key: newKey() } });
+    }
     data.participant_id = state.participant_id;
     if (state.stage === "done") {
       throw new TrialFailure("this participant's session of the study is complete: it has no trial left", "finished");
@@ -194,7 +192,7 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
       loadViewer: async () => (png ? null : createViewerDisplay({ base, framing: info.framing })),
     });
     data.display = ui.display.kind;
-    component = (params.task === "evolve" ? createEvolve : createCategorise)(page);
+    component = taskOf(params.task).create(page);
     await render(state);
   }
 

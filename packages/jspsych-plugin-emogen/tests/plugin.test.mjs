@@ -10,7 +10,7 @@ import { clickTarget, simulateTimeline, startTimeline } from "@jspsych/test-util
 import { ParameterType } from "jspsych";
 import EmogenPlugin from "../src/index.js";
 import { forgetSessions } from "../src/connect.js";
-import { distance, uniform } from "../src/observer.js";
+import { distance, uniform } from "../../../src/emogen/web/static/observer.js";
 import { SERVER, fakeServer } from "./fake-server.mjs";
 
 /** Waits (up to 5 s) until ``check()`` is true. */
@@ -73,7 +73,9 @@ test("an evolve and a categorise trial run on one session; their data are what w
 
   const [evolve, categorise] = getData().values();
   assert.equal(fake.sessions, 1); // one session for both trials
-  assert.equal(fake.log.filter((r) => r.path.endsWith("/begin")).length, 1);
+  const steps = fake.log.filter((r) => r.method === "POST" && r.path.startsWith("/api/s/"));
+  assert.ok(steps.every((r) => r.path === `/api/s/${"t".repeat(20)}/step`)); // the one step route
+  assert.deepEqual(steps.map((r) => r.body.command), ["begin", "select", "select", "rate", "answer"]);
   assert.equal(fake.participant, "node-participant"); // PROLIFIC_PID from the page's URL
   // the creation key: the server's pattern, kept for the session (a lost answer's retry gets it)
   const create = fake.log.find((r) => r.path === "/api/sessions").body;
@@ -86,16 +88,25 @@ test("an evolve and a categorise trial run on one session; their data are what w
   assert.equal(evolve.seed, "12345678901234567890"); // exact: a string
   assert.deepEqual(evolve.generations.map((g) => [g.generation, g.elite, g.others]), [[0, 2, [5]], [1, 10, [19]]]);
   assert.deepEqual(evolve.generations[1].shown, [10, 11, 12, 13, 14, 15, 16, 17, 18, 19]);
-  const sent = fake.log.filter((r) => r.path.endsWith("/select")).map((r) => r.body);
+  const sent = steps.filter((r) => r.body.command === "select").map((r) => r.body);
   assert.deepEqual(evolve.generations.map((g) => g.rt), sent.map((b) => b.response_ms));
   assert.equal(evolve.rating, 5);
   assert.deepEqual(evolve.final_weights, [0.3, 0.7, 0.5]);
+  assert.equal(evolve.final_face_id, 99);
+  assert.equal(evolve.emotion, "happy"); // from the trial record's evolve result
   assert.equal(evolve.display, "png");
   assert.ok(evolve.first_faces_ms >= 0 && evolve.rt >= evolve.first_faces_ms);
   assert.equal(categorise.success, true);
   assert.equal(categorise.label, "happy");
   assert.deepEqual(categorise.labels, ["sad", "happy"]);
   assert.equal(categorise.trial, 1);
+  assert.equal(categorise.final_face_id, null); // the face shown is no GA face: no id
+  assert.deepEqual(categorise.final_weights, [0.4, 0.6, 0.5]);
+  assert.equal(categorise.emotion, null); // never the emotion the face was made for
+  assert.deepEqual(steps.at(-1).body, {
+    command: "answer", key: steps.at(-1).body.key, trial: 1, label: "happy", intensity: null, confidence: null,
+    response_ms: categorise.response_rt, load_ms: categorise.load_ms,
+  });
   assert.ok(!("token" in evolve) || evolve.token === undefined); // the session's secret stays out
   const jspsychOwn = ["trial_type", "trial_index", "plugin_version", "time_elapsed"];
   for (const key of Object.keys(evolve).filter((k) => !jspsychOwn.includes(k))) {
@@ -214,4 +225,22 @@ test("simulate data-only categorise: the label of the nearest prototype", async 
   const data = getData().values()[0];
   assert.equal(data.label, "sad");
   assert.deepEqual(data.final_weights, [0.2, 0.9]);
+});
+
+test("simulate visual: the tasks' observers drive the real screens through the step route", async () => {
+  const simulation_options = { target: [0.9, 0.1, 0.5], chosen: 2, rating: 6, label: "sad", delay_ms: 0 };
+  const { getData } = await simulateTimeline([
+    { type: EmogenPlugin, server: SERVER, task: "evolve", simulation_options },
+    { type: EmogenPlugin, server: SERVER, task: "categorise", simulation_options },
+  ], "visual");
+  await until(() => getData().count() === 2, "both simulated trials' data");
+  const [evolve, categorise] = getData().values();
+  assert.equal(evolve.success, true);
+  // the faces nearest the target (face k has weights [k/10, 1 - k/10, 0.5]): 9 then 8
+  assert.deepEqual(evolve.generations.map((g) => [g.elite, g.others]), [[9, [8]], [19, [18]]]);
+  assert.equal(evolve.rating, 6);
+  assert.equal(categorise.success, true);
+  assert.equal(categorise.label, "sad");
+  const commands = fake.log.filter((r) => r.path.endsWith("/step")).map((r) => r.body.command);
+  assert.deepEqual(commands, ["begin", "select", "select", "rate", "answer"]);
 });

@@ -110,46 +110,6 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
-    "/api/s/{token}/begin": {
-        parameters: {
-            query?: never;
-            header?: never;
-            path?: never;
-            cookie?: never;
-        };
-        get?: never;
-        put?: never;
-        /**
-         * Begin
-         * @description Instructions read: the first trial starts.
-         */
-        post: operations["begin_api_s__token__begin_post"];
-        delete?: never;
-        options?: never;
-        head?: never;
-        patch?: never;
-        trace?: never;
-    };
-    "/api/s/{token}/categorise": {
-        parameters: {
-            query?: never;
-            header?: never;
-            path?: never;
-            cookie?: never;
-        };
-        get?: never;
-        put?: never;
-        /**
-         * Categorise
-         * @description The label (and the ratings the block asks) given to a categorise trial's face.
-         */
-        post: operations["categorise_api_s__token__categorise_post"];
-        delete?: never;
-        options?: never;
-        head?: never;
-        patch?: never;
-        trace?: never;
-    };
     "/api/s/{token}/faces/{face_id}.png": {
         parameters: {
             query?: never;
@@ -174,66 +134,6 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
-    "/api/s/{token}/rating": {
-        parameters: {
-            query?: never;
-            header?: never;
-            path?: never;
-            cookie?: never;
-        };
-        get?: never;
-        put?: never;
-        /**
-         * Rate
-         * @description The satisfaction rating (1 … points) of the trial's final face.
-         */
-        post: operations["rate_api_s__token__rating_post"];
-        delete?: never;
-        options?: never;
-        head?: never;
-        patch?: never;
-        trace?: never;
-    };
-    "/api/s/{token}/restart": {
-        parameters: {
-            query?: never;
-            header?: never;
-            path?: never;
-            cookie?: never;
-        };
-        get?: never;
-        put?: never;
-        /**
-         * Restart
-         * @description Start the current trial again at generation 0.
-         */
-        post: operations["restart_api_s__token__restart_post"];
-        delete?: never;
-        options?: never;
-        head?: never;
-        patch?: never;
-        trace?: never;
-    };
-    "/api/s/{token}/select": {
-        parameters: {
-            query?: never;
-            header?: never;
-            path?: never;
-            cookie?: never;
-        };
-        get?: never;
-        put?: never;
-        /**
-         * Select Faces
-         * @description The best face (elite) and the other acceptable faces of the shown generation.
-         */
-        post: operations["select_faces_api_s__token__select_post"];
-        delete?: never;
-        options?: never;
-        head?: never;
-        patch?: never;
-        trace?: never;
-    };
     "/api/s/{token}/state": {
         parameters: {
             query?: never;
@@ -248,6 +148,27 @@ export interface paths {
         get: operations["get_state_api_s__token__state_get"];
         put?: never;
         post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/s/{token}/step": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Step
+         * @description One step of the session: ``begin`` (the instructions read) or a command of the
+         *     current trial's task (a conflict, 409, if its task does not take it).
+         */
+        post: operations["step_api_s__token__step_post"];
         delete?: never;
         options?: never;
         head?: never;
@@ -321,8 +242,42 @@ export interface paths {
 export type webhooks = Record<string, never>;
 export interface components {
     schemas: {
-        /** Begin */
+        /**
+         * Answer
+         * @description The answer to a categorise trial's face: one of the labels it offered (or ``none`` where
+         *     the block offers "none of these"), and the intensity / confidence ratings the block asks.
+         */
+        Answer: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "answer";
+            /** Confidence */
+            confidence?: number | null;
+            /** Intensity */
+            intensity?: number | null;
+            /** Key */
+            key: string;
+            /** Label */
+            label: string;
+            /** Load Ms */
+            load_ms?: number | null;
+            /** Response Ms */
+            response_ms?: number | null;
+            /** Trial */
+            trial: number;
+        };
+        /**
+         * Begin
+         * @description Instructions read: the first trial starts (the study's own command, not a task's).
+         */
         Begin: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "begin";
             /** Key */
             key: string;
         };
@@ -341,30 +296,10 @@ export interface components {
             trials: number;
         };
         /**
-         * Categorisation
-         * @description The answer to a categorise trial's face: one of the labels it offered (or ``none`` where
-         *     the block offers "none of these"), and the intensity / confidence ratings the block asks.
-         */
-        Categorisation: {
-            /** Confidence */
-            confidence?: number | null;
-            /** Intensity */
-            intensity?: number | null;
-            /** Key */
-            key: string;
-            /** Label */
-            label: string;
-            /** Load Ms */
-            load_ms?: number | null;
-            /** Response Ms */
-            response_ms?: number | null;
-            /** Trial */
-            trial: number;
-        };
-        /**
          * CategoriseView
          * @description What a categorise trial shows: the face, the question, the labels in their order, and the
-         *     ratings asked (None when not asked).
+         *     ratings asked (None when not asked); never the emotion the face was made for, nor whose face
+         *     it is.
          */
         CategoriseView: {
             confidence: components["schemas"]["RatingScale"] | null;
@@ -376,6 +311,11 @@ export interface components {
             none_option: boolean;
             /** Question */
             question: string;
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            task: "categorise";
         };
         /**
          * Completion
@@ -391,14 +331,43 @@ export interface components {
         };
         /**
          * Created
-         * @description A session made (or resumed): its secret token, its page and its state.
+         * @description A session made (or resumed): its secret token, its page and its state (the state's
+         *     schema is :func:`state_model`'s).
          */
         Created: {
-            state: components["schemas"]["SessionState"];
+            /** State */
+            state: {
+                [key: string]: unknown;
+            };
             /** Token */
             token: string;
             /** Url */
             url: string;
+        };
+        /**
+         * EvolveView
+         * @description An evolve trial as the participant sees it: the emotion to make, the generation shown
+         *     (0-based) of how many, the selection's limits, whether "start again" is offered, and the
+         *     generation to select from (while the trial is active) or the rating asked (after its last
+         *     generation).
+         */
+        EvolveView: {
+            /** Allow Restart */
+            allow_restart: boolean;
+            /** Emotion */
+            emotion: string;
+            /** Generation */
+            generation: number;
+            /** Generations */
+            generations: number;
+            limits: components["schemas"]["Limits"];
+            population: components["schemas"]["PopulationView"] | null;
+            rating: components["schemas"]["RatingView"] | null;
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            task: "evolve";
         };
         /**
          * FaceView
@@ -477,24 +446,28 @@ export interface components {
         };
         /**
          * Progress
-         * @description Trial, block and generation shown (0-based) of how many.
+         * @description Trial and block shown (0-based) of how many.
          */
         Progress: {
             /** Block */
             block: number;
             /** Blocks */
             blocks: number;
-            /** Generation */
-            generation: number;
-            /** Generations */
-            generations: number;
             /** Trial */
             trial: number;
             /** Trials */
             trials: number;
         };
-        /** Rating */
-        Rating: {
+        /**
+         * Rate
+         * @description The satisfaction rating (1 … points) of the trial's final face.
+         */
+        Rate: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "rate";
             /** Key */
             key: string;
             /** Response Ms */
@@ -534,10 +507,18 @@ export interface components {
             /** Question */
             question: string;
         };
-        /** Restart */
+        /**
+         * Restart
+         * @description Start the current trial again at generation 0.
+         */
         Restart: {
             /** Attempt */
             attempt: number;
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "restart";
             /** Generation */
             generation: number;
             /** Key */
@@ -567,10 +548,18 @@ export interface components {
              */
             url: string;
         };
-        /** Selection */
-        Selection: {
+        /**
+         * Select
+         * @description The best face (elite) and the other acceptable faces of the shown generation.
+         */
+        Select: {
             /** Attempt */
             attempt: number;
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "select";
             /** Elite */
             elite: number;
             /** Generation */
@@ -579,31 +568,19 @@ export interface components {
             key: string;
             /** Load Ms */
             load_ms?: number | null;
-            /**
-             * Others
-             * @default []
-             */
-            others: number[];
+            /** Others */
+            others?: number[];
             /** Response Ms */
             response_ms?: number | null;
             /** Trial */
             trial: number;
         };
-        /**
-         * SessionState
-         * @description The participant's view of the session.
-         */
+        /** SessionState */
         SessionState: {
-            /** Allow Restart */
-            allow_restart: boolean;
-            categorise: components["schemas"]["CategoriseView"] | null;
             completion: components["schemas"]["Completion"] | null;
-            limits: components["schemas"]["Limits"];
             /** Participant Id */
             participant_id: string;
-            population: components["schemas"]["PopulationView"] | null;
             progress: components["schemas"]["Progress"];
-            rating: components["schemas"]["RatingView"] | null;
             /** Replayed */
             replayed?: boolean;
             /**
@@ -612,6 +589,8 @@ export interface components {
              */
             stage: "instructions" | "trial" | "done";
             trial: components["schemas"]["TrialView"] | null;
+            /** View */
+            view: (components["schemas"]["EvolveView"] | components["schemas"]["CategoriseView"]) | null;
         };
         /**
          * StudyInfo
@@ -638,8 +617,8 @@ export interface components {
         };
         /**
          * TrialRecord
-         * @description One trial of a session as recorded: where it is, its seeds and its final face (an evolve
-         *     trial's last elite; a categorise trial's face), the face only once the trial is done.
+         * @description One trial of a session as recorded: where it is, its seeds and its result (by its
+         *     task, ``task`` first; None until the task has one).
          */
         TrialRecord: {
             /** Attempt */
@@ -648,13 +627,14 @@ export interface components {
             block: number;
             /** Block Name */
             block_name: string;
-            /** Emotion */
-            emotion: string;
-            final_face: components["schemas"]["FaceView"] | null;
             /** Identity */
             identity: string;
             /** Participant Id */
             participant_id: string;
+            /** Result */
+            result: {
+                [key: string]: unknown;
+            } | null;
             /** Seed */
             seed: string;
             /** Session Id */
@@ -672,16 +652,14 @@ export interface components {
         };
         /**
          * TrialView
-         * @description The current trial: its task and block; an evolve trial's emotion on its identity (a
-         *     categorise trial's emotion is "": the participant is not told what the face was made for).
+         * @description The current trial: its task and block, its instruction line, its identity (the face
+         *     shown), its attempt (restarts) and status.
          */
         TrialView: {
             /** Attempt */
             attempt: number;
             /** Block */
             block: number;
-            /** Emotion */
-            emotion: string;
             /** Identity */
             identity: string;
             /** Position */
@@ -1001,150 +979,6 @@ export interface operations {
             };
         };
     };
-    begin_api_s__token__begin_post: {
-        parameters: {
-            query?: never;
-            header?: never;
-            path: {
-                /** @description The session's secret token (from the session link). */
-                token: string;
-            };
-            cookie?: never;
-        };
-        requestBody: {
-            content: {
-                "application/json": components["schemas"]["Begin"];
-            };
-        };
-        responses: {
-            /** @description Successful Response */
-            200: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["SessionState"];
-                };
-            };
-            /** @description No session with this token, or no such face now. */
-            404: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request does not fit the session now (stale page, reused step key). */
-            409: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request body is larger than 65536 bytes. */
-            413: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request's values break a rule (the message names the value). */
-            422: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["InvalidRequest"];
-                };
-            };
-            /** @description The server is busy or shutting down; try again in a moment. */
-            503: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-        };
-    };
-    categorise_api_s__token__categorise_post: {
-        parameters: {
-            query?: never;
-            header?: never;
-            path: {
-                /** @description The session's secret token (from the session link). */
-                token: string;
-            };
-            cookie?: never;
-        };
-        requestBody: {
-            content: {
-                "application/json": components["schemas"]["Categorisation"];
-            };
-        };
-        responses: {
-            /** @description Successful Response */
-            200: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["SessionState"];
-                };
-            };
-            /** @description No session with this token, or no such face now. */
-            404: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request does not fit the session now (stale page, reused step key). */
-            409: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request body is larger than 65536 bytes. */
-            413: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request's values break a rule (the message names the value). */
-            422: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["InvalidRequest"];
-                };
-            };
-            /** @description The server is busy or shutting down; try again in a moment. */
-            503: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-        };
-    };
     face_png_api_s__token__faces__face_id__png_get: {
         parameters: {
             query?: {
@@ -1208,222 +1042,6 @@ export interface operations {
             };
         };
     };
-    rate_api_s__token__rating_post: {
-        parameters: {
-            query?: never;
-            header?: never;
-            path: {
-                /** @description The session's secret token (from the session link). */
-                token: string;
-            };
-            cookie?: never;
-        };
-        requestBody: {
-            content: {
-                "application/json": components["schemas"]["Rating"];
-            };
-        };
-        responses: {
-            /** @description Successful Response */
-            200: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["SessionState"];
-                };
-            };
-            /** @description No session with this token, or no such face now. */
-            404: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request does not fit the session now (stale page, reused step key). */
-            409: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request body is larger than 65536 bytes. */
-            413: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request's values break a rule (the message names the value). */
-            422: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["InvalidRequest"];
-                };
-            };
-            /** @description The server is busy or shutting down; try again in a moment. */
-            503: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-        };
-    };
-    restart_api_s__token__restart_post: {
-        parameters: {
-            query?: never;
-            header?: never;
-            path: {
-                /** @description The session's secret token (from the session link). */
-                token: string;
-            };
-            cookie?: never;
-        };
-        requestBody: {
-            content: {
-                "application/json": components["schemas"]["Restart"];
-            };
-        };
-        responses: {
-            /** @description Successful Response */
-            200: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["SessionState"];
-                };
-            };
-            /** @description No session with this token, or no such face now. */
-            404: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request does not fit the session now (stale page, reused step key). */
-            409: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request body is larger than 65536 bytes. */
-            413: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request's values break a rule (the message names the value). */
-            422: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["InvalidRequest"];
-                };
-            };
-            /** @description The server is busy or shutting down; try again in a moment. */
-            503: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-        };
-    };
-    select_faces_api_s__token__select_post: {
-        parameters: {
-            query?: never;
-            header?: never;
-            path: {
-                /** @description The session's secret token (from the session link). */
-                token: string;
-            };
-            cookie?: never;
-        };
-        requestBody: {
-            content: {
-                "application/json": components["schemas"]["Selection"];
-            };
-        };
-        responses: {
-            /** @description Successful Response */
-            200: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["SessionState"];
-                };
-            };
-            /** @description No session with this token, or no such face now. */
-            404: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request does not fit the session now (stale page, reused step key). */
-            409: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request body is larger than 65536 bytes. */
-            413: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-            /** @description The request's values break a rule (the message names the value). */
-            422: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["InvalidRequest"];
-                };
-            };
-            /** @description The server is busy or shutting down; try again in a moment. */
-            503: {
-                headers: {
-                    [name: string]: unknown;
-                };
-                content: {
-                    "application/json": components["schemas"]["Problem"];
-                };
-            };
-        };
-    };
     get_state_api_s__token__state_get: {
         parameters: {
             query?: never;
@@ -1456,6 +1074,78 @@ export interface operations {
             };
             /** @description The request does not fit the session now (stale page, reused step key). */
             409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The request's values break a rule (the message names the value). */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["InvalidRequest"];
+                };
+            };
+            /** @description The server is busy or shutting down; try again in a moment. */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+        };
+    };
+    step_api_s__token__step_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description The session's secret token (from the session link). */
+                token: string;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["Begin"] | components["schemas"]["Select"] | components["schemas"]["Restart"] | components["schemas"]["Rate"] | components["schemas"]["Answer"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SessionState"];
+                };
+            };
+            /** @description No session with this token, or no such face now. */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The request does not fit the session now (stale page, reused step key). */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["Problem"];
+                };
+            };
+            /** @description The request body is larger than 65536 bytes. */
+            413: {
                 headers: {
                     [name: string]: unknown;
                 };

@@ -1,33 +1,66 @@
 // What the participant reads about where they are (DOM-free, unit-tested with `node --test`):
-// the round of a GA trial, the prompt of the screen, and the short pause between trials.
-// Types come from the server's OpenAPI schema (api-types.d.ts, generated).
+// the screen a state shows, its heading, the progress line and the short pause between trials —
+// the parts a trial's task decides asked of its component (tasks/index.js finds it by the
+// view's task). Types come from the server's OpenAPI schema (api-types.d.ts, generated).
 
 /** @typedef {import("./api-types").components["schemas"]["SessionState"]} SessionState */
-/** @typedef {import("./api-types").components["schemas"]["Progress"]} Progress */
+
+/**
+ * What the shared page asks of a trial's task component (tasks/<task>.js): the screen its state
+ * shows, where the participant is within the trial (``step``: words for the progress line, or
+ * null; ``within``: the share of the trial done, 0 … 1), the screen's own heading (null: the
+ * trial's prompt) and what the pause before the trial announces.
+ * @typedef {{
+ *   screen: (state: SessionState) => string,
+ *   progress: (state: SessionState) => { step: string | null, within: number },
+ *   prompt: (state: SessionState) => string | null,
+ *   upcoming: (state: SessionState) => string,
+ * }} TaskPart
+ */
 
 /** How long the pause between trials shows before the next trial starts by itself (ms). */
 export const TRANSITION_MS = 1200;
 
 /**
- * The round of a GA trial: ``ga.generations = G`` breeds G generations after the first set
- * of faces, so the participant chooses in G + 1 rounds, generation g being round g + 1.
- * @param {Progress} p
+ * The screen a state shows: the instructions, the trial's (its task says which), the end.
+ * @param {SessionState} state
+ * @param {TaskPart | null} task the trial's task component (null outside a trial)
  */
-export function roundText(p) {
-  return `Round ${p.generation + 1} of ${p.generations + 1}`;
+export function screenOf(state, task) {
+  if (state.stage !== "trial") return state.stage;
+  if (!state.trial || !state.view) throw new Error("a state in stage 'trial' must carry its trial and its view");
+  if (!task) throw new Error(`this page cannot show a '${state.view.task}' trial`);
+  return task.screen(state);
 }
 
 /**
- * The heading of the screen: a GA trial's rating asks its own question (the study's
- * ``[rating] question``), every other screen shows the trial's prompt.
+ * The heading of the screen: the task's own (a GA trial's rating asks its question), else the
+ * trial's prompt; outside a trial, ``fallback``.
  * @param {SessionState} state
  * @param {string} fallback the heading outside a trial (the study's title)
+ * @param {TaskPart | null} task
  */
-export function screenPrompt(state, fallback) {
+export function screenPrompt(state, fallback, task) {
   const trial = state.stage === "trial" ? state.trial : null;
   if (!trial) return fallback;
-  if (trial.task === "evolve" && trial.status === "rating" && state.rating) return state.rating.question;
-  return trial.prompt;
+  return (task && task.prompt(state)) || trial.prompt;
+}
+
+/**
+ * The progress line and bar: "Trial 2 of 8", the task's step within it (else the part of the
+ * study, where it has several), and the share of the study done.
+ * @param {SessionState} state
+ * @param {TaskPart | null} task
+ * @returns {{ trial: string, detail: string, done: number }}
+ */
+export function progressOf(state, task) {
+  const p = state.progress;
+  const where = state.stage === "trial" && task ? task.progress(state) : null;
+  let detail = "";
+  if (where && where.step) detail = `· ${where.step}`;
+  else if (where && p.blocks > 1) detail = `· Part ${p.block + 1} of ${p.blocks}`;
+  const done = state.stage === "done" ? 1 : (p.trial + (where ? where.within : 0)) / p.trials;
+  return { trial: `Trial ${p.trial + 1} of ${p.trials}`, detail, done: Math.min(1, done) };
 }
 
 /**
@@ -42,13 +75,12 @@ export function startsTrial(before, after) {
 }
 
 /**
- * What the pause before a trial says: "Trial 2 of 8 — next: SAD" (a categorise trial does not
- * give its answer away: "next: name the emotion").
+ * What the pause before a trial says: "Trial 2 of 8 — next: SAD" (the task says what comes;
+ * one that must not give its answer away says what to do: "next: name the emotion").
  * @param {SessionState} state
+ * @param {TaskPart} task
  */
-export function transitionText(state) {
+export function transitionText(state, task) {
   const p = state.progress;
-  const trial = state.trial;
-  const next = trial && trial.task === "evolve" ? trial.emotion.toUpperCase() : "name the emotion";
-  return `Trial ${p.trial + 1} of ${p.trials} — next: ${next}`;
+  return `Trial ${p.trial + 1} of ${p.trials} — next: ${task.upcoming(state)}`;
 }

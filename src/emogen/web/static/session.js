@@ -1,16 +1,14 @@
 // The participant's session: consent was given on the landing page; here the instructions,
-// the trials of every block — each drawn by its task's component (tasks/evolve.js: the GA's ten
-// faces and the rating; tasks/categorise.js: one face to label) — and the completion. Every
-// step is sent with an idempotency key and the page state always comes from the server, so a
-// reload or a server restart resumes exactly.
+// the trials of every block — each drawn by its task's component, found by the trial's view in
+// the task registry (tasks/index.js) — and the completion. Every step goes to the one step
+// route with an idempotency key and the page state always comes from the server, so a reload or
+// a server restart resumes exactly.
 import { api, ApiError, newKey } from "./api.js";
 import { statusText } from "./connection.js";
 import { createFaceDisplay } from "./faces.js";
-import { roundText, screenPrompt, startsTrial, TRANSITION_MS, transitionText } from "./progress.js";
-import * as selection from "./selection.js";
-import { createCategorise } from "./tasks/categorise.js";
-import { createEvolve } from "./tasks/evolve.js";
-import { STATUS_LINES, TASK_VIEWS } from "./tasks/markup.js";
+import { progressOf, screenOf, screenPrompt, startsTrial, TRANSITION_MS, transitionText } from "./progress.js";
+import { SCREENS, TASK_VIEWS, TASKS, taskOfState } from "./tasks/index.js";
+import { STATUS_LINES } from "./tasks/markup.js";
 import { createDrawFaces, fillScale } from "./tasks/shell.js";
 
 const token = document.body.dataset.token;
@@ -18,7 +16,7 @@ const $ = (id) => document.getElementById(id);
 // the task components' screens (shared with the jsPsych plugin), before the components start
 $("view-instructions").insertAdjacentHTML("afterend", TASK_VIEWS);
 $("main").insertAdjacentHTML("beforeend", STATUS_LINES);
-const views = ["loading", "instructions", "transition", "trial", "rating", "categorise", "done"];
+const views = ["loading", "instructions", "transition", ...SCREENS, "done"];
 
 const ui = {
   state: null,
@@ -85,21 +83,12 @@ const drawFaces = createDrawFaces($, ui, (done, total, unit) => {
 
 // ---- progress -------------------------------------------------------------------------------
 function renderProgress(state) {
-  const p = state.progress;
-  const G = p.generations + 1;
-  const trial = state.stage === "trial" ? state.trial : null;
-  $("trial-progress").textContent = `Trial ${p.trial + 1} of ${p.trials}`;
-  let detail = "";
-  if (trial && trial.task === "evolve") {
-    detail = trial.status === "active" ? `· ${roundText(p)}` : "· Rating";
-  } else if (trial && p.blocks > 1) {
-    detail = `· Part ${p.block + 1} of ${p.blocks}`;
-  }
+  const task = taskOfState(state);
+  const { trial, detail, done } = progressOf(state, task);
+  $("trial-progress").textContent = trial;
   $("gen-progress").textContent = detail;
-  const within = trial && trial.task === "evolve" ? (p.generation + 1) / (G + 1) : 0;
-  const done = state.stage === "done" ? 1 : (p.trial + within) / p.trials;
-  $("meter-fill").style.width = `${Math.round(100 * Math.min(1, done))}%`;
-  $("prompt").textContent = screenPrompt(state, document.title);
+  $("meter-fill").style.width = `${Math.round(100 * done)}%`;
+  $("prompt").textContent = screenPrompt(state, document.title, task);
 }
 
 // ---- what the task components share ---------------------------------------------------------
@@ -126,9 +115,14 @@ const page = {
   fillScale,
   facesShown,
   elapsed,
-  step: (path, body) => step(path, body),
+  step: (body) => step(body),
 };
-const tasks = { evolve: createEvolve(page), categorise: createCategorise(page) };
+/** Each task's component, started in this page: view.task → {render, paint}. */
+const components = Object.fromEntries(Object.entries(TASKS).map(([name, task]) => [name, task.create(page)]));
+const componentOf = (state) => {
+  const task = taskOfState(state);
+  return task ? components[task.name] : null;
+};
 
 // ---- completion ------------------------------------------------------------------------------
 function showDone(state) {
@@ -149,7 +143,7 @@ function showDone(state) {
 
 // ---- the pause between trials: "Trial 2 of 8 — next: SAD", a tap or a key skips it -----------
 function pause(state) {
-  $("transition-text").textContent = transitionText(state);
+  $("transition-text").textContent = transitionText(state, /** @type {any} */ (taskOfState(state)));
   show("transition");
   return new Promise((resolve) => {
     const done = () => {
@@ -176,7 +170,7 @@ async function render(state) {
     // the first faces this page draws count from the page's start (receivedAt stays 0)
     ui.receivedAt = ui.receivedAt === null ? 0 : performance.now();
   }
-  const view = selection.viewOf(state);
+  const view = screenOf(state, taskOfState(state));
   if (view === "instructions") {
     $("resume-link").value = `${location.origin}/s/${token}`;
     show("instructions");
@@ -185,43 +179,41 @@ async function render(state) {
   } else if (view === "done") {
     showDone(state);
   } else {
-    const task = tasks[state.trial.task];
-    if (!task) throw new Error(`this page cannot show a '${state.trial.task}' trial`);
-    await task.render(state);
+    await componentOf(state).render(state);
   }
 }
 
-const savingLabels = { begin: ["begin", "Starting…"], rating: ["rate", "Saving…"] };
-
 function paintTask() {
-  for (const task of Object.values(tasks)) task.paint();
+  const component = componentOf(ui.state);
+  if (component) component.paint();
 }
 
-function paintBusy(path) {
-  const [id, label] = savingLabels[path] || [];
-  if (!id) return;
-  const button = $(id);
+/** The Begin button says it is starting while its step is sent. */
+function paintBusy(command) {
+  if (command !== "begin") return;
+  const button = $("begin");
   button.dataset.label = button.dataset.label || button.textContent;
-  button.textContent = ui.busy ? label : button.dataset.label;
+  button.textContent = ui.busy ? "Starting…" : button.dataset.label;
   button.disabled = ui.busy;
 }
 
-async function step(path, body) {
+/** One step of the session (its body names the command), sent to the one step route. */
+async function step(body) {
   if (ui.busy) return; // one step at a time (and the key makes a repeat harmless)
   ui.busy = true;
   setReady(false);
   paintTask();
-  paintBusy(path);
+  paintBusy(body.command);
   try {
-    const state = await call(`/api/s/${token}/${path}`, { method: "POST", body });
+    const state = await call(`/api/s/${token}/step`, { method: "POST", body });
     say("");
     ui.busy = false;
-    paintBusy(path);
+    paintBusy(body.command);
     guardHistory();
     await render(state);
   } catch (err) {
     ui.busy = false;
-    paintBusy(path);
+    paintBusy(body.command);
     if (err instanceof ApiError && err.status === 409) {
       // The page was out of date (another tab, a double submission): show the server's state.
       say("");
@@ -266,7 +258,7 @@ async function copyLink() {
 $("copy-link").addEventListener("click", copyLink);
 $("resume-link").addEventListener("focus", (event) => event.target.select());
 
-$("begin").addEventListener("click", () => step("begin", { key: newKey() }));
+$("begin").addEventListener("click", () => step({ command: "begin", key: newKey() }));
 
 async function main() {
   try {

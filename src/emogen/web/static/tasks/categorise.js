@@ -1,13 +1,38 @@
-// The categorise task's screen: one face (the same display, identity and framing as the GA's
-// tiles, larger) and the study's emotion labels in the order the server drew; optionally an
+// The categorise task's page component: one face (the same display, identity and framing as the
+// GA's tiles, larger) and the study's emotion labels in the order the server drew; optionally an
 // intensity and a confidence rating. Number keys 1-9 choose a label. Without ratings a label
-// press sends the answer; with them, Continue does once every rating is given. The rules are
-// in ../answer.js; the page's shell (session.js) gives this component its context.
+// press sends the answer; with them, Continue does once every rating is given. What the shells
+// ask of a task: see ./evolve.js's header; the rules of an answer: ./answer.js.
 import { newKey } from "../api.js";
-import * as answers from "../answer.js";
+import { distance, randomFace, responseTime, uniform } from "../observer.js";
+import * as answers from "./answer.js";
+
+const markup = `
+  <section id="view-categorise" class="view categorise" hidden aria-labelledby="prompt">
+    <div class="categorise-face" data-viewer-container><div class="slot big" id="categorise-slot"></div></div>
+    <form id="categorise-form" class="categorise-form">
+      <fieldset>
+        <legend class="sr-only">Emotions (number keys choose one)</legend>
+        <div class="labels" id="label-buttons"></div>
+      </fieldset>
+      <fieldset id="intensity-set" hidden>
+        <legend id="intensity-question">&nbsp;</legend>
+        <div class="scale" id="intensity-scale"></div>
+        <div class="scale-labels"><span id="intensity-low"></span><span id="intensity-high"></span></div>
+      </fieldset>
+      <fieldset id="confidence-set" hidden>
+        <legend id="confidence-question">&nbsp;</legend>
+        <div class="scale" id="confidence-scale"></div>
+        <div class="scale-labels"><span id="confidence-low"></span><span id="confidence-high"></span></div>
+      </fieldset>
+      <p id="categorise-status" class="status" aria-live="polite">&nbsp;</p>
+      <div class="actions-row"><button id="answer" class="primary" type="submit" disabled>Continue</button></div>
+    </form>
+  </section>
+`;
 
 /** @param {any} page the shell's context (session.js: `page`) */
-export function createCategorise(page) {
+function create(page) {
   const { $, ui } = page;
   /** @type {import("../answer.js").Answer} */
   let answer = answers.emptyAnswer();
@@ -80,8 +105,8 @@ export function createCategorise(page) {
 
   function paint() {
     const state = ui.state;
-    if (!(state && state.stage === "trial" && state.trial.task === "categorise")) return;
-    const view = state.categorise;
+    if (!(state && state.stage === "trial" && state.view.task === "categorise")) return;
+    const view = state.view;
     for (const button of $("label-buttons").querySelectorAll("button")) {
       const chosen = button.dataset.label === answer.label;
       button.setAttribute("aria-pressed", chosen ? "true" : "false");
@@ -108,14 +133,14 @@ export function createCategorise(page) {
   }
 
   function send() {
-    const view = ui.state.categorise;
+    const view = ui.state.view;
     if (ui.busy || !page.ready() || !answers.complete(view, answer)) return;
-    page.step("categorise", answers.answerBody(ui.state, answer, ui.key, page.elapsed(), ui.loadMs));
+    page.step(answers.answerBody(ui.state, answer, ui.key, page.elapsed(), ui.loadMs));
   }
 
   function chooseLabel(label) {
     if (ui.busy || !page.ready() || label === null) return;
-    const view = ui.state.categorise;
+    const view = ui.state.view;
     const first = answer.label === null;
     answer.label = label;
     if (!answers.asksIntensity(view, answer)) answer.intensity = null;
@@ -128,7 +153,7 @@ export function createCategorise(page) {
   }
 
   async function render(state) {
-    const view = state.categorise;
+    const view = state.view;
     buildLabels(view);
     buildScale("intensity", view.intensity);
     buildScale("confidence", view.confidence);
@@ -179,11 +204,107 @@ export function createCategorise(page) {
       return;
     }
     if (target instanceof HTMLInputElement || target instanceof HTMLTextAreaElement) return;
-    const label = answers.labelForKey(ui.state.categorise, event.key);
+    const label = answers.labelForKey(ui.state.view, event.key);
     if (label === null) return;
     event.preventDefault();
     chooseLabel(label);
   }, { signal: page.signal });
 
-  return { views: ["categorise"], render, paint };
+  return { render, paint };
 }
+
+// ---- where the participant is: one screen, no step within the trial ---------------------------
+const screen = () => "categorise";
+const progress = () => ({ step: null, within: 0 });
+const prompt = () => null;
+/** The pause does not give the answer away: it says what to do. */
+const upcoming = () => "name the emotion";
+
+// ---- the jsPsych plugin's data -----------------------------------------------------------------
+/** The trial's data fields (jsPsych types by name) and their values before the trial. */
+const data = {
+  /** The labels offered, in the order shown ("none": "none of these"). */
+  labels: { type: "STRING", array: true, value: null },
+  label: { type: "STRING", value: null },
+  intensity: { type: "INT", value: null },
+  confidence: { type: "INT", value: null },
+  /** Face drawn → answer sent (ms), and the face's drawing time. */
+  response_rt: { type: "INT", value: null },
+  load_ms: { type: "INT", value: null },
+};
+
+/**
+ * The answer the server accepted, added to the trial's data.
+ * @param {any} data
+ * @param {any} body
+ * @param {any} view
+ */
+function record(data, body, view) {
+  if (body.command !== "answer") return;
+  data.labels = answers.options(view).map((o) => o.label);
+  data.label = body.label;
+  data.intensity = body.intensity ?? null;
+  data.confidence = body.confidence ?? null;
+  data.response_rt = body.response_ms ?? null;
+  data.load_ms = body.load_ms ?? null;
+}
+
+/** The trial record's result: the face shown (its weights; no face id: it is no GA face). @param {any} result */
+const result = (result) => ({ label: result.label, final_face_id: null, final_weights: result.weights });
+
+/**
+ * The simulated observer at the screen: the label asked for (else the first), the middle of
+ * each rating scale shown, then Continue where there is one.
+ * @param {string} _shown the screen
+ * @param {any} state
+ * @param {{ root: HTMLElement, click: (selector: string | Element | null | undefined) => void,
+ *   check: (scale: string, value: number) => void }} act
+ * @param {{ label?: string }} options
+ */
+function drive(_shown, state, act, { label }) {
+  const view = state.view;
+  const buttons = Array.from(act.root.querySelectorAll("#label-buttons button"));
+  act.click(buttons.find((b) => /** @type {HTMLElement} */ (b).dataset.label === label) ?? buttons[0]);
+  const middle = (/** @type {any} */ s) => Math.ceil(s.points / 2);
+  if (view.intensity && !act.root.querySelector("#intensity-set")?.hasAttribute("hidden")) {
+    act.check("intensity-scale", middle(view.intensity));
+  }
+  if (view.confidence) act.check("confidence-scale", middle(view.confidence));
+  const button = /** @type {HTMLButtonElement | null} */ (act.root.querySelector("#answer"));
+  if (button && !button.hidden && !button.disabled) button.click();
+}
+
+/**
+ * A trial's data without a server (the plugin's data-only simulate): the label nearest the
+ * face by ``prototypes`` (label → weights) where given, else a label drawn at random.
+ * @param {{ labels?: string[], prototypes?: Record<string, number[]>, face?: number[], seed?: number,
+ *   median_rt?: number }} options
+ */
+export function simulate({ labels = ["happy", "sad", "angry", "fearful"], prototypes, face, seed = 1, median_rt = 2500 }) {
+  const random = uniform(seed);
+  const weights = face ?? randomFace(random, prototypes ? Object.values(prototypes)[0].length : 20);
+  let label = labels[Math.floor(random() * labels.length)];
+  if (prototypes) {
+    const known = labels.filter((l) => l in prototypes);
+    known.sort((x, y) => distance(weights, prototypes[x]) - distance(weights, prototypes[y]));
+    label = known[0] ?? label;
+  }
+  const rt = responseTime(random, median_rt);
+  return { labels: [...labels], label, final_face_id: null, final_weights: weights, response_rt: rt, rt };
+}
+
+export default {
+  name: "categorise",
+  markup,
+  screens: ["categorise"],
+  create,
+  screen,
+  progress,
+  prompt,
+  upcoming,
+  data,
+  record,
+  result,
+  drive,
+  simulate,
+};

@@ -1,12 +1,45 @@
-// The evolve task's screens (the GA): ten faces, choose the best and any others, then rate the
-// final face. The rules of a selection are in ../selection.js; the page's shell (session.js)
-// gives this component its context: the shared state, the step sender and the face display.
+// The evolve task's page component (the GA): ten faces, choose the best and any others, round
+// after round, then rate the final face. What the shells (the study's page, static/session.js;
+// the jsPsych plugin's trial) ask of a task: its screens' markup, `create(page)` (render and
+// paint them in the shell's context: the shared state, the step sender, the face display), the
+// screen a state shows, the progress line, the heading, the pause's announcement; and for the
+// plugin, the trial's data (`data`, `record`, `result`), the simulated observer at the screens
+// (`drive`) and without a server (`simulate`). The rules of a selection: ./selection.js.
 import { newKey } from "../api.js";
-import * as selection from "../selection.js";
+import { choose, normal, randomFace, responseTime, uniform } from "../observer.js";
+import * as selection from "./selection.js";
+
+const markup = `
+  <section id="view-trial" class="view" hidden aria-labelledby="prompt">
+    <p id="grid-help" class="sr-only">Faces. Tab or the arrow keys move between faces; Enter or Space selects a face or removes it; B makes the focused face the best one.</p>
+    <div id="grid" class="grid" data-viewer-container role="group" aria-describedby="grid-help"></div>
+    <div class="actions">
+      <p id="star-help" class="legend"><span class="legend-best">★ best</span> · <span class="legend-ok">✓ also acceptable</span> · the ★ on a face makes it the best</p>
+      <p id="selection-status" class="status" aria-live="polite">&nbsp;</p>
+      <div class="buttons">
+        <button id="restart" type="button" class="secondary">Start again</button>
+        <button id="next" type="button" class="primary" disabled>Next round</button>
+      </div>
+    </div>
+  </section>
+
+  <section id="view-rating" class="view rating" hidden>
+    <div class="rating-face" data-viewer-container><div class="slot big" id="rating-slot"></div></div>
+    <form id="rating-form" class="rating-form">
+      <fieldset>
+        <legend id="rating-question" class="sr-only">&nbsp;</legend>
+        <div class="scale" id="rating-scale"></div>
+        <div class="scale-labels"><span id="rating-low"></span><span id="rating-high"></span></div>
+      </fieldset>
+      <div class="actions-row"><button id="rate" class="primary" type="submit" disabled>Continue</button></div>
+    </form>
+  </section>
+`;
 
 /** @param {any} page the shell's context (session.js: `page`) */
-export function createEvolve(page) {
+function create(page) {
   const { $, ui } = page;
+  const view = () => ui.state.view;
   // The grid also holds the 3D viewer's canvas: always go through the cells.
   const cellsOf = () => Array.from($("grid").querySelectorAll(":scope > .cell"));
   /** @type {{ elite: number | null, others: number[], focus: number }} */
@@ -15,7 +48,7 @@ export function createEvolve(page) {
   // ---- selection (kept in sessionStorage until submitted, so a reload keeps the clicks) -----
   function selectionKey() {
     const s = ui.state;
-    return `emogen-sel:${page.token}:${s.progress.trial}:${s.trial.attempt}:${s.progress.generation}`;
+    return `emogen-sel:${page.token}:${s.progress.trial}:${s.trial.attempt}:${s.view.generation}`;
   }
 
   function saveSelection() {
@@ -42,8 +75,8 @@ export function createEvolve(page) {
   }
 
   // A click (toggle) or the star (makeBest): the pure rule decides, the page shows the result.
-  function choose(rule, id) {
-    const { choice, refused } = rule({ elite: sel.elite, others: sel.others }, id, ui.state.limits);
+  function decide(rule, id) {
+    const { choice, refused } = rule({ elite: sel.elite, others: sel.others }, id, view().limits);
     if (refused) {
       page.say(refused);
       return;
@@ -54,13 +87,17 @@ export function createEvolve(page) {
     paint();
   }
 
-  const toggle = (id) => choose(selection.toggle, id);
-  const makeBest = (id) => choose(selection.makeBest, id);
+  const toggle = (id) => decide(selection.toggle, id);
+  const makeBest = (id) => decide(selection.makeBest, id);
 
   function paint() {
-    if (!(ui.state && ui.state.stage === "trial" && ui.state.trial.status === "active")) return;
-    if (ui.state.trial.task !== "evolve") return;
-    const { min_selections: min, max_selections: max } = ui.state.limits;
+    if (!(ui.state && ui.state.stage === "trial" && ui.state.view.task === "evolve")) return;
+    if (ui.state.trial.status === "rating") {
+      paintRate();
+      return;
+    }
+    if (ui.state.trial.status !== "active") return;
+    const { min_selections: min, max_selections: max } = view().limits;
     for (const cell of cellsOf()) {
       const id = Number(cell.dataset.face);
       const face = cell.querySelector(".face");
@@ -82,7 +119,7 @@ export function createEvolve(page) {
     else if (n < min) status = `Choose at least ${min} faces (${n} chosen).`;
     else status = `${n} chosen (up to ${max}): ★ best + ${sel.others.length} also acceptable. Then press Next round.`;
     $("selection-status").textContent = status;
-    $("next").disabled = ui.busy || ui.loading || !selection.complete(sel, ui.state.limits);
+    $("next").disabled = ui.busy || ui.loading || !selection.complete(sel, view().limits);
     $("next").textContent = ui.busy ? "Saving…" : "Next round";
   }
 
@@ -153,7 +190,7 @@ export function createEvolve(page) {
   }
 
   async function showTrial(state) {
-    const pop = state.population;
+    const pop = state.view.population;
     const ids = pop.faces.map((f) => f.id);
     buildGrid(ids.length);
     const cells = cellsOf();
@@ -162,7 +199,7 @@ export function createEvolve(page) {
     });
     restoreSelection(ids);
     page.show("trial");
-    $("restart").hidden = !state.allow_restart;
+    $("restart").hidden = !state.view.allow_restart;
     page.setReady(false);
     ui.loading = true;
     paint();
@@ -179,14 +216,21 @@ export function createEvolve(page) {
   }
 
   // ---- rating --------------------------------------------------------------------------------
+  // the Continue button says when the rating is being saved; it is pressed once a point is chosen
+  function paintRate() {
+    const rate = $("rate");
+    rate.textContent = ui.busy ? "Saving…" : "Continue";
+    rate.disabled = ui.busy || !$("rating-scale").querySelector('input[name="rating"]:checked');
+  }
+
   async function showRating(state) {
-    const r = state.rating;
+    const r = state.view.rating;
     $("rating-question").textContent = r.question;
     $("rating-low").textContent = `1 = ${r.low_label}`;
     $("rating-high").textContent = `${r.points} = ${r.high_label}`;
     page.fillScale($("rating-scale"), "rating", r.points);
     ui.key = newKey();
-    $("rate").disabled = true;
+    paintRate();
     page.show("rating");
     page.setReady(false);
     if (r.face) await page.drawFaces([$("rating-slot")], [r.face], state.trial.identity);
@@ -196,7 +240,7 @@ export function createEvolve(page) {
 
   function position() {
     const s = ui.state;
-    return { trial: s.progress.trial, attempt: s.trial.attempt, generation: s.progress.generation };
+    return { trial: s.progress.trial, attempt: s.trial.attempt, generation: s.view.generation };
   }
 
   $("grid").addEventListener("click", onGridClick);
@@ -204,13 +248,13 @@ export function createEvolve(page) {
 
   $("next").addEventListener("click", () => {
     if (sel.elite === null || ui.busy) return;
-    page.step("select", selection.selectionBody(ui.state, sel, ui.key, page.elapsed(), ui.loadMs));
+    page.step(selection.selectionBody(ui.state, sel, ui.key, page.elapsed(), ui.loadMs));
   });
 
   $("restart").addEventListener("click", () => {
     if (ui.busy) return;
     if (!confirm("Start this face again from a new set of faces?")) return;
-    page.step("restart", { key: ui.key, ...position(), response_ms: page.elapsed(), load_ms: ui.loadMs });
+    page.step({ command: "restart", key: ui.key, ...position(), response_ms: page.elapsed(), load_ms: ui.loadMs });
   });
 
   $("rating-scale").addEventListener("change", () => {
@@ -221,7 +265,8 @@ export function createEvolve(page) {
     event.preventDefault();
     const checked = $("rating-scale").querySelector('input[name="rating"]:checked');
     if (!checked || ui.busy) return;
-    page.step("rating", {
+    page.step({
+      command: "rate",
       key: ui.key,
       trial: ui.state.progress.trial,
       value: Number(checked.value),
@@ -230,9 +275,163 @@ export function createEvolve(page) {
   });
 
   return {
-    views: ["trial", "rating"],
     /** @param {any} state */
     render: (state) => (state.trial.status === "rating" ? showRating(state) : showTrial(state)),
     paint,
   };
 }
+
+// ---- where the participant is ------------------------------------------------------------------
+/** @param {any} state */
+const screen = (state) => (state.trial.status === "rating" ? "rating" : "trial");
+
+/**
+ * The round (or the rating), and the share of the trial done: G + 1 rounds and the rating.
+ * @param {any} state
+ */
+function progress(state) {
+  const view = state.view;
+  const step = state.trial.status === "active" ? selection.roundText(view) : "Rating";
+  return { step, within: (view.generation + 1) / (view.generations + 2) };
+}
+
+/** The rating asks its own question (the study's ``[rating] question``). @param {any} state */
+const prompt = (state) => (state.trial.status === "rating" && state.view.rating ? state.view.rating.question : null);
+
+/** The emotion to make: "next: SAD". @param {any} state */
+const upcoming = (state) => state.view.emotion.toUpperCase();
+
+// ---- the jsPsych plugin's data -----------------------------------------------------------------
+/** The trial's data fields (jsPsych types by name) and their values before the trial. */
+const data = {
+  /** The emotion the trial asked for (from the trial's record). */
+  emotion: { type: "STRING", value: null },
+  /** One entry per generation answered: {attempt, generation, shown, elite, others, rt, load_ms}. */
+  generations: {
+    type: "COMPLEX",
+    array: true,
+    nested: {
+      attempt: { type: "INT" }, generation: { type: "INT" }, shown: { type: "INT", array: true },
+      elite: { type: "INT" }, others: { type: "INT", array: true }, rt: { type: "INT" }, load_ms: { type: "INT" },
+    },
+    value: [],
+  },
+  /** "Start again" presses: {attempt, generation, rt}. */
+  restarts: { type: "COMPLEX", array: true, value: [] },
+  rating: { type: "INT", value: null },
+  rating_rt: { type: "INT", value: null },
+};
+
+/**
+ * A step the server accepted, added to the trial's data from its body and the view it answered.
+ * @param {any} data
+ * @param {any} body
+ * @param {any} view
+ */
+function record(data, body, view) {
+  if (body.command === "select") {
+    data.generations.push({
+      attempt: body.attempt,
+      generation: body.generation,
+      shown: view.population.faces.map((/** @type {any} */ f) => f.id),
+      elite: body.elite,
+      others: [...body.others],
+      rt: body.response_ms ?? null,
+      load_ms: body.load_ms ?? null,
+    });
+  } else if (body.command === "restart") {
+    data.restarts.push({ attempt: body.attempt, generation: body.generation, rt: body.response_ms ?? null });
+  } else if (body.command === "rate") {
+    data.rating = body.value;
+    data.rating_rt = body.response_ms ?? null;
+  }
+}
+
+/** The trial record's result: the emotion and the final face (the last best face). @param {any} result */
+const result = (result) => ({
+  emotion: result.emotion,
+  final_face_id: result.final_face ? result.final_face.id : null,
+  final_weights: result.final_face ? result.final_face.weights : null,
+});
+
+/**
+ * The simulated observer at the screens: the faces nearest its target as the best and the
+ * others (``chosen`` faces within the study's limits), then its rating (default 70% of the scale).
+ * @param {string} shown the screen
+ * @param {any} state
+ * @param {{ click: (selector: string) => void, check: (scale: string, value: number) => void }} act
+ * @param {{ target: number[], chosen?: number, noise?: number, rating?: number }} options
+ */
+function drive(shown, state, act, { target, chosen = 3, noise = 0, rating }) {
+  const view = state.view;
+  if (shown === "trial") {
+    const { min_selections: min, max_selections: max } = view.limits;
+    const pick = choose(view.population.faces, target, Math.min(max, Math.max(min, chosen)), { noise });
+    for (const id of [pick.elite, ...pick.others]) act.click(`#grid > .cell[data-face="${id}"] .face`);
+    act.click("#next");
+  } else if (shown === "rating") {
+    act.check("rating-scale", rating ?? Math.ceil(0.7 * view.rating.points));
+    act.click("#rate");
+  }
+}
+
+/** A child of two chosen faces: each weight from either, mutated (p 0.2, sd 0.15), in [0, 1]. */
+function child(random, a, b) {
+  return a.map((w, i) => {
+    const gene = random() < 0.5 ? w : b[i];
+    const mutated = random() < 0.2 ? gene + 0.15 * normal(random) : gene;
+    return Math.min(1, Math.max(0, mutated));
+  });
+}
+
+/**
+ * A trial's data without a server (the plugin's data-only simulate): the observer meets a
+ * stand-in for the server's GA — random faces, then children of the chosen faces (uniform
+ * crossover, Gaussian mutation) — made only so a lab can dry-run its timeline and its analysis
+ * code; the faces it writes are not emogen's GA's. ``generations`` + 1 generations of ``faces``.
+ * @param {{ target: number[] | Record<string, number>, generations?: number, faces?: number,
+ *   chosen?: number, noise?: number, seed?: number, median_rt?: number, rating?: number }} options
+ */
+export function simulate({ target, generations = 10, faces = 10, chosen = 3, noise = 0, seed = 1, median_rt = 4000, rating }) {
+  const goal = Array.isArray(target) ? target : Object.values(target);
+  const random = uniform(seed);
+  let nextId = 0;
+  let population = Array.from({ length: faces }, () => ({ id: nextId++, weights: randomFace(random, goal.length) }));
+  const rows = [];
+  let best = population[0];
+  for (let g = 0; g <= generations; g++) {
+    const { elite, others } = choose(population, goal, chosen, { noise, random });
+    rows.push({
+      attempt: 0, generation: g, shown: population.map((f) => f.id), elite, others: [...others],
+      rt: responseTime(random, median_rt), load_ms: 0,
+    });
+    const picked = [elite, ...others].map((id) => population.find((f) => f.id === id));
+    best = /** @type {any} */ (picked[0]);
+    const children = Array.from({ length: faces - 1 }, () => {
+      const a = picked[Math.floor(random() * picked.length)];
+      const b = picked[Math.floor(random() * picked.length)];
+      return { id: nextId++, weights: child(random, /** @type {any} */ (a).weights, /** @type {any} */ (b).weights) };
+    });
+    population = [best, ...children];
+  }
+  return {
+    generations: rows, final_face_id: best.id, final_weights: best.weights, rating: rating ?? null,
+    rt: rows.reduce((t, row) => t + row.rt, 0),
+  };
+}
+
+export default {
+  name: "evolve",
+  markup,
+  screens: ["trial", "rating"],
+  create,
+  screen,
+  progress,
+  prompt,
+  upcoming,
+  data,
+  record,
+  result,
+  drive,
+  simulate,
+};

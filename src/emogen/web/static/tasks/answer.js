@@ -1,10 +1,11 @@
-// The categorise screen's rules, free of the DOM (unit-tested with `node --test`): the labels
-// offered and their keys, when an answer is complete, and the body of the categorise step.
-// Types come from the server's OpenAPI schema (api-types.d.ts, generated).
+// The categorise task's rules, free of the DOM (unit-tested with `node --test`): the labels
+// offered and their keys, when an answer is complete, and the body of the answer step. The
+// screen is tasks/categorise.js. Types come from the server's OpenAPI schema (../api-types.d.ts,
+// generated).
 
-/** @typedef {import("./api-types").components["schemas"]["SessionState"]} SessionState */
-/** @typedef {import("./api-types").components["schemas"]["CategoriseView"]} CategoriseView */
-/** @typedef {import("./api-types").components["schemas"]["Categorisation"]} CategorisationBody */
+/** @typedef {import("../api-types").components["schemas"]["SessionState"]} SessionState */
+/** @typedef {import("../api-types").components["schemas"]["CategoriseView"]} CategoriseView */
+/** @typedef {import("../api-types").components["schemas"]["Answer"]} AnswerBody */
 
 /** The answer of "none of these" (where the block offers it). */
 export const NONE = "none";
@@ -99,20 +100,32 @@ export function missing(view, answer) {
 }
 
 /**
- * The body of the categorise step for the trial shown in ``state``.
+ * The categorise view of a state in a categorise trial.
+ * @param {SessionState} state
+ * @returns {CategoriseView}
+ */
+export function categoriseView(state) {
+  const view = state.view;
+  if (!state.trial || !view || view.task !== "categorise") throw new Error("not a categorise trial's state");
+  return view;
+}
+
+/**
+ * The body of the answer step for the trial shown in ``state``.
  * @param {SessionState} state
  * @param {Answer} answer
  * @param {string} key
  * @param {number} responseMs faces drawn → answer sent
  * @param {number} [loadMs] the page's time from receiving the face to drawing it
- * @returns {CategorisationBody}
+ * @returns {AnswerBody}
  */
 export function answerBody(state, answer, key, responseMs, loadMs) {
-  const view = state.categorise;
-  if (!view || !state.trial || !complete(view, answer) || answer.label === null) {
-    throw new Error("a categorisation needs a categorise trial and a complete answer");
+  const view = categoriseView(state);
+  if (!complete(view, answer) || answer.label === null) {
+    throw new Error("an answer needs a categorise trial and a complete answer");
   }
   return {
+    command: "answer",
     key,
     trial: state.progress.trial,
     label: answer.label,

@@ -1,5 +1,5 @@
-// Unit tests of the categorise screen's rules (src/emogen/web/static/answer.js) and of the
-// view a categorise state shows (selection.js viewOf): `node --test tests/web/js/`.
+// Unit tests of the categorise task's rules (src/emogen/web/static/tasks/answer.js) and of what
+// its component tells the shared page and the plugin (tasks/categorise.js): `node --test tests/web/js/`.
 import assert from "node:assert/strict";
 import { test } from "node:test";
 
@@ -12,33 +12,21 @@ import {
   labelText,
   missing,
   options,
-} from "../../../src/emogen/web/static/answer.js";
-import { viewOf } from "../../../src/emogen/web/static/selection.js";
-import { sessionState } from "./states.mjs";
+} from "../../../src/emogen/web/static/tasks/answer.js";
+import { screenOf } from "../../../src/emogen/web/static/progress.js";
+import categorise from "../../../src/emogen/web/static/tasks/categorise.js";
+import { taskOf } from "../../../src/emogen/web/static/tasks/index.js";
+import { categoriseState } from "./states.mjs";
 
 const scale = { question: "How intense?", points: 7, low_label: "weak", high_label: "strong" };
 
 function view(over = {}) {
-  return {
-    question: "Which emotion?",
-    face: { id: 0, weights: [0.1, 0.2] },
-    labels: ["sad", "happy", "fearful"],
-    none_option: false,
-    intensity: null,
-    confidence: null,
-    ...over,
-  };
+  return categoriseState(over).view;
 }
 
 function state(v) {
-  return sessionState(
-    {
-      progress: { trial: 6, trials: 9, block: 2, blocks: 3, generation: 0, generations: 9 },
-      allow_restart: true,
-      categorise: v,
-    },
-    { position: 6, block: 2, task: "categorise", emotion: "", prompt: "Which emotion?", identity: "female-medium" },
-  );
+  return categoriseState(v, { progress: { trial: 6, trials: 9, block: 2, blocks: 3 } },
+    { position: 6, block: 2, identity: "female-medium" });
 }
 
 test("labels are offered in the server's order, 'none of these' last, keyed 1-9", () => {
@@ -86,14 +74,32 @@ test("the body sends the ratings asked, and no intensity with 'none of these'", 
   const v = view({ intensity: scale, confidence: scale, none_option: true });
   const body = answerBody(state(v), { label: "none", intensity: 5, confidence: 2 }, "k1", 812, 40);
   assert.deepEqual(body, {
-    key: "k1", trial: 6, label: "none", intensity: null, confidence: 2, response_ms: 812, load_ms: 40,
+    command: "answer", key: "k1", trial: 6, label: "none", intensity: null, confidence: 2, response_ms: 812,
+    load_ms: 40,
   });
   const plain = answerBody(state(view()), { label: "sad", intensity: 4, confidence: 4 }, "k2", 300);
-  assert.deepEqual(plain, { key: "k2", trial: 6, label: "sad", intensity: null, confidence: null, response_ms: 300 });
+  assert.deepEqual(plain, {
+    command: "answer", key: "k2", trial: 6, label: "sad", intensity: null, confidence: null, response_ms: 300,
+  });
   assert.throws(() => answerBody(state(v), emptyAnswer(), "k3", 1), /complete answer/);
 });
 
-test("a categorise trial's state shows the categorise view", () => {
-  assert.equal(viewOf(state(view())), "categorise");
-  assert.throws(() => viewOf(state(null)), /must carry its face/);
+test("a categorise trial's state shows the categorise screen, found by the registry", () => {
+  const s = state(view());
+  assert.equal(taskOf(s.view.task), categorise);
+  assert.equal(screenOf(s, categorise), "categorise");
+  assert.throws(() => screenOf({ ...s, view: null }, categorise), /must carry its trial and its view/);
+  assert.throws(() => answerBody(categoriseState({}, { view: null }), { label: "sad", intensity: null, confidence: null }, "k", 1),
+    /not a categorise trial/);
+});
+
+test("the plugin's data: the answer and the labels offered; the result's face has no id", () => {
+  const v = view({ none_option: true, intensity: scale });
+  const data = {};
+  categorise.record(data, { command: "answer", key: "k", trial: 6, label: "happy", intensity: 3, confidence: null,
+    response_ms: 812, load_ms: 40 }, v);
+  assert.deepEqual(data, { labels: ["sad", "happy", "fearful", "none"], label: "happy", intensity: 3, confidence: null,
+    response_rt: 812, load_ms: 40 });
+  assert.deepEqual(categorise.result({ task: "categorise", label: "happy", weights: [0.1, 0.2] }),
+    { label: "happy", final_face_id: null, final_weights: [0.1, 0.2] });
 });

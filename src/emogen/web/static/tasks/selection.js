@@ -1,34 +1,17 @@
-// The participant page's state handling, free of the DOM (unit-tested with `node --test`):
-// which view a session state shows, and the selection a participant builds in a generation.
-// Types come from the server's OpenAPI schema (api-types.d.ts, generated; see tests/web/test_js.py).
+// The evolve task's rules, free of the DOM (unit-tested with `node --test`): the selection a
+// participant builds in a generation, the body of its select step and the round it is in. The
+// screens are tasks/evolve.js. Types come from the server's OpenAPI schema (../api-types.d.ts,
+// generated; see tests/web/test_js.py).
 
-/** @typedef {import("./api-types").components["schemas"]["SessionState"]} SessionState */
-/** @typedef {import("./api-types").components["schemas"]["Limits"]} Limits */
-/** @typedef {import("./api-types").components["schemas"]["Selection"]} SelectionBody */
-/** @typedef {"instructions" | "trial" | "rating" | "categorise" | "done"} View */
+/** @typedef {import("../api-types").components["schemas"]["SessionState"]} SessionState */
+/** @typedef {import("../api-types").components["schemas"]["EvolveView"]} EvolveView */
+/** @typedef {import("../api-types").components["schemas"]["Limits"]} Limits */
+/** @typedef {import("../api-types").components["schemas"]["Select"]} SelectBody */
 
 /**
  * A selection in progress: the best face (elite) and the others, in the order chosen.
  * @typedef {{ elite: number | null, others: number[] }} Choice
  */
-
-/**
- * The view a state shows: an evolve trial shows its faces ("trial"), or its rating once it waits
- * for one; a categorise trial shows its face and labels.
- * @param {SessionState} state
- * @returns {View}
- */
-export function viewOf(state) {
-  if (state.stage === "trial") {
-    if (!state.trial) throw new Error("a state in stage 'trial' must carry its trial");
-    if (state.trial.task === "categorise") {
-      if (!state.categorise) throw new Error("a categorise trial's state must carry its face");
-      return "categorise";
-    }
-    return state.trial.status === "rating" ? "rating" : "trial";
-  }
-  return state.stage;
-}
 
 /**
  * How many faces are chosen.
@@ -109,23 +92,45 @@ export function restoreChoice(saved, ids) {
 }
 
 /**
+ * The evolve view of a state in an evolve trial.
+ * @param {SessionState} state
+ * @returns {EvolveView}
+ */
+export function evolveView(state) {
+  const view = state.view;
+  if (!state.trial || !view || view.task !== "evolve") throw new Error("not an evolve trial's state");
+  return view;
+}
+
+/**
+ * The round of a GA trial: ``ga.generations = G`` breeds G generations after the first set
+ * of faces, so the participant chooses in G + 1 rounds, generation g being round g + 1.
+ * @param {{ generation: number, generations: number }} view
+ */
+export function roundText(view) {
+  return `Round ${view.generation + 1} of ${view.generations + 1}`;
+}
+
+/**
  * The body of the select step for the generation shown in ``state``.
  * @param {SessionState} state
  * @param {Choice} choice
  * @param {string} key
  * @param {number} responseMs
  * @param {number} [loadMs] the page's time from receiving this population to its faces drawn
- * @returns {SelectionBody}
+ * @returns {SelectBody}
  */
 export function selectionBody(state, choice, key, responseMs, loadMs) {
+  const view = evolveView(state);
   if (!state.trial || choice.elite === null) {
     throw new Error("a selection needs a trial and a best face");
   }
   return {
+    command: "select",
     key,
     trial: state.progress.trial,
     attempt: state.trial.attempt,
-    generation: state.progress.generation,
+    generation: view.generation,
     elite: choice.elite,
     others: [...choice.others],
     response_ms: responseMs,
