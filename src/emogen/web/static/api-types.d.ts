@@ -331,14 +331,10 @@ export interface components {
         };
         /**
          * Created
-         * @description A session made (or resumed): its secret token, its page and its state (the state's
-         *     schema is :func:`state_model`'s).
+         * @description A session made (or resumed): its secret token, its page and its state.
          */
         Created: {
-            /** State */
-            state: {
-                [key: string]: unknown;
-            };
+            state: components["schemas"]["SessionState"];
             /** Token */
             token: string;
             /** Url */
