@@ -192,7 +192,11 @@ def test_a_toy_task_pilots_exports_and_replays(toy: None, tmp_path: Path, ict_di
         con.execute("UPDATE toy_face_ratings SET weights = '[0.5]' WHERE id = 1")
     result = run(app, ["replay", "1", "--database-url", url, "--json"])
     report = json.loads(result.output)
-    assert result.exit_code != 0 and report["ok"] is False and report["mismatches"] == ["trial 3: face"]
+    assert (
+        result.exit_code != 0
+        and report["ok"] is False
+        and report["mismatches"] == ["trial 3: face"]
+    )
 
 
 def test_a_block_of_an_unregistered_task_is_refused_by_name() -> None:
