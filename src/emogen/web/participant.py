@@ -57,9 +57,13 @@ def landing(request: Request) -> HTMLResponse:
     note_parameters(request.app.state.link_parameters, query.keys())
     given = query.get(cfg.participant_param) or query.get("participant")
     if cfg.participant_required and not given:
-        response = _page(request, "error.html", heading="Your participant id is missing",
-                         detail="The link you opened has no participant id.",
-                         advice=missing_advice(cfg.participant_param))  # fmt: skip
+        response = _page(
+            request,
+            "error.html",
+            heading="Your participant id is missing",
+            detail="The link you opened has no participant id.",
+            advice=missing_advice(cfg.participant_param),
+        )
         response.status_code = 400
         return response
     return _page(request, "landing.html")

@@ -30,8 +30,10 @@ def _column(frame: object, names: tuple[str, ...]) -> list[str | None] | None:
     for name in names:
         if name in cols:
             values = frame[cols[name]].tolist()  # type: ignore[index]
-            return [None if v is None or str(v).strip() in ("", "nan") else str(v).strip()
-                    for v in values]  # fmt: skip
+            return [
+                None if v is None or str(v).strip() in ("", "nan") else str(v).strip()
+                for v in values
+            ]
     return None
 
 
