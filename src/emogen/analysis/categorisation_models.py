@@ -202,15 +202,6 @@ def label_dummies(avail: np.ndarray) -> np.ndarray:
     return d
 
 
-def cluster_covariance(info: np.ndarray, scores: np.ndarray, groups: np.ndarray) -> np.ndarray:
-    """Sandwich covariance with scores summed within clusters (participants), with the small-
-    sample factor G / (G − 1)."""
-    sums = pd.DataFrame(scores).groupby(groups).sum().to_numpy()
-    g = len(sums)
-    bread = np.linalg.inv(info)
-    return np.asarray(bread @ (sums.T @ sums) @ bread * g / max(g - 1, 1))
-
-
 def shuffled_control(
     ans: ModelAnswers, *, n_shuffles: int, rng: np.random.Generator
 ) -> dict[str, Any]:
