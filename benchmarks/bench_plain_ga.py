@@ -12,9 +12,8 @@ picks the faces closest by cosine distance; runs advanced together as arrays. Tw
   with the generator's own methods run by run, later generations from one block of doubles per
   run read front to back (stream 2, :mod:`emogen.ga.draws`); it keeps every generation's errors
   and selections (what the tables are made of). The generators are built by
-  :func:`emogen.rng.generation_rngs` — the same objects EmoGen uses, so the seeding method is
-  not what is compared (numpy's ``default_rng`` one by one would add ~0.07 s to the plain side
-  and flatter EmoGen). It returns the same numbers as EmoGen, bit for bit (checked below): the
+  :func:`emogen.rng.generation_rngs` (numpy's ``default_rng`` one by one, as EmoGen builds
+  them), so the seeding is not what is compared. It returns the same numbers as EmoGen, bit for bit (checked below): the
   same algorithm, the same draws, the same selections.
 * **plain, one generator** — all runs from one generator in a few calls, no per-run seeds: the
   cost of a simulation that could not replay a run from its seed. Shown for scale only; it

@@ -85,7 +85,10 @@ class CollisionSolution:
 
 
 def _block_solve(a: np.ndarray, b: np.ndarray, reg: float, upper: np.ndarray) -> np.ndarray:
-    """Solver 1: argmin_{0 ≤ w ≤ upper} w₁‖a w − b‖² + reg ‖w‖² (reg = (1 − w₁) M)."""
+    """Solver 1: argmin_{0 ≤ w ≤ upper} w₁‖a w − b‖² + reg ‖w‖² (reg = (1 − w₁) M).
+
+    Kept for trials corrected with it: needed by
+    tests/study/test_recorded_before.py::test_recorded_study_replays_exactly."""
     from scipy.optimize import lsq_linear
 
     n = a.shape[1]

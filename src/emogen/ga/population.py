@@ -37,12 +37,18 @@ class Population:
     parent_ids: np.ndarray
     operators: np.ndarray
     generation: int
-    trial: int
+    attempt: int
     correctives: np.ndarray | None = None
     corrective_names: tuple[str, ...] = ()
 
     def __len__(self) -> int:
         return len(self.ids)
+
+    @property
+    def trial(self) -> int:
+        """The old name of :attr:`attempt`, read by src/emogen/study/trials.py until its
+        rewrite (issue 38) reads ``attempt``; remove it then."""
+        return self.attempt
 
     def row(self, i: int) -> Population:
         """Face ``i`` as a population of one."""
@@ -54,7 +60,7 @@ class Population:
             readonly(self.parent_ids[s]),
             readonly(self.operators[s]),
             self.generation,
-            self.trial,
+            self.attempt,
             None if self.correctives is None else readonly(self.correctives[s]),
             self.corrective_names,
         )
@@ -62,7 +68,7 @@ class Population:
     def to_dict(self) -> dict[str, Any]:
         return {
             "generation": self.generation,
-            "trial": self.trial,
+            "attempt": self.attempt,
             "ids": self.ids.tolist(),
             "parent_ids": self.parent_ids.tolist(),
             "operators": self.operators.tolist(),

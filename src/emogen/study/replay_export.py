@@ -148,9 +148,9 @@ def _replay_trial(report: ReplayReport, config: StudyConfig, rig: Rig,
                         **({} if pd.isna(stream) else {"stream": int(stream)}))  # fmt: skip
         for key in keys:
             where = f"session {sid} trial {pos + 1} attempt {key[2] + 1} generation {key[3]}"
-            if (engine.trial, engine.generation) != key[2:]:
+            if (engine.attempt, engine.generation) != key[2:]:
                 report.mismatches.append(
-                    f"{where}: replay is at attempt {engine.trial + 1} generation "
+                    f"{where}: replay is at attempt {engine.attempt + 1} generation "
                     f"{engine.generation}"
                 )
                 return

@@ -192,7 +192,7 @@ class SessionSteps:
             )
         )
         shown = store_population(db, row, engine.reset())
-        row.attempt = engine.trial
+        row.attempt = engine.attempt
         row.generation = engine.generation
         row.engine_state = engine.to_json()
         return replace(shown, trial=row)

@@ -57,7 +57,7 @@ class TrialEngines:
         )
         row.status = "active"
         row.started_at = utcnow()
-        row.attempt = engine.trial
+        row.attempt = engine.attempt
         row.generation = engine.generation
         shown = store_population(db, row, engine.ask())
         row.engine_state = engine.to_json()
