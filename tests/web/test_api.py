@@ -128,9 +128,17 @@ def test_participants_cannot_reach_researcher_data(client: TestClient, app: Any)
     # a participant's state holds only their own session
     state = client.get(f"/api/s/{token}/state").json()
     assert set(state) == {
-        "stage", "participant_id", "progress", "limits", "allow_restart", "trial",
-        "population", "rating", "categorise", "completion",
-    }  # fmt: skip
+        "stage",
+        "participant_id",
+        "progress",
+        "limits",
+        "allow_restart",
+        "trial",
+        "population",
+        "rating",
+        "categorise",
+        "completion",
+    }
     app.state.researcher_token = None
     r = client.get("/api/researcher/status", headers=AUTH)
     assert r.status_code == 403 and "EMOGEN_RESEARCHER_TOKEN" in r.json()["detail"]

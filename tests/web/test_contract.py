@@ -101,12 +101,22 @@ def test_every_error_code_matches_the_schema(
     cases: list[tuple[str, str, Response, int]] = [
         ("/api/researcher/status", "get", client.get("/api/researcher/status"), 403),
         ("/api/s/{token}/state", "get", client.get(f"/api/s/{'x' * 20}/state"), 404),
-        ("/api/sessions", "post", client.post("/api/sessions", json={"participant_id": "contract-1"}), 409),
-        (select, "post", client.post(f"/api/s/{token}/select", json={**good, "generation": 3}), 409),
+        (
+            "/api/sessions",
+            "post",
+            client.post("/api/sessions", json={"participant_id": "contract-1"}),
+            409,
+        ),
+        (
+            select,
+            "post",
+            client.post(f"/api/s/{token}/select", json={**good, "generation": 3}),
+            409,
+        ),
         (select, "post", client.post(f"/api/s/{token}/select", json={**good, "elite": "3"}), 422),
         (select, "post", client.post(f"/api/s/{token}/select", json={**good, "elite": 999}), 422),
         (select, "post", client.post(f"/api/s/{token}/select", content=b"{" * 70_000), 413),
-    ]  # fmt: skip
+    ]
     for template, method, response, status in cases:
         assert response.status_code == status, (template, response.text)
         assert isinstance(response.json()["detail"], str) and response.json()["detail"]

@@ -149,9 +149,11 @@ def test_the_same_step_sent_at_once_to_two_workers_is_stored_once(
 MIXED_STUDY = {
     **SMALL_STUDY,
     "name": "mixed-fault",
-    "blocks": [{"task": "evolve"}, {"task": "categorise", "own": True, "random": 2,
-                                    "intensity": True}],
-}  # fmt: skip
+    "blocks": [
+        {"task": "evolve"},
+        {"task": "categorise", "own": True, "random": 2, "intensity": True},
+    ],
+}
 
 
 @pytest.mark.parametrize("workers", [1, 2])
@@ -167,8 +169,9 @@ def test_sigkill_during_categorisation_loses_and_duplicates_nothing(
     try:
         token = post(server.url, "/api/sessions", {"participant_id": "K-3"})["token"]
         state = post(server.url, f"/api/s/{token}/begin", {"key": new_key()})
-        state = run_to_end(state, call, stop=lambda s: s["stage"] == "trial"
-                           and s["trial"]["task"] == "categorise")  # fmt: skip
+        state = run_to_end(
+            state, call, stop=lambda s: s["stage"] == "trial" and s["trial"]["task"] == "categorise"
+        )
         state = call("categorise", categorise_body(state))  # one answered
         server.kill()  # 1. between steps: the answer and the next face were committed
         server.start()

@@ -48,8 +48,16 @@ def test_a_trailing_newline_is_no_second_participant(client: TestClient) -> None
     assert r.status_code == 422 and "participant id" in r.json()["detail"]
 
 
-@pytest.mark.parametrize("path", ["/s/", "/s", "/S/abcdefghijklmnopqrstuvwxyz012345",
-                                  "/s/abcdefghijklmnopqrstuvwxyz012345/x", "/s/a/b/c"])  # fmt: skip
+@pytest.mark.parametrize(
+    "path",
+    [
+        "/s/",
+        "/s",
+        "/S/abcdefghijklmnopqrstuvwxyz012345",
+        "/s/abcdefghijklmnopqrstuvwxyz012345/x",
+        "/s/a/b/c",
+    ],
+)
 def test_link_errors_are_html_pages(client: TestClient, path: str) -> None:
     r = client.get(path, headers={"Accept": "text/html"})
     assert r.status_code == 404
@@ -86,9 +94,11 @@ def test_faces_of_earlier_generations_are_not_served(client: TestClient) -> None
 def test_the_final_face_is_served_while_the_trial_waits_for_its_rating(client: TestClient) -> None:
     token = client.post("/api/sessions", json={"participant_id": "G-2"}).json()["token"]
     state: dict[str, Any] = client.post(f"/api/s/{token}/begin", json={"key": new_key()}).json()
-    state = run_to_end(state, lambda kind, body: client.post(f"/api/s/{token}/{kind}",
-                                                              json=body).json(),
-                       stop=lambda s: s["stage"] == "trial" and s["trial"]["status"] == "rating")  # fmt: skip
+    state = run_to_end(
+        state,
+        lambda kind, body: client.post(f"/api/s/{token}/{kind}", json=body).json(),
+        stop=lambda s: s["stage"] == "trial" and s["trial"]["status"] == "rating",
+    )
     final = state["rating"]["face"]["id"]
     where = {"trial": state["progress"]["trial"], "attempt": state["trial"]["attempt"]}
     assert client.get(f"/api/s/{token}/faces/{final}.png", params=where).status_code == 200

@@ -135,8 +135,14 @@ def export(
     store = _store(database_url, config)
     try:
         with output_folder(out, force=force) as tmp:
-            result = export_study(store, tmp, fmt.value, study=study, since=start,
-                                  tables=tuple(table) if table else TABLES)  # fmt: skip
+            result = export_study(
+                store,
+                tmp,
+                fmt.value,
+                study=study,
+                since=start,
+                tables=tuple(table) if table else TABLES,
+            )
     finally:
         store.dispose()
     paths = moved(result.paths, tmp, out)

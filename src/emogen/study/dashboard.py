@@ -55,20 +55,37 @@ def condition_progress(store: Store, study_ids: tuple[int, ...]) -> list[dict[st
     the study's sessions (a categorise block counts as one condition)."""
     with store.read() as db:
         rows = db.execute(
-            select(TrialRow.block, TrialRow.task, TrialRow.emotion, TrialRow.identity,
-                   TrialRow.status, func.count())
+            select(
+                TrialRow.block,
+                TrialRow.task,
+                TrialRow.emotion,
+                TrialRow.identity,
+                TrialRow.status,
+                func.count(),
+            )
             .join(SessionRow, TrialRow.session_id == SessionRow.id)
             .where(SessionRow.study_id.in_(study_ids))
-            .group_by(TrialRow.block, TrialRow.task, TrialRow.emotion, TrialRow.identity,
-                      TrialRow.status)
-        ).all()  # fmt: skip
+            .group_by(
+                TrialRow.block, TrialRow.task, TrialRow.emotion, TrialRow.identity, TrialRow.status
+            )
+        ).all()
     table: dict[tuple[int, str, str, str], dict[str, Any]] = {}
     for block, task, emotion, identity, status, n in rows:
         key = (int(block), str(task), str(emotion or ""), str(identity or ""))
         if task != "evolve":
             key = (int(block), str(task), "", "")
-        line = table.setdefault(key, {"block": key[0], "task": key[1], "emotion": key[2],
-                                      "identity": key[3], "assigned": 0, "started": 0, "done": 0})  # fmt: skip
+        line = table.setdefault(
+            key,
+            {
+                "block": key[0],
+                "task": key[1],
+                "emotion": key[2],
+                "identity": key[3],
+                "assigned": 0,
+                "started": 0,
+                "done": 0,
+            },
+        )
         line["assigned"] += int(n)
         if status == "done":
             line["done"] += int(n)
@@ -80,8 +97,10 @@ def condition_progress(store: Store, study_ids: tuple[int, ...]) -> list[dict[st
 def in_config_order(lines: list[dict[str, Any]], config: StudyConfig) -> list[dict[str, Any]]:
     """Condition lines in the config's order (block, then emotion, then identity)."""
     rank = {(c.block, c.emotion, c.identity): k for k, c in enumerate(config.conditions())}
-    return sorted(lines, key=lambda x: (x["block"], rank.get((x["block"], x["emotion"],
-                                                              x["identity"]), len(rank))))  # fmt: skip
+    return sorted(
+        lines,
+        key=lambda x: (x["block"], rank.get((x["block"], x["emotion"], x["identity"]), len(rank))),
+    )
 
 
 def row_counts(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) -> dict[str, Any]:
@@ -89,8 +108,11 @@ def row_counts(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) ->
     each row, every row listed (``rows``: None when the study does not use a Latin square)."""
     evolve = [(k, b) for k, b in enumerate(config.study_blocks()) if isinstance(b, EvolveBlock)]
     if not evolve or evolve[0][1].order != "latin_square":
-        return {"order": evolve[0][1].order if evolve else None, "counterbalance": None,
-                "rows": None}  # fmt: skip
+        return {
+            "order": evolve[0][1].order if evolve else None,
+            "counterbalance": None,
+            "rows": None,
+        }
     n_trials = sum(1 for c in config.conditions() if c.block == evolve[0][0])
     n_rows = len(balanced_latin_square(n_trials))
     with store.read() as db:

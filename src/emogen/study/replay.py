@@ -116,8 +116,14 @@ def compare_population(
         return 0, [f"{where}: stored {n} faces, replay made {len(pop)}"], 0.0
     weights = full_weights(pop)
     if stored.weights.shape != weights.shape:
-        return 0, [f"{where}: stored {stored.weights.shape[1]} weights a face, "
-                   f"replay made {weights.shape[1]}"], 0.0  # fmt: skip
+        return (
+            0,
+            [
+                f"{where}: stored {stored.weights.shape[1]} weights a face, "
+                f"replay made {weights.shape[1]}"
+            ],
+            0.0,
+        )
     problems = []
     worst = 0.0
     for i in range(n):
@@ -191,9 +197,13 @@ def replay_session(
 
 
 def _replay_trial(
-    db: Session, trial: TrialRow, config: StudyConfig, rig: Rig, correctors: StudyCorrectors,
+    db: Session,
+    trial: TrialRow,
+    config: StudyConfig,
+    rig: Rig,
+    correctors: StudyCorrectors,
     report: ReplayReport,
-) -> None:  # fmt: skip
+) -> None:
     """Replay an evolve trial's populations (attempt by attempt, with its selections and
     restarts) into ``report``."""
     pops = db.scalars(

@@ -78,8 +78,10 @@ def _made_face(db: Session, stim: StimulusRow, weights: np.ndarray, where: str) 
         .limit(1)
     ).first()
     if made is None:
-        return [f"{where}: its source face (session {stim.source_session_id}, trial "
-                f"{(stim.source_trial or 0) + 1}, face {stim.source_face_id}) is not stored"], 0.0  # fmt: skip
+        return [
+            f"{where}: its source face (session {stim.source_session_id}, trial "
+            f"{(stim.source_trial or 0) + 1}, face {stim.source_face_id}) is not stored"
+        ], 0.0
     if made[1] != stim.genes:
         return [f"{where}: genes differ from its source face"], 0.0
     problems, worst = _compare(where, weights, np.asarray(json.loads(made[0]), dtype=np.float64))

@@ -112,9 +112,13 @@ def run_participant(
 
 
 def _step(
-    service: StudyService, token: str, key: str, state: Any, maker: SimulatedParticipant,
+    service: StudyService,
+    token: str,
+    key: str,
+    state: Any,
+    maker: SimulatedParticipant,
     judge: SimulatedParticipant,
-) -> tuple[Any, str]:  # fmt: skip
+) -> tuple[Any, str]:
     if state["stage"] == "instructions":
         return service.begin(token, key), "begin"
     trial, where = state["trial"], state["progress"]["trial"]
@@ -126,10 +130,13 @@ def _step(
             (view["intensity"] or view["confidence"] or {"points": 7})["points"],
         )
         return service.categorise(
-            token, key, trial=where, label=label,
+            token,
+            key,
+            trial=where,
+            label=label,
             intensity=intensity if view["intensity"] else None,
             confidence=confidence if view["confidence"] else None,
-        ), "categorise"  # fmt: skip
+        ), "categorise"
     if trial["status"] == "rating":
         face = state["rating"]["face"]
         value = maker.rate(np.asarray(face["weights"]), trial["emotion"], state["rating"]["points"])
@@ -140,9 +147,14 @@ def _step(
         np.asarray([f["weights"] for f in faces]), trial["emotion"], limits
     )
     return service.select(
-        token, key, trial=where, attempt=trial["attempt"], generation=state["progress"]["generation"],
-        elite=faces[elite]["id"], others=[faces[j]["id"] for j in others],
-    ), "select"  # fmt: skip
+        token,
+        key,
+        trial=where,
+        attempt=trial["attempt"],
+        generation=state["progress"]["generation"],
+        elite=faces[elite]["id"],
+        others=[faces[j]["id"] for j in others],
+    ), "select"
 
 
 def _service(plan: SimulationPlan, model: FaceModel | None) -> tuple[StudyService, Store]:
@@ -152,8 +164,14 @@ def _service(plan: SimulationPlan, model: FaceModel | None) -> tuple[StudyServic
     if model is None:
         model = load_model(plan.model_path or plan.config.model, rig=plan.config.rig)
     store = Store(plan.database_url)
-    service = StudyService(plan.config, store, model.rig, model_name=model.name,
-                           model_hash=model.model_hash, model=model)  # fmt: skip
+    service = StudyService(
+        plan.config,
+        store,
+        model.rig,
+        model_name=model.name,
+        model_hash=model.model_hash,
+        model=model,
+    )
     return service, store
 
 
@@ -222,7 +240,11 @@ def simulate_study(
     finally:
         store.dispose()
     return SimulationSummary(
-        participants=plan.participants, database=store.describe(), seed=plan.seed,
-        seconds=round(time.perf_counter() - started, 2), shuffled=plan.shuffle_prototypes,
-        steps=sum(total.values()), by_task=total,
-    )  # fmt: skip
+        participants=plan.participants,
+        database=store.describe(),
+        seed=plan.seed,
+        seconds=round(time.perf_counter() - started, 2),
+        shuffled=plan.shuffle_prototypes,
+        steps=sum(total.values()),
+        by_task=total,
+    )
