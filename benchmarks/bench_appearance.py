@@ -36,8 +36,11 @@ def run(model: Any, model_path: str | None = None) -> dict[str, float]:  # type:
         env = {**os.environ, "EMOGEN_CACHE_DIR": tmp, "PYTHONPATH": str(REPO / "src")}
         out = subprocess.run(
             [sys.executable, "-c", _COLD, *([model_path] if model_path else [])],
-            env=env, capture_output=True, text=True, check=True,
-        )  # fmt: skip
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         cold = float(out.stdout.strip().splitlines()[-1])
         old = os.environ.get("EMOGEN_CACHE_DIR")
         os.environ["EMOGEN_CACHE_DIR"] = tmp

@@ -26,8 +26,16 @@ sys.path[:0] = [str(REPO), str(REPO / "src")]
 
 from benchmarks.bench_study import BENCH_STUDY, model_path, write_study_toml  # noqa: E402
 
-_TABLES = ("sessions", "trials", "populations", "faces", "selections", "restarts", "ratings",
-           "steps")  # fmt: skip
+_TABLES = (
+    "sessions",
+    "trials",
+    "populations",
+    "faces",
+    "selections",
+    "restarts",
+    "ratings",
+    "steps",
+)
 #: Foreign keys to remap in each table's copies: column → the table it points into.
 _REFS = {
     "trials": {"session_id": "sessions"},
@@ -52,8 +60,9 @@ def _template(database_url: str, config: Path) -> None:
     cfg = load_study_config(config)
     model = load_model(model_path(), rig=cfg.rig)
     store = Store(database_url)
-    service = StudyService(cfg, store, model.rig, model_name=model.name,
-                           model_hash=model.model_hash, model=model)  # fmt: skip
+    service = StudyService(
+        cfg, store, model.rig, model_name=model.name, model_hash=model.model_hash, model=model
+    )
     rng = random.Random(0)
     token, _ = service.create_session("export-template")
     state = service.begin(token, "template-key-begin")
@@ -65,9 +74,17 @@ def _template(database_url: str, config: Path) -> None:
         if state["trial"]["status"] == "active":
             ids = [f["id"] for f in state["population"]["faces"]]
             chosen = rng.sample(ids, 3)
-            state = service.select(token, key, trial=trial, attempt=state["trial"]["attempt"],
-                                   generation=state["progress"]["generation"], elite=chosen[0],
-                                   others=chosen[1:], response_ms=1500.0, load_ms=5.0)  # fmt: skip
+            state = service.select(
+                token,
+                key,
+                trial=trial,
+                attempt=state["trial"]["attempt"],
+                generation=state["progress"]["generation"],
+                elite=chosen[0],
+                others=chosen[1:],
+                response_ms=1500.0,
+                load_ms=5.0,
+            )
         else:
             state = service.rate(token, key, trial=trial, value=5, response_ms=900.0)
     store.dispose()
@@ -84,8 +101,9 @@ def fill(database_url: str, config: Path, sessions: int) -> None:
     meta = MetaData()
     meta.reflect(store.engine, only=list(_TABLES))
     with store.engine.connect() as conn:
-        rows = {t: [dict(r._mapping) for r in conn.execute(select(meta.tables[t]))]
-                for t in _TABLES}  # fmt: skip
+        rows = {
+            t: [dict(r._mapping) for r in conn.execute(select(meta.tables[t]))] for t in _TABLES
+        }
     span = {t: max((r["id"] for r in rows[t]), default=0) for t in _TABLES}
     batch = 50
     for start in range(1, sessions, batch):
@@ -99,16 +117,23 @@ def fill(database_url: str, config: Path, sessions: int) -> None:
                         for col, target in _REFS.get(t, {}).items():
                             new[col] = r[col] + k * span[target]
                         if t == "sessions":
-                            new |= {"token": f"{k:08d}{r['token'][8:]}", "number": k + 1,
-                                    "participant_id": f"export-{k:06d}"}  # fmt: skip
+                            new |= {
+                                "token": f"{k:08d}{r['token'][8:]}",
+                                "number": k + 1,
+                                "participant_id": f"export-{k:06d}",
+                            }
                         out.append(new)
                 if out:
                     conn.execute(insert(meta.tables[t]), out)
     if not store.is_sqlite:  # explicit ids: move the sequences past them
         with store.engine.begin() as conn:
             for t in _TABLES:
-                conn.execute(text(f"SELECT setval(pg_get_serial_sequence('{t}', 'id'), "
-                                  f"(SELECT max(id) FROM {t}))"))  # fmt: skip
+                conn.execute(
+                    text(
+                        f"SELECT setval(pg_get_serial_sequence('{t}', 'id'), "
+                        f"(SELECT max(id) FROM {t}))"
+                    )
+                )
     store.dispose()
 
 
@@ -135,8 +160,11 @@ def measure(args: list[str], env: dict[str, str]) -> dict[str, Any]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--sessions", type=int, default=1000)
-    parser.add_argument("--database-url", default=None, help="an empty database (default: "
-                        "SQLite in a temporary folder)")  # fmt: skip
+    parser.add_argument(
+        "--database-url",
+        default=None,
+        help="an empty database (default: SQLite in a temporary folder)",
+    )
     parser.add_argument("--in-memory", action="store_true", help="also the old path")
     args = parser.parse_args()
     env = {**os.environ, "PYTHONPATH": str(REPO / "src"), "EMOGEN_MODEL": str(model_path())}
@@ -147,19 +175,37 @@ def main() -> None:
         t0 = time.perf_counter()
         fill(url, config, args.sessions)
         faces = args.sessions * 12 * 10
-        print(f"study export: {args.sessions} completed sessions ({faces} face rows) in "
-              f"{url.split(':')[0]}, filled in {time.perf_counter() - t0:.0f} s")  # fmt: skip
+        print(
+            f"study export: {args.sessions} completed sessions ({faces} face rows) in "
+            f"{url.split(':')[0]}, filled in {time.perf_counter() - t0:.0f} s"
+        )
         for fmt in ("parquet", "csv"):
-            cmd = [sys.executable, "-m", "emogen", "study", "export", "--database-url", url,
-                   "--format", fmt, "--out", str(folder / f"out-{fmt}")]  # fmt: skip
+            cmd = [
+                sys.executable,
+                "-m",
+                "emogen",
+                "study",
+                "export",
+                "--database-url",
+                url,
+                "--format",
+                fmt,
+                "--out",
+                str(folder / f"out-{fmt}"),
+            ]
             r = measure(cmd, env)
-            print(f"  emogen study export --format {fmt:<8} {r['wall_s']:6.1f} s   "
-                  f"peak {r['peak_mb']:6.0f} MB")  # fmt: skip
+            print(
+                f"  emogen study export --format {fmt:<8} {r['wall_s']:6.1f} s   "
+                f"peak {r['peak_mb']:6.0f} MB"
+            )
             if args.in_memory:
-                r = measure([sys.executable, "-c", _IN_MEMORY, url, str(folder / f"mem-{fmt}"),
-                             fmt], env)  # fmt: skip
-                print(f"  in memory (export_tables)  {fmt:<8} {r['wall_s']:6.1f} s   "
-                      f"peak {r['peak_mb']:6.0f} MB")  # fmt: skip
+                r = measure(
+                    [sys.executable, "-c", _IN_MEMORY, url, str(folder / f"mem-{fmt}"), fmt], env
+                )
+                print(
+                    f"  in memory (export_tables)  {fmt:<8} {r['wall_s']:6.1f} s   "
+                    f"peak {r['peak_mb']:6.0f} MB"
+                )
 
 
 if __name__ == "__main__":

@@ -53,8 +53,9 @@ def first_faces(runs: int) -> list[float]:
         folder = Path(tmp)
         site = ExperimentSite(folder / "site")
         config = write_study_toml({**STUDY, "embed_origins": [site.origin]}, folder / "s.toml")
-        srv = ServerProcess(config, f"sqlite:///{folder / 'db.sqlite'}", Path(model_path()),
-                            folder / "server.log").start()  # fmt: skip
+        srv = ServerProcess(
+            config, f"sqlite:///{folder / 'db.sqlite'}", Path(model_path()), folder / "server.log"
+        ).start()
         page_url = site.add("bench.html", one_trial_page(srv.url, [{"task": "evolve"}]))
         ready: list[float] = []
         try:

@@ -67,8 +67,14 @@ class Run:
     exports: list[tuple[float, float]] = field(default_factory=list)  # (start, end)
 
 
-async def participant(client: httpx.AsyncClient, i: int, run: Run, cfg: argparse.Namespace,
-                      deadline: float, nonce: str) -> None:  # fmt: skip
+async def participant(
+    client: httpx.AsyncClient,
+    i: int,
+    run: Run,
+    cfg: argparse.Namespace,
+    deadline: float,
+    nonce: str,
+) -> None:
     rng = random.Random(i)
     lo, hi = cfg.pause
     keys = (f"{nonce}-{i:05d}-{k:04d}" for k in range(10_000))
@@ -110,10 +116,19 @@ async def participant(client: httpx.AsyncClient, i: int, run: Run, cfg: argparse
         trial = state["progress"]["trial"]
         if state["trial"]["task"] == "categorise":
             view = state["categorise"]
-            body = {"key": next(keys), "trial": trial, "label": rng.choice(view["labels"]),
-                    "intensity": rng.randint(1, view["intensity"]["points"]) if view["intensity"] else None,
-                    "confidence": rng.randint(1, view["confidence"]["points"]) if view["confidence"] else None,
-                    "response_ms": round(1000 * pause), "load_ms": 5.0}  # fmt: skip
+            body = {
+                "key": next(keys),
+                "trial": trial,
+                "label": rng.choice(view["labels"]),
+                "intensity": rng.randint(1, view["intensity"]["points"])
+                if view["intensity"]
+                else None,
+                "confidence": rng.randint(1, view["confidence"]["points"])
+                if view["confidence"]
+                else None,
+                "response_ms": round(1000 * pause),
+                "load_ms": 5.0,
+            }
             t0 = time.monotonic()
             state = await call("POST", f"/api/s/{token}/categorise", body)
             if state is not None:
@@ -121,19 +136,30 @@ async def participant(client: httpx.AsyncClient, i: int, run: Run, cfg: argparse
         elif state["trial"]["status"] == "active":
             ids = [f["id"] for f in state["population"]["faces"]]
             limits = state["limits"]
-            chosen = rng.sample(ids, rng.randint(limits["min_selections"],
-                                                 min(3, limits["max_selections"])))  # fmt: skip
-            body = {"key": next(keys), "trial": trial, "attempt": state["trial"]["attempt"],
-                    "generation": state["progress"]["generation"], "elite": chosen[0],
-                    "others": chosen[1:], "response_ms": round(1000 * (time.monotonic() - shown)),
-                    "load_ms": 5.0}  # fmt: skip
+            chosen = rng.sample(
+                ids, rng.randint(limits["min_selections"], min(3, limits["max_selections"]))
+            )
+            body = {
+                "key": next(keys),
+                "trial": trial,
+                "attempt": state["trial"]["attempt"],
+                "generation": state["progress"]["generation"],
+                "elite": chosen[0],
+                "others": chosen[1:],
+                "response_ms": round(1000 * (time.monotonic() - shown)),
+                "load_ms": 5.0,
+            }
             t0 = time.monotonic()
             state = await call("POST", f"/api/s/{token}/select", body)
             if state is not None:
                 run.steps.append((t0, time.monotonic() - t0))
         else:
-            body = {"key": next(keys), "trial": trial, "value": rng.randint(1, 7),
-                    "response_ms": round(1000 * pause)}  # fmt: skip
+            body = {
+                "key": next(keys),
+                "trial": trial,
+                "value": rng.randint(1, 7),
+                "response_ms": round(1000 * pause),
+            }
             t0 = time.monotonic()
             state = await call("POST", f"/api/s/{token}/rating", body)
             if state is not None:
@@ -150,8 +176,11 @@ async def exporter(client: httpx.AsyncClient, run: Run, stop: asyncio.Event, wai
     while not stop.is_set():
         t0 = time.monotonic()
         try:
-            r = await client.get("/api/researcher/export/faces.csv", timeout=600,
-                                 headers={"Authorization": f"Bearer {BENCH_TOKEN}"})  # fmt: skip
+            r = await client.get(
+                "/api/researcher/export/faces.csv",
+                timeout=600,
+                headers={"Authorization": f"Bearer {BENCH_TOKEN}"},
+            )
             if r.status_code != 200:
                 run.errors.append(f"faces.csv: {r.status_code}")
         except httpx.HTTPError as exc:
@@ -168,8 +197,11 @@ async def drive(url: str, n: int, cfg: argparse.Namespace) -> Run:
     deadline = time.monotonic() + cfg.max_seconds
     async with httpx.AsyncClient(base_url=url, timeout=60.0, limits=limits) as client:
         stop = asyncio.Event()
-        export = (asyncio.create_task(exporter(client, run, stop, cfg.ramp + 5))
-                  if cfg.export_during else None)  # fmt: skip
+        export = (
+            asyncio.create_task(exporter(client, run, stop, cfg.ramp + 5))
+            if cfg.export_during
+            else None
+        )
         await asyncio.wait_for(
             asyncio.gather(*(participant(client, i, run, cfg, deadline, nonce) for i in range(n))),
             timeout=cfg.max_seconds + 120,
@@ -192,15 +224,22 @@ def _pct(values: list[float], q: float) -> float:
     return float(np.percentile(values, q)) * 1000 if values else float("nan")
 
 
-def one_run(database_url: str, workers: int, n: int, cfg: argparse.Namespace,
-            folder: Path) -> dict[str, Any]:  # fmt: skip
+def one_run(
+    database_url: str, workers: int, n: int, cfg: argparse.Namespace, folder: Path
+) -> dict[str, Any]:
     config = write_study_toml(STUDIES[cfg.study], folder / "bench.toml")
     if cfg.export_during:
         from benchmarks.bench_export import fill
 
         fill(database_url, config, cfg.export_during)
-    server = ServerProcess(config, database_url, model_path(), folder / f"server-{n}.log",
-                           workers, extra=("--session-limit", "off")).start()  # fmt: skip
+    server = ServerProcess(
+        config,
+        database_url,
+        model_path(),
+        folder / f"server-{n}.log",
+        workers,
+        extra=("--session-limit", "off"),
+    ).start()
     try:
         pids = server.pids()
         cpu0 = sum(_cpu_s(p) for p in pids)
@@ -216,38 +255,54 @@ def one_run(database_url: str, workers: int, n: int, cfg: argparse.Namespace,
     first = min((t for t, _ in run.steps), default=t0)
     last = max((t + s for t, s in run.steps), default=t0 + 1)
     result = {
-        "database": database_url.split(":")[0].split("+")[0], "workers": workers,
-        "participants": n, "pause": f"{cfg.pause[0]:g}-{cfg.pause[1]:g}",
-        "steps": len(steps), "step_p50_ms": _pct(steps, 50), "step_p95_ms": _pct(steps, 95),
-        "step_max_ms": _pct(steps, 100), "errors": len(run.errors),
-        "answer_p95_ms": _pct([s for _, s in run.answers], 95), "answers": len(run.answers),
-        "steps_per_s": len(steps) / max(last - first, 1e-9), "completed": run.completed,
+        "database": database_url.split(":")[0].split("+")[0],
+        "workers": workers,
+        "participants": n,
+        "pause": f"{cfg.pause[0]:g}-{cfg.pause[1]:g}",
+        "steps": len(steps),
+        "step_p50_ms": _pct(steps, 50),
+        "step_p95_ms": _pct(steps, 95),
+        "step_max_ms": _pct(steps, 100),
+        "errors": len(run.errors),
+        "answer_p95_ms": _pct([s for _, s in run.answers], 95),
+        "answers": len(run.answers),
+        "steps_per_s": len(steps) / max(last - first, 1e-9),
+        "completed": run.completed,
         "unfinished": run.unfinished,
         "server_cpu_ms_per_request": 1000 * cpu / max(run.requests, 1),
-        "driver_cpu_pct": 100 * ((me1.ru_utime + me1.ru_stime) - (me0.ru_utime + me0.ru_stime))
+        "driver_cpu_pct": 100
+        * ((me1.ru_utime + me1.ru_stime) - (me0.ru_utime + me0.ru_stime))
         / wall,
         "error_examples": sorted(set(run.errors))[:5],
-    }  # fmt: skip
+    }
     if cfg.export_during:
         during = [s for t, s in run.steps if any(a <= t <= b for a, b in run.exports)]
         apart = [s for t, s in run.steps if not any(a <= t <= b for a, b in run.exports)]
-        result |= {"exports": len(run.exports), "step_p95_during_export_ms": _pct(during, 95),
-                   "step_p95_without_export_ms": _pct(apart, 95),
-                   "export_s": float(np.mean([b - a for a, b in run.exports]))
-                   if run.exports else float("nan")}  # fmt: skip
+        result |= {
+            "exports": len(run.exports),
+            "step_p95_during_export_ms": _pct(during, 95),
+            "step_p95_without_export_ms": _pct(apart, 95),
+            "export_s": float(np.mean([b - a for a, b in run.exports]))
+            if run.exports
+            else float("nan"),
+        }
     return result
 
 
-HEADER = (f"{'database':<10} {'workers':>7} {'N':>5} {'pause':>6} {'steps':>6} {'p50 ms':>8} "
-          f"{'p95 ms':>8} {'max ms':>8} {'errors':>6} {'steps/s':>8} {'cpu/req':>8} "
-          f"{'driver%':>7}")  # fmt: skip
+HEADER = (
+    f"{'database':<10} {'workers':>7} {'N':>5} {'pause':>6} {'steps':>6} {'p50 ms':>8} "
+    f"{'p95 ms':>8} {'max ms':>8} {'errors':>6} {'steps/s':>8} {'cpu/req':>8} "
+    f"{'driver%':>7}"
+)
 
 
 def line(r: dict[str, Any]) -> str:
-    text = (f"{r['database']:<10} {r['workers']:>7} {r['participants']:>5} {r['pause']:>6} "
-            f"{r['steps']:>6} {r['step_p50_ms']:>8.0f} {r['step_p95_ms']:>8.0f} "
-            f"{r['step_max_ms']:>8.0f} {r['errors']:>6} {r['steps_per_s']:>8.1f} "
-            f"{r['server_cpu_ms_per_request']:>8.1f} {r['driver_cpu_pct']:>7.0f}")  # fmt: skip
+    text = (
+        f"{r['database']:<10} {r['workers']:>7} {r['participants']:>5} {r['pause']:>6} "
+        f"{r['steps']:>6} {r['step_p50_ms']:>8.0f} {r['step_p95_ms']:>8.0f} "
+        f"{r['step_max_ms']:>8.0f} {r['errors']:>6} {r['steps_per_s']:>8.1f} "
+        f"{r['server_cpu_ms_per_request']:>8.1f} {r['driver_cpu_pct']:>7.0f}"
+    )
     if r["answers"]:
         text += f"  ratings+categorisations p95 {r['answer_p95_ms']:.0f} ms ({r['answers']})"
     if r["driver_cpu_pct"] > 70:
@@ -255,9 +310,11 @@ def line(r: dict[str, Any]) -> str:
     if r["unfinished"]:
         text += f"  ({r['unfinished']} unfinished at --max-seconds)"
     if "exports" in r:
-        text += (f"\n{'':>10} export of faces.csv ({r['exports']}×, {r['export_s']:.1f} s each): "
-                 f"step p95 {r['step_p95_during_export_ms']:.0f} ms while exporting, "
-                 f"{r['step_p95_without_export_ms']:.0f} ms otherwise")  # fmt: skip
+        text += (
+            f"\n{'':>10} export of faces.csv ({r['exports']}×, {r['export_s']:.1f} s each): "
+            f"step p95 {r['step_p95_during_export_ms']:.0f} ms while exporting, "
+            f"{r['step_p95_without_export_ms']:.0f} ms otherwise"
+        )
     for e in r["error_examples"]:
         text += f"\n{'':>10} error: {e}"
     return text
@@ -278,8 +335,9 @@ def databases(kind: str, folder: Path, stack: ExitStack) -> Iterator[Any]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--database", nargs="+", default=["sqlite", "postgresql"],
-                        choices=["sqlite", "postgresql"])  # fmt: skip
+    parser.add_argument(
+        "--database", nargs="+", default=["sqlite", "postgresql"], choices=["sqlite", "postgresql"]
+    )
     parser.add_argument("--workers", nargs="+", type=int, default=[1, 2])
     parser.add_argument("--participants", nargs="+", type=int, default=[50, 100, 200, 400])
     parser.add_argument("--pause", default="1-3", help="seconds before each step: LO-HI")
@@ -292,8 +350,9 @@ def main() -> None:
     )
     parser.add_argument("--ramp", type=float, default=10.0, help="arrivals spread over (s)")
     parser.add_argument("--max-seconds", type=float, default=900.0, help="cap per run")
-    parser.add_argument("--breaking-point", action="store_true",
-                        help="then raise N until the step p95 passes 1 s")  # fmt: skip
+    parser.add_argument(
+        "--breaking-point", action="store_true", help="then raise N until the step p95 passes 1 s"
+    )
     parser.add_argument(
         "--export-during",
         type=int,
@@ -306,10 +365,12 @@ def main() -> None:
     lo, _, hi = cfg.pause.partition("-")
     cfg.pause = (float(lo), float(hi or lo))
     os.environ.setdefault("EMOGEN_MODEL", str(model_path()))
-    print(f"study server load: {os.cpu_count()} cores, study {BENCH_STUDY['emotions']} × "
-          f"G={BENCH_STUDY['ga']['generations']} (12 selections + 2 ratings per participant"
-          f"{', then 8 faces to categorise' if cfg.study == 'mixed' else ''}), "
-          f"pause {cfg.pause[0]:g}–{cfg.pause[1]:g} s, arrivals over {cfg.ramp:g} s")  # fmt: skip
+    print(
+        f"study server load: {os.cpu_count()} cores, study {BENCH_STUDY['emotions']} × "
+        f"G={BENCH_STUDY['ga']['generations']} (12 selections + 2 ratings per participant"
+        f"{', then 8 faces to categorise' if cfg.study == 'mixed' else ''}), "
+        f"pause {cfg.pause[0]:g}–{cfg.pause[1]:g} s, arrivals over {cfg.ramp:g} s"
+    )
     print(HEADER, flush=True)
     results: list[dict[str, Any]] = []
     breaking: dict[str, int | None] = {}
@@ -327,8 +388,11 @@ def main() -> None:
                         k += 1
                         if r["step_p95_ms"] > 1000 or r["errors"]:
                             breaking.setdefault(f"{kind}/{workers}", counts[k - 1])
-                        if (cfg.breaking_point and k == len(counts)
-                                and f"{kind}/{workers}" not in breaking):  # fmt: skip
+                        if (
+                            cfg.breaking_point
+                            and k == len(counts)
+                            and f"{kind}/{workers}" not in breaking
+                        ):
                             counts.append(int(counts[-1] * 1.5))
     if cfg.breaking_point:
         for key, n in breaking.items():

@@ -12,9 +12,8 @@ picks the faces closest by cosine distance; runs advanced together as arrays. Tw
   with the generator's own methods run by run, later generations from one block of doubles per
   run read front to back (stream 2, :mod:`emogen.ga.draws`); it keeps every generation's errors
   and selections (what the tables are made of). The generators are built by
-  :func:`emogen.rng.generation_rngs` — the same objects EmoGen uses, so the seeding method is
-  not what is compared (numpy's ``default_rng`` one by one would add ~0.07 s to the plain side
-  and flatter EmoGen). It returns the same numbers as EmoGen, bit for bit (checked below): the
+  :func:`emogen.rng.generation_rngs` (numpy's ``default_rng`` one by one, as EmoGen builds
+  them), so the seeding is not what is compared. It returns the same numbers as EmoGen, bit for bit (checked below): the
   same algorithm, the same draws, the same selections.
 * **plain, one generator** — all runs from one generator in a few calls, no per-run seeds: the
   cost of a simulation that could not replay a run from its seed. Shown for scale only; it
@@ -26,7 +25,10 @@ per-run version's. Timed interleaved, median of ``REPEAT``.
 Figures (shared 2-core VM under load 4–6, three runs each, medians of 9): before #30's speed
 work EmoGen 0.118–0.176 s against plain per-run 0.096–0.136 s, 1.21–1.29×; after it
 0.101–0.192 s against 0.093–0.182 s, 1.05–1.16× (1.07–1.10× in three more runs); the
-one-generator version 0.034–0.068 s (ours 2.8–3.1× it). See docs/ga.md.
+one-generator version 0.034–0.068 s (ours 2.8–3.1× it). Issue 38 (generators one by one with
+numpy's public API on both sides, load 6–7, two runs each): EmoGen 0.30–0.46 s against
+0.33–0.55 s, 0.84–0.94× (before it, the same runs: 0.20–0.27 s against 0.20–0.26 s,
+1.01–1.02×). See docs/ga.md.
 
 Run: ``python benchmarks/bench_plain_ga.py`` (EMOGEN_MODEL names the model; the rig is enough).
 """

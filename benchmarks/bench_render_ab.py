@@ -55,8 +55,11 @@ def _worker(src: str, model: str) -> subprocess.Popen[str]:
     env = {**os.environ, "PYTHONPATH": src}
     p = subprocess.Popen(
         [sys.executable, "-c", _WORKER, model, str(REPO)],
-        env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        env=env,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     if cast(IO[str], p.stdout).readline().strip() != "ready":
         raise RuntimeError(f"worker for {src} failed to start")
     return p

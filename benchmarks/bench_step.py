@@ -184,9 +184,13 @@ def in_process(participants: int) -> tuple[np.ndarray, dict[str, float]]:
             model = load_model(model_path(), rig=config.rig)
             store = Store(f"sqlite:///{folder / 'bench.sqlite'}")
             service = StudyService(
-                config, store, model.rig, model_name=model.name, model_hash=model.model_hash,
+                config,
+                store,
+                model.rig,
+                model_name=model.name,
+                model_hash=model.model_hash,
                 model=model,
-            )  # fmt: skip
+            )
             rng, n = random.Random(0), 0
             for p in range(participants + 1):
                 token, _ = service.create_session(f"step-{p}")
@@ -201,10 +205,16 @@ def in_process(participants: int) -> tuple[np.ndarray, dict[str, float]]:
                     phase["on"] = p > 0  # the first participant warms up, not counted
                     t0 = time.process_time()
                     state = service.select(
-                        token, key, trial=s["trial"], attempt=s["attempt"],
-                        generation=s["generation"], elite=s["elite"], others=s["others"],
-                        response_ms=1000.0, load_ms=5.0,
-                    )  # fmt: skip
+                        token,
+                        key,
+                        trial=s["trial"],
+                        attempt=s["attempt"],
+                        generation=s["generation"],
+                        elite=s["elite"],
+                        others=s["others"],
+                        response_ms=1000.0,
+                        load_ms=5.0,
+                    )
                     phase["on"] = False
                     if p:
                         times.append((time.process_time() - t0) * 1000)

@@ -96,9 +96,15 @@ class ServerProcess:
     processes; ``kill()`` sends SIGKILL to the server and its workers (its process group)."""
 
     def __init__(
-        self, config: Path, database_url: str, model: Path, log: Path, workers: int = 1,
-        extra: tuple[str, ...] = (), env: dict[str, str] | None = None,
-    ) -> None:  # fmt: skip
+        self,
+        config: Path,
+        database_url: str,
+        model: Path,
+        log: Path,
+        workers: int = 1,
+        extra: tuple[str, ...] = (),
+        env: dict[str, str] | None = None,
+    ) -> None:
         self.config, self.database_url, self.model, self.log = config, database_url, model, log
         self.workers, self.extra, self.env = workers, extra, env or {}
         self.port = free_port()
@@ -113,15 +119,26 @@ class ServerProcess:
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(
                 [
-                    sys.executable, "-m", "emogen", "serve", str(self.config),
-                    "--port", str(self.port), "--database-url", self.database_url,
-                    "--model", str(self.model), "--workers", str(self.workers), *self.extra,
+                    sys.executable,
+                    "-m",
+                    "emogen",
+                    "serve",
+                    str(self.config),
+                    "--port",
+                    str(self.port),
+                    "--database-url",
+                    self.database_url,
+                    "--model",
+                    str(self.model),
+                    "--workers",
+                    str(self.workers),
+                    *self.extra,
                 ],
                 stdout=log,
                 stderr=subprocess.STDOUT,
                 env=env,
                 start_new_session=True,  # its own process group: kill() reaches the workers
-            )  # fmt: skip
+            )
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             if self.proc.poll() is not None:

@@ -20,10 +20,16 @@ from benchmarks.bench_render import BUILD, CHROMIUM
 WIRE_TARGET_MB = 4.0
 READY_TARGET_S = 3.0
 ARGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
-    "--disable-quic", "--no-first-run", "--disable-background-networking",
-    "--disable-component-update", "--disable-sync",
-]  # fmt: skip
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--enable-unsafe-swiftshader",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 
 
 class _GzipHandler(http.server.SimpleHTTPRequestHandler):

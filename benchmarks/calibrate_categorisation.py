@@ -47,10 +47,13 @@ def main() -> None:
                 raise SystemExit(f"study {s}: {res}")
             p[s] = [getattr(res, part)[key] for part, key in TESTS]
             g = res.gee
-            print(f"shuffle={shuffle} study {s}: GEE own {g['slope_own']:+.2f} ref "
-                  f"{g['slope_ref']:+.2f} contrast {g['contrast']:+.2f} (SE {g['se_contrast']:.2f})"
-                  f" p {g['p']:.3f}; two-stage p {p[s, 1]:.3f}, Wilcoxon {p[s, 2]:.3f}; "
-                  f"control p {p[s, 3]:.3f}", flush=True)  # fmt: skip
+            print(
+                f"shuffle={shuffle} study {s}: GEE own {g['slope_own']:+.2f} ref "
+                f"{g['slope_ref']:+.2f} contrast {g['contrast']:+.2f} (SE {g['se_contrast']:.2f})"
+                f" p {g['p']:.3f}; two-stage p {p[s, 1]:.3f}, Wilcoxon {p[s, 2]:.3f}; "
+                f"control p {p[s, 3]:.3f}",
+                flush=True,
+            )
         report(shuffle, p, args, time.perf_counter() - start)
 
 
@@ -58,14 +61,17 @@ def report(shuffle: bool, p: np.ndarray, args: argparse.Namespace, seconds: floa
     n, a = len(p), args.alpha
     bound = a + 2 * np.sqrt(a * (1 - a) / n)
     what = "shuffled prototypes (null)" if shuffle else "own prototypes (effect present)"
-    print(f"\n== {what}: {n} studies × {args.participants} participants, α = {a}, "
-          f"{seconds:.0f} s ==")  # fmt: skip
+    print(
+        f"\n== {what}: {n} studies × {args.participants} participants, α = {a}, {seconds:.0f} s =="
+    )
     for k, (part, key) in enumerate(TESTS):
         rate = float(np.mean(p[:, k] <= a))
         se = np.sqrt(rate * (1 - rate) / n)
         verdict = ("≤ bound" if rate <= bound else "ABOVE bound") if shuffle else ""
-        print(f"  {part:9s} {key:10s} rejection rate {rate:.3f} (SE {se:.3f}) "
-              f"{f'bound {bound:.3f} ' if shuffle else ''}{verdict}")  # fmt: skip
+        print(
+            f"  {part:9s} {key:10s} rejection rate {rate:.3f} (SE {se:.3f}) "
+            f"{f'bound {bound:.3f} ' if shuffle else ''}{verdict}"
+        )
 
 
 if __name__ == "__main__":

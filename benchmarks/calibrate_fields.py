@@ -58,11 +58,18 @@ def run(args: argparse.Namespace) -> None:
     rig = emogen.load_model(args.model).rig
     who = SimulatedDesign(spread=args.spread)
     base = dict(participants=args.participants, categorise=False, participant=who)
-    grouped = PeopleDesign(**base, groups=("a", "b"),  # type: ignore[arg-type]
-                           shifts={"b": shifts(GROUP_SHIFT, args.shift)})  # fmt: skip
+    grouped = PeopleDesign(
+        **base,
+        groups=("a", "b"),  # type: ignore[arg-type]
+        shifts={"b": shifts(GROUP_SHIFT, args.shift)},
+    )
     one = PeopleDesign(**base)  # type: ignore[arg-type]
-    ident = PeopleDesign(**base, identity_shifts={  # type: ignore[arg-type]
-        "male-medium": shifts(IDENTITY_SHIFT, args.identity_shift)})  # fmt: skip
+    ident = PeopleDesign(
+        **base,
+        identity_shifts={  # type: ignore[arg-type]
+            "male-medium": shifts(IDENTITY_SHIFT, args.identity_shift)
+        },
+    )
     k = args.studies
     found, aris, false_structure, fp, power, cross, chance = [], [], [], [], [], [], []
     t0 = time.time()
@@ -91,16 +98,24 @@ def run(args: argparse.Namespace) -> None:
         p = float(np.mean(x))
         return f"{p:.3f} (SE {np.sqrt(p * (1 - p) / k):.3f})"
 
-    print(f"\n{k} studies per cell, {args.participants} participants, spread {args.spread}, "
-          f"null studies per clustering test {args.null}")  # fmt: skip
-    print(f"two planted groups: structure found {share(found)}; ARI mean {np.mean(aris):.3f}, "
-          f"median {np.median(aris):.3f} (0 where no structure)")  # fmt: skip
-    print(f"one population: no structure {share([not f for f in false_structure])}; false "
-          f"structure {share(false_structure)} (bound α + 2 SE = {ALPHA + 2 * se:.3f})")  # fmt: skip
+    print(
+        f"\n{k} studies per cell, {args.participants} participants, spread {args.spread}, "
+        f"null studies per clustering test {args.null}"
+    )
+    print(
+        f"two planted groups: structure found {share(found)}; ARI mean {np.mean(aris):.3f}, "
+        f"median {np.median(aris):.3f} (0 where no structure)"
+    )
+    print(
+        f"one population: no structure {share([not f for f in false_structure])}; false "
+        f"structure {share(false_structure)} (bound α + 2 SE = {ALPHA + 2 * se:.3f})"
+    )
     print(f"identity, no shift: false-positive rate {share(fp)} (bound {ALPHA + 2 * se:.3f})")
     print(f"identity, shift {args.identity_shift}: power {share(power)}")
-    print(f"cross-identity decoding ({len(cross)} directions): accuracy mean {np.mean(cross):.3f}"
-          f" (min {np.min(cross):.3f}), permutation chance mean {np.mean(chance):.3f}")  # fmt: skip
+    print(
+        f"cross-identity decoding ({len(cross)} directions): accuracy mean {np.mean(cross):.3f}"
+        f" (min {np.min(cross):.3f}), permutation chance mean {np.mean(chance):.3f}"
+    )
 
 
 def main() -> None:

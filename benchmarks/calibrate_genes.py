@@ -31,9 +31,14 @@ from emogen.tasks.simulated import SimulatedDesign
 ALPHA = 0.05
 OPTS = GeneTestOptions(permutations=2000, bootstrap=200)
 NULL = PeopleDesign(
-    emotions=("happy", "sad"), identities=("female-medium",), participants=40, repetitions=2,
-    categorise=False, groups=("a", "b"), participant=SimulatedDesign(spread=0.1),
-)  # fmt: skip
+    emotions=("happy", "sad"),
+    identities=("female-medium",),
+    participants=40,
+    repetitions=2,
+    categorise=False,
+    groups=("a", "b"),
+    participant=SimulatedDesign(spread=0.1),
+)
 
 
 def rate(hits: int, n: int) -> str:
@@ -89,20 +94,35 @@ def genes(rig, studies: int) -> None:  # type: ignore[no-untyped-def]
 
 
 def conditions(rig, studies: int) -> None:  # type: ignore[no-untyped-def]
-    base = PeopleDesign(emotions=("happy", "sad"), participants=20, repetitions=1,
-                        categorise=False, participant=SimulatedDesign(spread=0.1))  # fmt: skip
+    base = PeopleDesign(
+        emotions=("happy", "sad"),
+        participants=20,
+        repetitions=1,
+        categorise=False,
+        participant=SimulatedDesign(spread=0.1),
+    )
     shift = {"mouthSmile": 0.3, "browInnerUp": 0.3, "eyeWide": 0.3}
     planted = replace(base, identity_shifts={"male-medium": {"happy": shift, "sad": shift}})
     null = {"identity": 0, "emotion × identity": 0}
     found = 0
     for s in range(studies):
         rng = np.random.default_rng(s)
-        t = condition_tests(as_people(simulate_people(base, rig, seed=2000 + s)),
-                            permutations=1000, bootstrap=50, level=0.95, rng=rng).set_index("effect")  # fmt: skip
+        t = condition_tests(
+            as_people(simulate_people(base, rig, seed=2000 + s)),
+            permutations=1000,
+            bootstrap=50,
+            level=0.95,
+            rng=rng,
+        ).set_index("effect")
         for k in null:
             null[k] += bool(t.loc[k, "p_perm"] < ALPHA)
-        t = condition_tests(as_people(simulate_people(planted, rig, seed=7000 + s)),
-                            permutations=1000, bootstrap=50, level=0.95, rng=rng).set_index("effect")  # fmt: skip
+        t = condition_tests(
+            as_people(simulate_people(planted, rig, seed=7000 + s)),
+            permutations=1000,
+            bootstrap=50,
+            level=0.95,
+            rng=rng,
+        ).set_index("effect")
         found += bool(t.loc["identity", "p_perm"] < ALPHA)
     print(f"conditions: {base.participants} participants, 2 emotions × 2 identities")
     for k, v in null.items():
@@ -116,10 +136,16 @@ def positions(studies: int) -> None:
     import pandas as pd
 
     for _ in range(max(1, studies // 10)):
-        rows = [(f"p{p}", p, t, 0, 0, int(pos)) for p in range(50) for t in range(24)
-                for pos in rng.choice(10, size=3, replace=False)]  # fmt: skip
-        picks = pd.DataFrame(rows, columns=["participant_id", "session_id", "trial", "attempt",
-                                            "generation", "position"])  # fmt: skip
+        rows = [
+            (f"p{p}", p, t, 0, 0, int(pos))
+            for p in range(50)
+            for t in range(24)
+            for pos in rng.choice(10, size=3, replace=False)
+        ]
+        picks = pd.DataFrame(
+            rows,
+            columns=["participant_id", "session_id", "trial", "attempt", "generation", "position"],
+        )
         table, _ = position_bias(picks, 10, draws=1000, rng=rng)
         rejected += int((table["p_mc"] < ALPHA).sum())
         total += len(table)

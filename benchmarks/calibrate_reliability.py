@@ -30,9 +30,12 @@ def main() -> None:
     rig = load_model(os.environ["EMOGEN_MODEL"]).rig
     t0 = time.perf_counter()
     big = simulate_people(
-        PeopleDesign(participants=1000, repetitions=4, identities=("female-medium",),
-                     categorise=False), rig, seed=999,
-    )  # fmt: skip
+        PeopleDesign(
+            participants=1000, repetitions=4, identities=("female-medium",), categorise=False
+        ),
+        rig,
+        seed=999,
+    )
     truth = {
         e: components(f[list(big.genes)].to_numpy(), f["participant_id"].to_numpy()).icc
         for e, f in big.faces.groupby("emotion")

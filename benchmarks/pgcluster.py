@@ -45,8 +45,13 @@ class Cluster:
         import psycopg
 
         name = f"emogen_bench_{os.getpid()}_{next(self._names)}"
-        with psycopg.connect(host=str(self.folder), port=self.port, user=self.user,
-                             dbname="postgres", autocommit=True) as conn:  # fmt: skip
+        with psycopg.connect(
+            host=str(self.folder),
+            port=self.port,
+            user=self.user,
+            dbname="postgres",
+            autocommit=True,
+        ) as conn:
             conn.execute(f'CREATE DATABASE "{name}"')
         return f"postgresql+psycopg://{self.user}@/{name}?host={self.folder}&port={self.port}"
 
@@ -62,15 +67,23 @@ def cluster() -> Iterator[Cluster]:
         pw = pwd.getpwnam("postgres")
         os.chown(folder, pw.pw_uid, pw.pw_gid)
     data, port = folder / "data", 5433
-    subprocess.run(_as_postgres([initdb, "-D", str(data), "-A", "trust", "-U", user,
-                                 "-E", "UTF8"]), check=True, capture_output=True)  # fmt: skip
+    subprocess.run(
+        _as_postgres([initdb, "-D", str(data), "-A", "trust", "-U", user, "-E", "UTF8"]),
+        check=True,
+        capture_output=True,
+    )
     options = f"-k {folder} -c listen_addresses='' -p {port} -c max_connections=300"
-    subprocess.run(_as_postgres([pg_ctl, "-D", str(data), "-o", options, "-l",
-                                 str(folder / "log"), "-w", "start"]),
-                   check=True, capture_output=True)  # fmt: skip
+    subprocess.run(
+        _as_postgres(
+            [pg_ctl, "-D", str(data), "-o", options, "-l", str(folder / "log"), "-w", "start"]
+        ),
+        check=True,
+        capture_output=True,
+    )
     try:
         yield Cluster(folder, port, user)
     finally:
-        subprocess.run(_as_postgres([pg_ctl, "-D", str(data), "-m", "fast", "-w", "stop"]),
-                       capture_output=True)  # fmt: skip
+        subprocess.run(
+            _as_postgres([pg_ctl, "-D", str(data), "-m", "fast", "-w", "stop"]), capture_output=True
+        )
         shutil.rmtree(folder, ignore_errors=True)

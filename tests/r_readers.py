@@ -73,8 +73,13 @@ def run_r(code: str, cwd: Path, *args: str) -> str:
         fh.write(code)
     rscript = shutil.which("Rscript") or "Rscript"
     try:
-        done = subprocess.run([rscript, "--vanilla", fh.name, *args], cwd=cwd,
-                              capture_output=True, text=True, timeout=300)  # fmt: skip
+        done = subprocess.run(
+            [rscript, "--vanilla", fh.name, *args],
+            cwd=cwd,
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
     finally:
         Path(fh.name).unlink()
     assert done.returncode == 0, f"R failed:\n{done.stderr}"
@@ -102,8 +107,11 @@ def read_in_r(
         list(col_types) if isinstance(col_types, Sequence) else [col_types or {}] * len(paths)
     )
     with tempfile.TemporaryDirectory() as tmp:
-        args = [a for p, types in zip(paths, per_path, strict=True)
-                for a in (str(Path(p).resolve()), types.get(Path(p).stem, ""))]  # fmt: skip
+        args = [
+            a
+            for p, types in zip(paths, per_path, strict=True)
+            for a in (str(Path(p).resolve()), types.get(Path(p).stem, ""))
+        ]
         run_r(READ_TABLES, Path(tmp), tmp, *args)
         return [_table(Path(tmp), i) for i in range(1, len(paths) + 1)]
 

@@ -21,7 +21,6 @@ PACKAGE = SRC / "emogen"
 #: and render where they are used (docs/architecture.md).
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors",),
-    ("seeding",),
     ("rng", "config", "data", "columns", "solvers", "leftovers"),
     ("model",),
     ("metrics", "appearance"),

@@ -40,19 +40,44 @@ def test_simulate_json_is_the_whole_of_stdout_and_matches_the_files(
 def test_correct_and_model_export_json(ict_dir: Path, tmp_path: Path) -> None:
     src = tmp_path / "faces.csv"
     src.write_text("jawOpen,mouthSmile\n0.5,0.2\n1,0\n")
-    data = _json(["correct", str(src), "--out", str(tmp_path / "c.csv"), "--model", str(ict_dir),
-                  "--json"])  # fmt: skip
+    data = _json(
+        ["correct", str(src), "--out", str(tmp_path / "c.csv"), "--model", str(ict_dir), "--json"]
+    )
     assert data["faces"] == 2 and data["wrote"] == [str(tmp_path / "c.csv")]
     obj = tmp_path / "face.obj"
-    data = _json(["model", "export", "--face", "-w", "jawOpen=1", "--out", str(obj), "--model",
-                  str(ict_dir), "--json"])  # fmt: skip
+    data = _json(
+        [
+            "model",
+            "export",
+            "--face",
+            "-w",
+            "jawOpen=1",
+            "--out",
+            str(obj),
+            "--model",
+            str(ict_dir),
+            "--json",
+        ]
+    )
     assert data == {"wrote": str(obj)} and obj.stat().st_size > 0
 
 
 def test_render_json_and_a_jpeg_name_is_refused(ict_dir: Path, tmp_path: Path) -> None:
     png = tmp_path / "a.png"
-    data = _json(["render", "-w", "jawOpen=1", "--size", "64", "--out", str(png), "--model",
-                  str(ict_dir), "--json"])  # fmt: skip
+    data = _json(
+        [
+            "render",
+            "-w",
+            "jawOpen=1",
+            "--size",
+            "64",
+            "--out",
+            str(png),
+            "--model",
+            str(ict_dir),
+            "--json",
+        ]
+    )
     assert data["wrote"] == [str(png)] and png.read_bytes()[:4] == b"\x89PNG"
     for args in (["render"], ["render", "sheet", "--face", "neutral"], ["render", "heatmap"]):
         jpg = tmp_path / "b.jpg"
@@ -66,9 +91,19 @@ def test_an_existing_file_as_out_folder_is_a_usage_error(ict_dir: Path, tmp_path
     afile = tmp_path / "results"
     afile.write_text("my notes")
     result = runner.invoke(
-        app, ["simulate", "-t", "jawOpen=1", "--runs", "2", "--out", str(afile),
-              "--model", str(ict_dir)]
-    )  # fmt: skip
+        app,
+        [
+            "simulate",
+            "-t",
+            "jawOpen=1",
+            "--runs",
+            "2",
+            "--out",
+            str(afile),
+            "--model",
+            str(ict_dir),
+        ],
+    )
     assert result.exit_code == 2 and f"--out {afile} is a file" in result.stderr
     assert afile.read_text() == "my notes" and sorted(tmp_path.iterdir()) == [afile]
 
@@ -89,10 +124,27 @@ def test_power_json_matches_its_files_and_keeps_assumptions_on_stderr(
     out = tmp_path / "power"
     result = runner.invoke(
         app,
-        ["power", "--out", str(out), "--model", str(ict_dir), "--a", "mouthSmile=0.9",
-         "--difference", "browInnerUp=0.8", "--generations", "2", "--replicates", "20",
-         "--permutations", "20", "--max-participants", "6", "--json"],
-    )  # fmt: skip
+        [
+            "power",
+            "--out",
+            str(out),
+            "--model",
+            str(ict_dir),
+            "--a",
+            "mouthSmile=0.9",
+            "--difference",
+            "browInnerUp=0.8",
+            "--generations",
+            "2",
+            "--replicates",
+            "20",
+            "--permutations",
+            "20",
+            "--max-participants",
+            "6",
+            "--json",
+        ],
+    )
     assert result.exit_code == 0, (result.stdout, result.stderr)
     data = json.loads(result.stdout)  # the whole of stdout
     on_disk = json.loads((out / "power.json").read_text())

@@ -44,7 +44,7 @@ def test_reading_a_trials_solver_and_exporting_load_no_compiled_correction() -> 
         "import sys, json\n"
         "from emogen.ga.state import collision_solver_of_state\n"
         "import emogen.study.export_rows\n"
-        "s = collision_solver_of_state(json.dumps({'collision_solver': 2}))\n"
+        "s = collision_solver_of_state(json.dumps({'schema': 'emogen.ga.engine/4', 'collision_solver': 2}))\n"
         "print(s, 'numba' in sys.modules, 'emogen.correct.solve' in sys.modules)\n"
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

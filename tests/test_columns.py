@@ -20,8 +20,10 @@ BIG = 2**60 + 1  # no double holds it: float(BIG) == 2**60
 def test_a_big_seed_beside_a_missing_value_survives_csv_and_parquet(
     tmp_path: Path, rscript: None
 ) -> None:
-    rows = [{"seed": BIG, "rank": 0, "shown_at": "2026-01-31T09:30:00+00:00"},
-            {"seed": None, "rank": None, "shown_at": None}]  # fmt: skip
+    rows = [
+        {"seed": BIG, "rank": 0, "shown_at": "2026-01-31T09:30:00+00:00"},
+        {"seed": None, "rank": None, "shown_at": None},
+    ]
     df = tidy.frame(rows)
     assert df["seed"].iloc[0] == BIG and df["seed"].isna().iloc[1]
     tidy.write_csv(df, tmp_path / "t.csv")
@@ -69,8 +71,18 @@ def test_an_empty_table_reads_in_r_with_the_types_of_a_full_one(
 ) -> None:
     """readr guesses types from rows: a table without rows reads as all text unless given its
     ``col_types`` (col_types.csv, written beside the table)."""
-    rows = [{"seed": BIG, "rank": 1, "shown_at": "2026-01-31T09:30:00Z", "study": "s",
-             "w_jawOpen": 0.5, "correct": True, "p_value": 0.04, "note": "x"}]  # fmt: skip
+    rows = [
+        {
+            "seed": BIG,
+            "rank": 1,
+            "shown_at": "2026-01-31T09:30:00Z",
+            "study": "s",
+            "w_jawOpen": 0.5,
+            "correct": True,
+            "p_value": 0.04,
+            "note": "x",
+        }
+    ]
     full = tidy.frame(rows)
     empty = tidy.typed(full.iloc[:0])
     for name, df in (("full", full), ("empty", empty)):
@@ -82,8 +94,16 @@ def test_an_empty_table_reads_in_r_with_the_types_of_a_full_one(
         [tmp_path / "full" / "t.csv", tmp_path / "full" / "t.csv", tmp_path / "empty" / "t.csv"],
         [{}, types, types],
     )
-    want = {"seed": "character", "rank": "numeric", "shown_at": "POSIXct:UTC", "study": "character",
-            "w_jawOpen": "numeric", "correct": "logical", "p_value": "numeric", "note": "character"}  # fmt: skip
+    want = {
+        "seed": "character",
+        "rank": "numeric",
+        "shown_at": "POSIXct:UTC",
+        "study": "character",
+        "w_jawOpen": "numeric",
+        "correct": "logical",
+        "p_value": "numeric",
+        "note": "character",
+    }
     assert as_guessed.classes == as_given.classes == empty_given.classes == want
     assert {R_CLASS[k] for k in types["t"]} <= {c.split(":")[0] for c in want.values()}
     assert len(empty_given.frame) == 0 and empty_given.problems == 0
@@ -98,10 +118,15 @@ def test_values_that_do_not_fit_their_type_are_named() -> None:
 
 @pytest.mark.parametrize(
     ("header", "name"),
-    [("bias mean", "bias_mean"), ("max [cm]", "max_cm"), ("[0.25, 0.5) %", "x0_25_0_5_pct"),
-     ("GA noise μ ± σ", "ga_noise_mean_pm_sd"), ("w_jawOpen", "w_jawOpen"),
-     ("classified as →", "classified_as")],
-)  # fmt: skip
+    [
+        ("bias mean", "bias_mean"),
+        ("max [cm]", "max_cm"),
+        ("[0.25, 0.5) %", "x0_25_0_5_pct"),
+        ("GA noise μ ± σ", "ga_noise_mean_pm_sd"),
+        ("w_jawOpen", "w_jawOpen"),
+        ("classified as →", "classified_as"),
+    ],
+)
 def test_machine_names(header: str, name: str) -> None:
     assert tidy.machine_name(header) == name
 
@@ -114,8 +139,11 @@ def test_matrices_are_written_long() -> None:
     long = tidy.machine_table(matrix, index=True)
     assert list(long.columns) == ["group", "cluster", "entry"]
     assert sorted(map(tuple, long.to_numpy().tolist())) == [
-        ("a", "c1", 3), ("a", "c2", 1), ("b", "c1", 0), ("b", "c2", 4)
-    ]  # fmt: skip
+        ("a", "c1", 3),
+        ("a", "c2", 1),
+        ("b", "c1", 0),
+        ("b", "c2", 4),
+    ]
     shown = pd.DataFrame({"group": ["a"], "participants": ["–"], "bias mean": [0.5]})
     out = tidy.machine_table(shown)
     assert list(out.columns) == ["group", "participants", "bias_mean"]

@@ -39,8 +39,12 @@ def dead_pid() -> int:
 @pytest.mark.parametrize("sig", ["SIGTERM", "SIGHUP"])
 def test_an_export_stopped_by_a_signal_removes_its_partial_folder(tmp_path: Path, sig: str) -> None:
     out = tmp_path / "export"
-    done = subprocess.run([sys.executable, "-c", INTERRUPTED, str(out), sig], timeout=60,
-                          capture_output=True, text=True)  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-c", INTERRUPTED, str(out), sig],
+        timeout=60,
+        capture_output=True,
+        text=True,
+    )
     assert done.returncode == 128 + getattr(signal, sig), done.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == []  # no .export.partial-* left
 
@@ -61,8 +65,9 @@ def test_a_download_is_private_while_it_exists(tmp_path: Path, ict_model: Any) -
     from emogen.web import create_app
     from emogen.web.exports import export_table_file
 
-    app = create_app(study_from_dict(SMALL_STUDY), f"sqlite:///{tmp_path / 's.sqlite'}",
-                     model=ict_model)  # fmt: skip
+    app = create_app(
+        study_from_dict(SMALL_STUDY), f"sqlite:///{tmp_path / 's.sqlite'}", model=ict_model
+    )
     app.state.store.dispose()
     lock = asyncio.Lock()
     answer = asyncio.run(export_table_file(lock, app.state.store.url, "small", "sessions", None))
@@ -90,8 +95,9 @@ def test_a_killed_servers_downloads_are_removed_when_the_next_starts(
     (left / "sessions.csv").write_text("participant_id\nP001\n")
     mine = Path(tempfile.mkdtemp(prefix=f"emogen-download-{os.getpid()}-"))  # a live server's
     try:
-        app = create_app(study_from_dict(SMALL_STUDY), f"sqlite:///{tmp_path / 's.sqlite'}",
-                         model=ict_model)  # fmt: skip
+        app = create_app(
+            study_from_dict(SMALL_STUDY), f"sqlite:///{tmp_path / 's.sqlite'}", model=ict_model
+        )
         app.state.store.dispose()
         assert not left.exists() and mine.exists()
     finally:

@@ -20,8 +20,13 @@ REPO = Path(__file__).resolve().parents[1]
 @pytest.fixture
 def hook(monkeypatch: pytest.MonkeyPatch) -> types.ModuleType:
     """hatch_build.py, imported without hatchling (only the build's own environment has it)."""
-    names = ["hatchling", "hatchling.builders", "hatchling.builders.hooks",
-             "hatchling.builders.hooks.plugin", "hatchling.builders.hooks.plugin.interface"]  # fmt: skip
+    names = [
+        "hatchling",
+        "hatchling.builders",
+        "hatchling.builders.hooks",
+        "hatchling.builders.hooks.plugin",
+        "hatchling.builders.hooks.plugin.interface",
+    ]
     for name in names:
         monkeypatch.setitem(sys.modules, name, types.ModuleType(name))
     sys.modules[names[-1]].BuildHookInterface = object  # type: ignore[attr-defined]

@@ -15,8 +15,12 @@ ROOT = Path(__file__).parents[1]
 
 
 def test_the_report_names_this_cpu_and_the_blas_kernel() -> None:
-    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "platform_report.py")],
-                         capture_output=True, text=True, check=True).stdout  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "platform_report.py")],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
     cpuinfo = Path("/proc/cpuinfo").read_text()
     model = re.search(r"^model name\s*:\s*(.+)$", cpuinfo, re.MULTILINE)
     assert model is not None  # x86-64 Linux
@@ -27,8 +31,11 @@ def test_the_report_names_this_cpu_and_the_blas_kernel() -> None:
     built = np.show_config(mode="dicts")["Build Dependencies"]["blas"]
     line = out.splitlines()[1]
     assert line.startswith("BLAS: ") and built["version"] in line
-    assert any(f"{i['internal_api']} {built['version']} kernel {i['architecture']}," in line
-               for i in loaded if i["internal_api"] in built["name"])  # fmt: skip
+    assert any(
+        f"{i['internal_api']} {built['version']} kernel {i['architecture']}," in line
+        for i in loaded
+        if i["internal_api"] in built["name"]
+    )
 
 
 def test_make_test_prints_it_before_any_test() -> None:

@@ -8,7 +8,9 @@ imports nothing.
 
 from __future__ import annotations
 
-#: The eq. 5 block solvers; :mod:`emogen.correct.solve` implements them.
+#: The eq. 5 block solvers; :mod:`emogen.correct.solve` implements them. Solver 1 is needed by
+#: tests/study/test_recorded_before.py::test_recorded_study_replays_exactly (and
+#: ::test_a_session_recorded_mid_trial_continues_and_replays).
 SOLVERS = {1: "scipy.optimize.lsq_linear (BVLS)", 2: "compiled exact active set"}
 #: The solver new trials use.
 CURRENT_SOLVER = 2

@@ -32,8 +32,14 @@ STUDY: dict[str, Any] = {
 
 def _export(root: Path, model: Any, n: int, study: dict[str, Any]) -> Path:
     url = f"sqlite:///{root / 'study.sqlite'}"
-    plan = SimulationPlan(study_from_dict(study), url, seed=1, participants=n,
-                          design=SimulatedDesign(), shuffle_prototypes=False)  # fmt: skip
+    plan = SimulationPlan(
+        study_from_dict(study),
+        url,
+        seed=1,
+        participants=n,
+        design=SimulatedDesign(),
+        shuffle_prototypes=False,
+    )
     simulate_study(plan, model=model)
     store = Store(url)
     try:
@@ -49,8 +55,10 @@ def export(ict_model, tmp_path_factory: pytest.TempPathFactory) -> Path:  # type
 
 
 def _analyse(export: Path, out: Path, *extra: str) -> Any:
-    return CliRunner().invoke(app, ["analyse", str(export), "--out", str(out), "--no-render",
-                                    "--noise-runs", "20", *extra])  # fmt: skip
+    return CliRunner().invoke(
+        app,
+        ["analyse", str(export), "--out", str(out), "--no-render", "--noise-runs", "20", *extra],
+    )
 
 
 def test_reliability_and_groups_with_the_participant_as_unit(
@@ -77,8 +85,11 @@ def test_reliability_and_groups_with_the_participant_as_unit(
         g, who, w = [], [], []
         shape_names = set(load_model(ict_dir).shape_names)
         for t in done.itertuples():
-            f = faces[(faces["session_id"] == t.session_id) & (faces["trial"] == t.trial)
-                      & (faces["face_id"] == t.final_face_id)]  # fmt: skip
+            f = faces[
+                (faces["session_id"] == t.session_id)
+                & (faces["trial"] == t.trial)
+                & (faces["face_id"] == t.final_face_id)
+            ]
             f = f[f["attempt"] == f["attempt"].max()]
             f = f[f["generation"] == f["generation"].max()]
             g.append(f[[c for c in f.columns if c.startswith("g_")]].to_numpy(dtype=float)[0])
@@ -196,8 +207,13 @@ def test_a_study_of_categorise_blocks_only_is_analysed(
     ict_model: Any, ict_dir: Path, tmp_path: Path
 ) -> None:
     """A stimulus-validation study (raters label random faces): no GA trial at all."""
-    study = {"name": "validation", "seed": 3, "emotions": ["happy", "sad"], "identities": ["generic"],
-             "blocks": [{"task": "categorise", "random": 6}]}  # fmt: skip
+    study = {
+        "name": "validation",
+        "seed": 3,
+        "emotions": ["happy", "sad"],
+        "identities": ["generic"],
+        "blocks": [{"task": "categorise", "random": 6}],
+    }
     export = _export(tmp_path, ict_model, 3, study)
     out = tmp_path / "report"
     result = _analyse(export, out, "--model", str(ict_dir))

@@ -52,8 +52,16 @@ def test_analyse_simulations_end_to_end(sims: Path, ict_model, tmp_path: Path) -
     opts = AnalysisOptions(noise_runs=60, noise_draws=200, render=True, render_size=128)
     res = analyse(sims, tmp_path / "out", model=ict_model, options=opts)
     out = res.out
-    for name in ("errors_by_generation", "kl_by_generation", "repeatability", "confusion",
-                 "spread_test", "group_means", "elites", "mean_face_distances"):  # fmt: skip
+    for name in (
+        "errors_by_generation",
+        "kl_by_generation",
+        "repeatability",
+        "confusion",
+        "spread_test",
+        "group_means",
+        "elites",
+        "mean_face_distances",
+    ):
         assert (out / "tables" / f"{name}.csv").is_file(), name
     for fig in ("error_distributions", "kl", "separability", "mean_faces", "mean_face_heatmaps"):
         assert (out / "figures" / f"{fig}.png").is_file(), fig

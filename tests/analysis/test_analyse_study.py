@@ -38,8 +38,14 @@ def key() -> str:
     return f"analysis-e2e-{next(_keys):06d}"
 
 
-def drive(service: Any, participant: str, targets: dict[str, np.ndarray], *, restart: bool = False,
-          stop_after: int | None = None) -> None:  # fmt: skip
+def drive(
+    service: Any,
+    participant: str,
+    targets: dict[str, np.ndarray],
+    *,
+    restart: bool = False,
+    stop_after: int | None = None,
+) -> None:
     token, _ = service.create_session(participant)
     state = do(service, "begin", token, key())
     steps = 0
@@ -92,8 +98,14 @@ def export(ict_model, tmp_path_factory: pytest.TempPathFactory) -> Path:  # type
 
     root = tmp_path_factory.mktemp("study")
     store = Store(f"sqlite:///{root / 'study.sqlite'}")
-    service = StudyService(study_from_dict(STUDY), store, ict_model.rig,
-                           model_name=ict_model.name, model_hash=ict_model.model_hash, model=ict_model)  # fmt: skip
+    service = StudyService(
+        study_from_dict(STUDY),
+        store,
+        ict_model.rig,
+        model_name=ict_model.name,
+        model_hash=ict_model.model_hash,
+        model=ict_model,
+    )
     rng = np.random.default_rng(11)
     rig = ict_model.rig
     for p in range(PARTICIPANTS):
@@ -101,8 +113,12 @@ def export(ict_model, tmp_path_factory: pytest.TempPathFactory) -> Path:  # type
             e: rig.weights_from_names(participant_target(rig, e, rng=rng)) for e in ("happy", "sad")
         }
         drive(service, f"P-{p:02d}", targets, restart=p == 1)
-    drive(service, "P-quit", {e: rig.weights_from_names({"mouthSmile": 1.0}) for e in ("happy", "sad")},
-          stop_after=2)  # fmt: skip
+    drive(
+        service,
+        "P-quit",
+        {e: rig.weights_from_names({"mouthSmile": 1.0}) for e in ("happy", "sad")},
+        stop_after=2,
+    )
     tables = export_tables(store)
     write_export(tables, root / "export", "parquet")
     write_export(tables, root / "export-csv", "csv")
@@ -119,9 +135,19 @@ def test_analyse_a_study_export(export: Path, ict_dir: Path, tmp_path: Path) -> 
     )
     result = CliRunner().invoke(
         analysis_app,
-        ["analyse", str(export / "export"), "--out", str(out), "--model", str(ict_dir),
-         "--noise-runs", "100", "--config", str(config)],
-    )  # fmt: skip
+        [
+            "analyse",
+            str(export / "export"),
+            "--out",
+            str(out),
+            "--model",
+            str(ict_dir),
+            "--noise-runs",
+            "100",
+            "--config",
+            str(config),
+        ],
+    )
     assert result.exit_code == 0, result.output
     assert (out / "index.html").is_file() and (out / "README.md").is_file()
     summary = json.loads((out / "analysis.json").read_text())
@@ -180,14 +206,24 @@ def test_analyse_a_one_participant_export(ict_model, tmp_path: Path) -> None:  #
         "name": "one",
         "ga": {"generations": 1, "min_selections": 2, "max_selections": 3},
     }
-    service = StudyService(study_from_dict(cfg), store, ict_model.rig,
-                           model_name=ict_model.name, model_hash=ict_model.model_hash, model=ict_model)  # fmt: skip
+    service = StudyService(
+        study_from_dict(cfg),
+        store,
+        ict_model.rig,
+        model_name=ict_model.name,
+        model_hash=ict_model.model_hash,
+        model=ict_model,
+    )
     smile = ict_model.rig.weights_from_names({"mouthSmile": 1.0})
     drive(service, "browser-1", {"happy": smile, "sad": smile}, restart=True)
     write_export(export_tables(store), tmp_path / "export", "csv")
     store.dispose()
-    res = analyse(tmp_path / "export", tmp_path / "out", model=ict_model,
-                  options=AnalysisOptions(noise_runs=50, render_size=96))  # fmt: skip
+    res = analyse(
+        tmp_path / "export",
+        tmp_path / "out",
+        model=ict_model,
+        options=AnalysisOptions(noise_runs=50, render_size=96),
+    )
     html = res.html.read_text()
     assert "Skipped: too few final faces" in html and "fewer than 2 final faces" in html
     protos = pd.read_csv(tmp_path / "out" / "tables" / "prototypes.csv")

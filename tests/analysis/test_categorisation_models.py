@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+from emogen.analysis import categorisation_fits as fits
 from emogen.analysis import categorisation_models as cm
 from emogen.analysis.simulated_study import PeopleDesign, as_people, simulate_people
 
@@ -38,7 +39,7 @@ def test_conditional_logit_matches_statsmodels() -> None:
     avail[:, :2] = True
     util = np.where(avail, x @ np.array([-1.5, 0.7]), -np.inf) + rng.gumbel(size=(n, labels))
     chosen = np.argmax(util, axis=1)
-    beta, info, _ = cm.conditional_logit(x, avail, chosen)
+    beta, info, _ = fits.conditional_logit(x, avail, chosen)
     rows, cols = np.nonzero(avail)
     ref = ConditionalLogit((chosen[rows] == cols).astype(float), x[rows, cols], groups=rows).fit(
         method="newton", maxiter=100, disp=False
@@ -84,11 +85,14 @@ def test_gee_matches_statsmodels_formula_gee(study) -> None:  # type: ignore[no-
     ans = cm.model_answers(study)
     assert not isinstance(ans, str)
     table = cm.long_table(ans, cm.derangement(len(ans.participants), np.random.default_rng(4)))
-    got = cm.gee_contrast(table)
+    got = fits.gee_contrast(table)
     ref = smf.gee(
-        "chosen ~ d_own + d_ref + C(label)", groups="participant_id", data=table,
-        family=sm.families.Binomial(), cov_struct=sm.cov_struct.Exchangeable(),
-    ).fit()  # fmt: skip
+        "chosen ~ d_own + d_ref + C(label)",
+        groups="participant_id",
+        data=table,
+        family=sm.families.Binomial(),
+        cov_struct=sm.cov_struct.Exchangeable(),
+    ).fit()
     assert got["slope_own"] == pytest.approx(ref.params["d_own"], rel=1e-5)
     assert got["slope_ref"] == pytest.approx(ref.params["d_ref"], rel=1e-5)
     assert got["se_own"] == pytest.approx(ref.bse["d_own"], rel=1e-4)
@@ -125,12 +129,22 @@ def test_the_contrast_holds_alpha_when_prototypes_are_shuffled(rig) -> None:  # 
 
 
 def test_too_few_participants_is_one_line(rig) -> None:  # type: ignore[no-untyped-def]
-    people = as_people(simulate_people(PeopleDesign(participants=4, repetitions=1,
-                                                    identities=("female-medium",)), rig, seed=2))  # fmt: skip
+    people = as_people(
+        simulate_people(
+            PeopleDesign(participants=4, repetitions=1, identities=("female-medium",)), rig, seed=2
+        )
+    )
     why = cm.own_distance(people, rng=np.random.default_rng(0))
     assert isinstance(why, str) and "needs at least 6" in why
-    none = as_people(simulate_people(PeopleDesign(participants=8, repetitions=1, categorise=False,
-                                                  identities=("female-medium",)), rig, seed=2))  # fmt: skip
+    none = as_people(
+        simulate_people(
+            PeopleDesign(
+                participants=8, repetitions=1, categorise=False, identities=("female-medium",)
+            ),
+            rig,
+            seed=2,
+        )
+    )
     assert (
         cm.own_distance(none, rng=np.random.default_rng(0))
         == "no categorise answers (no categorise block, or nobody has reached it yet)"

@@ -31,10 +31,16 @@ def test_the_section_of_a_study_with_a_categorise_block(people, tmp_path: Path) 
     report, summary = Report("t", tmp_path), {}  # type: ignore[var-annotated]
     categorisation_section(people, report, summary, AnalysisOptions(seed=3), None)
     tables = {p.stem for p in (tmp_path / "tables").glob("*.csv")}
-    assert {"categorisation_confusion", "categorisation_hit_rates",
-            "categorisation_hit_rate_tests", "categorisation_accuracy",
-            "categorisation_source_tests", "categorisation_model_long",
-            "categorisation_model_slopes", "categorisation_participants"} <= tables  # fmt: skip
+    assert {
+        "categorisation_confusion",
+        "categorisation_hit_rates",
+        "categorisation_hit_rate_tests",
+        "categorisation_accuracy",
+        "categorisation_source_tests",
+        "categorisation_model_long",
+        "categorisation_model_slopes",
+        "categorisation_participants",
+    } <= tables
     for fig in ("categorisation_confusion", "categorisation_own_distance"):
         assert (tmp_path / "figures" / f"{fig}.png").is_file()
         assert (tmp_path / "figures" / f"{fig}.svg").is_file()
@@ -55,8 +61,9 @@ def test_the_section_of_a_study_with_a_categorise_block(people, tmp_path: Path) 
 
 
 def test_no_categorise_block_is_one_line(ict_model: Any, tmp_path: Path) -> None:
-    design = PeopleDesign(participants=4, repetitions=1, identities=("female-medium",),
-                          categorise=False)  # fmt: skip
+    design = PeopleDesign(
+        participants=4, repetitions=1, identities=("female-medium",), categorise=False
+    )
     people = as_people(simulate_people(design, ict_model.rig, seed=1))
     report, summary = Report("t", tmp_path), {}  # type: ignore[var-annotated]
     categorisation_section(people, report, summary, AnalysisOptions(), None)

@@ -19,10 +19,28 @@ def test_power_command(ict_dir: Path, tmp_path: Path) -> None:
     out = tmp_path / "power"
     result = runner.invoke(
         analysis_app,
-        ["power", "--out", str(out), "--model", str(ict_dir), "--a", "mouthSmile=0.9",
-         "--a", "cheekSquint=0.6", "--difference", "browInnerUp=0.8", "--generations", "3",
-         "--replicates", "40", "--permutations", "40", "--max-participants", "12"],
-    )  # fmt: skip
+        [
+            "power",
+            "--out",
+            str(out),
+            "--model",
+            str(ict_dir),
+            "--a",
+            "mouthSmile=0.9",
+            "--a",
+            "cheekSquint=0.6",
+            "--difference",
+            "browInnerUp=0.8",
+            "--generations",
+            "3",
+            "--replicates",
+            "40",
+            "--permutations",
+            "40",
+            "--max-participants",
+            "12",
+        ],
+    )
     assert result.exit_code == 0, result.output
     summary = json.loads((out / "power.json").read_text())
     assert summary["n_required"] is not None and 4 <= summary["n_required"] <= 12
@@ -40,8 +58,21 @@ def test_power_command(ict_dir: Path, tmp_path: Path) -> None:
 
 
 def test_power_command_refuses_a_difference_cd_cannot_see(ict_dir: Path, tmp_path: Path) -> None:
-    base = ["power", "--out", str(tmp_path), "--model", str(ict_dir), "--a", "mouthSmile=0.4",
-            "--b", "mouthSmile=0.8", "--participant-sd", "0", "--noise-temperature", "0"]  # fmt: skip
+    base = [
+        "power",
+        "--out",
+        str(tmp_path),
+        "--model",
+        str(ict_dir),
+        "--a",
+        "mouthSmile=0.4",
+        "--b",
+        "mouthSmile=0.8",
+        "--participant-sd",
+        "0",
+        "--noise-temperature",
+        "0",
+    ]
     result = runner.invoke(analysis_app, base)
     assert result.exit_code == 2 and "only in intensity" in result.output
     assert "--statistic cd" in result.output and "--observer cd" in result.output
@@ -66,9 +97,20 @@ def _section(ict_dir: Path, out: Path, words: str, runs: int) -> tuple[pd.DataFr
     """``emogen replicate --quick --only WORDS --no-render --runs RUNS``: (findings, output)."""
     result = runner.invoke(
         analysis_app,
-        ["replicate", "--quick", "--out", str(out), "--model", str(ict_dir), "--only",
-         words, "--no-render", "--runs", str(runs)],
-    )  # fmt: skip
+        [
+            "replicate",
+            "--quick",
+            "--out",
+            str(out),
+            "--model",
+            str(ict_dir),
+            "--only",
+            words,
+            "--no-render",
+            "--runs",
+            str(runs),
+        ],
+    )
     assert result.exit_code == 0, result.output
     return pd.read_csv(out / "tables" / "findings.csv"), result.output
 

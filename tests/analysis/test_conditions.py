@@ -39,8 +39,9 @@ def test_permutation_p_matches_plain_enumeration() -> None:
         zc = z - z.mean(axis=1, keepdims=True)
         means = zc.mean(axis=0)
         ss_eff = sum(n * float(means[j] @ means[j]) for j in range(k))
-        ss_err = sum(float((zc[i, j] - means[j]) @ (zc[i, j] - means[j]))
-                     for i in range(n) for j in range(k))  # fmt: skip
+        ss_err = sum(
+            float((zc[i, j] - means[j]) @ (zc[i, j] - means[j])) for i in range(n) for j in range(k)
+        )
         return (ss_eff / (k - 1)) / (ss_err / ((k - 1) * (n - 1)))
 
     null = [
@@ -58,9 +59,12 @@ def rig(ict_model):  # type: ignore[no-untyped-def]
 
 
 BASE = PeopleDesign(
-    emotions=("happy", "sad"), participants=20, repetitions=1, categorise=False,
+    emotions=("happy", "sad"),
+    participants=20,
+    repetitions=1,
+    categorise=False,
     participant=SimulatedDesign(spread=0.1),
-)  # fmt: skip
+)
 
 
 def test_identity_tests_hold_alpha_on_null_and_find_a_planted_effect(rig) -> None:  # type: ignore[no-untyped-def]
@@ -70,17 +74,20 @@ def test_identity_tests_hold_alpha_on_null_and_find_a_planted_effect(rig) -> Non
     hits = {"identity": 0, "emotion × identity": 0}
     for seed in range(20):
         people = as_people(simulate_people(BASE, rig, seed=200 + seed))
-        t = condition_tests(people, permutations=500, bootstrap=50, level=0.95,
-                            rng=np.random.default_rng(seed)).set_index("effect")  # fmt: skip
+        t = condition_tests(
+            people, permutations=500, bootstrap=50, level=0.95, rng=np.random.default_rng(seed)
+        ).set_index("effect")
         assert t.loc["emotion", "p_perm"] < 0.01  # happy and sad differ
         for k in hits:
             hits[k] += bool(t.loc[k, "p_perm"] < 0.05)
     assert max(hits.values()) <= 4, hits
     shift = {"mouthSmile": 0.5, "browInnerUp": 0.5, "eyeWide": 0.5}
-    planted = PeopleDesign(**{**BASE.__dict__, "identity_shifts": {
-        "male-medium": {"happy": shift, "sad": shift}}})  # fmt: skip
+    planted = PeopleDesign(
+        **{**BASE.__dict__, "identity_shifts": {"male-medium": {"happy": shift, "sad": shift}}}
+    )
     people = as_people(simulate_people(planted, rig, seed=5))
-    t = condition_tests(people, permutations=500, bootstrap=200, level=0.95,
-                        rng=np.random.default_rng(0)).set_index("effect")  # fmt: skip
+    t = condition_tests(
+        people, permutations=500, bootstrap=200, level=0.95, rng=np.random.default_rng(0)
+    ).set_index("effect")
     assert t.loc["identity", "p_perm"] < 0.05
     assert t.loc["identity", "ci_low"] > 0

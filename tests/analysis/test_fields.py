@@ -52,16 +52,20 @@ def test_leave_one_out_density_matches_sklearn() -> None:
 
 def test_pooled_bandwidth_is_the_argmax_of_a_plain_loop() -> None:
     rng = np.random.default_rng(1)
-    fields = [rng.normal(rng.normal(0, 2, 2), 0.5, size=(int(rng.integers(2, 5)), 2))
-              for _ in range(8)]  # fmt: skip
+    fields = [
+        rng.normal(rng.normal(0, 2, 2), 0.5, size=(int(rng.integers(2, 5)), 2)) for _ in range(8)
+    ]
     h, table = pooled_bandwidth(fields)
     grid = table["bandwidth"].to_numpy()
     assert len(grid) == len(BANDWIDTH_GRID)
     plain = [
-        sum(KernelDensity(bandwidth=g).fit(np.delete(f, i, 0)).score_samples(f[i : i + 1])[0]
-            for f in fields for i in range(len(f)))
+        sum(
+            KernelDensity(bandwidth=g).fit(np.delete(f, i, 0)).score_samples(f[i : i + 1])[0]
+            for f in fields
+            for i in range(len(f))
+        )
         for g in grid
-    ]  # fmt: skip
+    ]
     assert table["loo_loglik"].to_numpy() == pytest.approx(plain, rel=1e-9)
     assert h == grid[int(np.argmax(plain))]
     assert 0.25 < h < 1.0  # near the planted within-field SD 0.5
@@ -100,16 +104,20 @@ def test_monte_carlo_bhattacharyya_and_min_overlap_match_closed_forms() -> None:
 
 def _grouped(participants: int, groups: bool) -> PeopleDesign:
     return PeopleDesign(
-        participants=participants, categorise=False, participant=SimulatedDesign(spread=0.15),
-        groups=("a", "b") if groups else (), shifts={"b": GROUP_SHIFT} if groups else {},
-    )  # fmt: skip
+        participants=participants,
+        categorise=False,
+        participant=SimulatedDesign(spread=0.15),
+        groups=("a", "b") if groups else (),
+        shifts={"b": GROUP_SHIFT} if groups else {},
+    )
 
 
 def test_clustering_recovers_two_planted_subpopulations(rig) -> None:  # type: ignore[no-untyped-def]
     for seed in (0, 1):
         sim = simulate_people(_grouped(30, True), rig, seed=seed)
-        c = cluster_fields(perceptive_fields(as_people(sim)), rng=np.random.default_rng(seed),
-                           n_null=39)  # fmt: skip
+        c = cluster_fields(
+            perceptive_fields(as_people(sim)), rng=np.random.default_rng(seed), n_null=39
+        )
         assert c.structure and c.k == 2
         assert adjusted_rand_score(sim.group, c.labels) > 0.8
 
@@ -118,10 +126,13 @@ def test_one_population_mostly_reads_as_no_structure(rig) -> None:  # type: igno
     """4 studies in CI (the 100-study rate: benchmarks/calibrate_fields.py); a test that found
     structure everywhere (the silhouette's bias) fails here."""
     found = [
-        cluster_fields(perceptive_fields(as_people(simulate_people(_grouped(30, False), rig,
-                       seed=100 + s))), rng=np.random.default_rng(s), n_null=39).structure
+        cluster_fields(
+            perceptive_fields(as_people(simulate_people(_grouped(30, False), rig, seed=100 + s))),
+            rng=np.random.default_rng(s),
+            n_null=39,
+        ).structure
         for s in range(4)
-    ]  # fmt: skip
+    ]
     assert sum(found) <= 1
     with pytest.raises(Exception, match="6 participants"):
         small = simulate_people(_grouped(4, False), rig, seed=1)
@@ -129,9 +140,14 @@ def test_one_population_mostly_reads_as_no_structure(rig) -> None:  # type: igno
 
 
 def test_fields_are_their_owners_when_participants_differ(rig) -> None:  # type: ignore[no-untyped-def]
-    design = PeopleDesign(participants=20, categorise=False, repetitions=4,
-                          identities=("female-medium",), emotions=("happy", "sad"),
-                          participant=SimulatedDesign(spread=0.5))  # fmt: skip
+    design = PeopleDesign(
+        participants=20,
+        categorise=False,
+        repetitions=4,
+        identities=("female-medium",),
+        emotions=("happy", "sad"),
+        participant=SimulatedDesign(spread=0.5),
+    )
     people = as_people(simulate_people(design, rig, seed=3))
     ind = field_individuality(people, perceptive_fields(people))
     for _, part in ind.groupby("emotion"):

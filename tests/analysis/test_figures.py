@@ -16,6 +16,7 @@ from PIL import Image
 from emogen.analysis import plots
 from emogen.analysis.repeatability import BIN_LABELS
 from emogen.analysis.separability import gmm_separability
+from emogen.analysis.separability_figure import separability_figure
 from emogen.errors import ConfigError
 
 
@@ -38,8 +39,14 @@ def _texts(fig: Figure) -> list:  # type: ignore[type-arg]
     for ax in fig.axes:
         # the tick labels drawn: those of ticks within the view limits
         ticks = [t for axis in (ax.xaxis, ax.yaxis) for t in axis._update_ticks()]
-        candidates = [*(t.label1 for t in ticks), *(t.label2 for t in ticks), ax.title,
-                      ax.xaxis.label, ax.yaxis.label, *ax.texts]  # fmt: skip
+        candidates = [
+            *(t.label1 for t in ticks),
+            *(t.label2 for t in ticks),
+            ax.title,
+            ax.xaxis.label,
+            ax.yaxis.label,
+            *ax.texts,
+        ]
         if not ax.get_visible():
             continue
         legend = ax.get_legend()
@@ -91,7 +98,7 @@ def legends_over_data(fig: Figure) -> list[str]:
 def test_separability_layout_holds_for_2_to_12_groups(n: int, tmp_path: Path) -> None:
     sep = _separable(n)
     with plots.keep_figures() as figs:
-        plots.separability(sep, tmp_path / "sep.png")
+        separability_figure(sep, tmp_path / "sep.png")
     (fig,) = figs
     assert overlapping_texts(fig) == []
     assert legends_over_data(fig) == []

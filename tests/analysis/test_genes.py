@@ -72,9 +72,14 @@ def test_facs_map_covers_every_gene_of_the_model(ict_model) -> None:  # type: ig
 
 OPTS = GeneTestOptions(permutations=1000, bootstrap=200)
 NULL = PeopleDesign(
-    emotions=("happy", "sad"), identities=("female-medium",), participants=30, repetitions=2,
-    categorise=False, groups=("a", "b"), participant=SimulatedDesign(spread=0.1),
-)  # fmt: skip
+    emotions=("happy", "sad"),
+    identities=("female-medium",),
+    participants=30,
+    repetitions=2,
+    categorise=False,
+    groups=("a", "b"),
+    participant=SimulatedDesign(spread=0.1),
+)
 
 
 def _same_prototype(people):  # type: ignore[no-untyped-def]
@@ -104,10 +109,15 @@ def test_family_wise_error_on_null_data(rig) -> None:  # type: ignore[no-untyped
 
 def test_planted_group_shift_is_found_on_its_gene(rig) -> None:  # type: ignore[no-untyped-def]
     design = PeopleDesign(
-        emotions=("happy", "sad"), identities=("female-medium",), participants=40,
-        repetitions=2, categorise=False, groups=("a", "b"),
-        shifts={"b": {"happy": {"browInnerUp": 0.6}}}, participant=SimulatedDesign(spread=0.1),
-    )  # fmt: skip
+        emotions=("happy", "sad"),
+        identities=("female-medium",),
+        participants=40,
+        repetitions=2,
+        categorise=False,
+        groups=("a", "b"),
+        shifts={"b": {"happy": {"browInnerUp": 0.6}}},
+        participant=SimulatedDesign(spread=0.1),
+    )
     people = as_people(simulate_people(design, rig, seed=7))
     g = group_gene_tests(people, OPTS, rng=np.random.default_rng(0))
     hits = g[g["significant_maxt"]]

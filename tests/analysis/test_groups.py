@@ -64,18 +64,27 @@ def test_effects_are_found() -> None:
 
 def test_planted_group_effect_in_a_simulated_study(ict_model) -> None:  # type: ignore[no-untyped-def]
     design = PeopleDesign(
-        participants=30, repetitions=2, identities=("female-medium",), categorise=False,
-        groups=("control", "clinical"), shifts={"clinical": {"happy": {"browInnerUp": 0.7}}},
+        participants=30,
+        repetitions=2,
+        identities=("female-medium",),
+        categorise=False,
+        groups=("control", "clinical"),
+        shifts={"clinical": {"happy": {"browInnerUp": 0.7}}},
         participant=SimulatedDesign(spread=0.2),
-    )  # fmt: skip
+    )
     people = as_people(simulate_people(design, ict_model.rig, seed=4))
     rng = np.random.default_rng(0)
     res = {}
     for emotion in ("happy", "sad"):
         m = mean_faces(people, emotion)
         assert len(m) == 30  # one row per participant, not per face
-        res[emotion] = compare_groups(m[list(people.genes)].to_numpy(), m["group"].to_numpy(),
-                                      rng=rng, permutations=999, draws=200)  # fmt: skip
+        res[emotion] = compare_groups(
+            m[list(people.genes)].to_numpy(),
+            m["group"].to_numpy(),
+            rng=rng,
+            permutations=999,
+            draws=200,
+        )
     assert res["happy"]["p_location"] <= 0.01
     assert res["happy"]["centroid_ed_low"] > 0.05
     assert res["sad"]["p_location"] > 0.01

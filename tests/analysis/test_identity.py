@@ -30,8 +30,13 @@ def rig(ict_model):  # type: ignore[no-untyped-def]
 
 
 def _design(participants: int, shifted: bool) -> PeopleDesign:
-    return PeopleDesign(participants=participants, emotions=("happy", "sad"), repetitions=2,
-                        categorise=False, identity_shifts=SHIFT if shifted else {})  # fmt: skip
+    return PeopleDesign(
+        participants=participants,
+        emotions=("happy", "sad"),
+        repetitions=2,
+        categorise=False,
+        identity_shifts=SHIFT if shifted else {},
+    )
 
 
 def test_distances_match_a_plain_loop(rig) -> None:  # type: ignore[no-untyped-def]
@@ -66,8 +71,9 @@ def test_false_positive_rate_without_identity_effect(rig) -> None:  # type: igno
     rejected = 0
     for s in range(k):
         people = as_people(simulate_people(_design(16, False), rig, seed=1000 + s))
-        r = within_between_test(identity_distances(people), rng=np.random.default_rng(s),
-                                n_perm=999)  # fmt: skip
+        r = within_between_test(
+            identity_distances(people), rng=np.random.default_rng(s), n_perm=999
+        )
         rejected += r["p"] < ALPHA
     bound = ALPHA + 2 * np.sqrt(ALPHA * (1 - ALPHA) / k)
     assert rejected / k <= bound
@@ -100,8 +106,9 @@ def test_identity_section_skips_one_identity_and_writes_tables(
     monkeypatch.setattr(identity, "DECODING_PERMUTATIONS", 19)
     one = PeopleDesign(participants=4, identities=("female-medium",), categorise=False)
     report = Report("t", tmp_path / "a")
-    identity_section(as_people(simulate_people(one, rig, seed=1)), report, {}, AnalysisOptions(),
-                     None)  # fmt: skip
+    identity_section(
+        as_people(simulate_people(one, rig, seed=1)), report, {}, AnalysisOptions(), None
+    )
     assert "Skipped: every face was made on one identity" in report._markdown()
     report, summary = Report("t", tmp_path / "b"), {}  # type: ignore[var-annotated]
     people = as_people(simulate_people(_design(8, False), rig, seed=2))

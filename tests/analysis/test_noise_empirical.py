@@ -64,38 +64,49 @@ def test_neutral_faces_are_left_out_and_counted() -> None:
     who = np.array([f"p{i}" for i in people])
     with_neutral = np.vstack([x, np.zeros((2, 6))])
     who_neutral = np.concatenate([who, ["p0", "p9"]])
-    res = empirical_spread_test(with_neutral, who_neutral, permutations=99,
-                                rng=np.random.default_rng(1))  # fmt: skip
+    res = empirical_spread_test(
+        with_neutral, who_neutral, permutations=99, rng=np.random.default_rng(1)
+    )
     within, between = _plain(x, who)
     assert res.neutral == 2 and res.faces == 15 and res.participants == 5
     assert res.within == pytest.approx(within) and res.between == pytest.approx(between)
     assert not has_repeats(np.array(["a", "a", "b", "b"]), np.array([[1.0], [0], [1], [1]]))
     with pytest.raises(DataError, match="neutral faces, which have no direction, not counted"):
-        empirical_spread_test(np.array([[1.0, 0], [0, 0], [1, 1], [1, 2]]),
-                              np.array(["a", "a", "b", "b"]), rng=np.random.default_rng(0))  # fmt: skip
+        empirical_spread_test(
+            np.array([[1.0, 0], [0, 0], [1, 1], [1, 2]]),
+            np.array(["a", "a", "b", "b"]),
+            rng=np.random.default_rng(0),
+        )
 
 
 def test_needs_two_participants_with_repeats() -> None:
     assert not has_repeats(np.array(["a", "a", "b"]))
     with pytest.raises(DataError, match="at least 2 participants with 2 or more"):
-        empirical_spread_test(np.ones((3, 4)), np.array(["a", "a", "b"]),
-                              rng=np.random.default_rng(0))  # fmt: skip
+        empirical_spread_test(
+            np.ones((3, 4)), np.array(["a", "a", "b"]), rng=np.random.default_rng(0)
+        )
 
 
 def _flagged(rig, spread: float, studies: int, n: int) -> list[bool]:  # type: ignore[no-untyped-def]
     design = PeopleDesign(
-        emotions=("happy", "sad"), identities=("female-medium",), participants=n,
-        repetitions=3, participant=SimulatedDesign(spread=spread), categorise=False,
-    )  # fmt: skip
+        emotions=("happy", "sad"),
+        identities=("female-medium",),
+        participants=n,
+        repetitions=3,
+        participant=SimulatedDesign(spread=spread),
+        categorise=False,
+    )
     out = []
     for k in range(studies):
         sim = simulate_people(design, rig, seed=100 + k)
         for emotion in design.emotions:
             f = sim.faces[sim.faces["emotion"] == emotion]
             res = empirical_spread_test(
-                f[list(sim.weights)].to_numpy(), f["participant_id"].to_numpy(),
-                permutations=199, rng=np.random.default_rng(k),
-            )  # fmt: skip
+                f[list(sim.weights)].to_numpy(),
+                f["participant_id"].to_numpy(),
+                permutations=199,
+                rng=np.random.default_rng(k),
+            )
             out.append(res.exceeds)
     return out
 

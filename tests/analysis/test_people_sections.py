@@ -25,8 +25,14 @@ def test_sections_on_a_simulated_study(ict_model, tmp_path: Path) -> None:  # ty
     opts = AnalysisOptions()
     for section in (quality_section, genes_section, conditions_section):
         section(people, report, summary, opts, None)
-    for name in ("genes_facs", "genes_emotion_tests", "genes_group_tests", "conditions_tests",
-                 "quality_sessions", "quality_exclusions"):  # fmt: skip
+    for name in (
+        "genes_facs",
+        "genes_emotion_tests",
+        "genes_group_tests",
+        "conditions_tests",
+        "quality_sessions",
+        "quality_exclusions",
+    ):
         assert (tmp_path / "tables" / f"{name}.csv").is_file(), name
     assert (tmp_path / "figures" / "genes_emotions.png").is_file()
     assert summary["quality"]["excluded"] == 0

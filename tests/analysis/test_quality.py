@@ -52,10 +52,14 @@ def test_position_bias_finds_a_biased_picker() -> None:
 
 
 STUDY: dict[str, Any] = {
-    "name": "quality", "seed": 5, "emotions": ["happy", "sad"], "identities": ["generic"],
-    "repetitions": 4, "ga": {"generations": 4, "min_selections": 1, "max_selections": 5},
+    "name": "quality",
+    "seed": 5,
+    "emotions": ["happy", "sad"],
+    "identities": ["generic"],
+    "repetitions": 4,
+    "ga": {"generations": 4, "min_selections": 1, "max_selections": 5},
     "blocks": [{"task": "evolve"}],
-}  # fmt: skip
+}
 
 
 @pytest.fixture(scope="module")
@@ -69,8 +73,14 @@ def export(ict_model, tmp_path_factory: pytest.TempPathFactory) -> Path:  # type
     url = f"sqlite:///{root / 'q.sqlite'}"
     from emogen.tasks.simulated import SimulatedDesign
 
-    plan = SimulationPlan(study_from_dict(STUDY), url, seed=1, participants=4,
-                          design=SimulatedDesign(), shuffle_prototypes=False)  # fmt: skip
+    plan = SimulationPlan(
+        study_from_dict(STUDY),
+        url,
+        seed=1,
+        participants=4,
+        design=SimulatedDesign(),
+        shuffle_prototypes=False,
+    )
     simulate_study(plan, model=ict_model)
     store = Store(url)
     try:

@@ -32,9 +32,16 @@ def responses(seed: int = 0, participants: int = 8) -> pd.DataFrame:
                 label = str(rng.choice([*EMOTIONS, "none"], p=[0.3, 0.3, 0.3, 0.1]))
             if rng.uniform() < 0.05:
                 label = None  # unanswered
-            rows.append({"participant_id": f"P{p}", "trial": t, "source": source,
-                         "fallback": bool(source == "other" and rng.uniform() < 0.1),
-                         "intended": intended, "label": label})  # fmt: skip
+            rows.append(
+                {
+                    "participant_id": f"P{p}",
+                    "trial": t,
+                    "source": source,
+                    "fallback": bool(source == "other" and rng.uniform() < 0.1),
+                    "intended": intended,
+                    "label": label,
+                }
+            )
     return pd.DataFrame(rows)
 
 

@@ -108,9 +108,12 @@ def test_icc_interval_covers_the_simulated_truth(ict_model) -> None:  # type: ig
     ≥ 90% (nominal 95%; binomial SE 1.7 points) (the full 100-study run: benchmarks/calibrate_reliability.py)."""
     rig = ict_model.rig
     big = simulate_people(
-        PeopleDesign(participants=1000, repetitions=4, identities=("female-medium",), categorise=False),
-        rig, seed=999,
-    )  # fmt: skip
+        PeopleDesign(
+            participants=1000, repetitions=4, identities=("female-medium",), categorise=False
+        ),
+        rig,
+        seed=999,
+    )
     truth = {
         e: components(f[list(big.genes)].to_numpy(), f["participant_id"].to_numpy()).icc
         for e, f in big.faces.groupby("emotion")

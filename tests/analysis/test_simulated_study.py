@@ -55,10 +55,14 @@ def test_final_faces_land_near_their_makers_prototypes(rig) -> None:  # type: ig
 
 def test_planted_group_shift_moves_that_gene_only(rig) -> None:  # type: ignore[no-untyped-def]
     design = PeopleDesign(
-        participants=20, repetitions=1, identities=("female-medium",), categorise=False,
-        groups=("a", "b"), shifts={"b": {"happy": {"browInnerUp": 0.6}}},
+        participants=20,
+        repetitions=1,
+        identities=("female-medium",),
+        categorise=False,
+        groups=("a", "b"),
+        shifts={"b": {"happy": {"browInnerUp": 0.6}}},
         participant=SimulatedDesign(spread=0.1),
-    )  # fmt: skip
+    )
     sim = simulate_people(design, rig, seed=5)
     happy = sim.faces[sim.faces["emotion"] == "happy"]
     means = happy.groupby("group")[["g_browInnerUp", "g_mouthSmile"]].mean()
@@ -68,8 +72,12 @@ def test_planted_group_shift_moves_that_gene_only(rig) -> None:  # type: ignore[
 
 def test_shuffled_prototypes_remove_the_own_face_advantage(rig) -> None:  # type: ignore[no-untyped-def]
     def advantage(shuffle: bool) -> float:
-        d = PeopleDesign(participants=30, repetitions=1, identities=("female-medium",),
-                         shuffle_prototypes=shuffle)  # fmt: skip
+        d = PeopleDesign(
+            participants=30,
+            repetitions=1,
+            identities=("female-medium",),
+            shuffle_prototypes=shuffle,
+        )
         r = simulate_people(d, rig, seed=6).responses
         acc = r[r["source"] != "random"].groupby("source")["correct"].mean()
         return float(acc["own"] - acc["other"])

@@ -30,18 +30,34 @@ def _study(folder: Path, fmt: str = "csv") -> dict[str, pd.DataFrame]:
     rng = np.random.default_rng(3)
     faces = pd.DataFrame(
         [
-            {"session_id": s, "trial": 0, "attempt": 0, "generation": g, "face_id": f,
-             "w_jawOpen": rng.uniform(), "w_mouthSmile_L": rng.uniform()}
-            for s in (1, 2) for g in (0, 1) for f in range(3)
+            {
+                "session_id": s,
+                "trial": 0,
+                "attempt": 0,
+                "generation": g,
+                "face_id": f,
+                "w_jawOpen": rng.uniform(),
+                "w_mouthSmile_L": rng.uniform(),
+            }
+            for s in (1, 2)
+            for g in (0, 1)
+            for f in range(3)
         ]
-    )  # fmt: skip
+    )
     selections = pd.DataFrame(
         [
-            {"session_id": s, "trial": 0, "attempt": 0, "generation": g, "face_id": 0,
-             "role": "elite"}
-            for s in (1, 2) for g in (0, 1)
+            {
+                "session_id": s,
+                "trial": 0,
+                "attempt": 0,
+                "generation": g,
+                "face_id": 0,
+                "role": "elite",
+            }
+            for s in (1, 2)
+            for g in (0, 1)
         ]
-    )  # fmt: skip
+    )
     tables = {"trials": trials, "faces": faces, "selections": selections}
     write(folder, tables, fmt)
     return tables
@@ -113,9 +129,17 @@ def test_a_simulation_with_nan_errors_or_bad_weights_is_refused(tmp_path: Path) 
         load_dataset(sim)
     table.to_parquet(sim / "simulation.parquet")
     faces = pd.DataFrame(
-        {"run": [0], "generation": [1], "slot": [0], "operator": ["S"], "distance": [0.1],
-         "error": [0.2], "rank": [0], "jawOpen": [1.7]}
-    )  # fmt: skip
+        {
+            "run": [0],
+            "generation": [1],
+            "slot": [0],
+            "operator": ["S"],
+            "distance": [0.1],
+            "error": [0.2],
+            "rank": [0],
+            "jawOpen": [1.7],
+        }
+    )
     faces.to_parquet(sim / "faces.parquet")
     with pytest.raises(DataError, match=r"faces: column 'jawOpen' row 1: .* got 1.7$"):
         load_dataset(sim)

@@ -30,7 +30,7 @@ def fingerprint(pop: Population) -> bytes:
             pop.ids.tobytes(),
             pop.parent_ids.tobytes(),
             "/".join(pop.operators.tolist()).encode(),
-            f"{pop.generation},{pop.trial}".encode(),
+            f"{pop.generation},{pop.attempt}".encode(),
         ]
     )
 
@@ -140,7 +140,7 @@ def test_json_round_trip_is_exact(ict_model) -> None:
     state = json.loads(text)
     assert (
         state["seed"] == 2**62 + 12345
-        and state["schema"] == "emogen.ga.engine/3"
+        and state["schema"] == "emogen.ga.engine/4"
         and state["stream"] == 2
     )
     assert state["config"]["init"]["activation_range"] == [2, 9]
@@ -160,9 +160,9 @@ def test_replay_from_seed_and_selections(ict_model) -> None:
             a.tell(*choose(pop, rng))
         a.reset()
     history.append(fingerprint(a.ask()))
-    b = Engine.replay(config, rig, 11, a.selections, trial=a.trial)
+    b = Engine.replay(config, rig, 11, a.selections, attempt=a.attempt)
     assert fingerprint(b.ask()) == history[-1]
-    assert b.trial == 2 and b.selections == a.selections
+    assert b.attempt == 2 and b.selections == a.selections
     # and a replay stopped half way shows that generation's population
     c = Engine.replay(config, rig, 11, a.selections[:5])
     assert fingerprint(c.ask()) == history[5]
@@ -171,7 +171,10 @@ def test_replay_from_seed_and_selections(ict_model) -> None:
 def test_replay_rejects_out_of_order_records(ict_model) -> None:
     with pytest.raises(SelectionError, match="does not follow"):
         Engine.replay(
-            GAConfig(), ict_model.rig, 1, [{"trial": 0, "generation": 3, "elite": 0, "others": []}]
+            GAConfig(),
+            ict_model.rig,
+            1,
+            [{"attempt": 0, "generation": 3, "elite": 0, "others": []}],
         )
 
 
@@ -182,7 +185,7 @@ def test_reset_reinitialise_or_keep(ict_model) -> None:
         first = engine.ask()
         engine.tell(int(first.ids[0]))
         again = engine.reset()
-        assert again.generation == 0 and again.trial == 1 and engine.generation == 0
+        assert again.generation == 0 and again.attempt == 1 and engine.generation == 0
         assert np.array_equal(again.genes, first.genes) is same
         assert not set(again.ids.tolist()) & set(first.ids.tolist())
         if same:
@@ -294,8 +297,9 @@ def test_every_face_is_symmetric_and_in_range(
 
 
 def test_an_engine_state_names_its_collision_solver(ict_model) -> None:
-    """``collision_solver`` of a stored state: recorded (2 now), 1 for a state recorded before
-    solvers were numbered, and an unknown number is an error naming it (not a silent fallback)."""
+    """``collision_solver`` of a stored state: recorded (2 now), 1 for a ``/1`` state recorded
+    before solvers were numbered, and an unknown or missing number is an error naming it (not a
+    silent fallback)."""
     from emogen.ga.engine import correctives_of
     from emogen.ga.state import collision_solver_of_state
 
@@ -304,7 +308,18 @@ def test_an_engine_state_names_its_collision_solver(ict_model) -> None:
     state = json.loads(engine.to_json())
     assert state["collision_solver"] == 2 and collision_solver_of_state(state) == 2
     assert collision_solver_of_state({**state, "collision_solver": 1}) == 1
-    legacy = {k: v for k, v in state.items() if k != "collision_solver"}
-    assert collision_solver_of_state(legacy) == 1
+    missing = {k: v for k, v in state.items() if k != "collision_solver"}
+    with pytest.raises(ConfigError, match="collision_solver"):
+        collision_solver_of_state(missing)
     with pytest.raises(ConfigError, match="collision solver must be one of \\[1, 2\\]; got 7"):
         collision_solver_of_state({**state, "collision_solver": 7})
+
+
+@pytest.mark.parametrize("schema", ["emogen.ga.engine/2", "emogen.ga.engine/3", None])
+def test_a_state_of_an_unreleased_or_unknown_schema_is_refused(ict_model, schema) -> None:
+    """Only ``/4`` states and the ``/1`` states of recorded studies load; ``/2`` and ``/3`` were
+    never released and name the attempt ``trial``."""
+    state = json.loads(Engine(GAConfig(), ict_model.rig, 5).to_json())
+    state["schema"] = schema
+    with pytest.raises(ConfigError, match="engine state schema must be one of"):
+        Engine.from_json(json.dumps(state), ict_model.rig)

@@ -150,14 +150,22 @@ def test_a_batch_equals_its_runs_one_at_a_time() -> None:
     seeds = data.integers(0, 2**62, 30)
     for stream in (1, 2):
         whole = next_generation(
-            genes, sel[:, 0], sel[:, 1:], 3,
+            genes,
+            sel[:, 0],
+            sel[:, 1:],
+            3,
             draws=generation_draws(seeds, 2, 4, stream=stream, block=block_size(10, 12, 2, 6)),
-        )  # fmt: skip
+        )
         for r in (0, 7, 29):
             one = next_generation(
-                genes[r : r + 1], sel[r : r + 1, 0], sel[r : r + 1, 1:], 3,
-                draws=generation_draws(seeds[r : r + 1], 2, 4, stream=stream, block=block_size(10, 12, 2, 6)),
-            )  # fmt: skip
+                genes[r : r + 1],
+                sel[r : r + 1, 0],
+                sel[r : r + 1, 1:],
+                3,
+                draws=generation_draws(
+                    seeds[r : r + 1], 2, 4, stream=stream, block=block_size(10, 12, 2, 6)
+                ),
+            )
             np.testing.assert_array_equal(whole.genes[r], one.genes[0])
             np.testing.assert_array_equal(whole.parents[r], one.parents[0])
 

@@ -147,8 +147,13 @@ def test_faces_table_and_all_weights(ict_model, tmp_path: Path) -> None:
     counts = faces[faces["rank"] >= 0].groupby(["run", "generation"]).size().to_numpy()
     assert counts[:11].tolist() == [2, 4, 4, 4, 4, 4, 5, 5, 5, 5, 1]
     assert set(faces.loc[faces["generation"] == 0, "operator"]) <= {
-        "init_happy", "init_sad", "init_angry", "init_fearful", "init_arbitrary", "init_neutral"
-    }  # fmt: skip
+        "init_happy",
+        "init_sad",
+        "init_angry",
+        "init_fearful",
+        "init_arbitrary",
+        "init_neutral",
+    }
     assert (
         faces.loc[(faces["generation"] > 0) & (faces["slot"] == 0), "operator"] == "elite"
     ).all()

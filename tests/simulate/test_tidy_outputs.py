@@ -91,8 +91,13 @@ def test_old_simulation_outputs_still_analyse(ict_model, tmp_path: Path) -> None
 
 
 def test_sweep_summary_is_typed_and_documented(ict_model, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    labels = {"target": "t", "metric": "cd", "init": "protocol", "schedule": "paper",
-              "variant": "emogen"}  # fmt: skip
+    labels = {
+        "target": "t",
+        "metric": "cd",
+        "init": "protocol",
+        "schedule": "paper",
+        "variant": "emogen",
+    }
     name = "__".join(labels.values())
     _simulate(ict_model.rig, tmp_path / "cells" / name)
     sweep = Sweep((Cell(name, labels, CONFIG),), "sweep.toml")
@@ -105,8 +110,16 @@ def test_analysis_tables_are_long_with_identifier_headers(
 ) -> None:  # type: ignore[no-untyped-def]
     for target in ("jawOpen", "mouthSmile"):
         _simulate(ict_model.rig, tmp_path / "sims" / target, {target: 0.9})
-    args = [str(tmp_path / "sims"), "--out", str(tmp_path / "out"), "--model", str(ict_dir),
-            "--no-render", "--noise-runs", "20"]  # fmt: skip
+    args = [
+        str(tmp_path / "sims"),
+        "--out",
+        str(tmp_path / "out"),
+        "--model",
+        str(ict_dir),
+        "--no-render",
+        "--noise-runs",
+        "20",
+    ]
     bad = CliRunner().invoke(analysis_app, ["analyse", *args, "--format", "jpeg"])
     assert bad.exit_code != 0 and "--format must be one or more of png, svg, pdf" in bad.output
     assert not (tmp_path / "out").exists()  # refused before any work

@@ -45,10 +45,17 @@ MIXED: dict[str, Any] = {
     "ga": {"generations": 1, "min_selections": 1, "max_selections": 3},
     "blocks": [
         {"task": "evolve", "name": "make", "identities": ["female-medium"]},
-        {"task": "categorise", "name": "label", "own": True, "others": 3, "random": 2,
-         "none_option": True, "intensity": True},
+        {
+            "task": "categorise",
+            "name": "label",
+            "own": True,
+            "others": 3,
+            "random": 2,
+            "none_option": True,
+            "intensity": True,
+        },
     ],
-}  # fmt: skip
+}
 
 
 @pytest.fixture
@@ -61,9 +68,10 @@ def mixed(db_url: str, ict_model: Any) -> Any:
 def at_categorise(service: StudyService, participant: str) -> tuple[str, dict[str, Any]]:
     token, state = service.create_session(participant)
     state = run_to_end(
-        state, service_caller(service, token), stop=lambda s: s["stage"] == "trial"
-        and s["trial"]["task"] == "categorise",
-    )  # fmt: skip
+        state,
+        service_caller(service, token),
+        stop=lambda s: s["stage"] == "trial" and s["trial"]["task"] == "categorise",
+    )
     return token, state
 
 
@@ -96,8 +104,9 @@ def test_a_mixed_study_shows_own_faces_and_stores_every_answer(mixed: StudyServi
     for _, row in own.iterrows():
         made = trials[(trials["trial"] == row["source_trial"])].iloc[0]
         assert made["task"] == "evolve" and made["emotion"] == row["intended"]
-        final = faces[(faces["trial"] == row["source_trial"])
-                      & (faces["face_id"] == made["final_face_id"])].iloc[-1]  # fmt: skip
+        final = faces[
+            (faces["trial"] == row["source_trial"]) & (faces["face_id"] == made["final_face_id"])
+        ].iloc[-1]
         np.testing.assert_array_equal(final[w_cols].to_numpy(float), row[w_cols].to_numpy(float))
         assert row["correct"] == (row["label"] == row["intended"])
     # no other session was complete: the 'other' faces are fallbacks (random draws), said so
@@ -212,10 +221,15 @@ def test_a_stimulus_file_shows_its_rows_on_their_identities(ict_model: Any, tmp_
         "label,identity,jawOpen,mouthSmile_L,mouthSmile_R\n"
         "happy,male-dark,0.1,0.8,0.8\nsad,,0.0,0.0,0.0\nangry,female-light,0.5,0.2,0.2\n"
     )
-    cfg = study_from_dict({
-        "name": "file", "emotions": LABELS, "seed": 3, "identities": ["generic", "male-dark", "female-light"],
-        "blocks": [{"task": "categorise", "file": str(csv)}],
-    })  # fmt: skip
+    cfg = study_from_dict(
+        {
+            "name": "file",
+            "emotions": LABELS,
+            "seed": 3,
+            "identities": ["generic", "male-dark", "female-light"],
+            "blocks": [{"task": "categorise", "file": str(csv)}],
+        }
+    )
     store = Store(f"sqlite:///{tmp_path / 'file.sqlite'}")
     svc = study_service(cfg, store, ict_model)
     assert svc.n_trials == 3  # every row of the file
@@ -249,8 +263,12 @@ def test_block_errors_name_the_key(ict_model: Any, tmp_path: Path) -> None:
     ):
         service([{"task": "categorise", "own": True}])
     with pytest.raises(ConfigError, match=r"blocks\[2\].labels: \['fearfull'\] not among"):
-        service([{"task": "evolve"}, {"task": "categorise", "random": 2,
-                                      "labels": ["happy", "fearfull"]}])  # fmt: skip
+        service(
+            [
+                {"task": "evolve"},
+                {"task": "categorise", "random": 2, "labels": ["happy", "fearfull"]},
+            ]
+        )
     with pytest.raises(ConfigError, match="a categorise block needs faces"):
         service([{"task": "categorise"}])
     empty = tmp_path / "empty.csv"
@@ -283,15 +301,21 @@ def test_replay_checks_every_categorised_face_and_catches_a_changed_one(
     token, state = mixed.create_session("R-second")
     run_to_end(state, service_caller(mixed, token))
     rig, mhash = ict_model.rig, ict_model.model_hash
-    ids = {row.participant_id: int(row.session_id) for row in
-           export_tables(mixed.store)["sessions"].itertuples()}  # fmt: skip
+    ids = {
+        row.participant_id: int(row.session_id)
+        for row in export_tables(mixed.store)["sessions"].itertuples()
+    }
     report = replay_session(mixed.store, ids["R-second"], rig, mhash, model=ict_model)
     assert report.ok and report.stimuli == 8 and report.populations == 6, report.mismatches
     with (
         mixed.store.write() as db
     ):  # a random face's weight moved by 1e-6; an own face's label order
-        stims = {s.source: s for s in db.scalars(select(StimulusRow).join(TrialRow).where(
-            TrialRow.session_id == ids["R-second"]))}  # fmt: skip
+        stims = {
+            s.source: s
+            for s in db.scalars(
+                select(StimulusRow).join(TrialRow).where(TrialRow.session_id == ids["R-second"])
+            )
+        }
         w = json.loads(stims["random"].weights)
         w[3] += 1e-6
         stims["random"].weights = json.dumps(w)

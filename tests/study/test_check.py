@@ -39,8 +39,15 @@ def test_redirect_url_fills_in_the_completion_code() -> None:
     # before: the literal "{completion_code}" was sent to Prolific, which credited nobody
     url = completion(study_from_dict(FIELD), "P-1")["redirect_url"]
     assert url == "https://app.prolific.com/submissions/complete?cc=C1A2B3"
-    cfg = study_from_dict({**FIELD, "completion": {
-        "code": "X 1", "redirect_url": "https://e.org/?a={code}&p={participant_id}&q={PROLIFIC_PID}"}})  # fmt: skip
+    cfg = study_from_dict(
+        {
+            **FIELD,
+            "completion": {
+                "code": "X 1",
+                "redirect_url": "https://e.org/?a={code}&p={participant_id}&q={PROLIFIC_PID}",
+            },
+        }
+    )
     assert completion(cfg, "P/2")["redirect_url"] == "https://e.org/?a=X%201&p=P%2F2&q=P%2F2"
 
 
@@ -88,8 +95,9 @@ def test_the_session_length_is_estimated_from_the_design() -> None:
     assert report.length.screens == {"selection": 88, "rating": 8, "categorise": 0}
     assert report.length.minutes == _minutes(88, 8) == (10, 16)
     assert "88 selection screens × 6–9 s" in "\n".join(report.lines())
-    small = study_from_dict({**FIELD, "emotions": ["happy"], "identities": ["generic"],
-                             "ga": {"generations": 3}})  # fmt: skip
+    small = study_from_dict(
+        {**FIELD, "emotions": ["happy"], "identities": ["generic"], "ga": {"generations": 3}}
+    )
     assert check_study(small).length.minutes == _minutes(4, 1)
 
 
@@ -108,8 +116,15 @@ def test_the_default_consent_states_the_estimated_length() -> None:
 
 def test_new_keys_at_their_defaults_leave_the_config_hash_alone() -> None:
     base = study_from_dict({**FIELD, "consent": "x"})
-    explicit = study_from_dict({**FIELD, "consent": "x", "custom_emotions": [],
-                                "participant_required": False, "counterbalance": "hash"})  # fmt: skip
+    explicit = study_from_dict(
+        {
+            **FIELD,
+            "consent": "x",
+            "custom_emotions": [],
+            "participant_required": False,
+            "counterbalance": "hash",
+        }
+    )
     assert base.config_hash() == explicit.config_hash()
     assert "counterbalance" not in base.canonical_json()
 

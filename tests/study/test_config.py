@@ -206,15 +206,27 @@ def test_the_default_instructions_say_what_each_task_asks() -> None:
 
     flat = study_from_dict({"name": "a", "emotions": ["happy", "sad"]})
     assert flat.instructions == DEFAULT_INSTRUCTIONS
-    both = study_from_dict({"name": "b", "emotions": ["happy", "sad"],
-                            "blocks": [{"task": "evolve"}, {"task": "categorise", "random": 2}]})  # fmt: skip
+    both = study_from_dict(
+        {
+            "name": "b",
+            "emotions": ["happy", "sad"],
+            "blocks": [{"task": "evolve"}, {"task": "categorise", "random": 2}],
+        }
+    )
     assert both.instructions.startswith(DEFAULT_INSTRUCTIONS)
     assert "one face at a time" in both.instructions and "Continue" in both.instructions
-    only = study_from_dict({"name": "c", "emotions": ["happy", "sad"],
-                            "blocks": [{"task": "categorise", "random": 2}]})  # fmt: skip
+    only = study_from_dict(
+        {"name": "c", "emotions": ["happy", "sad"], "blocks": [{"task": "categorise", "random": 2}]}
+    )
     assert "ten faces" not in only.instructions and "one face at a time" in only.instructions
-    own = study_from_dict({"name": "d", "emotions": ["happy", "sad"], "instructions": "Mine.",
-                           "blocks": [{"task": "categorise", "random": 2}]})  # fmt: skip
+    own = study_from_dict(
+        {
+            "name": "d",
+            "emotions": ["happy", "sad"],
+            "instructions": "Mine.",
+            "blocks": [{"task": "categorise", "random": 2}],
+        }
+    )
     assert own.instructions == "Mine."
     again = study_from_dict(both.model_dump(mode="json"))  # the stored config reads back alike
     assert again.instructions == both.instructions

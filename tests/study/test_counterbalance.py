@@ -39,8 +39,9 @@ def _rows(store: Store) -> dict[str, int]:
 def test_three_participants_get_rows_0_1_2(db_url: str, ict_model: Any) -> None:
     store = Store(db_url)
     try:
-        service = study_service(study_from_dict({**LATIN, "counterbalance": "arrival"}), store,
-                                ict_model)  # fmt: skip
+        service = study_service(
+            study_from_dict({**LATIN, "counterbalance": "arrival"}), store, ict_model
+        )
         tokens = [service.create_session(f"P-{k}")[0] for k in range(3)]
         assert _rows(store) == {"P-0": 0, "P-1": 1, "P-2": 2}
         # the trial order is that row of the square (conditions in config order)
@@ -72,8 +73,12 @@ def test_hashed_rows_are_the_default_and_not_arrival_order(db_url: str, ict_mode
         rows = _rows(store)
         # the hash's rows (the same for a participant whoever came first): not 0, 1, 2, 3 …
         assert [rows[f"P-{k}"] for k in range(8)] != [k % N_ROWS for k in range(8)]
-        assert overview(store, service.ctx.config, service.ctx.accepted)["counterbalancing"][
-            "counterbalance"] == "hash"  # fmt: skip
+        assert (
+            overview(store, service.ctx.config, service.ctx.accepted)["counterbalancing"][
+                "counterbalance"
+            ]
+            == "hash"
+        )
     finally:
         store.dispose()
 

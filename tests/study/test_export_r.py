@@ -51,8 +51,11 @@ def r_class(field: pa.Field) -> str:
 def guessed_agrees(guess: RTable, want: dict[str, str]) -> list[str]:
     """The columns whose readr guess differs from ``want`` — but for a column with no value,
     which readr reads as logical."""
-    return [c for c, k in guess.classes.items()
-            if k != want[c] and not (k == "logical" and guess.frame[c].isna().all())]  # fmt: skip
+    return [
+        c
+        for c, k in guess.classes.items()
+        if k != want[c] and not (k == "logical" and guess.frame[c].isna().all())
+    ]
 
 
 def test_every_export_table_reads_in_r_with_its_types(
@@ -111,12 +114,21 @@ def test_the_r_lines_of_the_data_dictionary_append_incremental_exports(
     t0 = datetime(2026, 5, 1, 12, 0, tzinfo=UTC)
     with service.store.write() as db:
         for sid, minutes in ((1, 0), (2, 10)):
-            db.execute(update(SessionRow).where(SessionRow.id == sid)
-                       .values(completed_at=t0 + timedelta(minutes=minutes)))  # fmt: skip
-    first = export_study(service.store, tmp_path / "export-1", "csv", since=t0 - timedelta(days=1),
-                         now=t0 + timedelta(minutes=5) + SETTLE)  # fmt: skip
-    export_study(service.store, tmp_path / "export-2", "csv", since=first.until,
-                 now=t0 + timedelta(hours=1))  # fmt: skip
+            db.execute(
+                update(SessionRow)
+                .where(SessionRow.id == sid)
+                .values(completed_at=t0 + timedelta(minutes=minutes))
+            )
+    first = export_study(
+        service.store,
+        tmp_path / "export-1",
+        "csv",
+        since=t0 - timedelta(days=1),
+        now=t0 + timedelta(minutes=5) + SETTLE,
+    )
+    export_study(
+        service.store, tmp_path / "export-2", "csv", since=first.until, now=t0 + timedelta(hours=1)
+    )
     assert (first.rows["restarts"], first.rows["responses"]) == (0, 0)  # header-only files
     write_export(export_tables(service.store), tmp_path / "pq", "parquet")
     checks = """
@@ -147,10 +159,18 @@ def test_every_analysis_table_reads_in_r_as_written(
     for p in ("A-1", "A-2", "A-3"):
         completed(service, p, restart=p == "A-1")
     write_export(export_tables(service.store), tmp_path / "export", "csv")
-    result = CliRunner().invoke(analysis_app, [
-        "analyse", str(tmp_path / "export"), "--out", str(tmp_path / "report"),
-        "--model", str(ict_dir), "--no-render",
-    ])  # fmt: skip
+    result = CliRunner().invoke(
+        analysis_app,
+        [
+            "analyse",
+            str(tmp_path / "export"),
+            "--out",
+            str(tmp_path / "report"),
+            "--model",
+            str(ict_dir),
+            "--no-render",
+        ],
+    )
     assert result.exit_code == 0, result.output
     folder = tmp_path / "report" / "tables"
     paths = sorted(p for p in folder.glob("*.csv") if p.name != "col_types.csv")

@@ -221,9 +221,13 @@ def test_export_records_every_identity_to_render_it_again(
     store = Store(db_url)
     try:
         service = StudyService(
-            config, store, ict_model.rig, model_name=ict_model.name,
-            model_hash=ict_model.model_hash, model=ict_model,
-        )  # fmt: skip
+            config,
+            store,
+            ict_model.rig,
+            model_name=ict_model.name,
+            model_hash=ict_model.model_hash,
+            model=ict_model,
+        )
         completed(service, "I-1")
         tables = export_tables(store)
         ids = tables["identities"]

@@ -67,8 +67,9 @@ def test_chunked_export_holds_what_one_table_holds(
             assert prov == tidy.provenance(tmp_path / "ref" / f"{name}.{fmt}"), name
             assert prov["table"] == name and prov["studies"][0]["model_hash"]
     assert not list((tmp_path / "out").glob("emogen-export-*"))  # the spill is removed
-    reports = replay_exported(tmp_path / "out", ict_model.rig, ict_model.model_hash,
-                              model=ict_model)  # fmt: skip
+    reports = replay_exported(
+        tmp_path / "out", ict_model.rig, ict_model.model_hash, model=ict_model
+    )
     assert all(r.ok for r in reports) and len(reports) >= 2
 
 
@@ -87,13 +88,19 @@ def test_incremental_exports_appended_hold_each_completed_session_once(
                 .where(SessionRow.id == sid)
                 .values(completed_at=t0 + timedelta(minutes=minutes))
             )
-    first = export_study(service.store, tmp_path / "a", "parquet", since=t0 - timedelta(days=1),
-                         now=t0 + timedelta(minutes=10) + SETTLE)  # fmt: skip
+    first = export_study(
+        service.store,
+        tmp_path / "a",
+        "parquet",
+        since=t0 - timedelta(days=1),
+        now=t0 + timedelta(minutes=10) + SETTLE,
+    )
     assert first.until == t0 + timedelta(minutes=10)
     manifest = json.loads((tmp_path / "a" / "export.json").read_text())
     assert manifest["until"] == first.until.isoformat() and manifest["sessions"] == 1
-    second = export_study(service.store, tmp_path / "b", "parquet", since=first.until,
-                          now=t0 + timedelta(hours=1))  # fmt: skip
+    second = export_study(
+        service.store, tmp_path / "b", "parquet", since=first.until, now=t0 + timedelta(hours=1)
+    )
     assert sorted(pd.read_parquet(tmp_path / "a" / "sessions.parquet").session_id) == [1]
     # completed exactly at the first cut-off: in the second export, not the first
     assert sorted(pd.read_parquet(tmp_path / "b" / "sessions.parquet").session_id) == [2, 3]
@@ -107,8 +114,11 @@ def test_incremental_exports_appended_hold_each_completed_session_once(
         want = whole[name][whole[name].participant_id != "I-4"]
         assert len(appended) == len(want), name
         assert not appended.drop(columns=["completed_at"], errors="ignore").duplicated().any()
-        key = [c for c in ("session_id", "trial", "attempt", "generation", "position", "rank")
-               if c in want.columns]  # fmt: skip
+        key = [
+            c
+            for c in ("session_id", "trial", "attempt", "generation", "position", "rank")
+            if c in want.columns
+        ]
         pd.testing.assert_frame_equal(
             appended.sort_values(key).reset_index(drop=True),
             want.sort_values(key).reset_index(drop=True),
@@ -125,16 +135,31 @@ def test_since_is_checked_and_named(service: StudyService, tmp_path: Path) -> No
     with pytest.raises(ConfigError, match=r"--since.*'yesterday'"):
         parse_since("yesterday")
     url = service.store.url
-    result = runner.invoke(study_app, ["export", "--database-url", url, "-o", str(tmp_path),
-                                       "--since", "yesterday"])  # fmt: skip
+    result = runner.invoke(
+        study_app, ["export", "--database-url", url, "-o", str(tmp_path), "--since", "yesterday"]
+    )
     assert result.exit_code == 2 and "'yesterday'" in result.output
-    result = runner.invoke(study_app, ["export", "--database-url", url, "-o", str(tmp_path),
-                                       "--table", "face"])  # fmt: skip
+    result = runner.invoke(
+        study_app, ["export", "--database-url", url, "-o", str(tmp_path), "--table", "face"]
+    )
     assert result.exit_code == 2 and "'face'" in result.output
     completed(service, "C-1")
-    result = runner.invoke(study_app, ["export", "--database-url", url, "-o", str(tmp_path / "i"),
-                                       "--format", "csv", "--since", "2000-01-01",
-                                       "--table", "sessions"])  # fmt: skip
+    result = runner.invoke(
+        study_app,
+        [
+            "export",
+            "--database-url",
+            url,
+            "-o",
+            str(tmp_path / "i"),
+            "--format",
+            "csv",
+            "--since",
+            "2000-01-01",
+            "--table",
+            "sessions",
+        ],
+    )
     assert result.exit_code == 0, result.output
     # completed less than SETTLE ago: not yet in an incremental export
     assert "sessions.csv (0 rows)" in result.output and "--since 20" in result.output

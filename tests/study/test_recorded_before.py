@@ -10,7 +10,8 @@ from pathlib import Path
 
 from sqlalchemy import select
 
-from emogen.ga.engine import stream_of_state
+from emogen.config import GAConfig
+from emogen.ga.engine import Engine, stream_of_state
 from emogen.ga.state import collision_solver_of_state
 from emogen.study.config import StudyConfig
 from emogen.study.export import export_tables
@@ -102,3 +103,25 @@ def test_a_session_recorded_mid_trial_continues_and_replays(tmp_path: Path, ict_
         assert report.populations == 10
     finally:
         store.dispose()
+
+
+def test_recorded_selections_replay_with_the_old_key(tmp_path: Path, ict_model) -> None:
+    """A ``/1`` state names the engine's attempt ``trial`` (in the state, its selections and
+    populations): its selection list still replays to the state it was stored with."""
+    store = _open(tmp_path)
+    try:
+        old = json.loads(_state(store, _sessions(store)["OLD-1"]))
+    finally:
+        store.dispose()
+    assert old["schema"] == "emogen.ga.engine/1"
+    assert all("trial" in s and "attempt" not in s for s in old["selections"])
+    assert {s["trial"] for s in old["selections"]} == {0, 1}  # a restart: two attempts
+    config = GAConfig.model_validate(old["config"])
+    replayed = Engine.replay(config, ict_model.rig, old["seed"], old["selections"], stream=1)
+    restored = Engine.from_json(old, ict_model.rig)
+    assert replayed.attempt == restored.attempt == old["trial"] == 1
+    assert replayed.done and restored.done
+    assert replayed.result.ids.tolist() == old["result"]["ids"]
+    assert replayed.result.genes.tolist() == old["result"]["genes"]
+    assert replayed.to_json() == restored.to_json()
+    assert [s["attempt"] for s in restored.selections] == [s["trial"] for s in old["selections"]]

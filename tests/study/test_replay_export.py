@@ -43,8 +43,9 @@ def test_exported_sessions_replay_exactly(
         faces.to_parquet(faces_path, index=False)
     else:
         faces.to_csv(faces_path, index=False)
-    again = replay_exported(out, ict_model.rig, ict_model.model_hash, model=ict_model,
-                            session_ids=[1])  # fmt: skip
+    again = replay_exported(
+        out, ict_model.rig, ict_model.model_hash, model=ict_model, session_ids=[1]
+    )
     assert len(again) == 1 and not again[0].ok
     assert (
         again[0].mismatches == ["session 1 trial 1 attempt 1 generation 0, position 3: weights"]
@@ -60,8 +61,9 @@ def test_a_recorded_study_replays_from_its_export(tmp_path: Path, ict_model) -> 
         write_export(export_tables(store), tmp_path / "csv", "csv")
     finally:
         store.dispose()
-    reports = replay_exported(tmp_path / "csv", ict_model.rig, ict_model.model_hash,
-                              model=ict_model)  # fmt: skip
+    reports = replay_exported(
+        tmp_path / "csv", ict_model.rig, ict_model.model_hash, model=ict_model
+    )
     assert [(r.ok, r.populations) for r in reports] == [(True, 13), (True, 4)]
 
 

@@ -49,11 +49,15 @@ def scaled(old: float, new: float) -> float:
 
 
 def _session_faces(db: Any, session_id: int) -> list[FaceRow]:
-    return list(db.scalars(
-        select(FaceRow).join(PopulationRow, FaceRow.population_id == PopulationRow.id)
-        .join(TrialRow, PopulationRow.trial_id == TrialRow.id)
-        .where(TrialRow.session_id == session_id).order_by(FaceRow.id)
-    ))  # fmt: skip
+    return list(
+        db.scalars(
+            select(FaceRow)
+            .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
+            .join(TrialRow, PopulationRow.trial_id == TrialRow.id)
+            .where(TrialRow.session_id == session_id)
+            .order_by(FaceRow.id)
+        )
+    )
 
 
 def _nudge_all(store: Store, session_id: int) -> float:
@@ -138,8 +142,9 @@ def test_an_export_off_by_a_few_ulps_replays_and_1e6_does_not(
 
     def save_and_replay() -> Any:
         faces.to_parquet(path, index=False) if fmt == "parquet" else faces.to_csv(path, index=False)
-        [report] = replay_exported(out, ict_model.rig, ict_model.model_hash, model=ict_model,
-                                   session_ids=[sid])  # fmt: skip
+        [report] = replay_exported(
+            out, ict_model.rig, ict_model.model_hash, model=ict_model, session_ids=[sid]
+        )
         return report
 
     report = save_and_replay()
@@ -159,13 +164,17 @@ def test_categorised_faces_off_by_a_few_ulps_match_and_1e6_does_not(mixed, ict_m
         sid = db.scalar(select(SessionRow.id).where(SessionRow.participant_id == "U-second"))
 
     def replay() -> Any:
-        return replay_session(mixed.store, sid, ict_model.rig, ict_model.model_hash,
-                              model=ict_model)  # fmt: skip
+        return replay_session(
+            mixed.store, sid, ict_model.rig, ict_model.model_hash, model=ict_model
+        )
 
     def change(source: str, how: Any) -> float:
         with mixed.store.write() as db:
-            stim = db.scalars(select(StimulusRow).join(TrialRow).where(
-                TrialRow.session_id == sid, StimulusRow.source == source)).first()  # fmt: skip
+            stim = db.scalars(
+                select(StimulusRow)
+                .join(TrialRow)
+                .where(TrialRow.session_id == sid, StimulusRow.source == source)
+            ).first()
             old = json.loads(stim.weights)
             new = [how(w) for w in old]
             stim.weights = json.dumps(new)

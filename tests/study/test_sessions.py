@@ -252,13 +252,20 @@ def test_correct_setting_decides_the_corrective_columns(db_url: str, ict_model) 
     assert corrected.correct  # the default
     with pytest.raises(ConfigError, match="correct = true"):
         StudyService(
-            corrected, store, ict_model.rig, model_name=ict_model.name,
+            corrected,
+            store,
+            ict_model.rig,
+            model_name=ict_model.name,
             model_hash=ict_model.model_hash,
-        )  # fmt: skip
+        )
     svc = StudyService(
-        corrected, store, ict_model.rig, model_name=ict_model.name,
-        model_hash=ict_model.model_hash, model=ict_model,
-    )  # fmt: skip
+        corrected,
+        store,
+        ict_model.rig,
+        model_name=ict_model.name,
+        model_hash=ict_model.model_hash,
+        model=ict_model,
+    )
     assert svc.ctx.weight_names == (*ict_model.shape_names, *model_correctives(ict_model).names)
     token, _ = svc.create_session("P-C1")
     shown = np.array(

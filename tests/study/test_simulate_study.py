@@ -45,10 +45,17 @@ def run(tmp_path: Path, model: Any, name: str, n: int = 24, **plan: Any) -> dict
     url = f"sqlite:///{tmp_path / f'{name}.sqlite'}"
     cfg = study_from_dict(PILOT)
     simulate_study(
-        SimulationPlan(cfg, url, seed=plan.pop("seed", 11), participants=n,
-                       design=DESIGN, shuffle_prototypes=plan.pop("shuffle", False)),
-        model=model, **plan,
-    )  # fmt: skip
+        SimulationPlan(
+            cfg,
+            url,
+            seed=plan.pop("seed", 11),
+            participants=n,
+            design=DESIGN,
+            shuffle_prototypes=plan.pop("shuffle", False),
+        ),
+        model=model,
+        **plan,
+    )
     store = Store(url)
     try:
         return export_tables(store)
@@ -103,13 +110,23 @@ def test_a_database_with_sessions_and_wrong_options_are_refused(
 
 def test_own_advantage_matches_a_plain_computation() -> None:
     rows = []
-    hits = {"p1": ([1, 1, 0, 1], [0, 1, 0, 0]), "p2": ([1, 1, 1, 1], [1, 0, 1, 1]),
-            "p3": ([0, 1, 1, 1], [1, 1, 0, 0])}  # fmt: skip
+    hits = {
+        "p1": ([1, 1, 0, 1], [0, 1, 0, 0]),
+        "p2": ([1, 1, 1, 1], [1, 0, 1, 1]),
+        "p3": ([0, 1, 1, 1], [1, 1, 0, 0]),
+    }
     for pid, (own, other) in hits.items():
         for source, seq in (("own", own), ("other", other)):
             for hit in seq:
-                rows.append({"participant_id": pid, "source": source, "fallback": False,
-                             "intended": "happy", "label": "happy" if hit else "sad"})  # fmt: skip
+                rows.append(
+                    {
+                        "participant_id": pid,
+                        "source": source,
+                        "fallback": False,
+                        "intended": "happy",
+                        "label": "happy" if hit else "sad",
+                    }
+                )
     rows.append(
         {
             "participant_id": "p1",
@@ -118,7 +135,7 @@ def test_own_advantage_matches_a_plain_computation() -> None:
             "intended": "sad",
             "label": "sad",
         }
-    )  # fmt: skip  (a fallback: left out)
+    )  # a fallback: left out
     table = pd.DataFrame(rows)
     per = accuracy_by_source(table).set_index("participant_id")
     assert per.loc["p1", "accuracy_other"] == 0.25 and per.loc["p1", "n_other"] == 4
@@ -143,10 +160,20 @@ def test_emogen_analyse_reads_a_study_of_evolve_and_categorise_blocks(
     tables = run(tmp_path, ict_model, "analysed", n=6)
     write_export(tables, tmp_path / "export")
     out = tmp_path / "analysis"
-    result = CliRunner().invoke(app, [
-        "analyse", str(tmp_path / "export"), "--out", str(out), "--model", str(ict_dir),
-        "--noise-runs", "20", "--no-render",
-    ])  # fmt: skip
+    result = CliRunner().invoke(
+        app,
+        [
+            "analyse",
+            str(tmp_path / "export"),
+            "--out",
+            str(out),
+            "--model",
+            str(ict_dir),
+            "--noise-runs",
+            "20",
+            "--no-render",
+        ],
+    )
     assert result.exit_code == 0, result.output
     summary = json.loads((out / "analysis.json").read_text())
     assert set(summary["groups"]) == {"happy", "sad", "angry", "fearful"}

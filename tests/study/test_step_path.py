@@ -61,8 +61,9 @@ def test_each_step_stores_what_a_plain_engine_makes_whichever_worker_serves_it(
     with a.store.read() as db:
         trial = db.scalars(select(TrialRow).where(TrialRow.position == 0)).one()
         seed, identity = trial.seed, trial.identity
-    reference = Engine(a.ctx.config.ga_for(identity), ict_model.rig, seed,
-                       corrector=correctives_of(ict_model))  # fmt: skip
+    reference = Engine(
+        a.ctx.config.ga_for(identity), ict_model.rig, seed, corrector=correctives_of(ict_model)
+    )
     pop = reference.ask()
     assert stored(a, 0, 0)[0] == reference.to_json()
     np.testing.assert_array_equal(stored(a, 0, 0)[1], np.hstack([pop.weights, pop.correctives]))

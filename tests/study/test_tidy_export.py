@@ -22,8 +22,12 @@ from tests.study.test_export_replay import completed
 
 #: Cells that hold a JSON document by design (docs/data.md says so): the resolved config, the
 #: column-name lists replay needs, a custom identity's shape coefficients.
-JSON_CELLS = {("study", "config_json"), ("study", "gene_names"), ("study", "weight_names"),
-              ("identities", "shape_coefficients")}  # fmt: skip
+JSON_CELLS = {
+    ("study", "config_json"),
+    ("study", "gene_names"),
+    ("study", "weight_names"),
+    ("identities", "shape_coefficients"),
+}
 
 
 def _seeds(service: StudyService) -> dict[str, dict[int, int]]:

@@ -18,8 +18,11 @@ from tests.study.conftest import SMALL_STUDY
 from tests.study.drive import do, new_key, run_to_end, service_caller
 from tests.study_fixtures import db_url, pg_cluster  # noqa: F401
 
-FIXED_CONSENT = {**SMALL_STUDY, "consent": "A one-word fix of the consent text.",
-                 "rating": {"question": "How well does it show it?"}}  # fmt: skip
+FIXED_CONSENT = {
+    **SMALL_STUDY,
+    "consent": "A one-word fix of the consent text.",
+    "rating": {"question": "How well does it show it?"},
+}
 NEW_DESIGN = {**SMALL_STUDY, "ga": {**SMALL_STUDY["ga"], "generations": 3}}
 
 
@@ -27,8 +30,15 @@ def serve(db_url: str, data: dict[str, Any], model: Any, **options: Any) -> Any:
     from emogen.study.sessions import StudyService
 
     store = Store(db_url)
-    return StudyService(study_from_dict(data), store, model.rig, model_name=model.name,
-                        model_hash=model.model_hash, model=model, **options)  # fmt: skip
+    return StudyService(
+        study_from_dict(data),
+        store,
+        model.rig,
+        model_name=model.name,
+        model_hash=model.model_hash,
+        model=model,
+        **options,
+    )
 
 
 def test_text_keys_leave_the_design_and_everything_else_is_named() -> None:

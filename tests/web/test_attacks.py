@@ -30,9 +30,14 @@ HEAD_TIMEOUT_S = 2
 def server(tmp_path_factory: pytest.TempPathFactory, ict_dir: Path):  # type: ignore[no-untyped-def]
     folder = tmp_path_factory.mktemp("attacks")
     config = write_study_toml(SMALL_STUDY, folder / "study.toml")
-    proc = ServerProcess(config, f"sqlite:///{folder / 'study.sqlite'}", ict_dir,
-                         folder / "server.log", workers=2,
-                         extra=("--header-timeout", str(HEAD_TIMEOUT_S))).start()  # fmt: skip
+    proc = ServerProcess(
+        config,
+        f"sqlite:///{folder / 'study.sqlite'}",
+        ict_dir,
+        folder / "server.log",
+        workers=2,
+        extra=("--header-timeout", str(HEAD_TIMEOUT_S)),
+    ).start()
     yield proc
     proc.stop()
 
@@ -84,8 +89,11 @@ def test_wrong_researcher_tokens_are_counted_across_workers(server: ServerProces
     assert server.ready_workers() == 2
     statuses = []
     for i in range(30):  # a brute force, a new connection each (any worker may take it)
-        r = httpx.get(f"{server.url}/api/researcher/status", timeout=10,
-                      headers={"Authorization": f"Bearer guess-{i:04d}-{'x' * 40}"})  # fmt: skip
+        r = httpx.get(
+            f"{server.url}/api/researcher/status",
+            timeout=10,
+            headers={"Authorization": f"Bearer guess-{i:04d}-{'x' * 40}"},
+        )
         statuses.append(r.status_code)
     assert statuses.count(403) == 10 and statuses.count(429) == 20, statuses
     right = [
@@ -104,14 +112,29 @@ def test_a_short_researcher_token_is_refused_at_start(tmp_path: Path, ict_model)
     from emogen.study.config import study_from_dict
     from emogen.web import create_app
 
-    for weak, problem in (("secret", "6 characters long; it must be at least 32"),
-                          ("ab" * 20, "only 2 different characters")):  # fmt: skip
+    for weak, problem in (
+        ("secret", "6 characters long; it must be at least 32"),
+        ("ab" * 20, "only 2 different characters"),
+    ):
         with pytest.raises(ConfigError, match=problem):
-            create_app(study_from_dict(SMALL_STUDY), f"sqlite:///{tmp_path / 'a.sqlite'}",
-                       model=ict_model, researcher_token=weak)  # fmt: skip
+            create_app(
+                study_from_dict(SMALL_STUDY),
+                f"sqlite:///{tmp_path / 'a.sqlite'}",
+                model=ict_model,
+                researcher_token=weak,
+            )
     config = write_study_toml(SMALL_STUDY, tmp_path / "study.toml")
-    result = CliRunner().invoke(cli, ["serve", str(config), "--port", str(free_port()),
-                                      "--database-url", f"sqlite:///{tmp_path / 'b.sqlite'}"],
-                                env={"EMOGEN_RESEARCHER_TOKEN": "hunter2"})  # fmt: skip
+    result = CliRunner().invoke(
+        cli,
+        [
+            "serve",
+            str(config),
+            "--port",
+            str(free_port()),
+            "--database-url",
+            f"sqlite:///{tmp_path / 'b.sqlite'}",
+        ],
+        env={"EMOGEN_RESEARCHER_TOKEN": "hunter2"},
+    )
     assert result.exit_code != 0
     assert "EMOGEN_RESEARCHER_TOKEN is 7 characters long" in result.output

@@ -43,14 +43,25 @@ BLOCKS_STUDY: dict[str, Any] = {
     "ga": {"generations": 1, "min_selections": 1, "max_selections": 3},
     "completion": {"code": "BLOCKS-OK"},
     "blocks": [
-        {"task": "evolve", "name": "make_female", "identities": ["female-medium"],
-         "order": "fixed"},
-        {"task": "evolve", "name": "make_male", "identities": ["male-medium"],
-         "order": "fixed"},
-        {"task": "categorise", "name": "recognise", "own": True, "others": 2, "random": 2,
-         "none_option": True, "intensity": True, "confidence": True},
+        {
+            "task": "evolve",
+            "name": "make_female",
+            "identities": ["female-medium"],
+            "order": "fixed",
+        },
+        {"task": "evolve", "name": "make_male", "identities": ["male-medium"], "order": "fixed"},
+        {
+            "task": "categorise",
+            "name": "recognise",
+            "own": True,
+            "others": 2,
+            "random": 2,
+            "none_option": True,
+            "intensity": True,
+            "confidence": True,
+        },
     ],
-}  # fmt: skip
+}
 N_EVOLVE = 4 * 2  # four emotions on each of two identities
 N_CATEGORISE = N_EVOLVE + 2 + 2
 
@@ -194,9 +205,15 @@ def test_a_study_of_evolve_and_categorise_blocks_runs_to_completion(
                 path=str(SCREENSHOTS / f"categorise_{size[0]}x{size[1]}.jpg"), quality=75
             )
             inside_viewport(page, "#answer")
-        answered.append({"trial": state["progress"]["trial"], "label": labels[pick - 1],
-                         "intensity": intensity, "confidence": confidence,
-                         "weights": view["face"]["weights"]})  # fmt: skip
+        answered.append(
+            {
+                "trial": state["progress"]["trial"],
+                "label": labels[pick - 1],
+                "intensity": intensity,
+                "confidence": confidence,
+                "weights": view["face"]["weights"],
+            }
+        )
         if keyboard:
             page.focus("#answer")
             page.keyboard.press("Enter")
@@ -220,8 +237,10 @@ def test_a_study_of_evolve_and_categorise_blocks_runs_to_completion(
     assert responses["confidence"].tolist() == [a["confidence"] for a in answered]
     assert (responses["client_response_ms"] > 0).all() and (responses["load_ms"] > 0).all()
     assert sorted(responses["source"].value_counts().items()) == [
-        ("other", 2), ("own", N_EVOLVE), ("random", 2)
-    ]  # fmt: skip
+        ("other", 2),
+        ("own", N_EVOLVE),
+        ("random", 2),
+    ]
     assert not responses["fallback"].any()  # a completed session was there to draw from
     w_cols = [c for c in responses.columns if c.startswith("w_")]
     shown = np.array([a["weights"] for a in answered])
@@ -262,12 +281,14 @@ def test_the_categorise_screen_with_server_images(
         src = page.get_attribute("#categorise-slot img", "src")
         assert src is not None and f"?trial={N_EVOLVE + k}&attempt=0" in src, src
         assert page.evaluate("document.querySelector('#categorise-slot img').naturalWidth") > 0
-        seen.append(page.evaluate(
-            "(() => { const i = document.querySelector('#categorise-slot img');"
-            " const c = document.createElement('canvas'); c.width = 32; c.height = 32;"
-            " const g = c.getContext('2d'); g.drawImage(i, 0, 0, 32, 32);"
-            " return c.toDataURL(); })()"
-        ))  # fmt: skip
+        seen.append(
+            page.evaluate(
+                "(() => { const i = document.querySelector('#categorise-slot img');"
+                " const c = document.createElement('canvas'); c.width = 32; c.height = 32;"
+                " const g = c.getContext('2d'); g.drawImage(i, 0, 0, 32, 32);"
+                " return c.toDataURL(); })()"
+            )
+        )
         check_categorise_layout(page)
         page.click("#label-buttons button:nth-child(1)")
         page.locator("#intensity-scale").get_by_label("3", exact=True).check()
@@ -290,9 +311,16 @@ FIRST_STUDY: dict[str, Any] = {
     "name": "categorise-first",
     "emotions": ["happy", "sad", "angry", "fearful", "disgusted", "surprised"],
     "seed": 6,
-    "blocks": [{"task": "categorise", "random": 2, "none_option": True, "intensity": True,
-                "confidence": True}],
-}  # fmt: skip
+    "blocks": [
+        {
+            "task": "categorise",
+            "random": 2,
+            "none_option": True,
+            "intensity": True,
+            "confidence": True,
+        }
+    ],
+}
 VIEWPORTS = [(360, 640), (390, 844), (768, 1024), (1366, 768), (2560, 1440)]
 
 

@@ -23,16 +23,24 @@ from tests.study.drive import command, new_key, run_to_end
 
 TOKEN = "researcher-secret-0123456789-abcdefghij"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
-LATIN = {**SMALL_STUDY, "identities": ["female-light", "male-dark"], "order": "latin_square",
-         "counterbalance": "arrival"}  # fmt: skip
+LATIN = {
+    **SMALL_STUDY,
+    "identities": ["female-light", "male-dark"],
+    "order": "latin_square",
+    "counterbalance": "arrival",
+}
 
 
 def _client(tmp_path: Path, model: Any, study: dict[str, Any]) -> TestClient:
     from emogen.web import create_app
 
-    app = create_app(study_from_dict(study), f"sqlite:///{tmp_path / 'dash.sqlite'}",
-                     model=model, researcher_token=TOKEN,
-                     session_limit=RateLimit.parse("off"))  # fmt: skip
+    app = create_app(
+        study_from_dict(study),
+        f"sqlite:///{tmp_path / 'dash.sqlite'}",
+        model=model,
+        researcher_token=TOKEN,
+        session_limit=RateLimit.parse("off"),
+    )
     return TestClient(app)
 
 
@@ -67,8 +75,15 @@ def test_status_has_durations_conditions_rows_and_the_exports_numbers(latin: Tes
     shown = {
         s["participant_id"]: (s["session_id"], s["session_number"]) for s in status["sessions"]
     }
-    exported = {p: (int(i), int(n)) for p, i, n in zip(sessions["participant_id"],
-                sessions["session_id"], sessions["session_number"], strict=True)}  # fmt: skip
+    exported = {
+        p: (int(i), int(n))
+        for p, i, n in zip(
+            sessions["participant_id"],
+            sessions["session_id"],
+            sessions["session_number"],
+            strict=True,
+        )
+    }
     assert shown == exported and sorted(n for _, n in shown.values()) == [0, 1, 2]
     # durations: consent → completion of the completed sessions, as the export's times say
     done = sessions[sessions["stage"] == "done"]
@@ -87,8 +102,11 @@ def test_status_has_durations_conditions_rows_and_the_exports_numbers(latin: Tes
         assert line["done"] == int((mine["status"] == "done").sum()) >= 2
     # 2 emotions × 2 identities, in the config's order
     assert [(c["emotion"], c["identity"]) for c in status["conditions"]] == [
-        ("happy", "female-light"), ("happy", "male-dark"), ("sad", "female-light"),
-        ("sad", "male-dark")]  # fmt: skip
+        ("happy", "female-light"),
+        ("happy", "male-dark"),
+        ("sad", "female-light"),
+        ("sad", "male-dark"),
+    ]
     # Latin-square rows: exact, in arrival order (4 conditions: 4 rows)
     rows = status["counterbalancing"]
     assert rows["counterbalance"] == "arrival"
@@ -112,8 +130,9 @@ def test_every_table_downloads_as_csv_and_parquet(latin: TestClient) -> None:
         assert list(got.columns) == list(whole[table].columns) and len(got) == len(whole[table])
         r = latin.get(f"/api/researcher/export/{table}.csv", headers=AUTH)
         assert r.status_code == 200 and len(pd.read_csv(io.StringIO(r.text))) == len(whole[table])
-    identities = pd.read_parquet(io.BytesIO(
-        latin.get("/api/researcher/export/identities.parquet", headers=AUTH).content))  # fmt: skip
+    identities = pd.read_parquet(
+        io.BytesIO(latin.get("/api/researcher/export/identities.parquet", headers=AUTH).content)
+    )
     assert sorted(identities["identity"]) == ["female-light", "male-dark"]
     assert latin.get("/api/researcher/export/faces.xlsx", headers=AUTH).status_code == 404
 

@@ -242,8 +242,12 @@ def test_a_crowded_start_waits_as_the_server_asks_and_gets_in(
     def limit(route: Any) -> None:
         tries.append(time.monotonic())
         if len(tries) <= 2:
-            route.fulfill(status=429, headers={"Retry-After": "2"}, content_type="application/json",
-                          body='{"detail": "too many new sessions from this address"}')  # fmt: skip
+            route.fulfill(
+                status=429,
+                headers={"Retry-After": "2"},
+                content_type="application/json",
+                body='{"detail": "too many new sessions from this address"}',
+            )
         else:
             route.continue_()
 

@@ -149,9 +149,12 @@ def test_trial_record_is_what_the_database_holds(embedded: TestClient) -> None:
             face = db.scalar(
                 select(FaceRow)
                 .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
-                .where(PopulationRow.trial_id == t.id, PopulationRow.attempt == t.attempt,
-                       FaceRow.face_id == t.final_face_id)
-            )  # fmt: skip
+                .where(
+                    PopulationRow.trial_id == t.id,
+                    PopulationRow.attempt == t.attempt,
+                    FaceRow.face_id == t.final_face_id,
+                )
+            )
             assert got["session_id"] == sess.id and got["participant_id"] == "rec-1"
             assert got["seed"] == str(t.seed) and got["session_seed"] == str(sess.seed)
             assert int(got["seed"]) == t.seed  # exact, past 2**53

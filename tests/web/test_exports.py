@@ -33,8 +33,9 @@ def test_dashboard_csv_is_the_export_table(client: TestClient, app: Any) -> None
         got = pd.read_csv(io.StringIO(r.text))
         assert list(got.columns) == list(whole[table].columns)
         assert len(got) == len(whole[table]) > 0
-    faces = pd.read_csv(io.StringIO(client.get("/api/researcher/export/faces.csv",
-                                               headers=AUTH).text))  # fmt: skip
+    faces = pd.read_csv(
+        io.StringIO(client.get("/api/researcher/export/faces.csv", headers=AUTH).text)
+    )
     w = [c for c in faces.columns if c.startswith("w_")]
     pd.testing.assert_frame_equal(faces[w], whole["faces"][w], check_dtype=False)
     # incremental: the session completed less than a minute ago is not in it yet

@@ -157,9 +157,11 @@ def test_the_same_step_sent_at_once_to_two_workers_is_stored_once(
 MIXED_STUDY = {
     **SMALL_STUDY,
     "name": "mixed-fault",
-    "blocks": [{"task": "evolve"}, {"task": "categorise", "own": True, "random": 2,
-                                    "intensity": True}],
-}  # fmt: skip
+    "blocks": [
+        {"task": "evolve"},
+        {"task": "categorise", "own": True, "random": 2, "intensity": True},
+    ],
+}
 
 
 @pytest.mark.parametrize("workers", [1, 2])

@@ -170,8 +170,12 @@ def test_jspsych_plugin_shows_the_study_framing(
     """The plugin reads the framing from GET /api/study: its categorise face is oval too."""
     build_plugin()
     site = ExperimentSite(tmp_path / "site")
-    study = {**OVAL_STUDY, "name": "oval-embedded", "emotions": ["happy", "sad"],
-             "blocks": [{"task": "categorise", "random": 1, "labels": ["happy", "sad"]}]}  # fmt: skip
+    study = {
+        **OVAL_STUDY,
+        "name": "oval-embedded",
+        "emotions": ["happy", "sad"],
+        "blocks": [{"task": "categorise", "random": 1, "labels": ["happy", "sad"]}],
+    }
     srv, _url = serve(study, site, tmp_path, ict_dir)
     try:
         site.add("oval.html", one_trial_page(srv.url, [{"task": "categorise"}]))

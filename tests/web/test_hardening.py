@@ -48,8 +48,16 @@ def test_a_trailing_newline_is_no_second_participant(client: TestClient) -> None
     assert r.status_code == 422 and "participant id" in r.json()["detail"]
 
 
-@pytest.mark.parametrize("path", ["/s/", "/s", "/S/abcdefghijklmnopqrstuvwxyz012345",
-                                  "/s/abcdefghijklmnopqrstuvwxyz012345/x", "/s/a/b/c"])  # fmt: skip
+@pytest.mark.parametrize(
+    "path",
+    [
+        "/s/",
+        "/s",
+        "/S/abcdefghijklmnopqrstuvwxyz012345",
+        "/s/abcdefghijklmnopqrstuvwxyz012345/x",
+        "/s/a/b/c",
+    ],
+)
 def test_link_errors_are_html_pages(client: TestClient, path: str) -> None:
     r = client.get(path, headers={"Accept": "text/html"})
     assert r.status_code == 404

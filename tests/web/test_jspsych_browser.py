@@ -43,9 +43,11 @@ STUDY: dict[str, Any] = {
     "identities": ["female-medium"],
     "seed": 31,
     "ga": {"generations": 2, "min_selections": 2, "max_selections": 3},
-    "blocks": [{"task": "evolve", "name": "make", "emotions": ["happy"]},
-               {"task": "categorise", "name": "recognise", "own": True}],
-}  # fmt: skip
+    "blocks": [
+        {"task": "evolve", "name": "make", "emotions": ["happy"]},
+        {"task": "categorise", "name": "recognise", "own": True},
+    ],
+}
 READY = ".emogen-trial[data-emogen-ready='true'][data-emogen-stage='{}']"
 
 
@@ -135,9 +137,13 @@ def run_readme_page(page: Any, size: tuple[int, int]) -> list[dict[str, Any]]:
     ("size", "phone"), [((1366, 768), False), ((390, 844), True)], ids=["desktop", "phone"]
 )
 def test_the_readme_page_runs_and_its_data_agree_with_the_export(
-    browser: Any, site: ExperimentSite, server: tuple[ServerProcess, str], ict_model: Any,
-    size: tuple[int, int], phone: bool,
-) -> None:  # fmt: skip
+    browser: Any,
+    site: ExperimentSite,
+    server: tuple[ServerProcess, str],
+    ict_model: Any,
+    size: tuple[int, int],
+    phone: bool,
+) -> None:
     srv, url = server
     pid = f"jspsych-{size[0]}"
     page = open_page(

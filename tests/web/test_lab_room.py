@@ -25,13 +25,18 @@ def test_a_room_of_60_behind_one_address_starts_and_a_flood_is_still_refused(
     from emogen.web import create_app
 
     # the defaults: no session_limit given, as `emogen serve` without --session-limit
-    app = create_app(study_from_dict(SMALL_STUDY), f"sqlite:///{tmp_path / 'room.sqlite'}",
-                     model=ict_model, researcher_token="lab-room-researcher-token-0123456789")  # fmt: skip
+    app = create_app(
+        study_from_dict(SMALL_STUDY),
+        f"sqlite:///{tmp_path / 'room.sqlite'}",
+        model=ict_model,
+        researcher_token="lab-room-researcher-token-0123456789",
+    )
     nat = ("192.0.2.10", 50000)
     with TestClient(app, client=nat) as room, TestClient(app, client=("192.0.2.99", 1)) as home:
         start = time.monotonic()
-        answers = [room.post("/api/sessions", json={"participant_id": f"LAB-{i}"})
-                   for i in range(ROOM)]  # fmt: skip
+        answers = [
+            room.post("/api/sessions", json={"participant_id": f"LAB-{i}"}) for i in range(ROOM)
+        ]
         assert time.monotonic() - start < 60
         assert [a.status_code for a in answers] == [201] * ROOM
         assert len({a.json()["token"] for a in answers}) == ROOM

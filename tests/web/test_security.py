@@ -82,8 +82,15 @@ def _csp(header: str) -> dict[str, list[str]]:
 
 def test_every_page_and_answer_has_the_security_headers(client: TestClient) -> None:
     token = client.post("/api/sessions", json={"participant_id": "H-1"}).json()["token"]
-    for path in ("/", f"/s/{token}", f"/api/s/{token}/state", "/healthz", "/researcher",
-                 "/api/s/" + "A" * 32 + "/state", "/openapi.json"):  # fmt: skip
+    for path in (
+        "/",
+        f"/s/{token}",
+        f"/api/s/{token}/state",
+        "/healthz",
+        "/researcher",
+        "/api/s/" + "A" * 32 + "/state",
+        "/openapi.json",
+    ):
         r = client.get(path)
         assert r.status_code in (200, 404), path
         csp = _csp(r.headers["content-security-policy"])
@@ -125,8 +132,14 @@ def test_formula_cells_are_neutralised_and_numbers_are_not() -> None:
     )
     safe = neutralise_formulas(df)
     assert safe["text"].tolist()[:7] == [
-        "'=1+2", "'+SUM(A1)", "'-2+3", "'@cmd", "'\tx", "'\rx", "plain",
-    ]  # fmt: skip
+        "'=1+2",
+        "'+SUM(A1)",
+        "'-2+3",
+        "'@cmd",
+        "'\tx",
+        "'\rx",
+        "plain",
+    ]
     assert pd.isna(safe["text"][7])
     assert safe["number"].equals(df["number"]) and safe["integer"].equals(df["integer"])
     assert df["text"][0] == "=1+2"  # the frame given is not changed
@@ -199,8 +212,7 @@ def _assignments(client: TestClient, ids: list[str]) -> dict[str, tuple[int, int
 
 
 def test_anonymous_sessions_shift_no_one_s_seed_or_order(tmp_path: Path, ict_model: Any) -> None:
-    study = {**SMALL_STUDY, "emotions": ["happy", "sad", "angry", "fear"],
-             "order": "latin_square"}  # fmt: skip
+    study = {**SMALL_STUDY, "emotions": ["happy", "sad", "angry", "fear"], "order": "latin_square"}
     ids = ["P-1", "P-2", "P-3"]
     with TestClient(make_app(tmp_path, ict_model, "a", study=study)) as c:
         first = _assignments(c, ids)
@@ -212,12 +224,13 @@ def test_anonymous_sessions_shift_no_one_s_seed_or_order(tmp_path: Path, ict_mod
 
 
 def test_latin_square_rows_stay_balanced_over_participants() -> None:
-    cfg = study_from_dict({"emotions": ["a", "b", "c", "d"], "order": "latin_square",
-                           "seed": 99})  # fmt: skip
+    cfg = study_from_dict({"emotions": ["a", "b", "c", "d"], "order": "latin_square", "seed": 99})
     n_rows = len(balanced_latin_square(cfg.n_trials))
     ids = [f"PROLIFIC-{i:05d}" for i in range(120)]
-    rows = Counter(trial_order(cfg, slot=participant_slot(cfg, p), rng=None).row  # type: ignore[arg-type]
-                   for p in ids)  # fmt: skip
+    rows = Counter(
+        trial_order(cfg, slot=participant_slot(cfg, p), rng=None).row  # type: ignore[arg-type]
+        for p in ids
+    )
     expected = len(ids) / n_rows  # 30 a row; a binomial's sd is √(120·¼·¾) ≈ 4.7
     assert set(rows) == set(range(n_rows))
     assert all(abs(n - expected) <= 12 for n in rows.values()), rows

@@ -104,8 +104,9 @@ def test_a_port_in_use_is_refused_before_anything_loads(
         other.listen()
         port = other.getsockname()[1]
         with pytest.raises(ResourceError, match=f"port {port} is in use.*--port"):
-            run(monkeypatch, lambda *a, **kw: made.append(1), lambda a, **kw: served.append(1),
-                port)  # fmt: skip
+            run(
+                monkeypatch, lambda *a, **kw: made.append(1), lambda a, **kw: served.append(1), port
+            )
     assert made == [] and served == [] and capsys.readouterr().out == ""
 
 

@@ -77,9 +77,18 @@ def test_ten_faces_load_fast_and_follow_their_weights(chromium: Any, site: Site,
     targets = [*ict_model.shape_names, *model_correctives(ict_model).names]
     assert page.evaluate("window.emogen.shapeNames") == targets
     assert "ICT-FaceKit © 2020 USC ICT, MIT licence" in page.inner_text("footer")
-    faces = [{}, {"jawOpen": 1.0}, {"mouthSmile": 1.0, "jawOpen": 0.3}, {"eyeBlink": 1.0},
-             {"browInnerUp": 1.0}, {"eyeLookLeft": 1.0}, {"PupilDilate": 1.0}, {"mouthFunnel": 1.0},
-             {"noseSneer": 1.0}, {"cheekPuff": 1.0}]  # fmt: skip
+    faces = [
+        {},
+        {"jawOpen": 1.0},
+        {"mouthSmile": 1.0, "jawOpen": 0.3},
+        {"eyeBlink": 1.0},
+        {"browInnerUp": 1.0},
+        {"eyeLookLeft": 1.0},
+        {"PupilDilate": 1.0},
+        {"mouthFunnel": 1.0},
+        {"noseSneer": 1.0},
+        {"cheekPuff": 1.0},
+    ]
     page.evaluate("w => window.emogen.setFaces(w)", weights_of(ict_model, *faces))
     slots = page.locator(".face")
     assert slots.count() == 10

@@ -10,12 +10,12 @@ import numpy as np
 import pandas as pd
 
 from emogen import columns as tidy
-from emogen.analysis import plots
 from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.data import Dataset
 from emogen.analysis.prototypes import group_means, participant_prototypes, top_weights
 from emogen.analysis.report import Report
 from emogen.analysis.separability import gmm_separability
+from emogen.analysis.separability_figure import separability_figure
 from emogen.errors import EmoGenError
 
 if TYPE_CHECKING:
@@ -89,7 +89,7 @@ def separability_section(
     report.bullets([f"Note: {n}" for n in sep.notes])
     _mixture_warning(report, len(x), len(ds.groups), sep.n_pca, ds.kind)
     report.figure(
-        plots.separability(sep, report.figures / "separability.png"),
+        separability_figure(sep, report.figures / "separability.png"),
         "Final faces in the first two PCA components; GMM components (1σ, 2σ), group "
         "means (×) and targets (★).",
     )
@@ -216,11 +216,17 @@ def _group_means_tables(
         [
             {
                 "group": g,
-                **({"cd_mean_target": r["CD(mean, target)"],
-                    "norm_ratio_mean_target": r["|mean| / |target|"]} if ds.targets else {}),
+                **(
+                    {
+                        "cd_mean_target": r["CD(mean, target)"],
+                        "norm_ratio_mean_target": r["|mean| / |target|"],
+                    }
+                    if ds.targets
+                    else {}
+                ),
                 **{f"w_{c}": float(v) for c, v in zip(cols, means[g], strict=True)},
             }
             for g, r in zip(means, mean_rows, strict=True)
         ]
-    )  # fmt: skip
+    )
     return mean_rows, data

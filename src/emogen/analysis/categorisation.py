@@ -76,8 +76,13 @@ def own_advantage(responses: pd.DataFrame, confidence: float = 0.95) -> dict[str
         return result
     test = stats.ttest_1samp(diff, 0.0)
     ci = test.confidence_interval(confidence)
-    result.update(ci_low=float(ci.low), ci_high=float(ci.high), t=float(test.statistic),
-                  p=float(test.pvalue), confidence=confidence)  # fmt: skip
+    result.update(
+        ci_low=float(ci.low),
+        ci_high=float(ci.high),
+        t=float(test.statistic),
+        p=float(test.pvalue),
+        confidence=confidence,
+    )
     return result
 
 
@@ -114,8 +119,10 @@ def categorisation_section(
         )
         summary["categorisation"] = {"n_answers": 0, "note": "no answers"}
         return
-    out: dict[str, Any] = {"n_answers": len(answered),
-                           "n_participants": int(answered["participant_id"].nunique())}  # fmt: skip
+    out: dict[str, Any] = {
+        "n_answers": len(answered),
+        "n_participants": int(answered["participant_id"].nunique()),
+    }
     summary["categorisation"] = out
     _overview(responses, answered, report, out)
     _confusion(responses, report)
@@ -142,13 +149,19 @@ def _overview(
 ) -> None:
     known = answered[answered["intended"].notna()]
     by_source = (
-        answered.assign(hit=(answered["label"] == answered["intended"]).astype(float)
-                        .where(answered["intended"].notna()))
+        answered.assign(
+            hit=(answered["label"] == answered["intended"])
+            .astype(float)
+            .where(answered["intended"].notna())
+        )
         .groupby("source")
-        .agg(participants=("participant_id", "nunique"), answers=("label", "size"),
-             accuracy=("hit", "mean"))
+        .agg(
+            participants=("participant_id", "nunique"),
+            answers=("label", "size"),
+            accuracy=("hit", "mean"),
+        )
         .reset_index()
-    )  # fmt: skip
+    )
     report.paragraph(
         f"{len(answered)} answers of {out['n_participants']} participants; "
         f"{len(answered) - len(known)} of them are to faces with no right answer (random "
@@ -157,8 +170,12 @@ def _overview(
         "describe the answers; every test below is over participants."
     )
     report.table(by_source, "categorisation_by_source", "Accuracy by face source (pooled)")
-    _long(report, accuracy_by_source(responses), "categorisation_participants",
-          "Accuracy on own and others' faces per participant")  # fmt: skip
+    _long(
+        report,
+        accuracy_by_source(responses),
+        "categorisation_participants",
+        "Accuracy on own and others' faces per participant",
+    )
 
 
 def _confusion(responses: pd.DataFrame, report: Report) -> None:
@@ -166,18 +183,20 @@ def _confusion(responses: pd.DataFrame, report: Report) -> None:
 
     table = rec.confusion_table(responses)
     report.table(
-        table, "categorisation_confusion",
+        table,
+        "categorisation_confusion",
         "Confusion matrices (intended × label; counts and row proportions), over all faces "
         "with an intended emotion and per face source; random faces: the labels given to them",
-    )  # fmt: skip
+    )
     if table.empty:
         return
     path = confusion_figure(table, report.figures / "categorisation_confusion.png")
     report.figure(
-        path, "Confusion matrices: share of each intended emotion's faces given each label "
+        path,
+        "Confusion matrices: share of each intended emotion's faces given each label "
         "(cell: count), per face source; random faces have no intended emotion (one row: "
         "their labels).",
-    )  # fmt: skip
+    )
 
 
 def _hit_rates(
@@ -188,10 +207,15 @@ def _hit_rates(
         report.paragraph("Unbiased hit rates: no answer to a face with an intended emotion.")
         return
     tests = rec.hu_tests(hu, opts.alpha)
-    _long(report, hu, "categorisation_hit_rates",
-          "Unbiased hit rate Hu and chance pc per participant × emotion")  # fmt: skip
-    report.table(tests, "categorisation_hit_rate_tests",
-                 "Hu against chance per emotion (over participants)")  # fmt: skip
+    _long(
+        report,
+        hu,
+        "categorisation_hit_rates",
+        "Unbiased hit rate Hu and chance pc per participant × emotion",
+    )
+    report.table(
+        tests, "categorisation_hit_rate_tests", "Hu against chance per emotion (over participants)"
+    )
     out["hit_rates"] = tests.to_dict(orient="records")
     above = ", ".join(tests.loc[tests["above_chance"], "emotion"]) or "none"
     report.paragraph(
@@ -212,8 +236,11 @@ def _sources(
     pairs = rec.source_comparisons(per, opts.alpha)
     _long(report, per, "categorisation_accuracy", "Accuracy per participant and face source")
     if not pairs.empty:
-        report.table(pairs, "categorisation_source_tests",
-                     "Accuracy between face sources (paired over participants)")  # fmt: skip
+        report.table(
+            pairs,
+            "categorisation_source_tests",
+            "Accuracy between face sources (paired over participants)",
+        )
         report.paragraph(
             "Accuracy by source: each participant's share of correct answers per source "
             "(own, others', file faces; fallback and random faces have no right answer); "
@@ -248,12 +275,23 @@ def _own_distance_model(
         out["own_distance"] = {"note": res}
         return
     g, two, ctl = res.gee, res.two_stage, res.control
-    out["own_distance"] = {"gee": g, "two_stage": two,
-                           "control": {k: v for k, v in ctl.items() if k != "control"}}  # fmt: skip
-    _long(report, res.table, "categorisation_model_long",
-          "The own-distance model's long table (answer × offered label)")  # fmt: skip
-    _long(report, res.slopes, "categorisation_model_slopes",
-          "Per-participant slopes (two-stage model, first stage)")  # fmt: skip
+    out["own_distance"] = {
+        "gee": g,
+        "two_stage": two,
+        "control": {k: v for k, v in ctl.items() if k != "control"},
+    }
+    _long(
+        report,
+        res.table,
+        "categorisation_model_long",
+        "The own-distance model's long table (answer × offered label)",
+    )
+    _long(
+        report,
+        res.slopes,
+        "categorisation_model_slopes",
+        "Per-participant slopes (two-stage model, first stage)",
+    )
     report.paragraph(
         f"For each answer to a face the participant did not make (others' and random faces: "
         f"{g['n_answers']} answers of {g['n_participants']} participants), d_own is the gene-"
@@ -268,6 +306,28 @@ def _own_distance_model(
         "beyond d_ref — the contrast of the two slopes (negative: one's own faces predict "
         "one's labels better)."
     )
+    _own_distance_tests(report, g, two, ctl, opts)
+    path = own_distance_figure(res, report.figures / "categorisation_own_distance.png")
+    report.figure(
+        path,
+        "A: per participant, the share of answers whose label is the offered emotion "
+        "with the nearest mean face among one's own faces (y) and among the reference "
+        "participant's (x); above the diagonal, one's own faces predict one's labels better "
+        "(descriptive). B: the shuffled control's slopes (derangements of participants) and "
+        "the slope with one's own faces.",
+    )
+
+
+def _own_distance_tests(
+    report: Report,
+    g: dict[str, Any],
+    two: dict[str, Any],
+    ctl: dict[str, Any],
+    opts: AnalysisOptions,
+) -> None:
+    """The own-distance model's three tests: GEE (primary), two-stage, shuffled control."""
+    from emogen.analysis.categorisation_fits import RIDGE
+
     report.paragraph(
         "Primary test — GEE (binomial, logit link; the long table of answer × offered label, "
         "chosen 0/1, on d_own, d_ref and one intercept per label; exchangeable working "
@@ -289,7 +349,7 @@ def _own_distance_model(
     )
     report.paragraph(
         "Robustness — two-stage (per participant a conditional logit of the chosen label on "
-        f"d_own and d_ref, ridge {cm.RIDGE} on both slopes alike; then over participants, the "
+        f"d_own and d_ref, ridge {RIDGE} on both slopes alike; then over participants, the "
         "unit): mean contrast "
         f"{two['mean_contrast']:+.2f}, 95% CI [{two['ci_low']:+.2f}, {two['ci_high']:+.2f}], "
         f"t = {two['t']:.2f}, p = {two['p_t']:.3g}; Wilcoxon signed-rank p = "
@@ -307,11 +367,3 @@ def _own_distance_model(
         f"{ctl['p']:.3g} (own faces closer to the labels than another's; assumes participants "
         "exchangeable under the null)."
     )
-    path = own_distance_figure(res, report.figures / "categorisation_own_distance.png")
-    report.figure(
-        path, "A: per participant, the share of answers whose label is the offered emotion "
-        "with the nearest mean face among one's own faces (y) and among the reference "
-        "participant's (x); above the diagonal, one's own faces predict one's labels better "
-        "(descriptive). B: the shuffled control's slopes (derangements of participants) and "
-        "the slope with one's own faces.",
-    )  # fmt: skip

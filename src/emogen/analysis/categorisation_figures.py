@@ -40,8 +40,15 @@ def confusion_figure(table: pd.DataFrame, path: Path) -> Path:
         image = ax.imshow(share, cmap="viridis", vmin=0.0, vmax=1.0, aspect="equal")
         for i in range(len(rows)):
             for j in range(len(labels)):
-                ax.text(j, i, str(count[i, j]), ha="center", va="center", fontsize=6,
-                        color="black" if share[i, j] > 0.6 else "white")  # fmt: skip
+                ax.text(
+                    j,
+                    i,
+                    str(count[i, j]),
+                    ha="center",
+                    va="center",
+                    fontsize=6,
+                    color="black" if share[i, j] > 0.6 else "white",
+                )
         ax.set_xticks(range(len(labels)), labels, rotation=45, ha="right", fontsize=7)
         ax.set_yticks(range(len(rows)), rows if ax is axes[0] or source == "random" else [])
         n = int(part["count"].sum())

@@ -202,9 +202,12 @@ def conditions_section(
         return
     permutations, draws = 2000, 1000
     table = condition_tests(
-        people, permutations=permutations, bootstrap=draws, level=1 - opts.alpha,
+        people,
+        permutations=permutations,
+        bootstrap=draws,
+        level=1 - opts.alpha,
         rng=np.random.default_rng(opts.seed),
-    )  # fmt: skip
+    )
     left_out = people.n_participants - len(ids)
     report.paragraph(
         "**Unit: the participant.** Test: a repeated-measures permutation MANOVA on the genes "
@@ -220,8 +223,11 @@ def conditions_section(
         f"with a {1 - opts.alpha:.0%} basic bootstrap CI over participants ({draws} resamples). Not a mixed "
         f"model. {left_out} participant(s) without every cell left out."
     )
-    report.table(table, "conditions_tests", "Emotion, identity and interaction effects on the "
-                 "genes (participant as unit).")  # fmt: skip
+    report.table(
+        table,
+        "conditions_tests",
+        "Emotion, identity and interaction effects on the genes (participant as unit).",
+    )
     summary["conditions"] = {
         r["effect"]: {"p": r["p_perm"], "partial_eta2": r["partial_eta2"]}
         for r in table.to_dict("records")

@@ -48,12 +48,19 @@ def field_heatmaps(fields: Fields, path: Path) -> Path:
     image = None
     for ax, e in zip(axes.flat, emotions, strict=False):
         dens = population_map(fields, e, mesh).reshape(len(gy), len(gx))
-        image = ax.imshow(dens / dens.max(), origin="lower", extent=(lo[0], hi[0], lo[1], hi[1]),
-                          aspect="auto", cmap="viridis", vmin=0, vmax=1)  # fmt: skip
-        centres = np.stack([fields.points[(p, e)][:, :2].mean(axis=0)
-                            for p in fields.participants(e)])  # fmt: skip
-        ax.scatter(centres[:, 0], centres[:, 1], s=6, c="white", edgecolors="black",
-                   linewidths=0.3)  # fmt: skip
+        image = ax.imshow(
+            dens / dens.max(),
+            origin="lower",
+            extent=(lo[0], hi[0], lo[1], hi[1]),
+            aspect="auto",
+            cmap="viridis",
+            vmin=0,
+            vmax=1,
+        )
+        centres = np.stack(
+            [fields.points[(p, e)][:, :2].mean(axis=0) for p in fields.participants(e)]
+        )
+        ax.scatter(centres[:, 0], centres[:, 1], s=6, c="white", edgecolors="black", linewidths=0.3)
         ax.set_title(f"{e} (n = {len(centres)})", fontsize=9)
     for ax in axes.flat[len(emotions) :]:
         ax.set_visible(False)
@@ -144,9 +151,12 @@ def contact_sheets(
     images, background = render_on_identities(model, weights, per_face, size=size)
     sheets = {}
     for e, part in means.groupby("emotion", sort=True):
-        labels = [f"{p} · {i} ({n})" for p, i, n in
-                  part[["participant_id", "identity", "n_faces"]].itertuples(index=False)]  # fmt: skip
-        sheet = contact_sheet(images[part.index.to_numpy()], labels, columns=columns,
-                              background=background)  # fmt: skip
+        labels = [
+            f"{p} · {i} ({n})"
+            for p, i, n in part[["participant_id", "identity", "n_faces"]].itertuples(index=False)
+        ]
+        sheet = contact_sheet(
+            images[part.index.to_numpy()], labels, columns=columns, background=background
+        )
         sheets[str(e)] = plots.save_image(folder / f"fields_faces_{e}.png", sheet)
     return sheets, missing

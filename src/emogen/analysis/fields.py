@@ -95,11 +95,16 @@ class Fields:
         for (p, e), x in sorted(self.points.items()):
             centre = x.mean(axis=0)
             rows.append(
-                {"participant_id": p, "emotion": e, "n_faces": len(x),
-                 "pc1": float(centre[0]), "pc2": float(centre[1]) if len(centre) > 1 else 0.0,
-                 "spread": float(np.sqrt(((x - centre) ** 2).sum(axis=1).mean())),
-                 "bandwidth": self.bandwidth[e]}
-            )  # fmt: skip
+                {
+                    "participant_id": p,
+                    "emotion": e,
+                    "n_faces": len(x),
+                    "pc1": float(centre[0]),
+                    "pc2": float(centre[1]) if len(centre) > 1 else 0.0,
+                    "spread": float(np.sqrt(((x - centre) ** 2).sum(axis=1).mean())),
+                    "bandwidth": self.bandwidth[e],
+                }
+            )
         return pd.DataFrame(rows)
 
 
@@ -278,8 +283,13 @@ def field_individuality(people: People, fields: Fields, *, min_half: int = 2) ->
         for i, p in enumerate(who):
             others = np.delete(m[i], i)
             rows.append(
-                {"participant_id": p, "emotion": e, "self": float(m[i, i]),
-                 "others": float(others.mean()), "identified": bool(m[i, i] > others.max()),
-                 "n_candidates": len(who)}
-            )  # fmt: skip
+                {
+                    "participant_id": p,
+                    "emotion": e,
+                    "self": float(m[i, i]),
+                    "others": float(others.mean()),
+                    "identified": bool(m[i, i] > others.max()),
+                    "n_candidates": len(who),
+                }
+            )
     return pd.DataFrame(rows)

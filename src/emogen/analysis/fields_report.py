@@ -101,9 +101,14 @@ def _describe(fields: Fields, counts: pd.Series, report: Report, out: dict[str, 
         cv = fields.cv[e]
         edge = bool(len(cv)) and bool(cv["chosen"].iloc[0] or cv["chosen"].iloc[-1])
         rows.append(
-            {"emotion": e, "n_fields": len(fields.participants(e)), "components": sp.k,
-             "bandwidth": fields.bandwidth[e], "at_grid_edge": edge}
-        )  # fmt: skip
+            {
+                "emotion": e,
+                "n_fields": len(fields.participants(e)),
+                "components": sp.k,
+                "bandwidth": fields.bandwidth[e],
+                "at_grid_edge": edge,
+            }
+        )
     report.table(
         pd.DataFrame(rows), "fields_bandwidth", "Bandwidth (kernel SD, gene units) per emotion"
     )
@@ -122,10 +127,18 @@ def _overlaps(
         pts = [fields.points[(p, e)] for p in who]
         bc, mn = bhattacharyya(pts, fields.bandwidth[e], rng=rng)
         i, j = np.triu_indices(len(who), 1)
-        long.append(pd.DataFrame({
-            "emotion": e, "participant_a": np.array(who)[i], "participant_b": np.array(who)[j],
-            "overlap": m.to_numpy()[i, j], "bhattacharyya": bc[i, j], "overlap_min": mn[i, j],
-        }))  # fmt: skip
+        long.append(
+            pd.DataFrame(
+                {
+                    "emotion": e,
+                    "participant_a": np.array(who)[i],
+                    "participant_b": np.array(who)[j],
+                    "overlap": m.to_numpy()[i, j],
+                    "bhattacharyya": bc[i, j],
+                    "overlap_min": mn[i, j],
+                }
+            )
+        )
     table = pd.concat(long, ignore_index=True)
     shown = table.groupby("emotion")[["overlap", "bhattacharyya", "overlap_min"]].agg(
         ["mean", "median"]
@@ -138,8 +151,12 @@ def _overlaps(
         "∫√(pq) and ∫min(p, q), by Monte Carlo (256 draws per field, SE < 0.05). The overlap "
         "is descriptive: each pair is a pair of participants, no test."
     )
-    report.table(shown.reset_index(), None, "Overlap between participants' fields, per emotion "
-                 "(every pair in tables/fields_overlap.csv)")  # fmt: skip
+    report.table(
+        shown.reset_index(),
+        None,
+        "Overlap between participants' fields, per emotion "
+        "(every pair in tables/fields_overlap.csv)",
+    )
     _write_only(report, table, "fields_overlap")
     out["mean_overlap"] = table.groupby("emotion")["overlap"].mean().to_dict()
     return matrices
@@ -170,12 +187,20 @@ def _individuality(
         res = stats.ttest_1samp(diff, 0.0)
         ci = res.confidence_interval(1 - opts.alpha)
         rows.append(
-            {"emotion": e, "n_participants": len(part), "self_overlap": part["self"].mean(),
-             "others_overlap": part["others"].mean(), "difference": diff.mean(),
-             "ci_low": ci.low, "ci_high": ci.high, "t": res.statistic, "p": res.pvalue,
-             "identified": part["identified"].mean(),
-             "chance_identified": float((1 / part["n_candidates"]).mean())}
-        )  # fmt: skip
+            {
+                "emotion": e,
+                "n_participants": len(part),
+                "self_overlap": part["self"].mean(),
+                "others_overlap": part["others"].mean(),
+                "difference": diff.mean(),
+                "ci_low": ci.low,
+                "ci_high": ci.high,
+                "t": res.statistic,
+                "p": res.pvalue,
+                "identified": part["identified"].mean(),
+                "chance_identified": float((1 / part["n_candidates"]).mean()),
+            }
+        )
     table = pd.DataFrame(rows)
     report.paragraph(
         "Are fields the participant's own? Each participant's faces of an emotion are split "
@@ -230,18 +255,26 @@ def _clusters(
     report.paragraph(verdict)
     table = c.table()
     if c.structure:
-        report.table(table.groupby("cluster").size().rename("participants").reset_index(),
-                     None, "Participants per cluster")  # fmt: skip
+        report.table(
+            table.groupby("cluster").size().rename("participants").reset_index(),
+            None,
+            "Participants per cluster",
+        )
     _write_only(report, table, "fields_clusters")
-    out["clusters"] = {"structure": c.structure, "k": c.k if c.structure else 1,
-                       "silhouette": c.silhouette, "p": c.p_value}  # fmt: skip
+    out["clusters"] = {
+        "structure": c.structure,
+        "k": c.k if c.structure else 1,
+        "silhouette": c.silhouette,
+        "p": c.p_value,
+    }
     return c
 
 
 def _sheets(people: People, report: Report, opts: AnalysisOptions, model: FaceModel | None) -> None:
     if model is None or not opts.render:
-        report.paragraph("Contact sheets of the participants' faces skipped (no face model, or "
-                         "--no-render).")  # fmt: skip
+        report.paragraph(
+            "Contact sheets of the participants' faces skipped (no face model, or --no-render)."
+        )
         return
     try:
         sheets, missing = field_maps.contact_sheets(
@@ -252,8 +285,12 @@ def _sheets(people: People, report: Report, opts: AnalysisOptions, model: FaceMo
         report.paragraph(f"Contact sheets failed: {exc}")
         return
     if missing:
-        report.paragraph(f"Not rendered (identity unknown to the export and the presets): "
-                         f"{', '.join(missing)}.")  # fmt: skip
+        report.paragraph(
+            f"Not rendered (identity unknown to the export and the presets): {', '.join(missing)}."
+        )
     for e, path in sheets.items():
-        report.figure(path, f"{e}: every participant's mean final face per identity, on the "
-                      "identity (shape and appearance) they made it on; (n) faces averaged.")  # fmt: skip
+        report.figure(
+            path,
+            f"{e}: every participant's mean final face per identity, on the "
+            "identity (shape and appearance) they made it on; (n) faces averaged.",
+        )

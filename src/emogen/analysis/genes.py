@@ -91,13 +91,23 @@ def emotion_gene_tests(
     for c, (a, b) in enumerate(pairs):
         for k, gene in enumerate(people.genes):
             rows.append(
-                {"gene": gene_base(gene), "facs_code": facs_code(gene),
-                 "contrast": f"{emotions[a]} − {emotions[b]}", "emotion_a": emotions[a],
-                 "emotion_b": emotions[b], "n_participants": len(ids),
-                 "mean_a": cube[:, a, k].mean(), "mean_b": cube[:, b, k].mean(),
-                 "difference": d[:, c, k].mean(), "ci_low": lo[c, k], "ci_high": hi[c, k],
-                 "used_a": used[a, k], "used_b": used[b, k], **_stats(res, c, k)}
-            )  # fmt: skip
+                {
+                    "gene": gene_base(gene),
+                    "facs_code": facs_code(gene),
+                    "contrast": f"{emotions[a]} − {emotions[b]}",
+                    "emotion_a": emotions[a],
+                    "emotion_b": emotions[b],
+                    "n_participants": len(ids),
+                    "mean_a": cube[:, a, k].mean(),
+                    "mean_b": cube[:, b, k].mean(),
+                    "difference": d[:, c, k].mean(),
+                    "ci_low": lo[c, k],
+                    "ci_high": hi[c, k],
+                    "used_a": used[a, k],
+                    "used_b": used[b, k],
+                    **_stats(res, c, k),
+                }
+            )
     return _typed(pd.DataFrame(rows), res, 1 - opts.level)
 
 
@@ -166,12 +176,22 @@ def _group_rows(
     for e, emotion in enumerate(emotions):
         for k, gene in enumerate(people.genes):
             rows.append(
-                {"gene": gene_base(gene), "facs_code": facs_code(gene), "emotion": emotion,
-                 "group_a": names[0], "group_b": names[1], "n_a": len(a), "n_b": len(b),
-                 "mean_a": a[:, e, k].mean(), "mean_b": b[:, e, k].mean(),
-                 "difference": a[:, e, k].mean() - b[:, e, k].mean(),
-                 "ci_low": ci[0][e, k], "ci_high": ci[1][e, k],
-                 "used_a": (a[:, e, k] > USED).mean(), "used_b": (b[:, e, k] > USED).mean(),
-                 **_stats(res, e, k)}
-            )  # fmt: skip
+                {
+                    "gene": gene_base(gene),
+                    "facs_code": facs_code(gene),
+                    "emotion": emotion,
+                    "group_a": names[0],
+                    "group_b": names[1],
+                    "n_a": len(a),
+                    "n_b": len(b),
+                    "mean_a": a[:, e, k].mean(),
+                    "mean_b": b[:, e, k].mean(),
+                    "difference": a[:, e, k].mean() - b[:, e, k].mean(),
+                    "ci_low": ci[0][e, k],
+                    "ci_high": ci[1][e, k],
+                    "used_a": (a[:, e, k] > USED).mean(),
+                    "used_b": (b[:, e, k] > USED).mean(),
+                    **_stats(res, e, k),
+                }
+            )
     return pd.DataFrame(rows)

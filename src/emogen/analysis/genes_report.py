@@ -53,8 +53,11 @@ def genes_section(
         f"participants ({gopts.bootstrap} resamples); `used_*`: the share of participants whose "
         f"mean of the gene exceeds {USED:g}."
     )
-    report.table(facs_table(people.genes), "genes_facs", "Blendshape genes and the FACS action "
-                 "units they approximate (not AUs).")  # fmt: skip
+    report.table(
+        facs_table(people.genes),
+        "genes_facs",
+        "Blendshape genes and the FACS action units they approximate (not AUs).",
+    )
     report.paragraph(CAVEAT)
     out: dict[str, Any] = {}
     if len(people.emotions) < 2:
@@ -68,12 +71,19 @@ def genes_section(
             "across contrasts: exact per contrast, conservative across them). Assumes "
             "participants independent of one another."
         )
-        report.table(_shown(emo, "contrast"), "genes_emotion_tests",
-                     "Genes that differ between emotions (FWER- or FDR-significant rows; the "
-                     "CSV has every gene × contrast).", data=emo)  # fmt: skip
+        report.table(
+            _shown(emo, "contrast"),
+            "genes_emotion_tests",
+            "Genes that differ between emotions (FWER- or FDR-significant rows; the "
+            "CSV has every gene × contrast).",
+            data=emo,
+        )
         path = heatmap(emo, report.figures / "genes_emotions", alpha=opts.alpha)
-        report.figure(path, "Participant-mean difference per gene (rows, ≈ action unit) and pair "
-                      "of emotions (columns). * BH q < α; ** max-T p < α (FWER).")  # fmt: skip
+        report.figure(
+            path,
+            "Participant-mean difference per gene (rows, ≈ action unit) and pair "
+            "of emotions (columns). * BH q < α; ** max-T p < α (FWER).",
+        )
         out["emotion_maxt"] = int(emo["significant_maxt"].sum())
         out["emotion_bh"] = int(emo["significant_bh"].sum())
         out["emotion_tests"] = len(emo)
@@ -101,8 +111,12 @@ def _groups(
         "differ). More than two groups: every pair, max-T within the pair, Bonferroni over pairs. "
         "Assumes participants independent and exchangeable between groups under H0."
     )
-    report.table(_shown(grp, "emotion"), "genes_group_tests", "Genes that differ between "
-                 "groups (significant rows; the CSV has every row).", data=grp)  # fmt: skip
+    report.table(
+        _shown(grp, "emotion"),
+        "genes_group_tests",
+        "Genes that differ between groups (significant rows; the CSV has every row).",
+        data=grp,
+    )
     out["group_maxt"] = int(grp["significant_maxt"].sum())
     out["group_bh"] = int(grp["significant_bh"].sum())
     out["group_tests"] = len(grp)

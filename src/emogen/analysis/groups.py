@@ -105,10 +105,14 @@ def compare_groups(
     out: dict[str, Any] = {
         "groups": " | ".join(f"{n} ({s})" for n, s in zip(names, sizes, strict=True)),
         "participants": len(x),
-        "r2": r2, "r2_low": boot["r2"][0], "r2_high": boot["r2"][1], "p_location": float(p_loc),
-        "dispersion_f": f, "p_dispersion": float(p_disp),
+        "r2": r2,
+        "r2_low": boot["r2"][0],
+        "r2_high": boot["r2"][1],
+        "p_location": float(p_loc),
+        "dispersion_f": f,
+        "p_dispersion": float(p_disp),
         **{f"dispersion_{n}": float(z[codes == i].mean()) for i, n in enumerate(names)},
-    }  # fmt: skip
+    }
     if len(names) == 2:
         out["centroid_ed"] = float(np.linalg.norm(x[codes == 0].mean(0) - x[codes == 1].mean(0)))
         out["centroid_ed_low"], out["centroid_ed_high"] = boot["ed"]

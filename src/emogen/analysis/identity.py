@@ -58,11 +58,15 @@ def identity_distances(people: People) -> pd.DataFrame:
         same = (ident[:, None] == ident[None, :]) & upper
         diff = (ident[:, None] != ident[None, :]) & upper
         rows.append(
-            {"participant_id": str(p), "emotion": str(e),
-             "within": float(d[same].mean()) if same.any() else np.nan,
-             "between": float(d[diff].mean()), "n_within": int(same.sum()),
-             "n_between": int(diff.sum())}
-        )  # fmt: skip
+            {
+                "participant_id": str(p),
+                "emotion": str(e),
+                "within": float(d[same].mean()) if same.any() else np.nan,
+                "between": float(d[diff].mean()),
+                "n_within": int(same.sum()),
+                "n_between": int(diff.sum()),
+            }
+        )
     return pd.DataFrame(rows)
 
 
@@ -84,12 +88,18 @@ def within_between_test(
     p_perm = float((1 + np.sum(perm >= abs(diff.mean()) - 1e-12)) / (1 + n_perm))
     sd = diff.std(ddof=1)
     return {
-        "n": float(n), "within": float(per["within"].mean()),
-        "between": float(per["between"].mean()), "difference": float(diff.mean()),
-        "ci_low": float(ci.low), "ci_high": float(ci.high), "t": float(res.statistic),
-        "df": float(n - 1), "p": float(res.pvalue), "p_sign_flip": p_perm,
+        "n": float(n),
+        "within": float(per["within"].mean()),
+        "between": float(per["between"].mean()),
+        "difference": float(diff.mean()),
+        "ci_low": float(ci.low),
+        "ci_high": float(ci.high),
+        "t": float(res.statistic),
+        "df": float(n - 1),
+        "p": float(res.pvalue),
+        "p_sign_flip": p_perm,
         "dz": float(diff.mean() / sd) if sd > 0 else np.nan,
-    }  # fmt: skip
+    }
 
 
 def _decode(
@@ -150,11 +160,18 @@ def cross_identity_decoding(
     for (a, b), acc in observed.items():
         nl = null[(a, b)]
         rows.append(
-            {"train_identity": a, "test_identity": b, "cross": a != b, "accuracy": acc,
-             "chance": float(np.nanmean(nl)), "null_95": float(np.nanquantile(nl, 0.95)),
-             "p": float((1 + np.sum(nl >= acc)) / (1 + n_perm)), "n_perm": n_perm,
-             "n_participants": len(set(who[ident == b]))}
-        )  # fmt: skip
+            {
+                "train_identity": a,
+                "test_identity": b,
+                "cross": a != b,
+                "accuracy": acc,
+                "chance": float(np.nanmean(nl)),
+                "null_95": float(np.nanquantile(nl, 0.95)),
+                "p": float((1 + np.sum(nl >= acc)) / (1 + n_perm)),
+                "n_perm": n_perm,
+                "n_participants": len(set(who[ident == b])),
+            }
+        )
     return pd.DataFrame(rows)
 
 
@@ -198,8 +215,11 @@ def identity_section(
             "time — if each identity had its own block, drift over the session reads as an "
             "identity effect (Murray et al. 2024)."
         )
-        report.table(pd.DataFrame([test]), "identity_distance_test",
-                     "Between − within identity distance over participants")  # fmt: skip
+        report.table(
+            pd.DataFrame([test]),
+            "identity_distance_test",
+            "Between − within identity distance over participants",
+        )
         out["distance"] = test
     report.table(dist, "identity_distances", "Per participant and emotion: mean distances")
     dec = cross_identity_decoding(people, rng=rng, n_perm=DECODING_PERMUTATIONS)

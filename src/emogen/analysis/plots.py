@@ -26,7 +26,6 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from emogen.analysis.separability import Separability
 
 DPI = 300
 #: Okabe & Ito (2008): distinguishable with every common colour-vision deficiency.
@@ -100,9 +99,14 @@ def legend_outside(ax: Axes, n_entries: int, **kw: object) -> None:
     if not ax.get_legend_handles_labels()[0]:
         return
     ax.legend(
-        loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize=7,
-        ncol=max(1, -(-n_entries // 12)), frameon=False, **kw,
-    )  # fmt: skip
+        loc="upper left",
+        bbox_to_anchor=(1.02, 1.0),
+        borderaxespad=0.0,
+        fontsize=7,
+        ncol=max(1, -(-n_entries // 12)),
+        frameon=False,
+        **kw,
+    )
 
 
 def _tidy_ticks(fig: Figure) -> None:
@@ -225,72 +229,6 @@ def kl_curves(series: dict[str, np.ndarray], path: Path, *, title: str = "") -> 
     return save_figure(fig, path)
 
 
-def _ellipse(ax: Axes, mean: np.ndarray, cov: np.ndarray, edge: str) -> None:
-    from matplotlib.patches import Ellipse
-
-    vals, vecs = np.linalg.eigh(cov[:2, :2])
-    vals = np.maximum(vals, 1e-12)
-    angle = float(np.degrees(np.arctan2(vecs[1, 1], vecs[0, 1])))
-    for k in (1, 2):
-        ax.add_patch(
-            Ellipse(
-                (float(mean[0]), float(mean[1])),
-                2 * k * np.sqrt(vals[1]),
-                2 * k * np.sqrt(vals[0]),
-                angle=angle,
-                fill=False,
-                ls="-" if k == 1 else "--",
-                lw=1.2,
-                color=edge,
-            )
-        )
-
-
-def separability(sep: Separability, path: Path, *, title: str = "") -> Path:
-    """Samples in the first two PCA components, coloured (and shaped) by group, with the GMM's
-    components (1σ solid and 2σ dashed ellipses, in the colour of the group each one matches;
-    grey when it matches none), group means (×) and targets (★) — Fig. 8. Names are in the
-    legend, outside the axes (no labels over the data, whatever the number of groups)."""
-    from matplotlib.lines import Line2D
-
-    n = len(sep.groups)
-    fig = new_figure(5.2 + 1.2 * max(1, -(-n // 10)), 4.2)
-    ax = fig.subplots()
-    z = sep.coords
-    y2 = z[:, 1] if z.shape[1] > 1 else np.zeros(len(z))
-    for i, g in enumerate(sep.groups):
-        m = sep.labels == i
-        ax.scatter(z[m, 0], y2[m], s=6, alpha=0.4, color=colour(i), marker=marker(i), label=g)
-        gm = sep.group_means[i]
-        ax.scatter([gm[0]], [gm[1] if len(gm) > 1 else 0], marker="x", s=60, color=colour(i))
-        if sep.target_coords is not None:
-            t = sep.target_coords[i]
-            ax.scatter([t[0]], [t[1] if len(t) > 1 else 0], marker="*", s=140, color=colour(i),
-                       edgecolor="k", zorder=5)  # fmt: skip
-    if z.shape[1] > 1:
-        index = {g: i for i, g in enumerate(sep.groups)}
-        for c, name in enumerate(sep.cluster_names):
-            edge = colour(index[name]) if name in index else "0.5"
-            _ellipse(ax, sep.means[c], sep.covariances[c], edge)
-    ax.set_xlabel("PCA component 1 [weight units]")
-    ax.set_ylabel("PCA component 2 [weight units]")
-    extra = [
-        Line2D([], [], color="k", marker="x", ls="", label="group mean"),
-        Line2D([], [], color="0.3", ls="-", label="GMM component, 1σ"),
-        Line2D([], [], color="0.3", ls="--", label="GMM component, 2σ"),
-    ]
-    if sep.target_coords is not None:
-        extra.append(Line2D([], [], color="w", marker="*", mec="k", ms=9, ls="", label="target"))
-    handles = ax.get_legend_handles_labels()[0] + extra
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
-              fontsize=7, markerscale=1.5, frameon=False, ncol=max(1, -(-len(handles) // 14)))  # fmt: skip
-    ax.grid(alpha=0.3)
-    ax.set_title(
-        title or f"GMM in {sep.n_pca} PCA components (accuracy {sep.accuracy:.0%})", fontsize=9
-    )
-    return save_figure(fig, path)
-
-
 def bins(table: pd.DataFrame, path: Path, *, title: str = "") -> Path:
     """Stacked bars of repeatability bins (rows of ``table``, columns the bins in %)."""
     import matplotlib
@@ -348,9 +286,15 @@ def power_curve(
     fig = new_figure(5.0, 3.2)
     ax = fig.subplots()
     ax.errorbar(
-        curve["n"], curve["power"], yerr=curve["se"], fmt="o", ms=3, capsize=2, label="simulated",
+        curve["n"],
+        curve["power"],
+        yerr=curve["se"],
+        fmt="o",
+        ms=3,
+        capsize=2,
+        label="simulated",
         color=colour(0),
-    )  # fmt: skip
+    )
     if "fitted" in curve and curve["fitted"].notna().any():
         ax.plot(curve["n"], curve["fitted"], "-", color=colour(1), lw=1.2, label="fitted")
     ax.axhline(target, color="0.4", ls="--", lw=1, label=f"target power {target:g}")
@@ -383,8 +327,9 @@ def spread(rows: pd.DataFrame, path: Path, *, title: str = "") -> Path:
     ax.barh(
         y, rows["mean proxy error"], color=colour(0), alpha=0.7, label="group: mean proxy error"
     )
-    ax.scatter(rows["noise 95th pct"], y, marker="|", s=300, color=colour(5),
-               label="GA noise, 95th pct")  # fmt: skip
+    ax.scatter(
+        rows["noise 95th pct"], y, marker="|", s=300, color=colour(5), label="GA noise, 95th pct"
+    )
     ax.scatter(rows["noise (same n)"], y, marker="|", s=200, color="k", label="GA noise, mean")
     ax.set_yticks(y, [str(g) for g in rows["group"]], fontsize=7)
     ax.invert_yaxis()

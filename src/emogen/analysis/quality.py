@@ -114,10 +114,16 @@ def position_bias(
         null_sum += null_stat
         top = int(np.argmax(counts))
         rows.append(
-            {"participant_id": str(pid), "picks": int(counts.sum()), "events": len(m),
-             "top_tile": top, "top_tile_share": counts[top] / counts.sum(), "chi2": stat,
-             "p_mc": (1 + int((null_stat >= stat - 1e-9).sum())) / (draws + 1)}
-        )  # fmt: skip
+            {
+                "participant_id": str(pid),
+                "picks": int(counts.sum()),
+                "events": len(m),
+                "top_tile": top,
+                "top_tile_share": counts[top] / counts.sum(),
+                "chi2": stat,
+                "p_mc": (1 + int((null_stat >= stat - 1e-9).sum())) / (draws + 1),
+            }
+        )
     table = pd.DataFrame(rows)
     total = float(table["chi2"].sum())
     overall = {

@@ -97,7 +97,10 @@ def _position(people: People, report: Report, opts: AnalysisOptions, out: dict) 
         f"{opts.alpha:g} (about {opts.alpha * len(table):.1f} expected by chance: a significant "
         "participant is not by itself careless)."
     )
-    report.table(table, "quality_position_bias", "Generation-0 picks per participant: the "
-                 "most-picked tile and the position-bias test.")  # fmt: skip
+    report.table(
+        table,
+        "quality_position_bias",
+        "Generation-0 picks per participant: the most-picked tile and the position-bias test.",
+    )
     out["position_bias_p"] = overall["p_mc"]
     out["position_bias_flagged"] = flagged

@@ -90,9 +90,18 @@ def unbiased_hit_rates(responses: pd.DataFrame) -> pd.DataFrame:
             used = int((part["label"] == emotion).sum())
             hits = int(((part["intended"] == emotion) & (part["label"] == emotion)).sum())
             hu = hits**2 / (faces * used) if used else 0.0
-            rows.append({"participant_id": pid, "emotion": emotion, "n_faces": faces,
-                         "n_label": used, "hits": hits, "n_answers": n, "hu": hu,
-                         "pc": faces * used / n**2})  # fmt: skip
+            rows.append(
+                {
+                    "participant_id": pid,
+                    "emotion": emotion,
+                    "n_faces": faces,
+                    "n_label": used,
+                    "hits": hits,
+                    "n_answers": n,
+                    "hu": hu,
+                    "pc": faces * used / n**2,
+                }
+            )
     cols = ["participant_id", "emotion", "n_faces", "n_label", "hits", "n_answers", "hu", "pc"]
     return pd.DataFrame(rows, columns=cols)
 
@@ -119,8 +128,13 @@ def _paired(diff: np.ndarray, confidence: float) -> dict[str, float]:
         return {"mean_difference": mean, "ci_low": nan, "ci_high": nan, "t": nan, "p": nan}
     test = stats.ttest_1samp(diff, 0.0)
     ci = test.confidence_interval(confidence)
-    return {"mean_difference": float(diff.mean()), "ci_low": float(ci.low),
-            "ci_high": float(ci.high), "t": float(test.statistic), "p": float(test.pvalue)}  # fmt: skip
+    return {
+        "mean_difference": float(diff.mean()),
+        "ci_low": float(ci.low),
+        "ci_high": float(ci.high),
+        "t": float(test.statistic),
+        "p": float(test.pvalue),
+    }
 
 
 def hu_tests(hu: pd.DataFrame, alpha: float = 0.05, confidence: float = 0.95) -> pd.DataFrame:
@@ -130,9 +144,15 @@ def hu_tests(hu: pd.DataFrame, alpha: float = 0.05, confidence: float = 0.95) ->
         diff = np.arcsin(np.sqrt(part["hu"].to_numpy(float))) - np.arcsin(
             np.sqrt(part["pc"].to_numpy(float))
         )
-        rows.append({"emotion": emotion, "n_participants": len(part),
-                     "mean_hu": float(part["hu"].mean()), "mean_pc": float(part["pc"].mean()),
-                     **_paired(diff, confidence)})  # fmt: skip
+        rows.append(
+            {
+                "emotion": emotion,
+                "n_participants": len(part),
+                "mean_hu": float(part["hu"].mean()),
+                "mean_pc": float(part["pc"].mean()),
+                **_paired(diff, confidence),
+            }
+        )
     out = pd.DataFrame(rows)
     if out.empty:
         return out
@@ -161,10 +181,16 @@ def source_comparisons(
     for a, b in combinations(present, 2):
         both = wide[[a, b]].dropna()
         diff = (both[a] - both[b]).to_numpy(float)
-        rows.append({"source_a": a, "source_b": b, "n_participants": len(both),
-                     "accuracy_a": float(both[a].mean()) if len(both) else float("nan"),
-                     "accuracy_b": float(both[b].mean()) if len(both) else float("nan"),
-                     **_paired(diff, confidence)})  # fmt: skip
+        rows.append(
+            {
+                "source_a": a,
+                "source_b": b,
+                "n_participants": len(both),
+                "accuracy_a": float(both[a].mean()) if len(both) else float("nan"),
+                "accuracy_b": float(both[b].mean()) if len(both) else float("nan"),
+                **_paired(diff, confidence),
+            }
+        )
     out = pd.DataFrame(rows)
     if not out.empty:
         out["p_holm"] = holm(out["p"].to_numpy())

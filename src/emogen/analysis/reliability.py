@@ -226,8 +226,9 @@ def split_half(
     r = float(np.sum(ca * cb) / np.sqrt(np.sum(ca**2) * np.sum(cb**2)))
     d = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
     hits = float(np.mean(np.argmin(d, axis=1) == np.arange(n)))
-    perms = np.array([np.mean(np.argmin(d[:, rng.permutation(n)], axis=1) == np.arange(n))
-                      for _ in range(999)])  # fmt: skip
+    perms = np.array(
+        [np.mean(np.argmin(d[:, rng.permutation(n)], axis=1) == np.arange(n)) for _ in range(999)]
+    )
     return {
         "participants": float(n),
         "r_half": r,

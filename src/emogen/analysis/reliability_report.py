@@ -30,10 +30,25 @@ if TYPE_CHECKING:
 MIN_FOR_INTERVAL = 10
 
 COLUMNS = [
-    "emotion", "identity", "space", "unit", "participants", "faces", "icc", "icc_low",
-    "icc_high", "within_variance", "between_variance", "within_distance", "between_distance",
-    "split_half_r", "spearman_brown", "self_identification", "chance", "p_identification",
-]  # fmt: skip
+    "emotion",
+    "identity",
+    "space",
+    "unit",
+    "participants",
+    "faces",
+    "icc",
+    "icc_low",
+    "icc_high",
+    "within_variance",
+    "between_variance",
+    "within_distance",
+    "between_distance",
+    "split_half_r",
+    "spearman_brown",
+    "self_identification",
+    "chance",
+    "p_identification",
+]
 
 
 def reliability_table(
@@ -60,19 +75,28 @@ def reliability_table(
             )
             dist = distances(x, who, space)
             half = split_half(x, who, cell["repetition"].to_numpy(), rng=rng)
-            rows.append({
-                "emotion": emotion, "identity": identity, "space": space,
-                "unit": SPACE_UNITS[space], "participants": comp.participants,
-                "faces": comp.faces, "icc": comp.icc, "icc_low": lo, "icc_high": hi,
-                "within_variance": comp.within, "between_variance": comp.between,
-                "within_distance": float(dist["within"].mean()),
-                "between_distance": float(dist["between"].mean()),
-                "split_half_r": half.get("r_half", np.nan),
-                "spearman_brown": half.get("spearman_brown", np.nan),
-                "self_identification": half.get("self_identification", np.nan),
-                "chance": half.get("chance", np.nan),
-                "p_identification": half.get("p_identification", np.nan),
-            })  # fmt: skip
+            rows.append(
+                {
+                    "emotion": emotion,
+                    "identity": identity,
+                    "space": space,
+                    "unit": SPACE_UNITS[space],
+                    "participants": comp.participants,
+                    "faces": comp.faces,
+                    "icc": comp.icc,
+                    "icc_low": lo,
+                    "icc_high": hi,
+                    "within_variance": comp.within,
+                    "between_variance": comp.between,
+                    "within_distance": float(dist["within"].mean()),
+                    "between_distance": float(dist["between"].mean()),
+                    "split_half_r": half.get("r_half", np.nan),
+                    "spearman_brown": half.get("spearman_brown", np.nan),
+                    "self_identification": half.get("self_identification", np.nan),
+                    "chance": half.get("chance", np.nan),
+                    "p_identification": half.get("p_identification", np.nan),
+                }
+            )
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
@@ -103,11 +127,25 @@ def reliability_section(
         )
         return
     report.paragraph(_method(opts, model))
-    shown = table[["emotion", "identity", "space", "participants", "icc", "icc_low", "icc_high",
-                   "within_distance", "between_distance", "spearman_brown",
-                   "self_identification", "chance"]]  # fmt: skip
-    report.table(shown, "reliability", "Test–retest reliability per emotion, identity and space",
-                 data=table)  # fmt: skip
+    shown = table[
+        [
+            "emotion",
+            "identity",
+            "space",
+            "participants",
+            "icc",
+            "icc_low",
+            "icc_high",
+            "within_distance",
+            "between_distance",
+            "spearman_brown",
+            "self_identification",
+            "chance",
+        ]
+    ]
+    report.table(
+        shown, "reliability", "Test–retest reliability per emotion, identity and space", data=table
+    )
     report.figure(
         _forest(table, report.figures / "reliability_icc.png"),
         "ICC (share of the faces' variance that is the person) with 95% jackknife intervals "
@@ -115,10 +153,13 @@ def reliability_section(
     )
     ed = table[table["space"] == "ed"]
     summary["reliability"] = {
-        f"{r.emotion} / {r.identity}": {"icc": r.icc, "ci": [r.icc_low, r.icc_high],
-                                        "participants": r.participants}
+        f"{r.emotion} / {r.identity}": {
+            "icc": r.icc,
+            "ci": [r.icc_low, r.icc_high],
+            "participants": r.participants,
+        }
         for r in ed.itertuples()
-    }  # fmt: skip
+    }
     report.paragraph(_floor_text(table))
 
 
@@ -169,9 +210,15 @@ def _forest(table: pd.DataFrame, path: Any) -> Any:
         t = table[table["space"] == space]
         y = np.array([cells.index(c) for c in t["emotion"] + " / " + t["identity"]])
         ax.errorbar(
-            t["icc"], y, xerr=[t["icc"] - t["icc_low"], t["icc_high"] - t["icc"]],
-            fmt="o", color=plots.colour(0), ms=3, capsize=2, lw=1,
-        )  # fmt: skip
+            t["icc"],
+            y,
+            xerr=[t["icc"] - t["icc_low"], t["icc_high"] - t["icc"]],
+            fmt="o",
+            color=plots.colour(0),
+            ms=3,
+            capsize=2,
+            lw=1,
+        )
         ax.axvline(0, color="0.6", lw=0.8, ls="--")
         ax.set_xlim(min(-0.1, float(t["icc_low"].min()) - 0.05), 1.0)
         ax.set_title(space, fontsize=8)

@@ -178,10 +178,18 @@ def _trial_plan(
                     goal[_gene(index, gene)] = np.clip(goal[_gene(index, gene)] + amount, 0, 1)
                 for rep in range(design.repetitions):
                     rows.append(
-                        {"_p": i, "participant_id": participant_name(i), "session_id": i + 1,
-                         "trial": trial, "block_name": f"make_{ident}", "emotion": emotion,
-                         "identity": ident, "repetition": rep, "duration_s": np.nan}
-                    )  # fmt: skip
+                        {
+                            "_p": i,
+                            "participant_id": participant_name(i),
+                            "session_id": i + 1,
+                            "trial": trial,
+                            "block_name": f"make_{ident}",
+                            "emotion": emotion,
+                            "identity": ident,
+                            "repetition": rep,
+                            "duration_s": np.nan,
+                        }
+                    )
                     targets.append(goal)
                     trial += 1
     return rows, rig.expand(np.array(targets), eye)
@@ -196,9 +204,13 @@ def _run_ga(
     p = design.participant
     first = {rig.shape_names[int(np.argmax(targets[0]))]: 1.0}
     cfg = SimulationConfig(
-        ga=design.ga, target=first, runs=1, selections=(max(1, p.n_selected),),
-        metric=MetricConfig(name="ed"), noise_temperature=p.select_noise,
-    )  # fmt: skip
+        ga=design.ga,
+        target=first,
+        runs=1,
+        selections=(max(1, p.n_selected),),
+        metric=MetricConfig(name="ed"),
+        noise_temperature=p.select_noise,
+    )
     problem = build_problem(cfg, rig, all_weights=True)
     seeds = np.array([_to_seed(c) for c in ss.spawn(len(targets))], dtype=np.int64)
     return simulate_elites(problem, np.arange(len(targets)), seeds, target=targets).final
@@ -227,8 +239,11 @@ def _categorise(
         rng = np.random.default_rng(streams[i])
         judge = SimulatedParticipant(
             prototypes={e: protos[labeller[i], k] for k, e in enumerate(design.emotions)},
-            design=design.participant, rig=rig, eye_motion=design.ga.eye_motion, rng=rng,
-        )  # fmt: skip
+            design=design.participant,
+            rig=rig,
+            eye_motion=design.ga.eye_motion,
+            rng=rng,
+        )
         own = np.flatnonzero(owner == i)
         other = _others(design, owner, emotion, i, rng)
         rand_g = _random_genes(design.random, len(gcols), rng)
@@ -238,25 +253,42 @@ def _categorise(
         answers = [judge.categorise(w, design.emotions, 7) for w in shown_w]
         idx = np.concatenate([own, other])
         k = len(idx)
-        part = pd.DataFrame({
-            "participant_id": participant_name(i), "session_id": i + 1,
-            "trial": np.arange(len(shown_w)),
-            "source": ["own"] * len(own) + ["other"] * len(other) + ["random"] * design.random,
-            "fallback": False,
-            "source_participant_id": [*faces["participant_id"].to_numpy()[idx], *[None] * design.random],
-            "source_trial": [*faces["trial"].to_numpy()[idx], *[None] * design.random],
-            "intended": [*emotion[idx], *[None] * design.random],
-            "identity": [*faces["identity"].to_numpy()[idx],
-                         *[design.identities[r % len(design.identities)] for r in range(design.random)]],
-            "label": [a[0] for a in answers],
-            "intensity": [a[1] for a in answers], "confidence": [a[2] for a in answers],
-        })  # fmt: skip
+        part = pd.DataFrame(
+            {
+                "participant_id": participant_name(i),
+                "session_id": i + 1,
+                "trial": np.arange(len(shown_w)),
+                "source": ["own"] * len(own) + ["other"] * len(other) + ["random"] * design.random,
+                "fallback": False,
+                "source_participant_id": [
+                    *faces["participant_id"].to_numpy()[idx],
+                    *[None] * design.random,
+                ],
+                "source_trial": [*faces["trial"].to_numpy()[idx], *[None] * design.random],
+                "intended": [*emotion[idx], *[None] * design.random],
+                "identity": [
+                    *faces["identity"].to_numpy()[idx],
+                    *[design.identities[r % len(design.identities)] for r in range(design.random)],
+                ],
+                "label": [a[0] for a in answers],
+                "intensity": [a[1] for a in answers],
+                "confidence": [a[2] for a in answers],
+            }
+        )
         hit = (part["label"] == part["intended"]).astype(object)
         hit.iloc[k:] = None  # random faces have no right answer
         part["correct"] = hit
         shown_g = np.vstack([genes[idx], rand_g])
-        parts.append(pd.concat([part, pd.DataFrame(shown_g, columns=list(gcols)),
-                                pd.DataFrame(shown_w, columns=list(wcols))], axis=1))  # fmt: skip
+        parts.append(
+            pd.concat(
+                [
+                    part,
+                    pd.DataFrame(shown_g, columns=list(gcols)),
+                    pd.DataFrame(shown_w, columns=list(wcols)),
+                ],
+                axis=1,
+            )
+        )
     return pd.concat(parts, ignore_index=True)
 
 

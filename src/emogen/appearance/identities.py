@@ -101,3 +101,9 @@ def resolve_identity(name: str, custom: dict[str, Identity] | None = None) -> Id
         return PRESETS[name]
     known = sorted({*PRESETS, *(custom or {})})
     raise ConfigError(f"unknown identity '{name}'; known identities: {', '.join(known)}")
+
+
+def identity_table(identity: Identity) -> dict[str, Any]:
+    """An identity as a flat table (``shape`` then the appearance keys), as in the TOML."""
+    shape = identity.shape if isinstance(identity.shape, str) else list(identity.shape)
+    return {"shape": shape, **identity.appearance.record()}

@@ -31,9 +31,13 @@ def read_weights_csv(path: Path, model: FaceModel) -> tuple[np.ndarray, pd.DataF
     from emogen.render.weights import LABEL_COLUMNS
 
     table = read_face_table(
-        path, model.rig, what="input CSV", others="error", unit_range=True,
+        path,
+        model.rig,
+        what="input CSV",
+        others="error",
+        unit_range=True,
         label_columns=LABEL_COLUMNS,
-    )  # fmt: skip
+    )
     return table.weights, table.frame
 
 

@@ -325,7 +325,6 @@ def sweep_command(
             all_weights=all_weights,
             model_name=model.name,
             model_hash=model.model_hash,
-            legacy_model_hash=model.legacy_model_hash,
         )
     finally:
         backend.close()

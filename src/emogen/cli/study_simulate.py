@@ -4,11 +4,14 @@ participants through the real study service and database (:mod:`emogen.study.sim
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from emogen.cli.options import JsonOpt, friendly_errors, show_result, stage_printer
+
+if TYPE_CHECKING:
+    from emogen.study.config import StudyConfig
 
 
 @friendly_errors
@@ -52,34 +55,27 @@ def simulate_study_command(
     """Simulated participants run the whole study (every block, categorisation included)
     through the real study service into a database of their own, marked 'simulated'; then
     `emogen study export` and `emogen analyse` work on it as on a real study."""
-    from emogen.errors import ConfigError
-    from emogen.study.config import load_study_config
     from emogen.study.simulate import SimulationPlan, simulate_study
     from emogen.tasks.simulated import SimulatedDesign
 
-    if not config.is_file():
-        raise ConfigError(f"study config {config} does not exist")
-    study = load_study_config(config)
-    if study.seed is None:  # simulated sessions must replay from the seed they were given
-        study = study.model_copy(update={"seed": seed})
-    url = database_url or f"sqlite:///{Path.cwd() / f'{study.name}-simulated.sqlite'}"
-    if study.database_url and url == study.database_url:
-        raise ConfigError(
-            f"--database-url is the study's own database ({url}): simulated participants go "
-            "into a database of their own"
-        )
+    study, url = _study_and_database(config, seed, database_url)
     plan = SimulationPlan(
-        config=study, database_url=url, seed=seed, participants=participants,
+        config=study,
+        database_url=url,
+        seed=seed,
+        participants=participants,
         design=SimulatedDesign(spread=spread, select_noise=select_noise, label_noise=label_noise),
-        shuffle_prototypes=shuffle_prototypes, model_path=model,
-    )  # fmt: skip
+        shuffle_prototypes=shuffle_prototypes,
+        model_path=model,
+    )
     show = stage_printer()
     if show is not None:
         show(f"simulating {participants} participants of study '{study.name}' into {url}")
     summary = simulate_study(
-        plan, workers=workers,
+        plan,
+        workers=workers,
         progress=None if show is None else lambda k, n: show(f"{k} of {n} participants done"),
-    )  # fmt: skip
+    )
     steps = ", ".join(f"{n} {kind}" for kind, n in sorted(summary.by_task.items()))
     show_result(
         as_json,
@@ -90,3 +86,25 @@ def simulate_study_command(
             f"next: emogen study export --database-url {url} --out OUT",
         ],
     )
+
+
+def _study_and_database(
+    config: Path, seed: int, database_url: str | None
+) -> tuple[StudyConfig, str]:
+    """The study config (seeded with ``seed`` when it names none: simulated sessions must
+    replay from the seed they were given) and the database URL the simulation writes to."""
+    from emogen.errors import ConfigError
+    from emogen.study.config import load_study_config
+
+    if not config.is_file():
+        raise ConfigError(f"study config {config} does not exist")
+    study = load_study_config(config)
+    if study.seed is None:
+        study = study.model_copy(update={"seed": seed})
+    url = database_url or f"sqlite:///{Path.cwd() / f'{study.name}-simulated.sqlite'}"
+    if study.database_url and url == study.database_url:
+        raise ConfigError(
+            f"--database-url is the study's own database ({url}): simulated participants go "
+            "into a database of their own"
+        )
+    return study, url

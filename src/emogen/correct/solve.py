@@ -85,7 +85,10 @@ class CollisionSolution:
 
 
 def _block_solve(a: np.ndarray, b: np.ndarray, reg: float, upper: np.ndarray) -> np.ndarray:
-    """Solver 1: argmin_{0 ≤ w ≤ upper} w₁‖a w − b‖² + reg ‖w‖² (reg = (1 − w₁) M)."""
+    """Solver 1: argmin_{0 ≤ w ≤ upper} w₁‖a w − b‖² + reg ‖w‖² (reg = (1 − w₁) M).
+
+    Kept for trials corrected with it: needed by
+    tests/study/test_recorded_before.py::test_recorded_study_replays_exactly."""
     from scipy.optimize import lsq_linear
 
     n = a.shape[1]
@@ -354,9 +357,15 @@ def _solve_compiled(
                         for d in range(3):
                             current[i, v, d] += w * deltas_local[k, v, d]
         within, ids, values = detect_faces(
-            current, lower, lower_vertices, anchor_corners, anchor_bary, anchor_kind, cell,
+            current,
+            lower,
+            lower_vertices,
+            anchor_corners,
+            anchor_bary,
+            anchor_kind,
+            cell,
             tolerance,
-        )  # fmt: skip
+        )
         colliding = np.zeros(n_act, dtype=np.bool_)
         for i in range(n_act):
             if it == 0:
@@ -381,9 +390,24 @@ def _solve_compiled(
         if it == max_iterations or not colliding.any():
             break
         _round_compiled(
-            face, kind, anchor, partner, bary, depth, anchor_corners, anchor_bary, lower,
-            deltas_local, active, colliding, weights, iterations, it, w1, alternations,
-        )  # fmt: skip
+            face,
+            kind,
+            anchor,
+            partner,
+            bary,
+            depth,
+            anchor_corners,
+            anchor_bary,
+            lower,
+            deltas_local,
+            active,
+            colliding,
+            weights,
+            iterations,
+            it,
+            w1,
+            alternations,
+        )
         active = active[colliding]
     return weights, within_before, within_after, depth_after, iterations
 
@@ -454,14 +478,25 @@ def solve_collisions(
         solved = _solve_compiled(
             np.ascontiguousarray(base_local, dtype=np.float64),
             np.ascontiguousarray(deltas_local, dtype=np.float64),
-            layout.lower, layout.lower_vertices, *layout.anchor_table, layout.cell,
-            CONTACT_TOLERANCE, margin, max_iterations, W1, ALTERNATIONS,
-        )  # fmt: skip
+            layout.lower,
+            layout.lower_vertices,
+            *layout.anchor_table,
+            layout.cell,
+            CONTACT_TOLERANCE,
+            margin,
+            max_iterations,
+            W1,
+            ALTERNATIONS,
+        )
         return CollisionSolution(*solved)
     return _solve_stepwise(
-        base_local, deltas_local, layout, max_iterations=max_iterations, margin=margin,
+        base_local,
+        deltas_local,
+        layout,
+        max_iterations=max_iterations,
+        margin=margin,
         solver=solver,
-    )  # fmt: skip
+    )
 
 
 def _solve_stepwise(
@@ -506,10 +541,23 @@ def _solve_stepwise(
             break
         if solver == 2:
             _round_compiled(
-                c.face, c.kind, c.anchor + len(layout.anchors[LIP]) * c.kind, c.partner,
-                c.partner_bary, c.depth, *layout.anchor_table[:2], layout.lower,
-                deltas_local, active, colliding, weights, iterations, it, W1, ALTERNATIONS,
-            )  # fmt: skip
+                c.face,
+                c.kind,
+                c.anchor + len(layout.anchors[LIP]) * c.kind,
+                c.partner,
+                c.partner_bary,
+                c.depth,
+                *layout.anchor_table[:2],
+                layout.lower,
+                deltas_local,
+                active,
+                colliding,
+                weights,
+                iterations,
+                it,
+                W1,
+                ALTERNATIONS,
+            )
             active = active[colliding]
             continue
         jac = depth_jacobian(c, layout, deltas_local)

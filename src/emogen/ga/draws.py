@@ -1,7 +1,7 @@
 """Where the GA's random numbers come from: one generator per run and generation, two streams.
 
-Generation g of trial t of a run with seed ``seed`` draws from its own generator,
-:func:`emogen.rng.generation_rng` (seed, t, g) (a ``SeedSequence`` child keyed (t, g)), so any
+Generation g of attempt a of a run with seed ``seed`` draws from its own generator,
+:func:`emogen.rng.generation_rng` (seed, a, g) (a ``SeedSequence`` child keyed (a, g)), so any
 generation replays from the seed alone. :mod:`emogen.ga.algorithm` asks a :class:`Draws` for
 its numbers in a fixed order (slot by slot: slot 3's partner; for each crossover slot the
 pair, the crossover mask, the mutation's gene indices and values; then the random faces' gene
@@ -120,7 +120,10 @@ class BlockDraws:
 
 
 class LegacyDraws:
-    """Stream 1: the generators' own methods, run by run, as EmoGen drew before stream 2."""
+    """Stream 1: the generators' own methods, run by run, as EmoGen drew before stream 2.
+
+    Needed by tests/ga/test_streams.py::test_stream_1_reproduces_offspring_recorded_before_the_redesign
+    and tests/study/test_recorded_before.py::test_recorded_study_replays_exactly."""
 
     def __init__(self, rngs: Sequence[np.random.Generator]) -> None:
         self._rngs = list(rngs)
@@ -145,17 +148,17 @@ class LegacyDraws:
 
 def generation_draws(
     seeds: Sequence[int] | np.ndarray,
-    trial: int,
+    attempt: int,
     generation: int,
     *,
     stream: int,
     block: int,
 ) -> Draws:
-    """The draws of generation ``generation`` of trial ``trial`` for runs with these seeds.
+    """The draws of generation ``generation`` of attempt ``attempt`` for runs with these seeds.
 
     ``block``: :func:`block_size` of the population (stream 2's block length).
     """
-    rngs = generation_rngs(seeds, trial, generation)
+    rngs = generation_rngs(seeds, attempt, generation)
     if check_stream(stream) == 1:
         return LegacyDraws(rngs)
     return BlockDraws(rngs, block)

@@ -1,15 +1,15 @@
 """The GA engine: ``ask()`` the population to show, ``tell(elite, others)`` the selection.
 
 A participant (web) and a simulated observer drive it through the same two calls. The engine
-records its integer seed and every selection; generation g of trial t draws from
-:func:`emogen.rng.generation_rng` (seed, t, g), so a run replays exactly from its seed and its
-selections (:meth:`Engine.replay`), and its state survives a JSON round trip
-(:meth:`Engine.to_json` / :meth:`Engine.from_json`) byte for byte.
+records its integer seed and every selection; generation g of attempt a (a restart within a
+trial starts the next attempt) draws from :func:`emogen.rng.generation_rng` (seed, a, g), so a
+run replays exactly from its seed and its selections (:meth:`Engine.replay`), and its state
+survives a JSON round trip (:meth:`Engine.to_json` / :meth:`Engine.from_json`) byte for byte.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -20,11 +20,18 @@ import orjson
 from emogen.config import GAConfig
 from emogen.errors import ConfigError, SelectionError
 from emogen.ga.algorithm import Offspring, classical_next_generation, next_generation
+from emogen.ga.corrector import Corrector, correctives_of
 from emogen.ga.draws import CURRENT_STREAM, block_size, check_stream, generation_draws
 from emogen.ga.init import first_generation, read_fixed_sets
 from emogen.ga.operators import select
 from emogen.ga.population import Population, readonly
-from emogen.ga.state import STATE_SCHEMA, read_state_header, state_data, stream_of_state
+from emogen.ga.state import (
+    STATE_SCHEMA,
+    read_state_header,
+    selection_attempt,
+    state_data,
+    stream_of_state,
+)
 from emogen.model.rig import Rig
 from emogen.rng import check_seed, generation_rng
 
@@ -36,34 +43,6 @@ __all__ = [
     "correctives_of",
     "stream_of_state",
 ]
-
-
-#: Corrects a batch of full weight vectors before they are shown: returns
-#: (corrective names, (n_faces, C) corrective weights). ``correctives_of(model)`` makes one.
-Corrector = Callable[[np.ndarray], tuple[tuple[str, ...], np.ndarray]]
-
-
-class ModelCorrector:
-    """A corrector from a face model: :func:`emogen.correct.correct_faces` (combinational +
-    collision correctives) with eq. 5 block solver ``solver`` (recorded in the engine's state
-    as ``collision_solver``, so that a recorded trial is corrected again as it was)."""
-
-    def __init__(self, model: Any, solver: int | None = None) -> None:
-        from emogen.solvers import CURRENT_SOLVER, check_solver
-
-        self.model = model
-        self.solver = check_solver(CURRENT_SOLVER if solver is None else solver)
-
-    def __call__(self, weights: np.ndarray) -> tuple[tuple[str, ...], np.ndarray]:
-        from emogen.correct.faces import correct_faces
-
-        result = correct_faces(self.model, weights, solver=self.solver)
-        return tuple(result.corrective_names), np.asarray(result.correctives, dtype=np.float64)
-
-
-def correctives_of(model: Any, solver: int | None = None) -> Corrector:
-    """A :class:`ModelCorrector` of ``model`` (``solver``: default the current one)."""
-    return ModelCorrector(model, solver)
 
 
 class Engine:
@@ -78,7 +57,8 @@ class Engine:
     ``Engine(config, rig, seed)`` makes generation 0 at once. Generations are numbered
     g = 0 … G (``config.generations``); a selection is told in every one of them, and the elite
     of generation G is the :attr:`result` (G = 10 shows 11 populations). :meth:`reset` starts a
-    new trial (re-initialised or with the same initial set, as configured).
+    new attempt (re-initialised or with the same initial set, as configured); :attr:`attempt`
+    counts them from 0.
     """
 
     def __init__(
@@ -128,7 +108,7 @@ class Engine:
                     f"init.fixed_option must be in [1, {len(self._fixed_sets)}] (sets in the "
                     f"file); got {config.init.fixed_option}"
                 )
-        self.trial = 0
+        self.attempt = 0
         self.generation = 0
         self._next_id = 0
         self._selections: list[dict[str, Any]] = []
@@ -158,7 +138,7 @@ class Engine:
 
     @property
     def selections(self) -> list[dict[str, Any]]:
-        """Every selection told so far: {trial, generation, elite, others} (face ids)."""
+        """Every selection told so far: {attempt, generation, elite, others} (face ids)."""
         return [dict(s, others=list(s["others"])) for s in self._selections]
 
     def ask(self) -> Population:
@@ -197,7 +177,7 @@ class Engine:
         )
         self._selections.append(
             {
-                "trial": self.trial,
+                "attempt": self.attempt,
                 "generation": self.generation,
                 "elite": int(pop.ids[e]),
                 "others": [int(pop.ids[i]) for i in o],
@@ -210,7 +190,7 @@ class Engine:
         g = self.generation
         draws = generation_draws(
             [self.seed],
-            self.trial,
+            self.attempt,
             g + 1,
             stream=self.stream,
             block=block_size(len(pop), pop.genes.shape[1], cfg.mutation_genes, cfg.random_genes),
@@ -232,8 +212,8 @@ class Engine:
         self._show(self._make_population(off.genes[0], parent_ids, off.operators))
 
     def reset(self) -> Population:
-        """Start a new trial at generation 0 (``init.on_reset``: reinitialise or keep)."""
-        self.trial += 1
+        """Start a new attempt at generation 0 (``init.on_reset``: reinitialise or keep)."""
+        self.attempt += 1
         self.generation = 0
         self._result = None
         self._show(self._initialise())
@@ -244,7 +224,7 @@ class Engine:
         if self.config.init.on_reset == "keep" and self._initial is not None:
             genes, labels = self._initial
         else:
-            rng = generation_rng(self.seed, self.trial, 0)
+            rng = generation_rng(self.seed, self.attempt, 0)
             genes, labels, option = first_generation(
                 self.config, self.rig, self._fixed_sets, rng=rng
             )
@@ -268,7 +248,7 @@ class Engine:
             parent_ids=readonly(np.asarray(parent_ids, dtype=np.int64)),
             operators=readonly(np.asarray(operators, dtype=str)),
             generation=self.generation,
-            trial=self.trial,
+            attempt=self.attempt,
         )
 
     def _corrected(self, population: Population) -> Population:
@@ -296,7 +276,7 @@ class Engine:
             "config": self.config.model_dump(mode="json"),
             "rig": {"name": self.rig.name, "genes": list(self.gene_names)},
             "seed": self.seed,
-            "trial": self.trial,
+            "attempt": self.attempt,
             "generation": self.generation,
             "next_id": self._next_id,
             "fixed_options": list(self.fixed_options),
@@ -333,7 +313,7 @@ class Engine:
                 f"engine state was saved with rig '{data['rig']['name']}' genes "
                 f"{data['rig']['genes']}; this rig '{rig.name}' has {list(self.gene_names)}"
             )
-        self.trial = int(data["trial"])
+        self.attempt = int(data["attempt"])
         self.generation = int(data["generation"])
         self._next_id = int(data["next_id"])
         self.fixed_options = [int(o) for o in data["fixed_options"]]
@@ -356,7 +336,7 @@ class Engine:
             parent_ids=readonly(np.array(d["parent_ids"], dtype=np.int64).reshape(-1, 2)),
             operators=readonly(np.array(d["operators"], dtype=str)),
             generation=int(d["generation"]),
-            trial=int(d["trial"]),
+            attempt=int(d["attempt"]),
         )
 
     def save(self, path: Path) -> None:
@@ -370,31 +350,34 @@ class Engine:
         seed: int,
         selections: Iterable[dict[str, Any]],
         *,
-        trial: int | None = None,
+        attempt: int | None = None,
         corrector: Corrector | None = None,
         stream: int = CURRENT_STREAM,
     ) -> Engine:
-        """A fresh engine driven through recorded selections ({trial, generation, elite, others}).
+        """A fresh engine driven through recorded selections ({attempt, generation, elite,
+        others}).
 
-        ``trial``: the trial to end in, for a reset after the last recorded selection
-        (default: the last recorded selection's trial). ``stream``: the stream the run was
+        ``attempt``: the attempt to end in, for a restart after the last recorded selection
+        (default: the last recorded selection's attempt). ``stream``: the stream the run was
         recorded with (:func:`stream_of_state` reads it off a stored state).
         """
         engine = cls(config, rig, seed, corrector=corrector, stream=stream)
         for s in selections:
-            while engine.trial < int(s["trial"]):
+            at = selection_attempt(s)
+            while engine.attempt < at:
                 engine.reset()
-            if int(s["generation"]) != engine.generation or int(s["trial"]) != engine.trial:
+            if int(s["generation"]) != engine.generation or at != engine.attempt:
                 raise SelectionError(
-                    f"recorded selection for generation {s['generation']} of trial {s['trial']} "
-                    f"does not follow generation {engine.generation} of trial {engine.trial}"
+                    f"recorded selection for generation {s['generation']} of attempt {at} "
+                    f"does not follow generation {engine.generation} of attempt {engine.attempt}"
                 )
             engine.tell(int(s["elite"]), s["others"])
-        if trial is not None:
-            if trial < engine.trial:
+        if attempt is not None:
+            if attempt < engine.attempt:
                 raise SelectionError(
-                    f"trial must be at least the last recorded one ({engine.trial}); got {trial}"
+                    f"attempt must be at least the last recorded one ({engine.attempt}); "
+                    f"got {attempt}"
                 )
-            while engine.trial < trial:
+            while engine.attempt < attempt:
                 engine.reset()
         return engine

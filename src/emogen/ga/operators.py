@@ -20,13 +20,6 @@ from emogen.errors import SelectionError, ShapeError
 from emogen.ga.draws import Draws
 
 
-def check_genes(genes: np.ndarray, name: str = "genes") -> np.ndarray:
-    genes = np.asarray(genes, dtype=np.float64)
-    if genes.ndim != 2:
-        raise ShapeError(f"{name} must have shape (n_faces, n_genes); got {genes.shape}")
-    return genes
-
-
 # ---- S: selection ------------------------------------------------------------------------
 def select(
     ids: np.ndarray,

@@ -37,7 +37,7 @@ class Population:
     parent_ids: np.ndarray
     operators: np.ndarray
     generation: int
-    trial: int
+    attempt: int
     correctives: np.ndarray | None = None
     corrective_names: tuple[str, ...] = ()
 
@@ -54,7 +54,7 @@ class Population:
             readonly(self.parent_ids[s]),
             readonly(self.operators[s]),
             self.generation,
-            self.trial,
+            self.attempt,
             None if self.correctives is None else readonly(self.correctives[s]),
             self.corrective_names,
         )
@@ -62,7 +62,7 @@ class Population:
     def to_dict(self) -> dict[str, Any]:
         return {
             "generation": self.generation,
-            "trial": self.trial,
+            "attempt": self.attempt,
             "ids": self.ids.tolist(),
             "parent_ids": self.parent_ids.tolist(),
             "operators": self.operators.tolist(),

@@ -63,13 +63,15 @@ class FaceModel:
     source: str = ""
     #: (68,) int32 landmark vertex ids (ICT's ``vertex_indices.json``), empty when unknown
     landmarks: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int32))
-    #: the version-1 hash (geometry only) that records made before version 2 carry
+    #: the version-1 hash (geometry only) that studies recorded before version 2 carry; read
+    #: by :func:`emogen.study.context.accepted_hashes` only (needed by
+    #: tests/study/test_recorded_before.py::test_recorded_study_replays_exactly)
     legacy_model_hash: str = ""
 
     def hash_matches(self, recorded: str) -> bool:
-        """Whether a record's model hash is this model's: the current (version 2) hash, or
-        the version-1 hash older records carry (see :mod:`emogen.model.model_hash`)."""
-        return bool(recorded) and recorded in (self.model_hash, self.legacy_model_hash)
+        """Whether a record's model hash is this model's (version 2, see
+        :mod:`emogen.model.model_hash`)."""
+        return bool(recorded) and recorded == self.model_hash
 
     # ---- sizes --------------------------------------------------------------------------
     @property

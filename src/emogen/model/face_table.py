@@ -221,9 +221,12 @@ def face_weights(
         w[np.ix_(np.flatnonzero(~empty), np.asarray(targets, dtype=np.intp))] = v[~empty, None]
         values[:, j] = v
     return FaceTable(
-        w, frame, tuple(_shape_name(str(c).strip(), shapes) for c in used), values,
+        w,
+        frame,
+        tuple(_shape_name(str(c).strip(), shapes) for c in used),
+        values,
         _labels(frame, label_cols),
-    )  # fmt: skip
+    )
 
 
 def _shape_name(name: str, shapes: dict[str, int]) -> str:
@@ -244,11 +247,36 @@ def _cell_text(cell: object) -> str:
 #: Columns EmoGen itself writes beside weights (simulation faces, study exports): never taken
 #: for a misspelt shape name.
 BOOKKEEPING = frozenset(
-    {"run", "generation", "slot", "operator", "distance", "error", "rank", "run_seed", "seed",
-     "study", "session_id", "participant_id", "trial", "attempt", "face_id", "role", "emotion",
-     "identity", "label", "name", "group", "participant", "sample", "n_trials", "block_name",
-     "repetition", "source"}
-)  # fmt: skip
+    {
+        "run",
+        "generation",
+        "slot",
+        "operator",
+        "distance",
+        "error",
+        "rank",
+        "run_seed",
+        "seed",
+        "study",
+        "session_id",
+        "participant_id",
+        "trial",
+        "attempt",
+        "face_id",
+        "role",
+        "emotion",
+        "identity",
+        "label",
+        "name",
+        "group",
+        "participant",
+        "sample",
+        "n_trials",
+        "block_name",
+        "repetition",
+        "source",
+    }
+)
 
 
 def derived_column(name: str) -> bool:

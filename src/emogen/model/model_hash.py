@@ -10,8 +10,8 @@ generator's version.
 
 Version 1 (:func:`emogen.model.io.ict.model_content_hash`) covered the geometry only: a neutral
 mesh cut inside its face lines kept its hash. Records made before version 2 carry a version-1
-hash; :meth:`emogen.model.face.FaceModel.hash_matches` accepts it as an alias of the same
-model, so old studies, sweeps and recordings still load and replay.
+hash; :func:`emogen.study.context.accepted_hashes` accepts it as an alias of the same model,
+so studies recorded then still replay (tests/data/study_stream1.sqlite).
 """
 
 from __future__ import annotations

@@ -170,9 +170,6 @@ class Look:
             total = total + np.asarray(sh[rgb]) * max((cos + wrap) / (1 + wrap), 0.0)
         return float(total[1])
 
-    def part_code(self, name: str) -> int:
-        return [p.name for p in self.parts].index(name)
-
     def glsl_defines(self) -> str:
         """``#define`` lines for ``shade.glsl`` (the viewer's ``glslDefines`` writes the same)."""
         return "".join(f"#define {k} {_glsl_value(v)}\n" for k, v in self.shader.items())

@@ -205,12 +205,12 @@ def cell_hash(cell: Cell, *, model_hash: str, all_weights: bool) -> str:
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
 
-def _done(folder: Path, *digests: str) -> bool:
+def _done(folder: Path, digest: str) -> bool:
     meta = folder / "simulation.json"
     if not (meta.is_file() and (folder / "simulation.parquet").is_file()):
         return False
     try:
-        return json.loads(meta.read_text()).get("config_hash") in digests
+        return json.loads(meta.read_text()).get("config_hash") == digest
     except (OSError, json.JSONDecodeError):
         return False
 
@@ -223,17 +223,13 @@ class SweepResult:
 
 
 def _pending(
-    sweep: Sweep, cells_dir: Path, model_hash: str, legacy_model_hash: str, all_weights: bool
+    sweep: Sweep, cells_dir: Path, model_hash: str, all_weights: bool
 ) -> tuple[dict[str, str], list[Cell]]:
-    """Each cell's hash, and the cells not yet done (under this hash or the legacy one)."""
+    """Each cell's hash, and the cells not yet done under it."""
     hashes = {
         c.name: cell_hash(c, model_hash=model_hash, all_weights=all_weights) for c in sweep.cells
     }
-    old = {
-        c.name: cell_hash(c, model_hash=legacy_model_hash or model_hash, all_weights=all_weights)
-        for c in sweep.cells
-    }
-    pending = [c for c in sweep.cells if not _done(cells_dir / c.name, hashes[c.name], old[c.name])]
+    pending = [c for c in sweep.cells if not _done(cells_dir / c.name, hashes[c.name])]
     return hashes, pending
 
 
@@ -247,17 +243,13 @@ def run_sweep(
     all_weights: bool = False,
     model_name: str = "",
     model_hash: str = "",
-    legacy_model_hash: str = "",
 ) -> SweepResult:
-    """Run every cell not already in ``out`` (same hash), writing each as it finishes.
-
-    legacy_model_hash : the model's version-1 hash, so cells written before the model hash
-    covered everything (:mod:`emogen.model.model_hash`) still count as done."""
+    """Run every cell not already in ``out`` (same hash), writing each as it finishes."""
     out = Path(out)
     cells_dir = out / "cells"
     cells_dir.mkdir(parents=True, exist_ok=True)
     backend = backend or LocalBackend()
-    hashes, pending = _pending(sweep, cells_dir, model_hash, legacy_model_hash, all_weights)
+    hashes, pending = _pending(sweep, cells_dir, model_hash, all_weights)
     skipped = [c.name for c in sweep.cells if c not in pending]
     tasks, owner, problems = [], [], {}
     for c in pending:

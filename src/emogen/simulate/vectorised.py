@@ -6,8 +6,7 @@ lets the observer choose (vectorised; per-run Gumbel draws for choice noise) and
 next generation with :func:`~emogen.ga.algorithm.next_generation` — the same function, over
 the same run axis, that the engine calls with one run. Run r draws from the generators the
 engine would use for its seed — :func:`~emogen.ga.draws.generation_draws` (seed, 0, g) for
-the GA, :func:`~emogen.rng.observer_rng` for the choice noise, all seeded together
-(:mod:`emogen.seeding`, the same generators) — so its numbers equal those
+the GA, :func:`~emogen.rng.observer_rng` for the choice noise — so its numbers equal those
 of :func:`engine_run`, which drives the :class:`~emogen.ga.engine.Engine` one run at a time
 through ``ask()``/``tell()`` like a participant. Results depend on each run's seed only, never
 on how runs are grouped into chunks or spread over workers.

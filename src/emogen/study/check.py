@@ -139,8 +139,9 @@ class CheckReport:
         out += [self.length.explained(), *self.notes]
         n_err, n_warn = len(self.errors), len(self.warnings)
         verdict = "not ready: fix the errors above" if n_err else "ready"
-        out.append(f"{n_err} error{'s' * (n_err != 1)}, {n_warn} warning{'s' * (n_warn != 1)}: "
-                   f"{verdict}")  # fmt: skip
+        out.append(
+            f"{n_err} error{'s' * (n_err != 1)}, {n_warn} warning{'s' * (n_warn != 1)}: {verdict}"
+        )
         return out
 
 
@@ -205,8 +206,16 @@ def check_placeholders(config: StudyConfig) -> list[Finding]:
         )
         for name in dict.fromkeys(_BRACED.findall(text)):
             if name not in known:
-                out.append(Finding("error", key, (f"{{{name}}} is not filled in: {shown}; "
-                                                  f"{_fills(known)}{_suggest(name, known)}")))  # fmt: skip
+                out.append(
+                    Finding(
+                        "error",
+                        key,
+                        (
+                            f"{{{name}}} is not filled in: {shown}; "
+                            f"{_fills(known)}{_suggest(name, known)}"
+                        ),
+                    )
+                )
     return out
 
 
@@ -226,16 +235,30 @@ def check_emotions(config: StudyConfig) -> list[Finding]:
             continue
         close = difflib.get_close_matches(word.lower(), sorted(KNOWN_EMOTIONS), n=1, cutoff=0.75)
         hint = f"did you mean '{close[0]}'? " if close else ""
-        out.append(Finding("error", "emotions", (
-            f"'{word}' is not an emotion word this check knows (participants would read "
-            f"{word.upper()}): {hint}if the study means it, add it to "
-            f'custom_emotions = ["{word}"]')))  # fmt: skip
+        out.append(
+            Finding(
+                "error",
+                "emotions",
+                (
+                    f"'{word}' is not an emotion word this check knows (participants would read "
+                    f"{word.upper()}): {hint}if the study means it, add it to "
+                    f'custom_emotions = ["{word}"]'
+                ),
+            )
+        )
     words = {w.lower() for w in study_emotions(config)}
     for word in config.custom_emotions:
         if word.lower() not in words:
-            out.append(Finding("warning", "custom_emotions", (
-                f"'{word}' is not among the study's emotions; custom_emotions only marks "
-                "emotion words the study uses")))  # fmt: skip
+            out.append(
+                Finding(
+                    "warning",
+                    "custom_emotions",
+                    (
+                        f"'{word}' is not among the study's emotions; custom_emotions only marks "
+                        "emotion words the study uses"
+                    ),
+                )
+            )
     return out
 
 
@@ -267,12 +290,17 @@ def check_identity_names(config: StudyConfig) -> list[Finding]:
     known = sorted({*PRESETS, *config.identity})
     level: Literal["error", "warning"] = "error" if config.rig is None else "warning"
     return [
-        Finding(level, "identities", (
-            f"'{name}' is neither a preset ({', '.join(PRESETS)}) nor one of the study's own "
-            f"[identity.NAME] tables{_suggest(name, known, QUOTED)}"))
+        Finding(
+            level,
+            "identities",
+            (
+                f"'{name}' is neither a preset ({', '.join(PRESETS)}) nor one of the study's own "
+                f"[identity.NAME] tables{_suggest(name, known, QUOTED)}"
+            ),
+        )
         for name in config.all_identities()
         if name not in known
-    ]  # fmt: skip
+    ]
 
 
 def never_matched(sources: Mapping[str, int], param: str, seen: Iterable[str] = ()) -> str | None:

@@ -37,7 +37,7 @@ from pydantic import (
     model_validator,
 )
 
-from emogen.appearance.identities import PRESETS, Identity, identity_from_dict
+from emogen.appearance.identities import PRESETS, Identity, identity_from_dict, identity_table
 from emogen.config import GAConfig, _Strict, read_toml, validate_config
 from emogen.errors import ConfigError
 from emogen.study.framing import check_framing
@@ -317,8 +317,12 @@ class StudyConfig(_Strict):
             del data["collect_user_agent"]
         if not data["blocks"]:  # nor studies of one evolve block (written before blocks)
             del data["blocks"]
-        for key, default in (("custom_emotions", []), ("participant_required", False),
-                             ("counterbalance", "hash"), ("framing", "face")):  # fmt: skip
+        for key, default in (
+            ("custom_emotions", []),
+            ("participant_required", False),
+            ("counterbalance", "hash"),
+            ("framing", "face"),
+        ):
             if data[key] == default:  # studies without them keep their hash
                 del data[key]
         del data["embed_origins"]  # where it may be embedded is no part of what people do
@@ -354,9 +358,3 @@ def load_study_config(path: Path) -> StudyConfig:
 def demo_study_path() -> Path:
     """The packaged demo study (``emogen/data/demo_study.toml``)."""
     return Path(__file__).resolve().parents[1] / "data" / "demo_study.toml"
-
-
-def identity_table(identity: Identity) -> dict[str, Any]:
-    """An identity as a flat table (``shape`` then the appearance keys), as in the TOML."""
-    shape = identity.shape if isinstance(identity.shape, str) else list(identity.shape)
-    return {"shape": shape, **identity.appearance.record()}

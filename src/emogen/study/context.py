@@ -48,7 +48,8 @@ class StudyContext:
 
 def accepted_hashes(model_hash: str, model: FaceModel | None) -> frozenset[str]:
     """The recorded model hashes that mean this model: its hash and, for the loaded model, the
-    version-1 hash of records made before version 2 (:mod:`emogen.model.model_hash`)."""
+    version-1 hash of studies recorded before version 2 (:mod:`emogen.model.model_hash`;
+    needed by tests/study/test_recorded_before.py::test_recorded_study_replays_exactly)."""
     if model is not None and model.model_hash == model_hash and model.legacy_model_hash:
         return frozenset({model_hash, model.legacy_model_hash})
     return frozenset({model_hash})

@@ -76,9 +76,13 @@ def key_hash(create_key: str | None) -> str | None:
 
 
 def _new_session(
-    db: Session, ctx: StudyContext, participant_id: str, source: str, user_agent: str,
+    db: Session,
+    ctx: StudyContext,
+    participant_id: str,
+    source: str,
+    user_agent: str,
     create_key: str | None,
-) -> SessionRow:  # fmt: skip
+) -> SessionRow:
     cfg = ctx.config
     number = count_sessions(db, ctx.accepted)
     seed = participant_seed(cfg.seed, participant_id)
@@ -142,9 +146,13 @@ def _theirs(sess: SessionRow, resume_token: str | None, create_key: str | None) 
 
 
 def _existing(
-    db: Session, ctx: StudyContext, pid: str, source: str, resume_token: str | None,
+    db: Session,
+    ctx: StudyContext,
+    pid: str,
+    source: str,
+    resume_token: str | None,
     create_key: str | None,
-) -> SessionRow | None:  # fmt: skip
+) -> SessionRow | None:
     """The session this request is a retry or a resumption of (None: make one); a conflict
     when the participant has a session the request does not hold."""
     if source == "generated" and create_key is not None:  # an anonymous create, retried

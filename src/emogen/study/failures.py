@@ -26,9 +26,13 @@ class SharedBuckets:
     the web layer's in-process buckets)."""
 
     def __init__(
-        self, store: Store, *, burst: int, per_minute: float,
+        self,
+        store: Store,
+        *,
+        burst: int,
+        per_minute: float,
         clock: Callable[[], float] = time.time,
-    ) -> None:  # fmt: skip
+    ) -> None:
         self.store = store
         self.burst = burst
         self.per_minute = per_minute

@@ -75,8 +75,9 @@ def progress_as_shown(store: Store, study_id: int | None = None) -> list[dict[st
     ]
 
 
-def participant_token(store: Store, participant_id: str, *, study_id: int | None = None,
-                      study: str | None = None) -> str:  # fmt: skip
+def participant_token(
+    store: Store, participant_id: str, *, study_id: int | None = None, study: str | None = None
+) -> str:
     """The token of the participant's session (in the study of this id or name).
 
     A participant with sessions in several studies needs ``study``; in several versions of one

@@ -114,8 +114,12 @@ def replay_exported(
         mine = {name: _of_study(df, str(study["study"])) for name, df in t.items()}
         faces = _populations(mine["faces"], genes, weights)
         sels = _selections(mine["selections"])
-        restarts = {_key(r) for r in mine["restarts"][
-            ["session_id", "trial", "attempt", "generation"]].itertuples(index=False)}  # fmt: skip
+        restarts = {
+            _key(r)
+            for r in mine["restarts"][["session_id", "trial", "attempt", "generation"]].itertuples(
+                index=False
+            )
+        }
         correctors = StudyCorrectors(config, model)
         trials = mine["trials"].sort_values(["session_id", "trial"])
         for sid in sorted(int(s) for s in mine["sessions"]["session_id"]):
@@ -132,9 +136,16 @@ def replay_exported(
     return reports
 
 
-def _replay_trial(report: ReplayReport, config: StudyConfig, rig: Rig,
-                  correctors: StudyCorrectors, trial: dict[str, Any], faces: dict[Key, Any],
-                  sels: dict[Key, tuple[int, list[int]]], restarts: set[Any]) -> None:  # fmt: skip
+def _replay_trial(
+    report: ReplayReport,
+    config: StudyConfig,
+    rig: Rig,
+    correctors: StudyCorrectors,
+    trial: dict[str, Any],
+    faces: dict[Key, Any],
+    sels: dict[Key, tuple[int, list[int]]],
+    restarts: set[Any],
+) -> None:
     sid, pos = int(trial["session_id"]), int(trial["trial"])
     keys = sorted(k for k in faces if k[:2] == (sid, pos))
     if not keys:
@@ -142,16 +153,20 @@ def _replay_trial(report: ReplayReport, config: StudyConfig, rig: Rig,
     stream = trial.get("ga_stream")
     solver = trial.get("collision_solver")  # NA or absent (before schema /4): solver 1
     try:
-        engine = Engine(config.ga_for(str(trial["identity"])), rig, int(trial["seed"]),
-                        corrector=correctors(str(trial["identity"]),
-                                             1 if solver is None or pd.isna(solver)
-                                             else int(solver)),
-                        **({} if pd.isna(stream) else {"stream": int(stream)}))  # fmt: skip
+        engine = Engine(
+            config.ga_for(str(trial["identity"])),
+            rig,
+            int(trial["seed"]),
+            corrector=correctors(
+                str(trial["identity"]), 1 if solver is None or pd.isna(solver) else int(solver)
+            ),
+            **({} if pd.isna(stream) else {"stream": int(stream)}),
+        )
         for key in keys:
             where = f"session {sid} trial {pos + 1} attempt {key[2] + 1} generation {key[3]}"
-            if (engine.trial, engine.generation) != key[2:]:
+            if (engine.attempt, engine.generation) != key[2:]:
                 report.mismatches.append(
-                    f"{where}: replay is at attempt {engine.trial + 1} generation "
+                    f"{where}: replay is at attempt {engine.attempt + 1} generation "
                     f"{engine.generation}"
                 )
                 return

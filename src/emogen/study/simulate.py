@@ -129,8 +129,14 @@ def _service(plan: SimulationPlan, model: FaceModel | None) -> tuple[StudyServic
     if model is None:
         model = load_model(plan.model_path or plan.config.model, rig=plan.config.rig)
     store = Store(plan.database_url)
-    service = StudyService(plan.config, store, model.rig, model_name=model.name,
-                           model_hash=model.model_hash, model=model)  # fmt: skip
+    service = StudyService(
+        plan.config,
+        store,
+        model.rig,
+        model_name=model.name,
+        model_hash=model.model_hash,
+        model=model,
+    )
     return service, store
 
 
@@ -199,7 +205,11 @@ def simulate_study(
     finally:
         store.dispose()
     return SimulationSummary(
-        participants=plan.participants, database=store.describe(), seed=plan.seed,
-        seconds=round(time.perf_counter() - started, 2), shuffled=plan.shuffle_prototypes,
-        steps=sum(total.values()), by_task=total,
-    )  # fmt: skip
+        participants=plan.participants,
+        database=store.describe(),
+        seed=plan.seed,
+        seconds=round(time.perf_counter() - started, 2),
+        shuffled=plan.shuffle_prototypes,
+        steps=sum(total.values()),
+        by_task=total,
+    )

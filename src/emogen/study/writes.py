@@ -24,9 +24,14 @@ def record_step(ex: Session, session_id: int, kind: str, key: str, digest: str) 
     now = utcnow()
     ex.execute(
         _INSERT_STEP,
-        {"session_id": session_id, "key": key, "kind": kind, "request_hash": digest,
-         "created_at": now},
-    )  # fmt: skip
+        {
+            "session_id": session_id,
+            "key": key,
+            "kind": kind,
+            "request_hash": digest,
+            "created_at": now,
+        },
+    )
     ex.execute(_TOUCH_SESSION, {"sid": session_id, "at": now})
     return now
 

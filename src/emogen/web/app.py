@@ -95,8 +95,10 @@ def _routes(app: FastAPI, store: Store, config: StudyConfig) -> None:
         store.ping()
         why = store.health_problem()
         body = {"ok": why is None, "study": config.name, "version": __version__}
-        return JSONResponse(body if why is None else {**body, "problem": why},
-                            status_code=200 if why is None else 503)  # fmt: skip
+        return JSONResponse(
+            body if why is None else {**body, "problem": why},
+            status_code=200 if why is None else 503,
+        )
 
     app.include_router(participant.router)
     app.include_router(participant.session_router())
@@ -146,9 +148,15 @@ def create_app(
         model = load_model(config.model, rig=config.rig)
     store = Store(resolve_database_url(database_url, config.database_url))
     store.check_writable()  # a full disk or read-only database: one clear line, at start
-    service = StudyService(config, store, model.rig, model_name=model.name,
-                           model_hash=model.model_hash, model=model,
-                           running_sessions=running_sessions)  # fmt: skip
+    service = StudyService(
+        config,
+        store,
+        model.rig,
+        model_name=model.name,
+        model_hash=model.model_hash,
+        model=model,
+        running_sessions=running_sessions,
+    )
     app = FastAPI(
         lifespan=_lifespan(store),
         title=f"EmoGen study: {config.name}",
@@ -157,11 +165,43 @@ def create_app(
         docs_url=None,
         redoc_url=None,
     )
+    _set_state(
+        app,
+        config,
+        store,
+        service,
+        model,
+        token=token or None,
+        session_limit=session_limit,
+        researcher_failure_limit=researcher_failure_limit,
+    )
+    remove_stale_downloads()  # left by a server killed outright (they hold participant data)
+    add_cors(app, config.embed_origins)  # innermost: preflights get the security headers too
+    add_response_headers(app, hsts=hsts)
+    app.add_middleware(BodyLimit, max_bytes=MAX_BODY_BYTES)
+    install_error_handlers(app)
+    _routes(app, store, config)
+    return app
+
+
+def _set_state(
+    app: FastAPI,
+    config: StudyConfig,
+    store: Store,
+    service: StudyService,
+    model: FaceModel,
+    *,
+    token: str | None,
+    session_limit: RateLimit,
+    researcher_failure_limit: RateLimit,
+) -> None:
+    """What the routes read from ``app.state``: the study, its store and service, the model and
+    its GLB and PNG caches, the researcher token and the rate limits."""
     app.state.config = config
     app.state.store = store
     app.state.service = service
     app.state.model = model
-    app.state.researcher_token = token or None
+    app.state.researcher_token = token
     app.state.templates = Jinja2Templates(directory=str(HERE / "templates"))
     app.state.viewer = viewer_built()
     identities = config.study_identities()
@@ -177,10 +217,3 @@ def create_app(
     app.state.export_lock = asyncio.Lock()  # one dashboard export at a time
     app.state.link_parameters = Counter()  # URL parameter names of landing pages (web.links)
     app.state.never_matched_warned = False
-    remove_stale_downloads()  # left by a server killed outright (they hold participant data)
-    add_cors(app, config.embed_origins)  # innermost: preflights get the security headers too
-    add_response_headers(app, hsts=hsts)
-    app.add_middleware(BodyLimit, max_bytes=MAX_BODY_BYTES)
-    install_error_handlers(app)
-    _routes(app, store, config)
-    return app

@@ -74,15 +74,30 @@ MEDIA_TYPES = {"csv": "text/csv", "parquet": "application/vnd.apache.parquet"}
 
 
 async def export_table_file(
-    lock: asyncio.Lock, database_url: str, study: str, table: str, since: str | None,
+    lock: asyncio.Lock,
+    database_url: str,
+    study: str,
+    table: str,
+    since: str | None,
     fmt: str = "csv",
-) -> FileResponse:  # fmt: skip
+) -> FileResponse:
     """``table`` of ``study`` as a CSV or Parquet download (``since``: an incremental export's
     start)."""
     folder = Path(tempfile.mkdtemp(prefix=f"{PREFIX}{os.getpid()}-"))  # 0700
     out = folder / "export"
-    args = [str(os.getpid()), "study", "export", "--format", fmt, "--table", table,
-            "--study", study, "--out", str(out)]  # fmt: skip
+    args = [
+        str(os.getpid()),
+        "study",
+        "export",
+        "--format",
+        fmt,
+        "--table",
+        table,
+        "--study",
+        study,
+        "--out",
+        str(out),
+    ]
     if since is not None:
         args += ["--since", since]
     env = {**os.environ, DATABASE_ENV: database_url}
@@ -90,9 +105,14 @@ async def export_table_file(
     try:
         async with lock:
             child = await asyncio.create_subprocess_exec(
-                sys.executable, "-c", _CHILD, *args, env=env,
-                stdout=asyncio.subprocess.DEVNULL, stderr=asyncio.subprocess.PIPE,
-            )  # fmt: skip
+                sys.executable,
+                "-c",
+                _CHILD,
+                *args,
+                env=env,
+                stdout=asyncio.subprocess.DEVNULL,
+                stderr=asyncio.subprocess.PIPE,
+            )
             _, err = await child.communicate()
         if child.returncode != 0:
             lines = err.decode(errors="replace").strip().splitlines() or ["no message"]

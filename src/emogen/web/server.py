@@ -61,9 +61,12 @@ def _app(options: dict[str, Any]) -> FastAPI:
     except ValueError as exc:
         raise ConfigError(f"--session-limit: {exc}") from None
     return create_app(
-        config, options.get("database_url"), session_limit=limit, hsts=bool(options.get("hsts")),
+        config,
+        options.get("database_url"),
+        session_limit=limit,
+        hsts=bool(options.get("hsts")),
         running_sessions=options.get("running_sessions") or "refuse",
-    )  # fmt: skip
+    )
 
 
 def _die_with_parent(parent: int) -> None:

@@ -8,8 +8,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from emogen.metrics import cosine_distance
-
 if TYPE_CHECKING:
     from emogen.metrics import VertexRMS
     from emogen.model.face import FaceModel
@@ -68,8 +66,3 @@ class FaceGeometry:
         rig = self.model.rig
         idx = [rig.shape_names.index(s) for g in rig.genes if g.name == gene for s in g.shapes]
         return float(np.mean(w[idx]))
-
-
-def mean_cd(faces: np.ndarray, target: np.ndarray) -> float:
-    """Mean CD of faces (n, S) to a target (S,)."""
-    return float(np.mean(cosine_distance(faces, target)))

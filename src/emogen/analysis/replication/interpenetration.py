@@ -65,12 +65,18 @@ class Measured:
         pen_b, pen_a = self.depth_before > CONTACT, self.depth_after > CONTACT
         rows = [
             ("faces interpenetrating (> 0.02 cm)", pen_b.mean(), pen_a.mean()),
-            ("mean deepest penetration [cm, our mesh]", self.depth_before.mean(),
-             self.depth_after.mean()),
+            (
+                "mean deepest penetration [cm, our mesh]",
+                self.depth_before.mean(),
+                self.depth_after.mean(),
+            ),
             ("largest penetration [cm, our mesh]", self.depth_before.max(), self.depth_after.max()),
-            ("implausible geometry (lids, lips, stretch; combinational only)",
-             self.implausible_before.mean(), self.implausible_after.mean()),
-        ]  # fmt: skip
+            (
+                "implausible geometry (lids, lips, stretch; combinational only)",
+                self.implausible_before.mean(),
+                self.implausible_after.mean(),
+            ),
+        ]
         return pd.DataFrame(
             [{"measure": m, "uncorrected": b, "corrected": a, "faces": n} for m, b, a in rows]
         )
@@ -218,8 +224,13 @@ def _figure(res: Measured, path: Path) -> Path:
         alpha=0.6,
         label=f"not penetrating uncorrected ({(~hit).sum()})",
     )
-    ax.scatter(res.depth_before[hit], res.depth_after[hit], s=14, color=plots.colour(0),
-               label=f"penetrating uncorrected ({hit.sum()})")  # fmt: skip
+    ax.scatter(
+        res.depth_before[hit],
+        res.depth_after[hit],
+        s=14,
+        color=plots.colour(0),
+        label=f"penetrating uncorrected ({hit.sum()})",
+    )
     ax.axhline(CONTACT, color="0.4", ls="--", lw=1)
     ax.axvline(CONTACT, color="0.4", ls="--", lw=1)
     top = max(float(res.depth_before.max()), 0.05) * 1.05

@@ -231,8 +231,16 @@ def _figure(tests: dict[str, list[GroupTest]], path: Path) -> Path:
             c = plots.colour(i)
             for null in t.nulls:
                 ax.scatter(null[:, 0], null[:, 1], s=4, alpha=0.25, color=c)
-            ax.scatter(*t.observed, s=90, marker="*", color=c, edgecolor="k", lw=0.6, zorder=3,
-                       label=f"{kind}{' (flagged)' if t.flagged else ''}")  # fmt: skip
+            ax.scatter(
+                *t.observed,
+                s=90,
+                marker="*",
+                color=c,
+                edgecolor="k",
+                lw=0.6,
+                zorder=3,
+                label=f"{kind}{' (flagged)' if t.flagged else ''}",
+            )
         ax.set_title(READINGS[reading][1], fontsize=8)
         ax.set_xlabel("mean inter-sample distance [CD]")
         ax.grid(alpha=0.3)

@@ -15,6 +15,7 @@ from emogen.analysis.replication.theoretical_metrics import (
 )
 from emogen.analysis.replication.write_report import FaceFigures
 from emogen.analysis.report import Report
+from emogen.analysis.separability_figure import separability_figure
 
 
 def write_targets(r: Report, res: Targets, figures: FaceFigures) -> None:
@@ -48,7 +49,7 @@ def write_theoretical(r: Report, res: TheoreticalMetrics, figures: FaceFigures) 
         )
         r.table(paper.TABLE_I[m], None, f"Paper: Table I, {METRIC_NAMES[m]}", index=True)
         r.figure(
-            plots.separability(
+            separability_figure(
                 sep,
                 r.figures / f"fig8_{m}.png",
                 title=f"{METRIC_NAMES[m]}: accuracy {sep.accuracy:.1%}",

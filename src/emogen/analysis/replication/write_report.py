@@ -199,9 +199,15 @@ def _changed(combined: list[Combined]) -> pd.DataFrame:
             "decided on the pooled runs' interval" if c.interval else "the seeds' verdicts"
         )
         rows.append(
-            {"finding": k, "section": f.section, "claim": f.claim, "before": old,
-             "now": c.verdict, "why": why}
-        )  # fmt: skip
+            {
+                "finding": k,
+                "section": f.section,
+                "claim": f.claim,
+                "before": old,
+                "now": c.verdict,
+                "why": why,
+            }
+        )
     return pd.DataFrame(rows, columns=["finding", "section", "claim", "before", "now", "why"])
 
 

@@ -7,6 +7,7 @@ from emogen.analysis import plots
 from emogen.analysis.replication.analysis_tools import ParticipantTools, PowerStudy
 from emogen.analysis.replication.settings import ReplicateSettings
 from emogen.analysis.report import Report
+from emogen.analysis.separability_figure import separability_figure
 
 
 def write_participant_tools(r: Report, res: ParticipantTools, settings: ReplicateSettings) -> None:
@@ -59,7 +60,7 @@ def write_participant_tools(r: Report, res: ParticipantTools, settings: Replicat
         index=True,
     )
     r.figure(
-        plots.separability(
+        separability_figure(
             sep,
             r.figures / "emotions_separability.png",
             title=f"four emotions: accuracy {sep.accuracy:.0%}",

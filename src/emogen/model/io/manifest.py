@@ -58,11 +58,6 @@ class Manifest:
     commit: str
     files: tuple[ManifestFile, ...]
 
-    @property
-    def total_size(self) -> int:
-        """Bytes in all files together."""
-        return sum(entry.size for entry in self.files)
-
     @classmethod
     def from_mapping(cls, data: Mapping[str, Any]) -> Manifest:
         """Build a manifest from its JSON form: ``{"repository", "commit", "files": [...]}``."""

@@ -121,9 +121,9 @@ def replay_trial(env: TaskEnv, db: Session, trial: TrialRow, rig: Any) -> Replay
         )
         for p in pops:
             where = f"trial {trial.position + 1} attempt {p.attempt + 1} generation {p.generation}"
-            if (engine.trial, engine.generation) != (p.attempt, p.generation):
+            if (engine.attempt, engine.generation) != (p.attempt, p.generation):
                 report.problems.append(
-                    f"{where}: replay is at attempt {engine.trial + 1} generation "
+                    f"{where}: replay is at attempt {engine.attempt + 1} generation "
                     f"{engine.generation}"
                 )
                 break

@@ -65,7 +65,7 @@ def store_population(db: Session, trial: TrialRow, population: Population) -> Sh
         _INSERT_POPULATION,
         {
             "trial_id": trial.id,
-            "attempt": population.trial,
+            "attempt": population.attempt,
             "generation": population.generation,
             "shown_at": utcnow(),
         },
@@ -95,7 +95,7 @@ def store_population(db: Session, trial: TrialRow, population: Population) -> Sh
         ],
     )
     faces = [FaceView(id=i, weights=w) for i, w in zip(ids, weights, strict=True)]
-    return ShownPopulation(trial.id, population.trial, population.generation, faces, trial)
+    return ShownPopulation(trial.id, population.attempt, population.generation, faces, trial)
 
 
 _POPULATION_AT = select(PopulationRow).where(

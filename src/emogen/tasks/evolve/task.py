@@ -136,7 +136,7 @@ class EvolveTask:
         engine = new_engine(env, row)
         row.status = "active"
         row.started_at = utcnow()
-        row.attempt = engine.trial
+        row.attempt = engine.attempt
         row.generation = engine.generation
         shown = store_population(db, row, engine.ask())
         row.engine_state = engine.to_json()
@@ -198,7 +198,7 @@ class EvolveTask:
             )
         )
         shown = store_population(db, row, engine.reset())
-        row.attempt = engine.trial
+        row.attempt = engine.attempt
         row.generation = engine.generation
         row.engine_state = engine.to_json()
         return Outcome(shown=replace(shown, trial=row))
