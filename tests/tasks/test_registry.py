@@ -74,6 +74,11 @@ class _Twin(TaskDefaults):
     name: ClassVar[str] = "twin"
     block: ClassVar[type[TaskBlock]] = _Block
     commands: ClassVar[tuple[type[TrialCommand], ...]] = (_Answer,)
+    view_type = result_type = dict
+    tables = exported = ()
+    instructions = ""
+    screens: ClassVar[dict[str, tuple[float, float]]] = {}
+    start = accept = view = prompt = simulate = TaskDefaults.face
 
 
 @pytest.mark.parametrize(
@@ -90,6 +95,13 @@ def test_a_task_with_a_taken_or_bad_name_is_refused(change: dict[str, Any], mess
     with pytest.raises(ConfigError, match=message):
         register(task)
     assert "twin" not in TASKS and set(TASKS) == {"evolve", "categorise"}
+
+
+def test_a_task_without_its_parts_is_refused_naming_them() -> None:
+    bare = type("Bare", (TaskDefaults,), {"name": "bare"})()
+    with pytest.raises(ConfigError, match="task 'bare' lacks block, commands, view_type"):
+        register(bare)
+    assert "bare" not in TASKS
 
 
 def test_a_command_body_is_found_by_its_name() -> None:

@@ -78,11 +78,16 @@ def toy_face(rig: Any, seed: int) -> list[float]:
     return np.random.default_rng(seed).uniform(0.0, 0.6, len(rig.shape_names)).tolist()
 
 
+class RateFaceResult(TypedDict):
+    task: Literal["rateface"]
+
+
 class RateFaceTask(TaskDefaults):
     name: ClassVar[str] = "rateface"
     block: ClassVar[type[TaskBlock]] = RateFaceBlock
     commands: ClassVar[tuple[type[TrialCommand], ...]] = (RateFace,)
     view_type: ClassVar[type] = RateFaceView
+    result_type: ClassVar[type] = RateFaceResult
     tables: ClassVar[tuple[type, ...]] = (RateFaceRow,)
     exported: ClassVar[tuple[type, ...]] = (RateFaceRow,)
     instructions: ClassVar[str] = "you will rate faces from 1 (not at all) to 7 (very much)."

@@ -166,6 +166,8 @@ class Task(Protocol):
     commands: ClassVar[tuple[type[TrialCommand], ...]]
     #: what :meth:`view` answers (a TypedDict whose ``task`` is ``Literal[name]``)
     view_type: ClassVar[type]
+    #: what :meth:`result` answers (a TypedDict whose ``task`` is ``Literal[name]``)
+    result_type: ClassVar[type]
     #: its record tables (rows on :class:`emogen.tasks.records.Base`)
     tables: ClassVar[tuple[type, ...]]
     #: the record tables the study's export writes as they are (one export table each, keyed

@@ -26,6 +26,22 @@ TASKS: dict[str, Task] = {}
 #: The task of a ``[[blocks]]`` table without ``task``, and of a study without blocks.
 DEFAULT_TASK = EvolveTask.name
 _NAME = re.compile(r"^[a-z][a-z0-9_]{0,15}$")
+#: What a task must have besides its methods (:class:`emogen.tasks.protocol.Task`).
+REQUIRED = (
+    "block",
+    "commands",
+    "view_type",
+    "result_type",
+    "tables",
+    "exported",
+    "instructions",
+    "screens",
+    "start",
+    "accept",
+    "view",
+    "prompt",
+    "simulate",
+)
 
 
 def _literal(model: type[Any], field: str) -> str | None:
@@ -39,6 +55,9 @@ def register(task: Task) -> None:
     """Add ``task`` (its name, its block's ``task`` Literal and its commands' names must be new,
     and the names match)."""
     name = task.name
+    missing = [a for a in REQUIRED if not hasattr(task, a)]
+    if missing:
+        raise ConfigError(f"task {name!r} lacks {', '.join(missing)} (emogen.tasks.protocol.Task)")
     if not _NAME.fullmatch(name):
         raise ConfigError(f"a task's name is 1-16 lowercase letters, digits or '_'; got {name!r}")
     if name in TASKS:

@@ -103,6 +103,7 @@ def _routes(app: FastAPI, store: Store, config: StudyConfig) -> None:
     app.include_router(participant.router)
     app.include_router(participant.session_router())
     app.include_router(embed.router)
+    app.include_router(embed.record_router())
     app.include_router(assets.router)
     app.include_router(researcher.router)
     app.mount("/static", StaticFiles(directory=str(HERE / "static")), name="static")

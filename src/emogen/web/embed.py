@@ -11,7 +11,7 @@ from fastapi.middleware.cors import CORSMiddleware
 
 from emogen.study.records import StudyInfo, TrialRecord
 from emogen.web.participant import Token, _service
-from emogen.web.schemas import error_responses
+from emogen.web.schemas import error_responses, record_model
 
 router = APIRouter()
 
@@ -22,17 +22,24 @@ def get_study(request: Request) -> StudyInfo:
     return _service(request).study_info()
 
 
-@router.get(
-    "/api/s/{token}/trials/{position}",
-    response_model=TrialRecord,
-    responses=error_responses(404, 409, 422, 503),
-)
 def get_trial_record(
     request: Request, token: Token, position: Annotated[int, Path(ge=0, le=100_000)]
 ) -> TrialRecord:
     """A trial of the session as recorded: the researcher's session id, the trial's and the
     session's seeds (decimal strings), and, once done, its final face's id and weights."""
     return _service(request).trial_record(token, position)
+
+
+def record_router() -> APIRouter:
+    """The trial record's route: its ``result`` is any registered task's, keyed by ``task``
+    (made when the app is made, so every task registered by then is in its schema)."""
+    routes = APIRouter()
+    routes.get(
+        "/api/s/{token}/trials/{position}",
+        response_model=record_model(),
+        responses=error_responses(404, 409, 422, 503),
+    )(get_trial_record)
+    return routes
 
 
 def add_cors(app: FastAPI, origins: tuple[str, ...]) -> None:

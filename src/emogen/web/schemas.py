@@ -15,6 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field, create_model
 from typing_extensions import TypedDict
 
 from emogen.study.enrolment import PARTICIPANT_ID
+from emogen.study.records import TrialRecord
 from emogen.study.view import SessionState
 from emogen.tasks.registry import TASKS, command_names
 
@@ -59,6 +60,15 @@ def state_model() -> Any:
     fields = {**get_type_hints(SessionState), "view": Optional[view]}  # noqa: UP045
     fields["replayed"] = NotRequired[bool]
     return TypedDict("SessionState", fields)  # type: ignore[operator]
+
+
+def record_model() -> Any:
+    """A trial's record as answered (:class:`emogen.study.records.TrialRecord`) with
+    ``result`` the union of the registered tasks' results, keyed by ``task``."""
+    results: Any = tuple(task.result_type for task in TASKS.values())
+    result = Annotated[Union[results], Field(discriminator="task")]  # noqa: UP007
+    fields = {**get_type_hints(TrialRecord), "result": Optional[result]}  # noqa: UP045
+    return TypedDict("TrialRecord", fields)  # type: ignore[operator]
 
 
 def created_model(state: Any) -> Any:

@@ -25,7 +25,12 @@ from emogen.tasks.categorise.draw import BlockDraw
 from emogen.tasks.categorise.faces import FileFaces, block_files
 from emogen.tasks.categorise.replay import check_stimulus
 from emogen.tasks.categorise.tables import ResponseRow, StimulusRow
-from emogen.tasks.categorise.view import CategoriseView, categorise_view, check_answer
+from emogen.tasks.categorise.view import (
+    CategoriseResult,
+    CategoriseView,
+    categorise_view,
+    check_answer,
+)
 from emogen.tasks.errors import StepConflict
 from emogen.tasks.protocol import (
     FaceView,
@@ -66,6 +71,7 @@ class CategoriseTask:
     block: ClassVar[type[TaskBlock]] = CategoriseBlock
     commands: ClassVar[tuple[type[TrialCommand], ...]] = (Answer,)
     view_type: ClassVar[type] = CategoriseView
+    result_type: ClassVar[type] = CategoriseResult
     tables: ClassVar[tuple[type, ...]] = (StimulusRow, ResponseRow)
     #: exported by the study's own typed tables (stimuli and answers)
     exported: ClassVar[tuple[type, ...]] = ()

@@ -42,6 +42,15 @@ class CategoriseView(TypedDict):
     confidence: RatingScale | None
 
 
+class CategoriseResult(TypedDict):
+    """A categorise trial's record for an embedding page, once answered: the label given and
+    the face's weights (never what it was made for, nor whose it is)."""
+
+    task: Literal["categorise"]
+    label: str
+    weights: list[float]
+
+
 def _scale(
     block: CategoriseBlock, asked: bool, question: str, ends: tuple[str, str]
 ) -> RatingScale | None:

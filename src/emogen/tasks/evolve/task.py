@@ -42,7 +42,7 @@ from emogen.tasks.evolve.tables import (
     RestartRow,
     SelectionRow,
 )
-from emogen.tasks.evolve.view import EvolveView, evolve_view
+from emogen.tasks.evolve.view import EvolveResult, EvolveView, evolve_view
 from emogen.tasks.protocol import (
     FaceId,
     Index,
@@ -97,6 +97,7 @@ class EvolveTask:
     block: ClassVar[type[TaskBlock]] = EvolveBlock
     commands: ClassVar[tuple[type[TrialCommand], ...]] = (Select, Restart, Rate)
     view_type: ClassVar[type] = EvolveView
+    result_type: ClassVar[type] = EvolveResult
     tables: ClassVar[tuple[type, ...]] = (
         PopulationRow,
         FaceRow,

@@ -55,6 +55,15 @@ class EvolveView(TypedDict):
     rating: RatingView | None
 
 
+class EvolveResult(TypedDict):
+    """An evolve trial's record for an embedding page: the emotion made and, once the trial is
+    done, its final face."""
+
+    task: Literal["evolve"]
+    emotion: str
+    final_face: FaceView | None
+
+
 def _face(face_id: int, weights_json: str) -> FaceView:
     return {"id": face_id, "weights": json.loads(weights_json)}
 
