@@ -296,6 +296,22 @@ export interface components {
             trials: number;
         };
         /**
+         * CategoriseResult
+         * @description A categorise trial's record for an embedding page, once answered: the label given and
+         *     the face's weights (never what it was made for, nor whose it is).
+         */
+        CategoriseResult: {
+            /** Label */
+            label: string;
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            task: "categorise";
+            /** Weights */
+            weights: number[];
+        };
+        /**
          * CategoriseView
          * @description What a categorise trial shows: the face, the question, the labels in their order, and the
          *     ratings asked (None when not asked); never the emotion the face was made for, nor whose face
@@ -339,6 +355,21 @@ export interface components {
             token: string;
             /** Url */
             url: string;
+        };
+        /**
+         * EvolveResult
+         * @description An evolve trial's record for an embedding page: the emotion made and, once the trial is
+         *     done, its final face.
+         */
+        EvolveResult: {
+            /** Emotion */
+            emotion: string;
+            final_face: components["schemas"]["FaceView"] | null;
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            task: "evolve";
         };
         /**
          * EvolveView
@@ -611,11 +642,7 @@ export interface components {
             /** Weight Names */
             weight_names: string[];
         };
-        /**
-         * TrialRecord
-         * @description One trial of a session as recorded: where it is, its seeds and its result (by its
-         *     task, ``task`` first; None until the task has one).
-         */
+        /** TrialRecord */
         TrialRecord: {
             /** Attempt */
             attempt: number;
@@ -628,9 +655,7 @@ export interface components {
             /** Participant Id */
             participant_id: string;
             /** Result */
-            result: {
-                [key: string]: unknown;
-            } | null;
+            result: (components["schemas"]["EvolveResult"] | components["schemas"]["CategoriseResult"]) | null;
             /** Seed */
             seed: string;
             /** Session Id */
