@@ -120,17 +120,16 @@ def export(
     force: ForceOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
-    """Tidy tables: sessions, trials, faces, selections, restarts, ratings, identities, study
-    (every column: docs/data.md; CSV seeds are text s<digits> so R keeps them exact).
+    """Tidy tables: sessions, trials, faces, selections, restarts, evolve_ratings, final_faces,
+    categorise_responses, identities, study (every column and the join keys: docs/data.md; CSV
+    seeds are text s<digits> so R keeps them exact).
 
     Written a few sessions at a time, in bounded memory whatever the study's size."""
     from emogen.study.export import TABLES
-    from emogen.study.export_stream import export_study, parse_since
+    from emogen.study.export_stream import check_table_names, export_study, parse_since
 
     start = None if since is None else parse_since(since)
-    unknown = [t for t in table or [] if t not in TABLES]
-    if unknown:
-        raise ConfigError(f"--table must be one of {', '.join(TABLES)}; got {unknown[0]!r}")
+    check_table_names(table or [])
     check_out_folder(out, force=force)
     store = _store(database_url, config)
     try:

@@ -41,6 +41,8 @@ from sqlalchemy import func, select
 from emogen import columns as tidy
 from emogen.errors import ConfigError
 from emogen.study.export import (
+    FORMERLY,
+    SESSION_TABLES,
     TABLES,
     _frame,
     export_provenance,
@@ -49,7 +51,7 @@ from emogen.study.export import (
     study_rows,
     table_extras,
 )
-from emogen.study.export_rows import SESSION_TABLE_ROWS, iso, load_records
+from emogen.study.export_rows import iso, load_records
 from emogen.study.storage import Store
 from emogen.study.tables import FaceRow, PopulationRow, SessionRow, StudyRow, TrialRow, as_utc
 
@@ -78,6 +80,17 @@ def parse_since(text: str) -> datetime:
         raise ConfigError(
             f"--since must be a time between 0001-01-01 and 9999-12-31 in UTC; got {text!r}"
         ) from None
+
+
+def check_table_names(tables: tuple[str, ...] | list[str]) -> None:
+    """Every name one of :data:`TABLES` (an old name is named with its new one)."""
+    for name in tables:
+        if name in FORMERLY:
+            raise ConfigError(
+                f"--table {name!r} is called {FORMERLY[name]!r} since schema emogen.study/6"
+            )
+        if name not in TABLES:
+            raise ConfigError(f"--table must be one of {', '.join(TABLES)}; got {name!r}")
 
 
 @dataclass(frozen=True)
@@ -231,9 +244,7 @@ def export_study(
     with ``since``, only the sessions completed in [since, now − SETTLE), and ``export.json``."""
     if fmt not in ("parquet", "csv"):
         raise ConfigError(f"--format must be parquet or csv; got {fmt!r}")
-    unknown = [t for t in tables if t not in TABLES]
-    if unknown:
-        raise ConfigError(f"--table must be one of {', '.join(TABLES)}; got {unknown[0]!r}")
+    check_table_names(tables)
     studies = _studies(store, study)
     until = None
     if since is not None:
@@ -273,12 +284,13 @@ def _spill_sessions(
     tables: tuple[str, ...], extras: dict[str, list[str]],
 ) -> None:  # fmt: skip
     """Every chunk's rows of the per-session tables, read and spilled one chunk at a time."""
-    per_session = [name for name in tables if name in SESSION_TABLE_ROWS]
+    per_session = [name for name in tables if name in SESSION_TABLES]
     for name in per_session:
         spill.add(name, _frame(name, [], extras.get(name, [])))
     for ids in chunks:
         with store.read() as db:
             rec = load_records(db, studies, ids)
         for name in per_session:
-            spill.add(name, _frame(name, list(SESSION_TABLE_ROWS[name](rec)), extras.get(name, [])))
+            rows = list(SESSION_TABLES[name].rows(rec))
+            spill.add(name, _frame(name, rows, extras.get(name, [])))
         del rec
