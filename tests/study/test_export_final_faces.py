@@ -12,25 +12,13 @@ import pytest
 
 from emogen import columns as tidy
 from emogen.analysis.study_export import derive_final_faces
-from emogen.study.config import study_from_dict
+from emogen.errors import ConfigError
 from emogen.study.export import FORMERLY, TABLES, export_tables, write_export
-from emogen.study.export_stream import export_study
-from emogen.study.simulate import SimulationPlan, simulate_study
-from emogen.study.storage import Store
+from emogen.study.export_stream import check_table_names, export_study
 from emogen.study.tables import SCHEMA_VERSION
-from emogen.tasks.simulated import SimulatedDesign
+from tests.export_helpers import MIXED, simulated_tables
 from tests.study.drive import new_key, run_to_end, service_caller
 from tests.study.test_export_replay import completed
-
-MIXED: dict[str, Any] = {
-    "name": "mixed",
-    "seed": 3,
-    "emotions": ["happy", "sad"],
-    "repetitions": 2,
-    "correct": False,
-    "ga": {"generations": 3, "min_selections": 1, "max_selections": 5},
-    "blocks": [{"task": "evolve"}, {"task": "categorise", "own": True, "others": 2, "random": 1}],
-}
 
 
 @pytest.fixture
@@ -114,20 +102,8 @@ def test_final_faces_are_the_faces_a_plain_lookup_finds(service, tmp_path: Path)
     assert (final["schema_version"] == SCHEMA_VERSION).all()
 
 
-def _mixed_export(root: Path, model: Any) -> dict[str, pd.DataFrame]:
-    url = f"sqlite:///{root / 'mixed.sqlite'}"
-    plan = SimulationPlan(study_from_dict(MIXED), url, seed=1, participants=4,
-                          design=SimulatedDesign(), shuffle_prototypes=False)  # fmt: skip
-    simulate_study(plan, model=model)
-    store = Store(url)
-    try:
-        return export_tables(store)
-    finally:
-        store.dispose()
-
-
 def test_categorise_trials_make_no_face_and_name_no_emotion(tmp_path: Path, ict_model: Any) -> None:
-    tables = _mixed_export(tmp_path, ict_model)
+    tables = simulated_tables(tmp_path, ict_model, MIXED, participants=4, seed=1)
     trials = tables["trials"]
     categorise = trials[trials["task"] == "categorise"]
     evolve = trials[trials["task"] == "evolve"]
@@ -160,3 +136,8 @@ def test_tables_are_named_by_their_task() -> None:
     assert FORMERLY == {"ratings": "evolve_ratings", "responses": "categorise_responses"}
     assert not set(FORMERLY) & set(TABLES)
     assert {"final_faces", "evolve_ratings", "categorise_responses"} <= set(TABLES)
+    check_table_names(["final_faces", "evolve_ratings"])
+    with pytest.raises(ConfigError, match="'ratings' is called 'evolve_ratings' since schema"):
+        check_table_names(["ratings"])
+    with pytest.raises(ConfigError, match="--table must be one of sessions, trials"):
+        check_table_names(["ratingz"])

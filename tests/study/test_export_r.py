@@ -70,6 +70,13 @@ def test_every_export_table_reads_in_r_with_its_types(
     guessed, given = read_in_r(paths), read_in_r(paths, types)
     empty = [name for name in TABLES if len(tables[name]) == 0]
     assert empty == ["categorise_responses"]  # no categorise block: the empty table of this study
+    final = given[TABLES.index("final_faces")]  # a finished trial's final face, typed in R
+    assert len(final.frame) == 4 and final.frame["face_id"].notna().all()
+    assert {final.classes[c] for c in ("session_id", "trial", "attempt", "face_id")} == {"numeric"}
+    assert final.classes["emotion"] == "character"
+    assert final.classes["finished_at"] == "POSIXct:UTC"
+    gene_classes = {k for c, k in final.classes.items() if c.startswith(("g_", "w_"))}
+    assert gene_classes == {"numeric"}
     for name, guess, read in zip(TABLES, guessed, given, strict=True):
         parquet = tmp_path / "pq" / f"{name}.parquet"
         want = {f.name: r_class(f) for f in pq.read_schema(parquet)}

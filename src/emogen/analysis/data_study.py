@@ -153,15 +153,20 @@ def load_study(folder: Path, exclude: frozenset[str] = frozenset()) -> Dataset:
 def _finals(
     final: pd.DataFrame, trials: pd.DataFrame, elites: pd.DataFrame, wcols: list[str]
 ) -> pd.DataFrame:
-    """The export's final faces (one per finished evolve trial) in the columns of ``elites``
-    (weights named by shape), ordered by group and sample."""
+    """The export's final faces (one per finished evolve trial: ``status`` ``done`` in
+    ``trials``) in the columns of ``elites`` (weights named by shape), by group and sample."""
     key = ["session_id", "trial"]
-    f = final[[*key, "generation", *wcols]].merge(trials[[*key, "participant_id", "group"]], on=key)
+    done = trials.loc[trials["status"] == "done", [*key, "participant_id", "group"]]
+    f = final[[*key, "generation", *wcols]].merge(done, on=key)
     f = f.merge(elites[[*key, "generation", "n_selected"]], on=[*key, "generation"], how="left")
     f = f.rename(columns={w: w[2:] for w in wcols})
-    f["sample"] = f["session_id"].astype(str) + ":" + f["trial"].astype(str)
-    f["participant"] = f["participant_id"].astype(str)
-    f["complete"], f["error"] = True, np.nan
+    new = {
+        "sample": f["session_id"].astype(str) + ":" + f["trial"].astype(str),
+        "participant": f["participant_id"].astype(str),
+        "complete": True,
+        "error": np.nan,
+    }
+    f = pd.concat([f, pd.DataFrame(new, index=f.index)], axis=1)  # one block: not fragmented
     return f.sort_values(["group", "sample", "generation"]).reset_index(drop=True)
 
 

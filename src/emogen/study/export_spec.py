@@ -12,12 +12,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, get_args
+from typing import Any, get_args
 
 from emogen import columns as tidy
-
-if TYPE_CHECKING:
-    from emogen.study.export_rows import Records
 
 Row = dict[str, Any]
 Column = tuple[str, tidy.Kind]
@@ -53,7 +50,9 @@ class ExportTable:
 
     name: str
     columns: tuple[Column, ...]
-    rows: Callable[[Records], Iterator[Row]]
+    #: the rows from a read's :class:`~emogen.study.export_rows.Records` (typed Any here: the
+    #: records module defines its own tables with this class)
+    rows: Callable[[Any], Iterator[Row]]
     faces: bool = False
     formerly: str | None = None
 
