@@ -60,7 +60,7 @@ def _study_tables(folder: Path, exclude: frozenset[str]) -> StudyTables:
     check_study(folder, {"trials": trials, "faces": faces, "selections": selections}, other)
     responses = _read(folder, "categorise_responses", required=False)
     final = _read(folder, "final_faces", required=False)
-    final = derive_final_faces(trials, faces) if final is None else final
+    final = derive_final_faces(trials, faces, selections) if final is None else final
     gone = sessions_of(trials, exclude) if exclude else set()
     trials, faces, selections, final = (
         t[~t["session_id"].isin(gone)] for t in (trials, faces, selections, final)

@@ -58,12 +58,18 @@ def read_final_faces(folder: Path, trials: pd.DataFrame, faces: pd.DataFrame) ->
     return derive_final_faces(trials, faces) if table is None else table
 
 
-def derive_final_faces(trials: pd.DataFrame, faces: pd.DataFrame) -> pd.DataFrame:
+def derive_final_faces(
+    trials: pd.DataFrame, faces: pd.DataFrame, selections: pd.DataFrame | None = None
+) -> pd.DataFrame:
     """The ``final_faces`` rows of an old export: for every finished evolve trial (``status``
     ``done``, a ``final_face_id``), the face of the trial's last attempt whose ``face_id`` is the
     final one, in the latest generation that shows it (face ids restart in every trial: never
-    join on the id alone). A finished trial whose face is not in ``faces`` has no row."""
+    join on the id alone). A finished trial whose face is not in ``faces`` has no row. A
+    ``trials`` table without ``final_face_id`` (one written by hand) takes it from
+    ``selections``: the elite of the last generation of the trial's last attempt."""
     key = list(TRIAL_KEY)
+    if "final_face_id" not in trials.columns and selections is not None:
+        trials = trials.merge(_last_elites(selections), on=key, how="left")
     done = trials[(trials["status"] == "done") & trials["final_face_id"].notna()]
     if "task" in done.columns:
         done = done[done["task"] == "evolve"]
@@ -83,3 +89,12 @@ def derive_final_faces(trials: pd.DataFrame, faces: pd.DataFrame) -> pd.DataFram
         how="inner",
     )
     return out.drop(columns="final_face_id").sort_values(key).reset_index(drop=True)
+
+
+def _last_elites(selections: pd.DataFrame) -> pd.DataFrame:
+    """Per trial (``session_id``, ``trial``), the ``final_face_id``: the elite selected in the
+    last generation of its last attempt."""
+    key = list(TRIAL_KEY)
+    elite = selections[selections["role"] == "elite"].sort_values(["attempt", "generation"])
+    last = elite.drop_duplicates(key, keep="last")
+    return last[[*key, "face_id"]].rename(columns={"face_id": "final_face_id"})
