@@ -304,7 +304,7 @@ def read_csv(source: Path | str, **kwargs: Any) -> pd.DataFrame:
     for c in df.columns:
         if kind(str(c)) == "seed":
             df[c] = df[c].map(lambda v: v[len(SEED_PREFIX) :] if _prefixed(v) else v)
-        elif kind(str(c)) is None:
+        elif kind(str(c)) in (None, "bool"):  # booleans are written True/False
             df[c] = _guess(df[c])
     return typed(df)
 

@@ -221,3 +221,27 @@ def test_a_study_of_categorise_blocks_only_is_analysed(
     readme = (out / "README.md").read_text()
     assert "None: the export has no GA trial" in readme
     assert "## Categorisation of faces" in readme
+
+
+def test_an_export_written_before_final_faces_analyses_the_same(
+    export: Path, ict_dir: Path, tmp_path: Path
+) -> None:
+    """Schema 5 (no final_faces; ratings and responses under their old names): every figure and
+    table of ``emogen analyse`` is the same as the new export's."""
+    from tests.export_helpers import as_schema5
+
+    old = as_schema5(export, tmp_path / "export-old")
+    reports = {}
+    for name, folder in (("new", export), ("old", old)):
+        result = _analyse(folder, tmp_path / name, "--model", str(ict_dir))
+        assert result.exit_code == 0, result.output
+        summary = json.loads((tmp_path / name / "analysis.json").read_text())
+        for key in ("source", "methods"):  # they name the folder and the command line
+            summary.pop(key)
+        reports[name] = summary
+    assert reports["new"] == reports["old"]
+    tables = sorted(p.name for p in (tmp_path / "new" / "tables").iterdir())
+    assert "ratings.csv" in tables and "reliability.csv" in tables
+    for name in tables:
+        new, old_table = (tmp_path / d / "tables" / name for d in ("new", "old"))
+        assert new.read_bytes() == old_table.read_bytes(), name

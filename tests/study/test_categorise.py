@@ -93,7 +93,7 @@ def test_a_mixed_study_shows_own_faces_and_stores_every_answer(mixed: StudyServi
             view["none_option"] and view["intensity"]["points"] == 7 and view["confidence"] is None
         )
     tables = export_tables(mixed.store)
-    resp = tables["responses"]
+    resp = tables["categorise_responses"]
     assert len(resp) == 8 and resp["label"].notna().all()
     assert list(resp["labels"]) == ["|".join(s["view"]["labels"]) for s in categorised]
     # the own faces are the participant's final faces, as the faces table recorded them
@@ -134,7 +134,7 @@ def test_others_faces_come_from_completed_sessions_balanced_over_labels(
     run_to_end(state, service_caller(mixed, first))
     token, state = at_categorise(mixed, "C-second")
     run_to_end(state, service_caller(mixed, token))
-    resp = export_tables(mixed.store)["responses"]
+    resp = export_tables(mixed.store)["categorise_responses"]
     second = resp[resp["participant_id"] == "C-second"]
     others = second[second["source"] == "other"]
     assert not others["fallback"].any()
@@ -209,7 +209,7 @@ def test_the_same_participant_and_seed_get_the_same_faces(ict_model: Any, tmp_pa
         svc = study_service(study_from_dict(MIXED), store, ict_model)
         token, state = at_categorise(svc, "C-same")
         run_to_end(state, service_caller(svc, token))
-        resp = export_tables(store)["responses"]
+        resp = export_tables(store)["categorise_responses"]
         answers.append(resp.filter(regex="^(w_|g_|labels|source|intended|identity)"))
         store.dispose()
     pd.testing.assert_frame_equal(answers[0], answers[1])
@@ -235,7 +235,7 @@ def test_a_stimulus_file_shows_its_rows_on_their_identities(ict_model: Any, tmp_
     assert svc.n_trials == 3  # every row of the file
     token, state = svc.create_session("F-1")
     run_to_end(state, service_caller(svc, token))
-    resp = export_tables(store)["responses"].sort_values("source_row")
+    resp = export_tables(store)["categorise_responses"].sort_values("source_row")
     assert list(resp["intended"]) == ["happy", "sad", "angry"]
     # rows with an identity keep it; a row without one takes the block's identities cycled
     # over the session's draw of the rows (so over participants it meets every identity)
@@ -247,7 +247,7 @@ def test_a_stimulus_file_shows_its_rows_on_their_identities(ict_model: Any, tmp_
     for k in range(2, 10):
         token, state = svc.create_session(f"F-{k}")
         run_to_end(state, service_caller(svc, token))
-    resp = export_tables(store)["responses"]
+    resp = export_tables(store)["categorise_responses"]
     blank = resp[resp["source_row"] == 1]
     assert len(blank) == 9 and set(blank["identity"]) == {"generic", "male-dark", "female-light"}
     store.dispose()

@@ -72,7 +72,14 @@ def test_every_export_table_reads_in_r_with_its_types(
     paths = [tmp_path / "csv" / f"{name}.csv" for name in TABLES]
     guessed, given = read_in_r(paths), read_in_r(paths, types)
     empty = [name for name in TABLES if len(tables[name]) == 0]
-    assert empty == ["responses"]  # no categorise block: the empty table of this study
+    assert empty == ["categorise_responses"]  # no categorise block: the empty table of this study
+    final = given[TABLES.index("final_faces")]  # a finished trial's final face, typed in R
+    assert len(final.frame) == 4 and final.frame["face_id"].notna().all()
+    assert {final.classes[c] for c in ("session_id", "trial", "attempt", "face_id")} == {"numeric"}
+    assert final.classes["emotion"] == "character"
+    assert final.classes["finished_at"] == "POSIXct:UTC"
+    gene_classes = {k for c, k in final.classes.items() if c.startswith(("g_", "w_"))}
+    assert gene_classes == {"numeric"}
     for name, guess, read in zip(TABLES, guessed, given, strict=True):
         parquet = tmp_path / "pq" / f"{name}.parquet"
         want = {f.name: r_class(f) for f in pq.read_schema(parquet)}
@@ -114,25 +121,20 @@ def test_the_r_lines_of_the_data_dictionary_append_incremental_exports(
     t0 = datetime(2026, 5, 1, 12, 0, tzinfo=UTC)
     with service.store.write() as db:
         for sid, minutes in ((1, 0), (2, 10)):
-            db.execute(
-                update(SessionRow)
-                .where(SessionRow.id == sid)
-                .values(completed_at=t0 + timedelta(minutes=minutes))
-            )
-    first = export_study(
-        service.store,
-        tmp_path / "export-1",
-        "csv",
-        since=t0 - timedelta(days=1),
-        now=t0 + timedelta(minutes=5) + SETTLE,
-    )
-    export_study(
-        service.store, tmp_path / "export-2", "csv", since=first.until, now=t0 + timedelta(hours=1)
-    )
-    assert (first.rows["restarts"], first.rows["responses"]) == (0, 0)  # header-only files
+            db.execute(update(SessionRow).where(SessionRow.id == sid)
+                       .values(completed_at=t0 + timedelta(minutes=minutes)))  # fmt: skip
+    first = export_study(service.store, tmp_path / "export-1", "csv", since=t0 - timedelta(days=1),
+                         now=t0 + timedelta(minutes=5) + SETTLE)  # fmt: skip
+    export_study(service.store, tmp_path / "export-2", "csv", since=first.until,
+                 now=t0 + timedelta(hours=1))  # fmt: skip
+    assert (first.rows["restarts"], first.rows["categorise_responses"]) == (
+        0,
+        0,
+    )  # header-only files
     write_export(export_tables(service.store), tmp_path / "pq", "parquet")
     checks = """
-    responses <- rbind(read_emogen("export-1", "responses"), read_emogen("export-2", "responses"))
+    responses <- rbind(read_emogen("export-1", "categorise_responses"),
+                   read_emogen("export-2", "categorise_responses"))
     for (d in list(restarts, responses)) {
       cat(nrow(d), paste(names(d), vapply(d, function(x) class(x)[1], ""), sep = "=",
           collapse = " "), "\\n")
@@ -140,7 +142,7 @@ def test_the_r_lines_of_the_data_dictionary_append_incremental_exports(
     cat(seeds, "\\n")
     """
     out = run_r(r_block(DOCS.read_text(encoding="utf-8")) + checks, tmp_path).splitlines()
-    for line, name, rows in ((out[0], "restarts", 1), (out[1], "responses", 0)):
+    for line, name, rows in ((out[0], "restarts", 1), (out[1], "categorise_responses", 0)):
         n, *columns = line.split()
         classes = dict(c.split("=") for c in columns)
         want = {

@@ -64,7 +64,7 @@ def test_export_holds_every_generation_and_selection(service: StudyService, tmp_
     e1s = sel[sel.participant_id == "E-1"]
     assert len(e1s[e1s.role == "elite"]) == 6 and len(e1s) == 18
     assert (e1s.client_response_ms == 1234.5).all()
-    assert len(tables["restarts"]) == 1 and len(tables["ratings"]) == 2
+    assert len(tables["restarts"]) == 1 and len(tables["evolve_ratings"]) == 2
     e2 = sel[sel.participant_id == "E-2"]
     assert sorted(e2[e2.role == "elite"].generation) == [0]
     # shown weights in the export are exactly the stored ones

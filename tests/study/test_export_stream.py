@@ -25,7 +25,15 @@ from tests.study.drive import do, new_key, run_to_end, service_caller
 from tests.study.test_export_replay import completed
 
 runner = CliRunner()
-PER_SESSION = ("sessions", "trials", "faces", "selections", "restarts", "ratings")
+PER_SESSION = (
+    "sessions",
+    "trials",
+    "faces",
+    "selections",
+    "restarts",
+    "evolve_ratings",
+    "final_faces",
+)
 
 
 def read(path: Path) -> pd.DataFrame:

@@ -16,6 +16,7 @@ from emogen.study.export import export_tables, write_export
 from emogen.study.replay_export import replay_exported
 from emogen.study.sessions import StudyService
 from emogen.study.storage import Store
+from tests.export_helpers import as_schema5
 from tests.study.test_export_replay import completed
 
 RECORDED = Path(__file__).parents[1] / "data" / "study_stream1.sqlite"
@@ -76,6 +77,11 @@ def test_cli_replays_an_export_folder(service: StudyService, tmp_path: Path, ict
     runner = CliRunner()
     args = ["replay", "--from-export", str(tmp_path / "out"), "--model", str(ict_dir)]
     result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert "session 1: 6 populations, 60 faces replayed: every face matches" in result.output
+    # an export of schema 5 (no final_faces; ratings, responses under their old names)
+    old = as_schema5(tmp_path / "out", tmp_path / "old")
+    result = runner.invoke(app, ["replay", "--from-export", str(old), "--model", str(ict_dir)])
     assert result.exit_code == 0, result.output
     assert "session 1: 6 populations, 60 faces replayed: every face matches" in result.output
     result = runner.invoke(app, ["replay", "--from-export", str(tmp_path / "nothing")])

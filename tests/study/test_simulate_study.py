@@ -67,13 +67,20 @@ def test_own_faces_are_labelled_better_and_not_with_shuffled_prototypes(
     tmp_path: Path, ict_model: Any
 ) -> None:
     tables = run(tmp_path, ict_model, "known")
-    for name in ("sessions", "trials", "faces", "selections", "ratings", "responses"):
+    for name in (
+        "sessions",
+        "trials",
+        "faces",
+        "selections",
+        "evolve_ratings",
+        "categorise_responses",
+    ):
         assert set(tables[name]["participant_source"]) == {"simulated"}, name
     assert (tables["sessions"]["stage"] == "done").all()
-    effect = own_advantage(tables["responses"])
+    effect = own_advantage(tables["categorise_responses"])
     assert effect["n_participants"] == 23  # the first participant has no others' faces yet
     assert effect["ci_low"] > 0, effect
-    null = own_advantage(run(tmp_path, ict_model, "shuffled", shuffle=True)["responses"])
+    null = own_advantage(run(tmp_path, ict_model, "shuffled", shuffle=True)["categorise_responses"])
     assert null["ci_low"] < 0 < null["ci_high"], null
     assert abs(null["difference"]) < effect["difference"]
 
@@ -81,11 +88,13 @@ def test_own_faces_are_labelled_better_and_not_with_shuffled_prototypes(
 def test_the_same_seed_gives_the_same_data(tmp_path: Path, ict_model: Any) -> None:
     a = run(tmp_path, ict_model, "a", n=3)
     b = run(tmp_path, ict_model, "b", n=3)
-    for name in ("faces", "responses", "selections", "ratings"):
+    for name in ("faces", "categorise_responses", "selections", "evolve_ratings"):
         keep = [c for c in a[name].columns if not c.endswith(("_at", "_ms"))]
         pd.testing.assert_frame_equal(a[name][keep], b[name][keep], check_like=False)
     c = run(tmp_path, ict_model, "c", n=3, seed=12)
-    assert not np.array_equal(a["responses"]["w_jawOpen"], c["responses"]["w_jawOpen"])
+    assert not np.array_equal(
+        a["categorise_responses"]["w_jawOpen"], c["categorise_responses"]["w_jawOpen"]
+    )
 
 
 def test_two_workers_run_every_participant(tmp_path: Path, ict_model: Any) -> None:
@@ -178,10 +187,13 @@ def test_emogen_analyse_reads_a_study_of_evolve_and_categorise_blocks(
     summary = json.loads((out / "analysis.json").read_text())
     assert set(summary["groups"]) == {"happy", "sad", "angry", "fearful"}
     reported = summary["categorisation"]["own_advantage"]
-    expected = own_advantage(tables["responses"])
+    expected = own_advantage(tables["categorise_responses"])
     assert reported["n_participants"] == expected["n_participants"] == 5
     assert reported["difference"] == pytest.approx(expected["difference"])
-    assert summary["categorisation"]["n_answers"] == tables["responses"]["label"].notna().sum()
+    assert (
+        summary["categorisation"]["n_answers"]
+        == tables["categorise_responses"]["label"].notna().sum()
+    )
     html = (out / "index.html").read_text()
     assert "Categorisation of faces" in html and "the participant is the unit" in html
     per = pd.read_csv(out / "tables" / "categorisation_participants.csv")

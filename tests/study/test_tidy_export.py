@@ -14,7 +14,7 @@ from sqlalchemy import select
 
 from emogen import __version__
 from emogen import columns as tidy
-from emogen.study.export import TABLES, export_tables, write_export
+from emogen.study.export import SESSION_TABLES, TABLES, export_tables, write_export
 from emogen.study.sessions import StudyService
 from emogen.study.tables import SCHEMA_VERSION, SessionRow, TrialRow
 from tests.r_readers import ISO_UTC, read_in_r, undocumented
@@ -128,6 +128,20 @@ def test_an_empty_export_has_the_schema_of_a_full_one(
         ), name
         head = (tmp_path / "empty_csv" / f"{name}.csv").read_text().splitlines()[0]
         assert head == (tmp_path / "full_csv" / f"{name}.csv").read_text().splitlines()[0]
+    arrow = {
+        "int": pa.int64(),
+        "seed": pa.int64(),
+        "float": pa.float64(),
+        "str": pa.string(),
+        "time": pa.timestamp("us", tz="UTC"),
+        "bool": pa.bool_(),
+    }
+    for name, table in SESSION_TABLES.items():  # each table's declared columns and types
+        for folder in ("empty", "full"):
+            schema = pq.read_schema(tmp_path / folder / f"{name}.parquet")
+            assert schema.names[: len(table.columns)] == table.column_names, (name, folder)
+            for column, kind in table.columns:
+                assert schema.field(column).type == arrow[kind], (name, column)
 
 
 def test_every_export_column_is_in_the_data_dictionary(service: StudyService) -> None:

@@ -39,7 +39,7 @@ def test_validation_study_shows_every_stimulus_to_every_rater(
     )
     assert result.exit_code == 0, result.output
     stimuli = pd.read_csv(EXAMPLES / "prototypes.csv")
-    responses = pd.read_parquet(tmp_path / "x" / "responses.parquet")
+    responses = pd.read_parquet(tmp_path / "x" / "categorise_responses.parquet")
     assert responses.groupby("participant_id").size().tolist() == [len(stimuli)] * 3
     intended = responses.groupby("participant_id")["intended"].apply(sorted)
     for labels in intended:

@@ -228,7 +228,9 @@ def test_a_study_of_evolve_and_categorise_blocks_runs_to_completion(
     tables = export_tables(store)
     sessions = tables["sessions"]
     session_id = int(sessions.loc[sessions.participant_id == pid, "session_id"].iloc[0])
-    responses = tables["responses"].query("session_id == @session_id").sort_values("trial")
+    responses = (
+        tables["categorise_responses"].query("session_id == @session_id").sort_values("trial")
+    )
     assert responses["trial"].tolist() == [a["trial"] for a in answered]
     assert responses["label"].tolist() == [a["label"] for a in answered]
     given = [None if pd.isna(x) else int(x) for x in responses["intensity"]]

@@ -108,7 +108,7 @@ def test_sigkill_mid_session_loses_and_duplicates_nothing(
     assert len(per_generation) == 6 and (per_generation == 10).all()
     elites = sel[sel.role == "elite"]
     assert len(elites) == 6 and not elites.duplicated(["trial", "attempt", "generation"]).any()
-    assert len(tables["ratings"]) == 2
+    assert len(tables["evolve_ratings"]) == 2
     report = replay_session(store, 1, ict_model.rig, ict_model.model_hash, model=ict_model)
     assert report.ok, report.mismatches
     store.dispose()
@@ -195,7 +195,7 @@ def test_sigkill_during_categorisation_loses_and_duplicates_nothing(
         server.stop()
     store = Store(db_url)
     tables = export_tables(store)
-    responses = tables["responses"]
+    responses = tables["categorise_responses"]
     assert len(responses) == 4 and responses["label"].notna().all()  # 2 own + 2 random, once
     assert not responses.duplicated(["trial"]).any()
     assert (tables["trials"]["status"] == "done").all()

@@ -197,9 +197,9 @@ def test_the_readme_page_runs_and_its_data_agree_with_the_export(
     np.testing.assert_allclose(
         final[w_cols].to_numpy(float)[-1], evolve["final_weights"], rtol=0, atol=0
     )
-    ratings = tables["ratings"].query("session_id == @sid")
+    ratings = tables["evolve_ratings"].query("session_id == @sid")
     assert ratings["value"].tolist() == [evolve["rating"]] == [6]
-    responses = tables["responses"].query("session_id == @sid")
+    responses = tables["categorise_responses"].query("session_id == @sid")
     assert responses["label"].tolist() == [categorise["label"]]
     assert responses["source"].tolist() == ["own"] and responses["source_trial"].tolist() == [0]
     np.testing.assert_allclose(

@@ -262,7 +262,7 @@ def test_participant_completes_two_trials(
     assert len(sel) == sum(1 + len(c[4]) for c in chosen)
     assert len(tables["restarts"]) == 1
     assert tables["restarts"].load_ms.notna().all() and (tables["restarts"].load_ms > 0).all()
-    assert tables["ratings"].value.tolist() == [6, 2]
+    assert tables["evolve_ratings"].value.tolist() == [6, 2]
     assert tables["sessions"].stage.tolist() == ["done"]
     assert replay_session(store, 1, ict_model.rig, ict_model.model_hash, model=ict_model).ok
     store.dispose()

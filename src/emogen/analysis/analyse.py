@@ -49,9 +49,9 @@ from emogen.analysis.analyse_people import (
 from emogen.analysis.data import Dataset, load_dataset
 from emogen.analysis.distributions import generation_summary, kl_per_generation
 from emogen.analysis.methods import methods_record, methods_text
-from emogen.analysis.people import read_table
 from emogen.analysis.repeatability import BIN_LABELS, repeatability_bins
 from emogen.analysis.report import Report
+from emogen.analysis.study_export import read_table
 
 if TYPE_CHECKING:
     from emogen.appearance.identities import Identity

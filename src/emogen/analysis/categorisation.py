@@ -1,8 +1,9 @@
-"""Categorisation of faces by the participants who made them (the ``responses`` table of a study
-export): accuracy on one's own faces against accuracy on other participants' faces, and the
-report section of every categorisation analysis (:mod:`emogen.analysis.recognition`: confusion
-matrices, unbiased hit rates, accuracy by source; :mod:`emogen.analysis.categorisation_models`:
-labels predicted by the distance to one's own faces).
+"""Categorisation of faces by the participants who made them (the ``categorise_responses``
+table of a study export): accuracy on one's own faces against accuracy on other participants'
+faces, and the report section of every categorisation analysis
+(:mod:`emogen.analysis.recognition`: confusion matrices, unbiased hit rates, accuracy by
+source; :mod:`emogen.analysis.categorisation_models`: labels predicted by the distance to one's
+own faces).
 
 Binetti et al. (2022, PNAS 119:e2201380119) found participants' categorisation of test faces
 explained by how close each face lay to the faces they had made themselves; the simplest form of

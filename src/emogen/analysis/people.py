@@ -4,7 +4,8 @@ the unit.
 :func:`load_people` reads a study export folder (``emogen study export``) into :class:`People`:
 
 * ``faces``: one row per **finished** GA trial (``task = evolve``, status ``done``) — the face
-  the participant ended with (the elite of the last generation of the trial's last attempt).
+  the participant ended with, as the export's ``final_faces`` table gives it (an export
+  written before that table: :func:`~emogen.analysis.study_export.derive_final_faces`).
   Columns: ``participant_id``, ``session_id``, ``trial``, ``block_name``, ``emotion``,
   ``identity``, ``repetition`` (0, 1, … : the how-many-th trial of this emotion on this
   identity the participant made), ``duration_s`` (the trial's first shown face to its end),
@@ -12,8 +13,9 @@ the unit.
   [0, 1]) and the weight columns ``w_*`` (the full, corrected shape weights the participant
   saw); plus any column of a joined participant table (e.g. ``group``);
 * ``trials``: every evolve trial, finished or not (for quality checks);
-* ``selections``, ``responses`` (categorise answers, when the study had them), ``ratings``,
-  ``sessions``, ``identities`` and ``study`` as exported.
+* ``selections``, ``responses`` (the ``categorise_responses`` table: categorise answers, when
+  the study had them), ``ratings`` (``evolve_ratings``), ``sessions``, ``identities`` and
+  ``study`` as exported (an export written before schema 6 under its old table names).
 
 A **participant table** (``--participants FILE`` of ``emogen analyse``: CSV or Parquet with a
 ``participant_id`` column and any others, e.g. ``group`` = clinical/control) is joined to every
@@ -29,11 +31,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from emogen import columns as tidy
+from emogen.analysis.study_export import TRIAL_KEY, read_final_faces, read_table
 from emogen.errors import ConfigError, DataError
-
-#: The key of a trial in every exported table.
-TRIAL_KEY = ("session_id", "trial")
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,20 +109,6 @@ class People:
         return replace(self, faces=faces, responses=responses, participant_columns=tuple(extra))
 
 
-def read_table(folder: Path, name: str, required: bool = True) -> pd.DataFrame | None:
-    """``folder/name.parquet`` or ``.csv`` (None, or an error if ``required``, when absent)."""
-    for suffix in (".parquet", ".csv"):
-        path = folder / f"{name}{suffix}"
-        if path.is_file():
-            try:
-                return pd.read_parquet(path) if suffix == ".parquet" else tidy.read_csv(path)
-            except (OSError, ValueError, ConfigError) as exc:
-                raise ConfigError(f"cannot read {path}: {exc}") from None
-    if required:
-        raise ConfigError(f"{folder} has no {name}.parquet or {name}.csv (a study export's table)")
-    return None
-
-
 def read_participant_table(path: Path) -> pd.DataFrame:
     """A participant table (CSV or Parquet) with a ``participant_id`` column."""
     if not path.is_file():
@@ -159,7 +144,7 @@ def load_people(folder: Path) -> People:
     weights = tuple(c for c in faces.columns if str(c).startswith("w_"))
     if not genes and len(faces):
         raise DataError(f"{folder}/faces has no gene (g_*) columns: export the study again")
-    final = _final_faces(trials, faces, genes, weights)
+    final = _final_faces(trials, read_final_faces(folder, trials, faces), faces, genes, weights)
     return People(
         source=folder,
         faces=final,
@@ -167,8 +152,8 @@ def load_people(folder: Path) -> People:
         selections=selections,
         genes=genes,
         weights=weights,
-        responses=read_table(folder, "responses", required=False),
-        ratings=read_table(folder, "ratings", required=False),
+        responses=read_table(folder, "categorise_responses", required=False),
+        ratings=read_table(folder, "evolve_ratings", required=False),
         sessions=read_table(folder, "sessions", required=False),
         identities=read_table(folder, "identities", required=False),
     )
@@ -191,30 +176,27 @@ def _typed_trials(trials: pd.DataFrame) -> pd.DataFrame:
 
 
 def _final_faces(
-    trials: pd.DataFrame, faces: pd.DataFrame, genes: tuple[str, ...], weights: tuple[str, ...]
+    trials: pd.DataFrame,
+    final: pd.DataFrame,
+    faces: pd.DataFrame,
+    genes: tuple[str, ...],
+    weights: tuple[str, ...],
 ) -> pd.DataFrame:
-    """One row per finished trial: its final face's genes and weights, and its duration."""
+    """One row per finished trial: its final face's genes and weights (from the export's
+    ``final_faces`` table), and its duration."""
     key = list(TRIAL_KEY)
     done = trials[(trials["status"] == "done") & trials["final_face_id"].notna()]
     done = done.assign(duration_s=_durations(done, faces))
-    last = faces.groupby(key)["attempt"].max().rename("last_attempt").reset_index()
-    f = faces.merge(last, on=key)
-    f = f[f["attempt"] == f["last_attempt"]]
-    top = f.groupby(key)["generation"].max().rename("last_generation").reset_index()
-    f = f.merge(top, on=key)
-    f = f[f["generation"] == f["last_generation"]]
-    f = f[[*key, "face_id", *genes, *weights]]
     info = [*key, "participant_id", "block_name", "emotion", "identity", "repetition"]
-    out = done[[*info, "duration_s", "final_face_id"]].merge(
-        f, left_on=[*key, "final_face_id"], right_on=[*key, "face_id"], how="inner"
-    )
+    out = done[[*info, "duration_s"]].merge(final[[*key, *genes, *weights]], on=key, how="inner")
     lost = len(done) - len(out)
     if lost:
         raise DataError(
-            f"{lost} finished trial(s) have no final face in the faces table: the export is "
-            "incomplete (export the study again)"
+            f"{lost} finished trial(s) have no final face in the export (its final_faces table, "
+            "or for an older export its faces table): the export is incomplete (export the "
+            "study again)"
         )
-    return out.drop(columns=["face_id", "final_face_id"]).reset_index(drop=True)
+    return out.reset_index(drop=True)
 
 
 def _durations(done: pd.DataFrame, faces: pd.DataFrame) -> pd.Series:

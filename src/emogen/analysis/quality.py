@@ -27,7 +27,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from emogen.analysis.people import People, read_table
+from emogen.analysis.people import People
+from emogen.analysis.study_export import read_table
 from emogen.errors import ConfigError
 
 PICK_KEY = ["session_id", "trial", "attempt", "generation", "face_id"]

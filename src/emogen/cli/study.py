@@ -120,25 +120,26 @@ def export(
     force: ForceOpt = False,
     as_json: JsonOpt = False,
 ) -> None:
-    """Tidy tables: sessions, trials, faces, selections, restarts, ratings, identities, study
-    (every column: docs/data.md; CSV seeds are text s<digits> so R keeps them exact).
+    """Tidy tables: sessions, trials, faces, selections, restarts, evolve_ratings, final_faces,
+    categorise_responses, identities, study (every column and the join keys: docs/data.md; CSV
+    seeds are text s<digits> so R keeps them exact).
 
     Written a few sessions at a time, in bounded memory whatever the study's size."""
-    from emogen.study.export import TABLES
-    from emogen.study.export_stream import export_study, parse_since
-    from emogen.study.export_tasks import task_export_tables
+    from emogen.study.export_stream import check_table_names, export_study, parse_since
 
     start = None if since is None else parse_since(since)
-    known = (*TABLES, *task_export_tables())
-    unknown = [t for t in table or [] if t not in known]
-    if unknown:
-        raise ConfigError(f"--table must be one of {', '.join(known)}; got {unknown[0]!r}")
+    check_table_names(table or [])
     check_out_folder(out, force=force)
     store = _store(database_url, config)
     try:
         with output_folder(out, force=force) as tmp:
             result = export_study(
-                store, tmp, fmt.value, study=study, since=start, tables=tuple(table or known)
+                store,
+                tmp,
+                fmt.value,
+                study=study,
+                since=start,
+                tables=tuple(table) if table else None,
             )
     finally:
         store.dispose()

@@ -1,13 +1,17 @@
 """Researcher side: study progress, and tidy export tables in Parquet or CSV.
 
-Tables (one row per …): ``sessions`` (session), ``trials`` (trial of a session), ``faces``
-(face shown, per generation: genes ``g_<gene>`` and full weights ``w_<column>``), ``selections``
-(selected face: role ``elite`` or ``other``), ``restarts`` (press of "Start again"),
-``ratings`` (trial) and ``identities`` (identity of a study: its ``shape`` — a preset name, or
-``shape_coefficients`` as a JSON list — and one column per appearance parameter, with
-``appearance_generator``, so any stimulus can be re-rendered exactly; join on ``study`` and
-``identity``), and ``study`` (study: its resolved config itself as ``config_json``, the model,
-gene and weight column names, ``framing``: what participants saw around each face). Every row carries ``schema_version``, ``package_version`` (the version that
+Tables (one row per …): ``sessions`` (session), ``trials`` (trial of a session), then each
+task's own tables — the evolve task's ``faces`` (face shown, per generation: genes ``g_<gene>``
+and full weights ``w_<column>``), ``selections`` (selected face: role ``elite`` or ``other``),
+``restarts`` (press of "Start again"), ``evolve_ratings`` (rated trial) and ``final_faces``
+(finished evolve trial: its final face, genes and weights) in :mod:`emogen.study.export_evolve`;
+the categorise task's ``categorise_responses`` (categorise trial: face shown and answer) in
+:mod:`emogen.study.export_categorise` —, ``identities`` (identity of a study: its ``shape`` —
+a preset name, or ``shape_coefficients`` as a JSON list — and one column per appearance
+parameter, with ``appearance_generator``, so any stimulus can be re-rendered exactly; join on
+``study`` and ``identity``), and ``study`` (study: its resolved config itself as
+``config_json``, the model, gene and weight column names, ``framing``: what participants saw
+around each face). Every row carries ``schema_version``, ``package_version`` (the version that
 recorded the session; for ``identities``, the study), ``model_hash`` and ``study_config_hash``.
 A session's trial order is the ``trials`` table (``trial``: position, ``condition``).
 
@@ -31,28 +35,30 @@ from emogen.appearance.params import GENERATOR_VERSION, Appearance
 from emogen.errors import ConfigError
 from emogen.study.config import StudyConfig
 from emogen.study.dashboard import seconds_between
-from emogen.study.export_rows import (
-    SESSION_TABLE_ROWS,
-    TABLE_COLUMNS,
-    Row,
-    iso,
-    load_records,
-)
+from emogen.study.export_categorise import CATEGORISE_TABLES
+from emogen.study.export_evolve import EVOLVE_TABLES
+from emogen.study.export_rows import SESSIONS, TRIALS, iso, load_records
+from emogen.study.export_spec import ExportTable, Row
 from emogen.study.storage import Store
 from emogen.study.tables import SCHEMA_VERSION, SessionRow, StudyRow, TrialRow
 from emogen.tasks.evolve.tables import SelectionRow
 
-TABLES = (
-    "sessions",
-    "trials",
-    "faces",
-    "selections",
-    "restarts",
-    "ratings",
-    "responses",
-    "identities",
-    "study",
-)
+#: The per-session tables: the study's own, then each task's (made from a read's records).
+SESSION_TABLES: dict[str, ExportTable] = {
+    t.name: t for t in (SESSIONS, TRIALS, *EVOLVE_TABLES, *CATEGORISE_TABLES)
+}
+#: Every table of an export, in order; the study-wide ones last.
+TABLES = (*SESSION_TABLES, "identities", "study")
+#: The tables' names before schema 6 (``emogen.study/5`` and older exports): old name → new.
+FORMERLY = {t.formerly: t.name for t in SESSION_TABLES.values() if t.formerly}
+#: The fixed columns of the study-wide tables (``identities`` adds the appearance parameters).
+STUDY_TABLE_COLUMNS = {
+    "identities": ["study", "identity", "shape", "shape_coefficients"],
+    "study": [
+        *("study", "config_json", "model_name", "gene_names", "weight_names", "framing"),
+        "created_at",
+    ],
+}
 STAMPS = ("schema_version", "package_version", "model_hash", "study_config_hash")
 
 
@@ -146,7 +152,7 @@ def export_tables(
                 raise ConfigError(f"no study named '{study}' in {store.describe()}")
         rec = load_records(db, studies, session_ids)
     rows: dict[str, list[dict[str, Any]]] = {
-        name: list(make(rec)) for name, make in SESSION_TABLE_ROWS.items()
+        name: list(table.rows(rec)) for name, table in SESSION_TABLES.items()
     }
     rows["identities"] = []
     shown = {s.study_id for s in rec.sessions} if session_ids is not None else set(studies)
@@ -158,15 +164,15 @@ def export_tables(
 
 
 def table_extras(studies: list[StudyRow]) -> dict[str, list[str]]:
-    """The columns a table has beyond its fixed ones, for these studies: the faces table's
-    ``g_<gene>`` and ``w_<weight>`` columns (present even when no face has been shown)."""
+    """The columns a table has beyond its fixed ones, for these studies: the ``g_<gene>`` and
+    ``w_<weight>`` columns of the tables of faces (present even when no face has been shown)."""
     names = [json.loads(s.gene_names) for s in studies]
     weights = [json.loads(s.weight_names) for s in studies]
     face_columns = [
         *dict.fromkeys(f"g_{n}" for ns in names for n in ns),
         *dict.fromkeys(f"w_{n}" for ns in weights for n in ns),
     ]
-    return {"faces": face_columns, "responses": face_columns}
+    return {name: face_columns for name, t in SESSION_TABLES.items() if t.faces}
 
 
 def identity_rows(study: StudyRow) -> list[dict[str, Any]]:
@@ -216,7 +222,10 @@ def identities_from_table(table: pd.DataFrame) -> dict[tuple[str, str], Identity
 
 def _frame(name: str, rows: list[dict[str, Any]], extra: list[str]) -> pd.DataFrame:
     """A table typed by :func:`emogen.columns.typed`; empty, it has all its columns."""
-    columns = [*TABLE_COLUMNS[name], *extra, *STAMPS]
+    if name in SESSION_TABLES:
+        table = SESSION_TABLES[name]
+        return tidy.frame(rows, [*table.column_names, *extra, *STAMPS], table.dtypes)
+    columns = [*STUDY_TABLE_COLUMNS[name], *extra, *STAMPS]
     if name == "identities":
         columns[4:4] = [*Appearance().record(), "appearance_generator"]
     dtypes = {k: _APPEARANCE_DTYPES[type(v)] for k, v in Appearance().record().items()}

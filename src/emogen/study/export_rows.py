@@ -1,13 +1,16 @@
-"""The rows of the export tables, one function per table, from the records of a read.
+"""The records of an export read, and the study's own per-session tables (``sessions``,
+``trials``); each task's tables are in its own module (:mod:`emogen.study.export_evolve`,
+:mod:`emogen.study.export_categorise`).
 
-:func:`load_records` reads the sessions (and everything under them) of some studies;
-each ``*_rows`` function turns them into the tidy rows of one table (see :mod:`emogen.study.export`).
+:func:`load_records` reads the sessions (and everything under them) of some studies; each
+table's ``rows`` function turns them into the tidy rows of one table (see
+:mod:`emogen.study.export`).
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Any
@@ -15,44 +18,11 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from emogen.study.export_spec import TRIAL_KEY, ExportTable, Row, typed_columns
 from emogen.study.tables import SCHEMA_VERSION, SessionRow, StudyRow, TrialRow, as_utc
 from emogen.tasks.categorise.tables import ResponseRow, StimulusRow
 from emogen.tasks.evolve.tables import FaceRow, PopulationRow, RatingRow, RestartRow, SelectionRow
 from emogen.tasks.registry import task_named
-
-Row = dict[str, Any]
-
-#: Each table's columns (``faces`` adds ``g_<gene>`` and ``w_<weight>`` columns, ``identities``
-#: the appearance parameters; every table ends with the record stamp).
-TABLE_COLUMNS = {
-    "sessions": ["study", "session_id", "participant_id", "participant_source", "session_number",
-                 "seed", "order_kind", "order_row", "stage", "n_trials", "user_agent",
-                 "created_at", "consented_at", "started_at", "completed_at"],
-    "trials": ["study", "session_id", "participant_id", "participant_source", "trial", "block",
-               "block_name", "task", "condition", "emotion",
-               "identity", "repetition", "seed", "ga_stream", "collision_solver", "status", "attempts",
-               "generation_reached", "final_face_id", "started_at", "finished_at"],
-    "faces": ["study", "session_id", "participant_id", "participant_source", "trial", "attempt", "generation",
-              "position", "face_id", "parent_a", "parent_b", "operator", "shown_at"],
-    "selections": ["study", "session_id", "participant_id", "participant_source", "trial", "attempt", "generation",
-                   "face_id", "role", "rank", "n_selected", "shown_at", "submitted_at",
-                   "server_response_ms", "load_ms", "client_response_ms", "step_key"],
-    "restarts": ["study", "session_id", "participant_id", "participant_source", "trial", "attempt", "generation",
-                 "shown_at", "submitted_at", "server_response_ms", "load_ms",
-                 "client_response_ms", "step_key"],
-    "ratings": ["study", "session_id", "participant_id", "participant_source", "trial", "emotion", "identity",
-                "face_id", "value", "points", "submitted_at", "server_response_ms",
-                "client_response_ms", "step_key"],
-    "responses": ["study", "session_id", "participant_id", "participant_source", "trial",
-                  "block", "block_name", "source", "fallback", "source_session_id",
-                  "source_participant_id", "source_trial", "source_face_id", "source_row",
-                  "source_label", "intended", "identity", "labels", "label", "label_position",
-                  "correct", "intensity", "confidence", "shown_at", "submitted_at",
-                  "server_response_ms", "load_ms", "client_response_ms", "step_key"],
-    "identities": ["study", "identity", "shape", "shape_coefficients"],
-    "study": ["study", "config_json", "model_name", "gene_names", "weight_names", "framing",
-              "created_at"],
-}  # fmt: skip
 
 
 def iso(t: datetime | None) -> str | None:
@@ -81,6 +51,7 @@ class Records:
     by_population: dict[int, PopulationRow] = field(init=False)
     _corrects: dict[int, bool] = field(init=False, default_factory=dict)
     _block_names: dict[int, list[str]] = field(init=False, default_factory=dict)
+    _face_columns: dict[int, tuple[list[str], list[str]]] = field(init=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         self.by_session = {s.id: s for s in self.sessions}
@@ -128,6 +99,16 @@ class Records:
 
     def trial_stamp(self, trial: TrialRow) -> Row:
         return self.stamp(self.by_session[trial.session_id])
+
+    def face_columns(self, session: SessionRow) -> tuple[list[str], list[str]]:
+        """The ``g_<gene>`` and ``w_<weight>`` column names of the session's study."""
+        st = self.studies[session.study_id]
+        if st.id not in self._face_columns:
+            self._face_columns[st.id] = (
+                [f"g_{n}" for n in json.loads(st.gene_names)],
+                [f"w_{n}" for n in json.loads(st.weight_names)],
+            )
+        return self._face_columns[st.id]
 
 
 def load_records(
@@ -200,13 +181,16 @@ def session_rows(rec: Records) -> Iterator[Row]:
 
 def trial_rows(rec: Records) -> Iterator[Row]:
     for t in rec.trials:
+        makes = task_named(t.task).block.makes_faces  # its emotion and face are its own
         yield {
             **rec.key(t),
             "block": t.block,
             "block_name": rec.block_name(t),
             "task": t.task,
             "condition": t.condition,
-            "emotion": t.emotion or None,  # a categorise face of unknown making: NA
+            # a face-making trial: the emotion to make; other tasks' own tables say what they
+            # showed
+            "emotion": (t.emotion or None) if makes else None,
             "identity": t.identity,
             "repetition": t.repetition,
             "seed": t.seed,
@@ -214,157 +198,42 @@ def trial_rows(rec: Records) -> Iterator[Row]:
             "status": t.status,
             "attempts": t.attempt + 1,
             "generation_reached": t.generation,
-            "final_face_id": t.final_face_id,
+            "final_face_id": t.final_face_id if makes else None,
             "started_at": iso(t.started_at),
             "finished_at": iso(t.finished_at),
             **rec.trial_stamp(t),
         }
 
 
-def face_rows(rec: Records) -> Iterator[Row]:
-    gene_cols = {sid: json.loads(st.gene_names) for sid, st in rec.studies.items()}
-    weight_cols = {sid: json.loads(st.weight_names) for sid, st in rec.studies.items()}
-    for f in rec.faces:
-        p = rec.by_population[f.population_id]
-        t = rec.by_trial[p.trial_id]
-        s = rec.by_session[t.session_id]
-        row: Row = {
-            **rec.key(t),
-            "attempt": p.attempt,
-            "generation": p.generation,
-            "position": f.position,
-            "face_id": f.face_id,
-            "parent_a": None if f.parent_a < 0 else f.parent_a,
-            "parent_b": None if f.parent_b < 0 else f.parent_b,
-            "operator": f.operator,
-            "shown_at": iso(p.shown_at),
-        }
-        row.update(zip((f"g_{n}" for n in gene_cols[s.study_id]), json.loads(f.genes), strict=True))
-        row.update(
-            zip((f"w_{n}" for n in weight_cols[s.study_id]), json.loads(f.weights), strict=True)
-        )
-        row.update(rec.stamp(s))
-        yield row
+def face_values(rec: Records, session: SessionRow, genes: str | None, weights: str) -> Row:
+    """A face's ``g_<gene>`` (NA when ``genes`` is None: a file face) and ``w_<weight>``
+    cells, from their stored JSON lists."""
+    gene_cols, weight_cols = rec.face_columns(session)
+    values = json.loads(genes) if genes else [None] * len(gene_cols)
+    row = dict(zip(gene_cols, values, strict=True))
+    row.update(zip(weight_cols, json.loads(weights), strict=True))
+    return row
 
 
-def selection_rows(rec: Records) -> Iterator[Row]:
-    for sel in sorted(rec.selections, key=lambda x: x.id):
-        p = rec.by_population[sel.population_id]
-        t = rec.by_trial[p.trial_id]
-        others = json.loads(sel.other_face_ids)
-        chosen = [(sel.elite_face_id, "elite")] + [(o, "other") for o in others]
-        for rank, (face, role) in enumerate(chosen):
-            yield {
-                **rec.key(t),
-                "attempt": p.attempt,
-                "generation": p.generation,
-                "face_id": face,
-                "role": role,
-                "rank": rank,
-                "n_selected": 1 + len(others),
-                "shown_at": iso(p.shown_at),
-                "submitted_at": iso(sel.submitted_at),
-                "server_response_ms": sel.server_response_ms,
-                "load_ms": sel.load_ms,
-                "client_response_ms": sel.client_response_ms,
-                "step_key": sel.step_key,
-                **rec.trial_stamp(t),
-            }
-
-
-def restart_rows(rec: Records) -> Iterator[Row]:
-    for r in sorted(rec.restarts, key=lambda x: x.id):
-        p = rec.by_population[r.population_id]
-        t = rec.by_trial[p.trial_id]
-        yield {
-            **rec.key(t),
-            "attempt": p.attempt,
-            "generation": p.generation,
-            "shown_at": iso(p.shown_at),
-            "submitted_at": iso(r.submitted_at),
-            "server_response_ms": r.server_response_ms,
-            "load_ms": r.load_ms,
-            "client_response_ms": r.client_response_ms,
-            "step_key": r.step_key,
-            **rec.trial_stamp(t),
-        }
-
-
-def rating_rows(rec: Records) -> Iterator[Row]:
-    for rt in sorted(rec.ratings, key=lambda x: x.id):
-        t = rec.by_trial[rt.trial_id]
-        yield {
-            **rec.key(t),
-            "emotion": t.emotion,
-            "identity": t.identity,
-            "face_id": rt.face_id,
-            "value": rt.value,
-            "points": rt.points,
-            "submitted_at": iso(rt.submitted_at),
-            "server_response_ms": rt.server_response_ms,
-            "client_response_ms": rt.client_response_ms,
-            "step_key": rt.step_key,
-            **rec.trial_stamp(t),
-        }
-
-
-def response_rows(rec: Records) -> Iterator[Row]:
-    """One row per categorise trial whose face was drawn: the face (source, identity, genes
-    and full weights), the labels offered in their order, the answer (NA until answered)."""
-    gene_cols = {sid: json.loads(st.gene_names) for sid, st in rec.studies.items()}
-    weight_cols = {sid: json.loads(st.weight_names) for sid, st in rec.studies.items()}
-    answers = {r.trial_id: r for r in rec.responses}
-    for stim in rec.stimuli:  # in trial id order: sessions, then positions
-        t = rec.by_trial[stim.trial_id]
-        s = rec.by_session[t.session_id]
-        r = answers.get(t.id)
-        label = None if r is None else r.label
-        row: Row = {
-            **rec.key(t),
-            "block": t.block,
-            "block_name": rec.block_name(t),
-            "source": stim.source,
-            "fallback": bool(stim.fallback),
-            "source_session_id": stim.source_session_id,
-            "source_participant_id": rec.participants.get(stim.source_session_id or -1),
-            "source_trial": stim.source_trial,
-            "source_face_id": stim.source_face_id,
-            "source_row": stim.source_row,
-            "source_label": stim.source_label,
-            "intended": stim.intended,
-            "identity": stim.identity,
-            "labels": "|".join(json.loads(stim.labels)),
-            "label": label,
-            "label_position": None if r is None else r.label_position,
-            "correct": None if r is None or stim.intended is None else label == stim.intended,
-            "intensity": None if r is None else r.intensity,
-            "confidence": None if r is None else r.confidence,
-            "shown_at": iso(stim.shown_at),
-            "submitted_at": None if r is None else iso(r.submitted_at),
-            "server_response_ms": None if r is None else r.server_response_ms,
-            "load_ms": None if r is None else r.load_ms,
-            "client_response_ms": None if r is None else r.client_response_ms,
-            "step_key": None if r is None else r.step_key,
-        }
-        genes = json.loads(stim.genes) if stim.genes else [None] * len(gene_cols[s.study_id])
-        row.update(zip((f"g_{n}" for n in gene_cols[s.study_id]), genes, strict=True))
-        row.update(
-            zip((f"w_{n}" for n in weight_cols[s.study_id]), json.loads(stim.weights), strict=True)
-        )
-        row.update(rec.stamp(s))
-        yield row
-
-
-#: The per-session tables and the function that makes each one's rows from the records.
-SESSION_TABLE_ROWS: dict[str, Callable[[Records], Iterator[Row]]] = {
-    "sessions": session_rows,
-    "trials": trial_rows,
-    "faces": face_rows,
-    "selections": selection_rows,
-    "restarts": restart_rows,
-    "ratings": rating_rows,
-    "responses": response_rows,
-}
+SESSIONS = ExportTable(
+    "sessions",
+    typed_columns(
+        "study:str session_id:int participant_id:str participant_source:str session_number:int "
+        "seed:seed order_kind:str order_row:int stage:str n_trials:int user_agent:str "
+        "created_at:time consented_at:time started_at:time completed_at:time"
+    ),
+    session_rows,
+)
+TRIALS = ExportTable(
+    "trials",
+    TRIAL_KEY
+    + typed_columns(
+        "block:int block_name:str task:str condition:int emotion:str identity:str repetition:int "
+        "seed:seed ga_stream:int collision_solver:int status:str attempts:int "
+        "generation_reached:int final_face_id:int started_at:time finished_at:time"
+    ),
+    trial_rows,
+)
 
 
 def _state_facts(t: TrialRow, corrects: bool) -> dict[str, Any]:

@@ -41,6 +41,8 @@ from sqlalchemy import func, select
 from emogen import columns as tidy
 from emogen.errors import ConfigError
 from emogen.study.export import (
+    FORMERLY,
+    SESSION_TABLES,
     TABLES,
     _frame,
     export_provenance,
@@ -49,7 +51,7 @@ from emogen.study.export import (
     study_rows,
     table_extras,
 )
-from emogen.study.export_rows import SESSION_TABLE_ROWS, iso, load_records
+from emogen.study.export_rows import iso, load_records
 from emogen.study.export_tasks import task_export_tables, task_frame, task_rows
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, StudyRow, TrialRow, as_utc
@@ -80,6 +82,23 @@ def parse_since(text: str) -> datetime:
         raise ConfigError(
             f"--since must be a time between 0001-01-01 and 9999-12-31 in UTC; got {text!r}"
         ) from None
+
+
+def all_tables() -> tuple[str, ...]:
+    """Every export table: the study's (:data:`TABLES`) and the registered tasks' records'."""
+    return (*TABLES, *task_export_tables())
+
+
+def check_table_names(tables: tuple[str, ...] | list[str]) -> None:
+    """Every name one of :func:`all_tables` (an old name is named with its new one)."""
+    known = all_tables()
+    for name in tables:
+        if name in FORMERLY:
+            raise ConfigError(
+                f"--table {name!r} is called {FORMERLY[name]!r} since schema emogen.study/6"
+            )
+        if name not in known:
+            raise ConfigError(f"--table must be one of {', '.join(known)}; got {name!r}")
 
 
 @dataclass(frozen=True)
@@ -137,7 +156,7 @@ class _Spill:
 
     def __init__(self, folder: Path) -> None:
         self.folder = folder
-        names = (*TABLES, *task_export_tables())
+        names = all_tables()
         self.files: dict[str, list[Path]] = {name: [] for name in names}
         self.rows: dict[str, int] = dict.fromkeys(names, 0)
         self.empty: dict[str, pa.Table] = {}
@@ -234,11 +253,8 @@ def export_study(
     with ``since``, only the sessions completed in [since, now − SETTLE), and ``export.json``."""
     if fmt not in ("parquet", "csv"):
         raise ConfigError(f"--format must be parquet or csv; got {fmt!r}")
-    known = (*TABLES, *task_export_tables())
-    tables = known if tables is None else tables
-    unknown = [t for t in tables if t not in known]
-    if unknown:
-        raise ConfigError(f"--table must be one of {', '.join(known)}; got {unknown[0]!r}")
+    tables = all_tables() if tables is None else tables
+    check_table_names(tables)
     studies = _studies(store, study)
     until = None
     if since is not None:
@@ -274,11 +290,15 @@ def export_study(
 
 
 def _spill_sessions(
-    store: Store, studies: dict[int, StudyRow], chunks: list[list[int]], spill: _Spill,
-    tables: tuple[str, ...], extras: dict[str, list[str]],
-) -> None:  # fmt: skip
+    store: Store,
+    studies: dict[int, StudyRow],
+    chunks: list[list[int]],
+    spill: _Spill,
+    tables: tuple[str, ...],
+    extras: dict[str, list[str]],
+) -> None:
     """Every chunk's rows of the per-session tables, read and spilled one chunk at a time."""
-    per_session = [name for name in tables if name in SESSION_TABLE_ROWS]
+    per_session = [name for name in tables if name in SESSION_TABLES]
     for name in per_session:
         spill.add(name, _frame(name, [], extras.get(name, [])))
     records = {k: v for k, v in task_export_tables().items() if k in tables}
@@ -290,5 +310,6 @@ def _spill_sessions(
             for name, row in records.items():
                 spill.add(name, task_frame(row, task_rows(db, row, ids)))
         for name in per_session:
-            spill.add(name, _frame(name, list(SESSION_TABLE_ROWS[name](rec)), extras.get(name, [])))
+            rows = list(SESSION_TABLES[name].rows(rec))
+            spill.add(name, _frame(name, rows, extras.get(name, [])))
         del rec

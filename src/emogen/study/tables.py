@@ -58,7 +58,10 @@ __all__ = [
 #: and replay.
 #: 5: blocks and tasks: ``trials.block`` and ``trials.task``, the ``responses`` table (a
 #: categorise trial's face and answer). Exports of schema 4 still analyse and replay.
-SCHEMA_VERSION = "emogen.study/5"
+#: 6 (exports only): tables named by their task (``responses`` → ``categorise_responses``,
+#: ``ratings`` → ``evolve_ratings``), the ``final_faces`` table, ``trials.emotion`` and
+#: ``final_face_id`` NA for trials that make no face. Exports of schema 5 still analyse and replay.
+SCHEMA_VERSION = "emogen.study/6"
 
 
 class StudyRow(Base):

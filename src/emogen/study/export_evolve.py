@@ -1,0 +1,184 @@
+"""The evolve task's (the GA's) export tables: each one's name, typed columns and rows.
+
+``faces`` (every face shown, per generation), ``selections``, ``restarts``, ``evolve_ratings``
+(the rating of a trial's final face; ``ratings`` before schema 6) and ``final_faces`` (one row
+per finished evolve trial: the face the participant ended with, with its genes and weights).
+Face ids are unique only within a trial (see docs/data.md, "Joining the tables").
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+
+from emogen.study.export_rows import Records, face_values, iso
+from emogen.study.export_spec import TRIAL_KEY, ExportTable, Row, typed_columns
+from emogen.tasks.evolve.tables import FaceRow
+from emogen.tasks.evolve.task import EvolveTask
+
+#: The response times and the idempotency key of a participant's step.
+_TIMING = "submitted_at:time server_response_ms:float load_ms:float client_response_ms:float"
+
+
+def face_rows(rec: Records) -> Iterator[Row]:
+    for f in rec.faces:
+        p = rec.by_population[f.population_id]
+        t = rec.by_trial[p.trial_id]
+        s = rec.by_session[t.session_id]
+        yield {
+            **rec.key(t),
+            "attempt": p.attempt,
+            "generation": p.generation,
+            "position": f.position,
+            "face_id": f.face_id,
+            "parent_a": None if f.parent_a < 0 else f.parent_a,
+            "parent_b": None if f.parent_b < 0 else f.parent_b,
+            "operator": f.operator,
+            "shown_at": iso(p.shown_at),
+            **face_values(rec, s, f.genes, f.weights),
+            **rec.stamp(s),
+        }
+
+
+def selection_rows(rec: Records) -> Iterator[Row]:
+    for sel in sorted(rec.selections, key=lambda x: x.id):
+        p = rec.by_population[sel.population_id]
+        t = rec.by_trial[p.trial_id]
+        others = json.loads(sel.other_face_ids)
+        chosen = [(sel.elite_face_id, "elite")] + [(o, "other") for o in others]
+        for rank, (face, role) in enumerate(chosen):
+            yield {
+                **rec.key(t),
+                "attempt": p.attempt,
+                "generation": p.generation,
+                "face_id": face,
+                "role": role,
+                "rank": rank,
+                "n_selected": 1 + len(others),
+                "shown_at": iso(p.shown_at),
+                "submitted_at": iso(sel.submitted_at),
+                "server_response_ms": sel.server_response_ms,
+                "load_ms": sel.load_ms,
+                "client_response_ms": sel.client_response_ms,
+                "step_key": sel.step_key,
+                **rec.trial_stamp(t),
+            }
+
+
+def restart_rows(rec: Records) -> Iterator[Row]:
+    for r in sorted(rec.restarts, key=lambda x: x.id):
+        p = rec.by_population[r.population_id]
+        t = rec.by_trial[p.trial_id]
+        yield {
+            **rec.key(t),
+            "attempt": p.attempt,
+            "generation": p.generation,
+            "shown_at": iso(p.shown_at),
+            "submitted_at": iso(r.submitted_at),
+            "server_response_ms": r.server_response_ms,
+            "load_ms": r.load_ms,
+            "client_response_ms": r.client_response_ms,
+            "step_key": r.step_key,
+            **rec.trial_stamp(t),
+        }
+
+
+def rating_rows(rec: Records) -> Iterator[Row]:
+    for rt in sorted(rec.ratings, key=lambda x: x.id):
+        t = rec.by_trial[rt.trial_id]
+        yield {
+            **rec.key(t),
+            "emotion": t.emotion,
+            "identity": t.identity,
+            "face_id": rt.face_id,
+            "value": rt.value,
+            "points": rt.points,
+            "submitted_at": iso(rt.submitted_at),
+            "server_response_ms": rt.server_response_ms,
+            "client_response_ms": rt.client_response_ms,
+            "step_key": rt.step_key,
+            **rec.trial_stamp(t),
+        }
+
+
+def final_face_rows(rec: Records) -> Iterator[Row]:
+    """One row per finished evolve trial: its final face (``trials.final_face_id``) as found in
+    the trial's last attempt, in the latest generation that shows it, with that face's genes
+    and weights."""
+    latest: dict[tuple[int, int, int], tuple[int, FaceRow]] = {}
+    for f in rec.faces:
+        p = rec.by_population[f.population_id]
+        k = (p.trial_id, p.attempt, f.face_id)
+        if k not in latest or p.generation > latest[k][0]:
+            latest[k] = (p.generation, f)
+    for t in rec.trials:
+        if t.task != EvolveTask.name or t.status != "done" or t.final_face_id is None:
+            continue
+        found = latest.get((t.id, t.attempt, t.final_face_id))
+        if found is None:  # not stored: the analysis reports the finished trial without it
+            continue
+        generation, f = found
+        s = rec.by_session[t.session_id]
+        yield {
+            **rec.key(t),
+            "block": t.block,
+            "block_name": rec.block_name(t),
+            "emotion": t.emotion,
+            "identity": t.identity,
+            "repetition": t.repetition,
+            "attempt": t.attempt,
+            "generation": generation,
+            "face_id": f.face_id,
+            "finished_at": iso(t.finished_at),
+            **face_values(rec, s, f.genes, f.weights),
+            **rec.stamp(s),
+        }
+
+
+FACES = ExportTable(
+    "faces",
+    TRIAL_KEY
+    + typed_columns(
+        "attempt:int generation:int position:int face_id:int parent_a:int parent_b:int "
+        "operator:str shown_at:time"
+    ),
+    face_rows,
+    faces=True,
+)
+SELECTIONS = ExportTable(
+    "selections",
+    TRIAL_KEY
+    + typed_columns(
+        "attempt:int generation:int face_id:int role:str rank:int n_selected:int shown_at:time "
+        f"{_TIMING} step_key:str"
+    ),
+    selection_rows,
+)
+RESTARTS = ExportTable(
+    "restarts",
+    TRIAL_KEY + typed_columns(f"attempt:int generation:int shown_at:time {_TIMING} step_key:str"),
+    restart_rows,
+)
+EVOLVE_RATINGS = ExportTable(
+    "evolve_ratings",
+    TRIAL_KEY
+    + typed_columns(
+        "emotion:str identity:str face_id:int value:int points:int submitted_at:time "
+        "server_response_ms:float client_response_ms:float step_key:str"
+    ),
+    rating_rows,
+    formerly="ratings",
+)
+FINAL_FACES = ExportTable(
+    "final_faces",
+    TRIAL_KEY
+    + typed_columns(
+        "block:int block_name:str emotion:str identity:str repetition:int attempt:int "
+        "generation:int face_id:int finished_at:time"
+    ),
+    final_face_rows,
+    faces=True,
+)
+
+#: The evolve task's tables, in export order.
+EVOLVE_TABLES = (FACES, SELECTIONS, RESTARTS, EVOLVE_RATINGS, FINAL_FACES)

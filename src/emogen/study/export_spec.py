@@ -1,0 +1,79 @@
+"""What an export table is: its name, its columns and their types, and how its rows are made.
+
+Each task declares its own tables in one module (:mod:`emogen.study.export_evolve`,
+:mod:`emogen.study.export_categorise`; the study's own tables in
+:mod:`emogen.study.export_rows`); :mod:`emogen.study.export` writes every one of them the same
+way. A column's type is declared with it (``name:kind``, the kinds of :mod:`emogen.columns`);
+where :mod:`emogen.columns` has a rule for that name the two must agree (checked when the table
+is defined), so Parquet, CSV and R's ``col_types.csv`` type it the same.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from typing import Any, get_args
+
+from emogen import columns as tidy
+
+Row = dict[str, Any]
+Column = tuple[str, tidy.Kind]
+
+#: pandas dtypes of the kinds (for a declared column that :mod:`emogen.columns` has no rule for)
+PANDAS_DTYPES = {"int": "Int64", "float": "float64", "str": "string", "bool": "boolean"}
+
+
+def typed_columns(spec: str) -> tuple[Column, ...]:
+    """``"study:str session_id:int …"`` as (name, kind) pairs."""
+    kinds: dict[str, tidy.Kind] = {k: k for k in get_args(tidy.Kind)}
+    out = []
+    for item in spec.split():
+        name, _, kind = item.partition(":")
+        if kind not in kinds:
+            raise ValueError(f"column {name!r}: kind must be one of {list(kinds)}; got {kind!r}")
+        out.append((name, kinds[kind]))
+    return tuple(out)
+
+
+#: The columns that name a trial in every per-trial table.
+TRIAL_KEY = typed_columns(
+    "study:str session_id:int participant_id:str participant_source:str trial:int"
+)
+
+
+@dataclass(frozen=True)
+class ExportTable:
+    """One export table: ``name``, its fixed ``columns`` (then, with ``faces``, the study's
+    ``g_<gene>`` and ``w_<weight>`` columns; then the record stamp), and ``rows`` (its rows from
+    the records of a read). ``formerly``: its name in exports before schema 6 (readers of old
+    exports look for that name too)."""
+
+    name: str
+    columns: tuple[Column, ...]
+    #: the rows from a read's :class:`~emogen.study.export_rows.Records` (typed Any here: the
+    #: records module defines its own tables with this class)
+    rows: Callable[[Any], Iterator[Row]]
+    faces: bool = False
+    formerly: str | None = None
+
+    def __post_init__(self) -> None:
+        for name, kind in self.columns:
+            rule = tidy.kind(name)
+            if rule is not None and rule != kind:
+                raise ValueError(
+                    f"export table {self.name!r}: column {name!r} is declared {kind} but "
+                    f"emogen.columns types it {rule}"
+                )
+
+    @property
+    def column_names(self) -> list[str]:
+        return [name for name, _ in self.columns]
+
+    @property
+    def dtypes(self) -> dict[str, str]:
+        """pandas dtypes of the declared columns without a rule in :mod:`emogen.columns`."""
+        return {
+            n: PANDAS_DTYPES[k]
+            for n, k in self.columns
+            if tidy.kind(n) is None and k in PANDAS_DTYPES
+        }
