@@ -17,7 +17,7 @@ from emogen.study.export import FORMERLY, TABLES, export_tables, write_export
 from emogen.study.export_stream import check_table_names, export_study
 from emogen.study.tables import SCHEMA_VERSION
 from tests.export_helpers import MIXED, simulated_tables
-from tests.study.drive import new_key, run_to_end, service_caller
+from tests.study.drive import do, new_key, run_to_end, service_caller
 from tests.study.test_export_replay import completed
 
 
@@ -72,9 +72,11 @@ def test_final_faces_are_the_faces_a_plain_lookup_finds(service, tmp_path: Path)
     completed(service, "F-1", restart=True)  # trial 0's final face is in attempt 1
     completed(service, "F-2")
     token, _ = service.create_session("F-3")  # stops at generation 1: no final face
-    state = service.begin(token, new_key())
+    state = do(service, "begin", token, new_key())
     run_to_end(
-        state, service_caller(service, token), stop=lambda s: s["progress"]["generation"] == 1
+        state,
+        service_caller(service, token),
+        stop=lambda s: s["view"] is not None and s["view"].get("generation") == 1,
     )
     tables = export_tables(service.store)
     assert check_final_faces(tables) == 4

@@ -13,7 +13,18 @@ import json
 from collections.abc import Iterator
 
 from emogen.study.export_rows import Records, face_values, iso
-from emogen.study.export_spec import TRIAL_KEY, ExportTable, Row, typed_columns
+from emogen.study.export_spec import (
+    TRIAL_KEY,
+    ExportTable,
+    Row,
+    record_columns,
+    record_values,
+    typed_columns,
+)
+from emogen.tasks.categorise.tables import ResponseRow
+
+#: The answer's columns: the record's own (:class:`ResponseRow`, where they are named).
+ANSWER = record_columns(ResponseRow)
 
 
 def response_rows(rec: Records) -> Iterator[Row]:
@@ -24,7 +35,6 @@ def response_rows(rec: Records) -> Iterator[Row]:
         t = rec.by_trial[stim.trial_id]
         s = rec.by_session[t.session_id]
         r = answers.get(t.id)
-        label = None if r is None else r.label
         yield {
             **rec.key(t),
             "block": t.block,
@@ -40,17 +50,9 @@ def response_rows(rec: Records) -> Iterator[Row]:
             "intended": stim.intended,
             "identity": stim.identity,
             "labels": "|".join(json.loads(stim.labels)),
-            "label": label,
-            "label_position": None if r is None else r.label_position,
-            "correct": None if r is None or stim.intended is None else label == stim.intended,
-            "intensity": None if r is None else r.intensity,
-            "confidence": None if r is None else r.confidence,
             "shown_at": iso(stim.shown_at),
-            "submitted_at": None if r is None else iso(r.submitted_at),
-            "server_response_ms": None if r is None else r.server_response_ms,
-            "load_ms": None if r is None else r.load_ms,
-            "client_response_ms": None if r is None else r.client_response_ms,
-            "step_key": None if r is None else r.step_key,
+            "correct": None if r is None or stim.intended is None else r.label == stim.intended,
+            **record_values(r, ANSWER),
             **face_values(rec, s, stim.genes, stim.weights),
             **rec.stamp(s),
         }
@@ -62,10 +64,9 @@ CATEGORISE_RESPONSES = ExportTable(
     + typed_columns(
         "block:int block_name:str source:str fallback:bool source_session_id:int "
         "source_participant_id:str source_trial:int source_face_id:int source_row:int "
-        "source_label:str intended:str identity:str labels:str label:str label_position:int "
-        "correct:bool intensity:int confidence:int shown_at:time submitted_at:time "
-        "server_response_ms:float load_ms:float client_response_ms:float step_key:str"
-    ),
+        "source_label:str intended:str identity:str labels:str shown_at:time correct:bool"
+    )
+    + ANSWER,
     response_rows,
     faces=True,
     formerly="responses",

@@ -14,7 +14,10 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, get_args
 
+from sqlalchemy import Boolean, DateTime, Float, Integer
+
 from emogen import columns as tidy
+from emogen.study.tables import as_utc
 
 Row = dict[str, Any]
 Column = tuple[str, tidy.Kind]
@@ -33,6 +36,36 @@ def typed_columns(spec: str) -> tuple[Column, ...]:
             raise ValueError(f"column {name!r}: kind must be one of {list(kinds)}; got {kind!r}")
         out.append((name, kinds[kind]))
     return tuple(out)
+
+
+def record_columns(row: Any, skip: tuple[str, ...] = ("id", "trial_id")) -> tuple[Column, ...]:
+    """A task record's columns as its row declares them (SQLAlchemy types as kinds), but
+    ``skip``: a record's fields are named once, where the record is declared."""
+    kinds: list[tuple[type, tidy.Kind]] = [
+        (Boolean, "bool"),
+        (Integer, "int"),
+        (Float, "float"),
+        (DateTime, "time"),
+    ]
+    out: list[Column] = []
+    for column in row.__table__.columns:
+        if column.name not in skip:
+            found: tidy.Kind = next((k for t, k in kinds if isinstance(column.type, t)), "str")
+            out.append((str(column.name), tidy.kind(column.name) or found))
+    return tuple(out)
+
+
+def record_values(record: Any, columns: tuple[Column, ...]) -> Row:
+    """A record's values of ``columns`` (times as the exports write them; None: a record not
+    made yet, every value missing)."""
+    if record is None:
+        return dict.fromkeys(name for name, _ in columns)
+    out = {}
+    for name, kind in columns:
+        value = getattr(record, name)
+        stamp = as_utc(value) if kind == "time" else None
+        out[name] = stamp.isoformat() if stamp is not None else value
+    return out
 
 
 #: The columns that name a trial in every per-trial table.

@@ -102,3 +102,10 @@ class TrialRow(Base):
     final_face_id: Mapped[int | None] = mapped_column(Integer, nullable=True)
     started_at: Mapped[datetime | None] = mapped_column(Stamp, nullable=True)
     finished_at: Mapped[datetime | None] = mapped_column(Stamp, nullable=True)
+
+
+def fields_of(command: Any, row: Any) -> dict[str, Any]:
+    """The command's values of the fields its record's row has columns of (a field is named
+    once, in the command and the record, never copied by hand)."""
+    columns = set(core_table(row).columns.keys())
+    return {k: v for k, v in command.model_dump().items() if k in columns}

@@ -42,7 +42,7 @@ from emogen.tasks.protocol import (
     TaskEnv,
     TrialCommand,
 )
-from emogen.tasks.records import TrialRow, server_ms, utcnow
+from emogen.tasks.records import TrialRow, fields_of, server_ms, utcnow
 
 #: The face id a categorise trial's one face has in its view (and its PNG's URL).
 FACE_ID = 0
@@ -123,15 +123,12 @@ class CategoriseTask:
         now = utcnow()
         db.add(
             ResponseRow(
+                **fields_of(cmd, ResponseRow),  # the answer as sent: label, ratings, load_ms
                 trial_id=row.id,
-                label=cmd.label,
                 label_position=position,
-                intensity=cmd.intensity,
-                confidence=cmd.confidence,
                 submitted_at=now,
                 server_response_ms=server_ms(now, stim.shown_at, cmd.load_ms),
                 client_response_ms=cmd.response_ms,
-                load_ms=cmd.load_ms,
                 step_key=cmd.key,
             )
         )
