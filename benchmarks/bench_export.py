@@ -56,20 +56,23 @@ def _template(database_url: str, config: Path) -> None:
                            model_hash=model.model_hash, model=model)  # fmt: skip
     rng = random.Random(0)
     token, _ = service.create_session("export-template")
-    state = service.begin(token, "template-key-begin")
+    state = service.step(token, {"command": "begin", "key": "template-key-begin"})
     for k in range(200):
         if state["stage"] == "done":
             break
         key = f"template-key-{k:04d}"
         trial = state["progress"]["trial"]
         if state["trial"]["status"] == "active":
-            ids = [f["id"] for f in state["population"]["faces"]]
+            ids = [f["id"] for f in state["view"]["population"]["faces"]]
             chosen = rng.sample(ids, 3)
-            state = service.select(token, key, trial=trial, attempt=state["trial"]["attempt"],
-                                   generation=state["progress"]["generation"], elite=chosen[0],
-                                   others=chosen[1:], response_ms=1500.0, load_ms=5.0)  # fmt: skip
+            state = service.step(token, {
+                "command": "select", "key": key, "trial": trial,
+                "attempt": state["trial"]["attempt"], "generation": state["view"]["generation"],
+                "elite": chosen[0], "others": chosen[1:], "response_ms": 1500.0, "load_ms": 5.0,
+            })  # fmt: skip
         else:
-            state = service.rate(token, key, trial=trial, value=5, response_ms=900.0)
+            state = service.step(token, {"command": "rate", "key": key, "trial": trial,
+                                         "value": 5, "response_ms": 900.0})  # fmt: skip
     store.dispose()
 
 
