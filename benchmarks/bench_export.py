@@ -65,28 +65,34 @@ def _template(database_url: str, config: Path) -> None:
     )
     rng = random.Random(0)
     token, _ = service.create_session("export-template")
-    state = service.begin(token, "template-key-begin")
+    state = service.step(token, {"command": "begin", "key": "template-key-begin"})
     for k in range(200):
         if state["stage"] == "done":
             break
         key = f"template-key-{k:04d}"
         trial = state["progress"]["trial"]
         if state["trial"]["status"] == "active":
-            ids = [f["id"] for f in state["population"]["faces"]]
+            ids = [f["id"] for f in state["view"]["population"]["faces"]]
             chosen = rng.sample(ids, 3)
-            state = service.select(
+            state = service.step(
                 token,
-                key,
-                trial=trial,
-                attempt=state["trial"]["attempt"],
-                generation=state["progress"]["generation"],
-                elite=chosen[0],
-                others=chosen[1:],
-                response_ms=1500.0,
-                load_ms=5.0,
+                {
+                    "command": "select",
+                    "key": key,
+                    "trial": trial,
+                    "attempt": state["trial"]["attempt"],
+                    "generation": state["view"]["generation"],
+                    "elite": chosen[0],
+                    "others": chosen[1:],
+                    "response_ms": 1500.0,
+                    "load_ms": 5.0,
+                },
             )
         else:
-            state = service.rate(token, key, trial=trial, value=5, response_ms=900.0)
+            state = service.step(
+                token,
+                {"command": "rate", "key": key, "trial": trial, "value": 5, "response_ms": 900.0},
+            )
     store.dispose()
 
 

@@ -82,13 +82,14 @@ async def participant(
 
     async def call(method: str, path: str, body: dict[str, Any] | None = None) -> Any:
         run.requests += 1
+        what = path.split("/")[-1] + (f" {body['command']}" if body and "command" in body else "")
         try:
             r = await client.request(method, path, json=body)
         except httpx.HTTPError as exc:
-            run.errors.append(f"{path.split('/')[-1]}: {type(exc).__name__}")
+            run.errors.append(f"{what}: {type(exc).__name__}")
             return None
         if r.status_code >= 400:
-            run.errors.append(f"{path.split('/')[-1]}: {r.status_code} {r.text[:100]}")
+            run.errors.append(f"{what}: {r.status_code} {r.text[:100]}")
             return None
         return r.json() if "json" in r.headers.get("content-type", "") else r.text
 
@@ -103,7 +104,8 @@ async def participant(
     state = await call("GET", f"/api/s/{token}/state")
     shown = time.monotonic()
     await asyncio.sleep(rng.uniform(lo, hi))  # reads the instructions
-    state = await call("POST", f"/api/s/{token}/begin", {"key": next(keys)})
+    step = f"/api/s/{token}/step"
+    state = await call("POST", step, {"command": "begin", "key": next(keys)})
     for _ in range(500):  # bounded, whatever the study
         if state is None or state["stage"] == "done":
             break
@@ -113,10 +115,10 @@ async def participant(
         shown = time.monotonic()
         pause = rng.uniform(lo, hi)
         await asyncio.sleep(pause)
-        trial = state["progress"]["trial"]
-        if state["trial"]["task"] == "categorise":
-            view = state["categorise"]
+        trial, view = state["progress"]["trial"], state["view"]
+        if view["task"] == "categorise":
             body = {
+                "command": "answer",
                 "key": next(keys),
                 "trial": trial,
                 "label": rng.choice(view["labels"]),
@@ -130,38 +132,40 @@ async def participant(
                 "load_ms": 5.0,
             }
             t0 = time.monotonic()
-            state = await call("POST", f"/api/s/{token}/categorise", body)
+            state = await call("POST", step, body)
             if state is not None:
                 run.answers.append((t0, time.monotonic() - t0))
         elif state["trial"]["status"] == "active":
-            ids = [f["id"] for f in state["population"]["faces"]]
-            limits = state["limits"]
+            ids = [f["id"] for f in view["population"]["faces"]]
+            limits = view["limits"]
             chosen = rng.sample(
                 ids, rng.randint(limits["min_selections"], min(3, limits["max_selections"]))
             )
             body = {
+                "command": "select",
                 "key": next(keys),
                 "trial": trial,
                 "attempt": state["trial"]["attempt"],
-                "generation": state["progress"]["generation"],
+                "generation": view["generation"],
                 "elite": chosen[0],
                 "others": chosen[1:],
                 "response_ms": round(1000 * (time.monotonic() - shown)),
                 "load_ms": 5.0,
             }
             t0 = time.monotonic()
-            state = await call("POST", f"/api/s/{token}/select", body)
+            state = await call("POST", step, body)
             if state is not None:
                 run.steps.append((t0, time.monotonic() - t0))
         else:
             body = {
+                "command": "rate",
                 "key": next(keys),
                 "trial": trial,
                 "value": rng.randint(1, 7),
                 "response_ms": round(1000 * pause),
             }
             t0 = time.monotonic()
-            state = await call("POST", f"/api/s/{token}/rating", body)
+            state = await call("POST", step, body)
             if state is not None:
                 run.answers.append((t0, time.monotonic() - t0))
     if state is not None and state["stage"] == "done":

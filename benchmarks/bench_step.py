@@ -14,9 +14,10 @@ generation) and prints the CPU time of every selection, p50/p95/mean:
   generation made, corrected and stored), of that the correction (``correct``) and of that
   ``collisions`` — the detect–solve loop, ray casting and eq. 5, compiled.
 
-``--against SRC`` (another checkout's ``src`` folder, e.g. a ``git worktree`` of main) runs a
-second server with that code beside this one, in the same virtual environment, and alternates
-participants between the two: the only fair comparison of two versions on a machine whose
+``--against SRC`` (another checkout's ``src`` folder, e.g. a ``git worktree`` of main; one with
+the single step route of #38, as both servers are driven through it) runs a second server with
+that code beside this one, in the same virtual environment, and alternates participants
+between the two: the only fair comparison of two versions on a machine whose
 speed drifts from one run to the next (on the 2-core VM of the figures in docs/study.md, ±15%
 and more; two runs of the same code minutes apart can differ by 2 ms).
 
@@ -68,7 +69,8 @@ def _server_cpu_ns(pids: list[int]) -> int:
 
 def _selection(state: Any, rng: random.Random) -> dict[str, Any]:
     """Three of the shown faces, at random (the first the elite)."""
-    return selection_body(state, rng.sample([f["id"] for f in state["population"]["faces"]], 3))
+    faces = state["view"]["population"]["faces"]
+    return selection_body(state, rng.sample([f["id"] for f in faces], 3))
 
 
 def over_http(participants: int, against: Path | None = None) -> dict[str, np.ndarray]:
@@ -121,17 +123,23 @@ def _participant(
             return r.json()  # type: ignore[no-any-return]
 
         token = post("/api/sessions", {"participant_id": participant})["token"]
-        state = post(f"/api/s/{token}/begin", {"key": f"begin-{n:06d}"})
+        step = f"/api/s/{token}/step"
+        state = post(step, {"command": "begin", "key": f"begin-{n:06d}"})
         while state["stage"] != "done":
             n += 1
             key = f"step-{n:06d}"
             if state["trial"]["status"] != "active":
-                body = {"key": key, "trial": state["progress"]["trial"], "value": 4}
-                state = post(f"/api/s/{token}/rating", body)
+                body = {
+                    "command": "rate",
+                    "key": key,
+                    "trial": state["progress"]["trial"],
+                    "value": 4,
+                }
+                state = post(step, body)
                 continue
             body = {"key": key, **_selection(state, rng)}
             t0 = _server_cpu_ns(pids)
-            state = post(f"/api/s/{token}/select", body)
+            state = post(step, body)
             out.append((_server_cpu_ns(pids) - t0) / 1e6)
     return n
 
@@ -160,15 +168,16 @@ def in_process(participants: int) -> tuple[np.ndarray, dict[str, float]]:
     """Process CPU (ms) of each selection of the study service, and the mean ms per part."""
     import emogen.correct.apply as apply
     from emogen.model import load_model
-    from emogen.study import steps, storage
+    from emogen.study import storage
     from emogen.study.config import load_study_config
     from emogen.study.sessions import StudyService
     from emogen.study.storage import Store
+    from emogen.tasks.evolve.task import EvolveTask
 
     acc: dict[str, float] = defaultdict(float)
     phase = {"on": False}
     patches = [
-        (steps.SessionSteps, "select", "select"),
+        (EvolveTask, "_select", "select"),
         (apply.Corrector, "correct", "correct"),
         (apply, "solve_collisions", "collisions"),
         (storage._GroupCommit, "_execute", "writer"),
@@ -194,27 +203,23 @@ def in_process(participants: int) -> tuple[np.ndarray, dict[str, float]]:
             rng, n = random.Random(0), 0
             for p in range(participants + 1):
                 token, _ = service.create_session(f"step-{p}")
-                state = service.begin(token, f"begin-{p:06d}")
+                state = service.step(token, {"command": "begin", "key": f"begin-{p:06d}"})
                 while state["stage"] != "done":
                     n += 1
                     key = f"step-{n:06d}"
                     if state["trial"]["status"] != "active":
-                        state = service.rate(token, key, trial=state["progress"]["trial"], value=4)
+                        rate = {
+                            "command": "rate",
+                            "key": key,
+                            "trial": state["progress"]["trial"],
+                            "value": 4,
+                        }
+                        state = service.step(token, rate)
                         continue
-                    s = _selection(state, rng)
+                    select = {**_selection(state, rng), "key": key, "load_ms": 5.0}
                     phase["on"] = p > 0  # the first participant warms up, not counted
                     t0 = time.process_time()
-                    state = service.select(
-                        token,
-                        key,
-                        trial=s["trial"],
-                        attempt=s["attempt"],
-                        generation=s["generation"],
-                        elite=s["elite"],
-                        others=s["others"],
-                        response_ms=1000.0,
-                        load_ms=5.0,
-                    )
+                    state = service.step(token, select)
                     phase["on"] = False
                     if p:
                         times.append((time.process_time() - t0) * 1000)

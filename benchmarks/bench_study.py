@@ -200,11 +200,13 @@ class ServerProcess:
 
 # ---- one simulated participant -------------------------------------------------------------
 def selection_body(state: dict[str, Any], chosen: list[int]) -> dict[str, Any]:
-    """The page's selection request for the shown generation: ``chosen[0]`` the elite."""
+    """The page's selection command for the shown generation (no key): ``chosen[0]`` the
+    elite."""
     return {
+        "command": "select",
         "trial": state["progress"]["trial"],
         "attempt": state["trial"]["attempt"],
-        "generation": state["progress"]["generation"],
+        "generation": state["view"]["generation"],
         "elite": chosen[0],
         "others": chosen[1:],
         "response_ms": 1000.0,
@@ -262,7 +264,8 @@ async def participant(
     if created is None:
         return
     token = created["token"]
-    state = await post(f"/api/s/{token}/begin", {})
+    step = f"/api/s/{token}/step"
+    state = await post(step, {"command": "begin"})
     steps = 0
     while state is not None and state["stage"] != "done" and time.monotonic() < deadline:
         steps += 1
@@ -271,13 +274,17 @@ async def participant(
             return
         await asyncio.sleep(think_s * (0.5 + rng.random()))
         if state["trial"]["status"] == "active":
-            ids = [f["id"] for f in state["population"]["faces"]]
+            ids = [f["id"] for f in state["view"]["population"]["faces"]]
             chosen = rng.sample(ids, rng.randint(1, 4))
-            state = await post(f"/api/s/{token}/select", selection_body(state, chosen))
+            state = await post(step, selection_body(state, chosen))
         else:
             state = await post(
-                f"/api/s/{token}/rating",
-                {"trial": state["progress"]["trial"], "value": rng.randint(1, 7)},
+                step,
+                {
+                    "command": "rate",
+                    "trial": state["progress"]["trial"],
+                    "value": rng.randint(1, 7),
+                },
             )
     if state is not None and state["stage"] == "done":
         stats.completed += 1

@@ -22,7 +22,7 @@ from pathlib import Path
 import httpx
 from benchmarks.bench_study import BENCH_TOKEN, ServerProcess, write_study_toml
 from playwright.sync_api import sync_playwright
-from tests.study.drive import new_key, run_to_end
+from tests.study.drive import command, new_key, run_to_end
 from tests.web.viewer_site import CHROMIUM, CHROMIUM_ARGS
 
 STUDY = {
@@ -46,10 +46,11 @@ def _populate(url: str) -> list[int]:
         token = created.json()["token"]
         if k == 6:
             continue  # consented, not begun
-        state = httpx.post(f"{url}/api/s/{token}/begin", json={"key": new_key()}).json()
+        step = f"{url}/api/s/{token}/step"
+        state = httpx.post(step, json={"command": "begin", "key": new_key()}).json()
 
-        def call(kind: str, body: dict, token: str = token) -> dict:
-            return httpx.post(f"{url}/api/s/{token}/{kind}", json=body, timeout=60).json()
+        def call(kind: str, body: dict, step: str = step) -> dict:
+            return httpx.post(step, json=command(kind, body), timeout=60).json()
 
         stop = (lambda s: s["progress"]["trial"] >= 2) if k in (4, 5) else (lambda s: False)
         run_to_end(state, call, stop=stop)
