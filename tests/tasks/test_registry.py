@@ -75,7 +75,7 @@ class _Twin(TaskDefaults):
     block: ClassVar[type[TaskBlock]] = _Block
     commands: ClassVar[tuple[type[TrialCommand], ...]] = (_Answer,)
     view_type = result_type = dict
-    tables = exported = ()
+    tables = export_tables = ()
     instructions = ""
     screens: ClassVar[dict[str, tuple[float, float]]] = {}
     start = accept = view = prompt = simulate = TaskDefaults.face

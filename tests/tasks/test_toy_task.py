@@ -26,6 +26,7 @@ from typing_extensions import TypedDict
 
 from emogen.cli.app import app
 from emogen.tasks.blocks import Condition, TaskBlock
+from emogen.tasks.export import record_table
 from emogen.tasks.protocol import (
     FaceView,
     Outcome,
@@ -89,7 +90,7 @@ class RateFaceTask(TaskDefaults):
     view_type: ClassVar[type] = RateFaceView
     result_type: ClassVar[type] = RateFaceResult
     tables: ClassVar[tuple[type, ...]] = (RateFaceRow,)
-    exported: ClassVar[tuple[type, ...]] = (RateFaceRow,)
+    export_tables: ClassVar[tuple[Any, ...]] = (record_table(RateFaceRow),)
     instructions: ClassVar[str] = "you will rate faces from 1 (not at all) to 7 (very much)."
     screens: ClassVar[dict[str, tuple[float, float]]] = {"face rating": (2.0, 4.0)}
 

@@ -35,22 +35,35 @@ from emogen.appearance.params import GENERATOR_VERSION, Appearance
 from emogen.errors import ConfigError
 from emogen.study.config import StudyConfig
 from emogen.study.dashboard import seconds_between
-from emogen.study.export_categorise import CATEGORISE_TABLES
-from emogen.study.export_evolve import EVOLVE_TABLES
 from emogen.study.export_rows import SESSIONS, TRIALS, iso, load_records
-from emogen.study.export_spec import ExportTable, Row
 from emogen.study.storage import Store
 from emogen.study.tables import SCHEMA_VERSION, SessionRow, StudyRow, TrialRow
 from emogen.tasks.evolve.tables import SelectionRow
+from emogen.tasks.export import ExportTable, Row
+from emogen.tasks.registry import TASKS
 
-#: The per-session tables: the study's own, then each task's (made from a read's records).
-SESSION_TABLES: dict[str, ExportTable] = {
-    t.name: t for t in (SESSIONS, TRIALS, *EVOLVE_TABLES, *CATEGORISE_TABLES)
-}
-#: Every table of an export, in order; the study-wide ones last.
-TABLES = (*SESSION_TABLES, "identities", "study")
-#: The tables' names before schema 6 (``emogen.study/5`` and older exports): old name → new.
-FORMERLY = {t.formerly: t.name for t in SESSION_TABLES.values() if t.formerly}
+
+def session_tables() -> dict[str, ExportTable]:
+    """The per-session tables: the study's own, then each registered task's
+    (:attr:`emogen.tasks.protocol.Task.export_tables`, made from a read's records)."""
+    tasks = [table for task in TASKS.values() for table in task.export_tables]
+    return {t.name: t for t in (SESSIONS, TRIALS, *tasks)}
+
+
+def all_tables() -> tuple[str, ...]:
+    """Every table of an export, in order; the study-wide ones last."""
+    return (*session_tables(), "identities", "study")
+
+
+def former_names() -> dict[str, str]:
+    """The tables' names before schema 6 (``emogen.study/5`` and older exports): old → new."""
+    return {t.formerly: t.name for t in session_tables().values() if t.formerly}
+
+
+#: The tables of the tasks registered when this module was imported (the built-in ones).
+SESSION_TABLES = session_tables()
+TABLES = all_tables()
+FORMERLY = former_names()
 #: The fixed columns of the study-wide tables (``identities`` adds the appearance parameters).
 STUDY_TABLE_COLUMNS = {
     "identities": ["study", "identity", "shape", "shape_coefficients"],
@@ -152,7 +165,7 @@ def export_tables(
                 raise ConfigError(f"no study named '{study}' in {store.describe()}")
         rec = load_records(db, studies, session_ids)
     rows: dict[str, list[dict[str, Any]]] = {
-        name: list(table.rows(rec)) for name, table in SESSION_TABLES.items()
+        name: list(table.rows(rec)) for name, table in session_tables().items()
     }
     rows["identities"] = []
     shown = {s.study_id for s in rec.sessions} if session_ids is not None else set(studies)
@@ -160,7 +173,7 @@ def export_tables(
         rows["identities"].extend(identity_rows(studies[sid]))
     rows["study"] = list(study_rows([studies[sid] for sid in sorted(shown)]))
     extra = table_extras([studies[sid] for sid in sorted(shown)])
-    return {name: _frame(name, rows[name], extra.get(name, [])) for name in TABLES}
+    return {name: _frame(name, rows[name], extra.get(name, [])) for name in all_tables()}
 
 
 def table_extras(studies: list[StudyRow]) -> dict[str, list[str]]:
@@ -172,7 +185,7 @@ def table_extras(studies: list[StudyRow]) -> dict[str, list[str]]:
         *dict.fromkeys(f"g_{n}" for ns in names for n in ns),
         *dict.fromkeys(f"w_{n}" for ns in weights for n in ns),
     ]
-    return {name: face_columns for name, t in SESSION_TABLES.items() if t.faces}
+    return {name: face_columns for name, t in session_tables().items() if t.faces}
 
 
 def identity_rows(study: StudyRow) -> list[dict[str, Any]]:
@@ -222,8 +235,9 @@ def identities_from_table(table: pd.DataFrame) -> dict[tuple[str, str], Identity
 
 def _frame(name: str, rows: list[dict[str, Any]], extra: list[str]) -> pd.DataFrame:
     """A table typed by :func:`emogen.columns.typed`; empty, it has all its columns."""
-    if name in SESSION_TABLES:
-        table = SESSION_TABLES[name]
+    tables = session_tables()
+    if name in tables:
+        table = tables[name]
         return tidy.frame(rows, [*table.column_names, *extra, *STAMPS], table.dtypes)
     columns = [*STUDY_TABLE_COLUMNS[name], *extra, *STAMPS]
     if name == "identities":

@@ -12,22 +12,16 @@ from __future__ import annotations
 import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from datetime import datetime
 from typing import Any
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from emogen.study.export_spec import TRIAL_KEY, ExportTable, Row, typed_columns
-from emogen.study.tables import SCHEMA_VERSION, SessionRow, StudyRow, TrialRow, as_utc
-from emogen.tasks.categorise.tables import ResponseRow, StimulusRow
-from emogen.tasks.evolve.tables import FaceRow, PopulationRow, RatingRow, RestartRow, SelectionRow
-from emogen.tasks.registry import task_named
+from emogen.study.tables import SCHEMA_VERSION, SessionRow, StudyRow, TrialRow, core_table
+from emogen.tasks.export import TRIAL_KEY, ExportTable, Row, iso, typed_columns
+from emogen.tasks.registry import TASKS, task_named
 
-
-def iso(t: datetime | None) -> str | None:
-    u = as_utc(t)
-    return None if u is None else u.isoformat()
+__all__ = ["Records", "iso", "load_records"]
 
 
 @dataclass
@@ -37,18 +31,14 @@ class Records:
     studies: dict[int, StudyRow]
     sessions: list[SessionRow]
     trials: list[TrialRow]
-    populations: list[PopulationRow]
-    faces: list[FaceRow]
-    selections: list[SelectionRow]
-    restarts: list[RestartRow]
-    ratings: list[RatingRow]
-    stimuli: list[StimulusRow] = field(default_factory=list)
-    responses: list[ResponseRow] = field(default_factory=list)
-    #: participant ids of the sessions others' faces came from (any session of the study)
+    #: every registered task's records under these trials, by record type (in trial, then
+    #: record order)
+    records: dict[type, list[Any]] = field(default_factory=dict)
+    #: participant ids of the studies' sessions (a face another participant made names its)
     participants: dict[int, str] = field(default_factory=dict)
     by_session: dict[int, SessionRow] = field(init=False)
     by_trial: dict[int, TrialRow] = field(init=False)
-    by_population: dict[int, PopulationRow] = field(init=False)
+    _by_id: dict[type, dict[int, Any]] = field(init=False, default_factory=dict)
     _corrects: dict[int, bool] = field(init=False, default_factory=dict)
     _block_names: dict[int, list[str]] = field(init=False, default_factory=dict)
     _face_columns: dict[int, tuple[list[str], list[str]]] = field(init=False, default_factory=dict)
@@ -56,7 +46,25 @@ class Records:
     def __post_init__(self) -> None:
         self.by_session = {s.id: s for s in self.sessions}
         self.by_trial = {t.id: t for t in self.trials}
-        self.by_population = {p.id: p for p in self.populations}
+
+    def rows_of(self, row: type) -> list[Any]:
+        """The records of one type (a task's row class)."""
+        return self.records.get(row, [])
+
+    def by_id(self, row: type) -> dict[int, Any]:
+        """The records of one type by their id."""
+        if row not in self._by_id:
+            self._by_id[row] = {r.id: r for r in self.rows_of(row)}
+        return self._by_id[row]
+
+    def face_values(self, session: SessionRow, genes: str | None, weights: str) -> Row:
+        """A face's ``g_<gene>`` (NA when ``genes`` is None: a file face) and ``w_<weight>``
+        cells, from their stored JSON lists."""
+        gene_cols, weight_cols = self.face_columns(session)
+        values = json.loads(genes) if genes else [None] * len(gene_cols)
+        row = dict(zip(gene_cols, values, strict=True))
+        row.update(zip(weight_cols, json.loads(weights), strict=True))
+        return row
 
     def stamp(self, session: SessionRow) -> Row:
         """The record stamp of every row: schema, package version, model and config hashes."""
@@ -127,34 +135,43 @@ def load_records(
             .order_by(TrialRow.session_id, TrialRow.position)
         )
     )
-    tids = [t.id for t in trials]
-    pops = list(
-        db.scalars(
-            select(PopulationRow).where(PopulationRow.trial_id.in_(tids)).order_by(PopulationRow.id)
-        )
+    sources = select(SessionRow.id, SessionRow.participant_id).where(
+        SessionRow.study_id.in_(list(studies))
     )
-    pids = [p.id for p in pops]
-    faces = list(
-        db.scalars(
-            select(FaceRow)
-            .where(FaceRow.population_id.in_(pids))
-            .order_by(FaceRow.population_id, FaceRow.position)
-        )
-    )
-    selections = list(db.scalars(select(SelectionRow).where(SelectionRow.population_id.in_(pids))))
-    restarts = list(db.scalars(select(RestartRow).where(RestartRow.population_id.in_(pids))))
-    ratings = list(db.scalars(select(RatingRow).where(RatingRow.trial_id.in_(tids))))
-    stimuli = list(
-        db.scalars(
-            select(StimulusRow).where(StimulusRow.trial_id.in_(tids)).order_by(StimulusRow.trial_id)
-        )
-    )
-    responses = list(db.scalars(select(ResponseRow).where(ResponseRow.trial_id.in_(tids))))
-    sources = {s.source_session_id for s in stimuli if s.source_session_id is not None}
-    query = select(SessionRow.id, SessionRow.participant_id).where(SessionRow.id.in_(sources))
-    participants = {int(i): str(p) for i, p in db.execute(query)}
-    return Records(studies, sessions, trials, pops, faces, selections, restarts, ratings,
-                   stimuli, responses, participants)  # fmt: skip
+    participants = {int(i): str(p) for i, p in db.execute(sources)}
+    records = task_records(db, [t.id for t in trials])
+    return Records(studies, sessions, trials, records, participants)
+
+
+def task_records(db: Session, trial_ids: list[int]) -> dict[type, list[Any]]:
+    """Every registered task's records under these trials: a table with a ``trial_id`` by it
+    (in trial, then record order); a table under another task table (a population's faces) by
+    its key to that table's records (in parent, then record order)."""
+    out: dict[type, list[Any]] = {}
+    ids: dict[str, list[int]] = {"trials": trial_ids}
+    pending: list[Any] = [row for task in TASKS.values() for row in task.tables]
+    while pending:
+        row = next((r for r in pending if _parent(r, ids) is not None), None)
+        if row is None:  # pragma: no cover - a task table under no trial
+            raise ValueError(f"task tables {[r.__name__ for r in pending]} hang from no trial")
+        pending.remove(row)
+        parent, column = _parent(row, ids)  # type: ignore[misc]
+        key = getattr(row, column)
+        table = core_table(row)
+        query = select(row).where(key.in_(ids[parent])).order_by(key, table.c.id)
+        found: list[Any] = list(db.scalars(query))
+        out[row] = found
+        ids[table.name] = [r.id for r in found]
+    return out
+
+
+def _parent(row: Any, loaded: dict[str, list[int]]) -> tuple[str, str] | None:
+    """(the loaded table a task table hangs from, its column) — ``trials`` first."""
+    keys = [(fk.column.table.name, fk.parent.name) for fk in core_table(row).foreign_keys]
+    for table, column in sorted(keys, key=lambda k: k[0] != "trials"):
+        if table in loaded:
+            return table, column
+    return None
 
 
 def session_rows(rec: Records) -> Iterator[Row]:
@@ -203,16 +220,6 @@ def trial_rows(rec: Records) -> Iterator[Row]:
             "finished_at": iso(t.finished_at),
             **rec.trial_stamp(t),
         }
-
-
-def face_values(rec: Records, session: SessionRow, genes: str | None, weights: str) -> Row:
-    """A face's ``g_<gene>`` (NA when ``genes`` is None: a file face) and ``w_<weight>``
-    cells, from their stored JSON lists."""
-    gene_cols, weight_cols = rec.face_columns(session)
-    values = json.loads(genes) if genes else [None] * len(gene_cols)
-    row = dict(zip(gene_cols, values, strict=True))
-    row.update(zip(weight_cols, json.loads(weights), strict=True))
-    return row
 
 
 SESSIONS = ExportTable(

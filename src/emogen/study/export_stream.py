@@ -41,18 +41,17 @@ from sqlalchemy import func, select
 from emogen import columns as tidy
 from emogen.errors import ConfigError
 from emogen.study.export import (
-    FORMERLY,
-    SESSION_TABLES,
-    TABLES,
     _frame,
+    all_tables,
     export_provenance,
+    former_names,
     identity_rows,
     neutralise_formulas,
+    session_tables,
     study_rows,
     table_extras,
 )
 from emogen.study.export_rows import iso, load_records
-from emogen.study.export_tasks import task_export_tables, task_frame, task_rows
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, StudyRow, TrialRow, as_utc
 from emogen.tasks.evolve.tables import FaceRow, PopulationRow
@@ -84,18 +83,13 @@ def parse_since(text: str) -> datetime:
         ) from None
 
 
-def all_tables() -> tuple[str, ...]:
-    """Every export table: the study's (:data:`TABLES`) and the registered tasks' records'."""
-    return (*TABLES, *task_export_tables())
-
-
 def check_table_names(tables: tuple[str, ...] | list[str]) -> None:
     """Every name one of :func:`all_tables` (an old name is named with its new one)."""
-    known = all_tables()
+    known, formerly = all_tables(), former_names()
     for name in tables:
-        if name in FORMERLY:
+        if name in formerly:
             raise ConfigError(
-                f"--table {name!r} is called {FORMERLY[name]!r} since schema emogen.study/6"
+                f"--table {name!r} is called {formerly[name]!r} since schema emogen.study/6"
             )
         if name not in known:
             raise ConfigError(f"--table must be one of {', '.join(known)}; got {name!r}")
@@ -298,18 +292,14 @@ def _spill_sessions(
     extras: dict[str, list[str]],
 ) -> None:
     """Every chunk's rows of the per-session tables, read and spilled one chunk at a time."""
-    per_session = [name for name in tables if name in SESSION_TABLES]
+    known = session_tables()
+    per_session = [name for name in tables if name in known]
     for name in per_session:
         spill.add(name, _frame(name, [], extras.get(name, [])))
-    records = {k: v for k, v in task_export_tables().items() if k in tables}
-    for name, row in records.items():
-        spill.add(name, task_frame(row, []))
     for ids in chunks:
         with store.read() as db:
             rec = load_records(db, studies, ids)
-            for name, row in records.items():
-                spill.add(name, task_frame(row, task_rows(db, row, ids)))
         for name in per_session:
-            rows = list(SESSION_TABLES[name].rows(rec))
+            rows = list(known[name].rows(rec))
             spill.add(name, _frame(name, rows, extras.get(name, [])))
         del rec

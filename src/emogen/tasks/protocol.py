@@ -170,9 +170,9 @@ class Task(Protocol):
     result_type: ClassVar[type]
     #: its record tables (rows on :class:`emogen.tasks.records.Base`)
     tables: ClassVar[tuple[type, ...]]
-    #: the record tables the study's export writes as they are (one export table each, keyed
-    #: by session, participant, block and trial: :mod:`emogen.study.export_tasks`)
-    exported: ClassVar[tuple[type, ...]]
+    #: its export tables (:class:`emogen.tasks.export.ExportTable`: name, typed columns, rows
+    #: from a read's records; :func:`emogen.tasks.export.record_table` makes one from a record)
+    export_tables: ClassVar[tuple[Any, ...]]
     #: what the study's default instructions say of its blocks
     instructions: ClassVar[str]
     #: screens a trial shows a participant, and the seconds each takes (low, high): an

@@ -33,7 +33,7 @@ REQUIRED = (
     "view_type",
     "result_type",
     "tables",
-    "exported",
+    "export_tables",
     "instructions",
     "screens",
     "start",

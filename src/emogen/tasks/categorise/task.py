@@ -22,6 +22,7 @@ from sqlalchemy.orm import Session
 from emogen.tasks.blocks import Condition, TaskBlock
 from emogen.tasks.categorise.block import CategoriseBlock
 from emogen.tasks.categorise.draw import BlockDraw
+from emogen.tasks.categorise.export import CATEGORISE_TABLES
 from emogen.tasks.categorise.faces import FileFaces, block_files
 from emogen.tasks.categorise.replay import check_stimulus
 from emogen.tasks.categorise.tables import ResponseRow, StimulusRow
@@ -73,8 +74,8 @@ class CategoriseTask:
     view_type: ClassVar[type] = CategoriseView
     result_type: ClassVar[type] = CategoriseResult
     tables: ClassVar[tuple[type, ...]] = (StimulusRow, ResponseRow)
-    #: exported by the study's own typed tables (stimuli and answers)
-    exported: ClassVar[tuple[type, ...]] = ()
+    #: categorise_responses: each face shown and its answer (:mod:`.export`)
+    export_tables: ClassVar[tuple[Any, ...]] = CATEGORISE_TABLES
     #: what the default instructions say of its blocks (after "In this study " or "In another
     #: part of the study ")
     instructions: ClassVar[str] = (

@@ -24,6 +24,7 @@ from emogen.ga.state import collision_solver_of_state, stream_of_state
 from emogen.tasks.blocks import Condition, TaskBlock
 from emogen.tasks.errors import StepConflict
 from emogen.tasks.evolve.block import EvolveBlock
+from emogen.tasks.evolve.export import EVOLVE_TABLES
 from emogen.tasks.evolve.replay import replay_trial
 from emogen.tasks.evolve.store import (
     final_face,
@@ -105,8 +106,8 @@ class EvolveTask:
         RestartRow,
         RatingRow,
     )
-    #: exported by the study's own typed tables (faces, selections, restarts, ratings)
-    exported: ClassVar[tuple[type, ...]] = ()
+    #: faces, selections, restarts, evolve_ratings, final_faces (:mod:`.export`)
+    export_tables: ClassVar[tuple[Any, ...]] = EVOLVE_TABLES
     #: the default instructions of its blocks
     instructions: ClassVar[str] = (
         "You will see ten faces at a time. Click the face that best shows the emotion you are "

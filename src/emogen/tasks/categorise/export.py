@@ -11,17 +11,20 @@ from __future__ import annotations
 
 import json
 from collections.abc import Iterator
+from typing import Any
 
-from emogen.study.export_rows import Records, face_values, iso
-from emogen.study.export_spec import (
+from emogen.tasks.categorise.tables import ResponseRow, StimulusRow
+from emogen.tasks.export import (
     TRIAL_KEY,
     ExportTable,
     Row,
+    iso,
     record_columns,
     record_values,
     typed_columns,
 )
-from emogen.tasks.categorise.tables import ResponseRow
+
+Records = Any  # a read's records (emogen.study.export_rows.Records: emogen.tasks.export says)
 
 #: The answer's columns: the record's own (:class:`ResponseRow`, where they are named).
 ANSWER = record_columns(ResponseRow)
@@ -30,8 +33,8 @@ ANSWER = record_columns(ResponseRow)
 def response_rows(rec: Records) -> Iterator[Row]:
     """One row per categorise trial whose face was drawn: the face (source, identity, genes
     and full weights), the labels offered in their order, the answer (NA until answered)."""
-    answers = {r.trial_id: r for r in rec.responses}
-    for stim in rec.stimuli:  # in trial id order: sessions, then positions
+    answers = {r.trial_id: r for r in rec.rows_of(ResponseRow)}
+    for stim in rec.rows_of(StimulusRow):  # in trial id order: sessions, then positions
         t = rec.by_trial[stim.trial_id]
         s = rec.by_session[t.session_id]
         r = answers.get(t.id)
@@ -53,7 +56,7 @@ def response_rows(rec: Records) -> Iterator[Row]:
             "shown_at": iso(stim.shown_at),
             "correct": None if r is None or stim.intended is None else r.label == stim.intended,
             **record_values(r, ANSWER),
-            **face_values(rec, s, stim.genes, stim.weights),
+            **rec.face_values(s, stim.genes, stim.weights),
             **rec.stamp(s),
         }
 

@@ -1,9 +1,12 @@
 """What an export table is: its name, its columns and their types, and how its rows are made.
 
-Each task declares its own tables in one module (:mod:`emogen.study.export_evolve`,
-:mod:`emogen.study.export_categorise`; the study's own tables in
-:mod:`emogen.study.export_rows`); :mod:`emogen.study.export` writes every one of them the same
-way. A column's type is declared with it (``name:kind``, the kinds of :mod:`emogen.columns`);
+Each task declares its own tables (:attr:`emogen.tasks.protocol.Task.export_tables`, in its
+package's ``export`` module; :func:`record_table` makes one straight from a record type); the
+study's own tables are in :mod:`emogen.study.export_rows`; :mod:`emogen.study.export` writes
+every one of them the same way. A table's rows come from a read's records
+(:class:`emogen.study.export_rows.Records`: ``key``, ``stamp``, ``block_name``,
+``face_values``, ``rows_of``, ``by_id``, ``by_trial``, ``by_session``, ``trials``,
+``participants``). A column's type is declared with it (``name:kind``, the kinds of :mod:`emogen.columns`);
 where :mod:`emogen.columns` has a rule for that name the two must agree (checked when the table
 is defined), so Parquet, CSV and R's ``col_types.csv`` type it the same.
 """
@@ -17,7 +20,7 @@ from typing import Any, get_args
 from sqlalchemy import Boolean, DateTime, Float, Integer
 
 from emogen import columns as tidy
-from emogen.study.tables import as_utc
+from emogen.tasks.records import as_utc
 
 Row = dict[str, Any]
 Column = tuple[str, tidy.Kind]
@@ -68,6 +71,12 @@ def record_values(record: Any, columns: tuple[Column, ...]) -> Row:
     return out
 
 
+def iso(t: Any) -> str | None:
+    """A stored time as ISO 8601 in UTC (None stays None)."""
+    u = as_utc(t)
+    return None if u is None else u.isoformat()
+
+
 #: The columns that name a trial in every per-trial table.
 TRIAL_KEY = typed_columns(
     "study:str session_id:int participant_id:str participant_source:str trial:int"
@@ -110,3 +119,23 @@ class ExportTable:
             for n, k in self.columns
             if tidy.kind(n) is None and k in PANDAS_DTYPES
         }
+
+
+def record_table(row: Any) -> ExportTable:
+    """A task's record type as an export table of its own: one row per record, named by its
+    table, keyed by the trial it belongs to (:data:`TRIAL_KEY` and ``block``), its columns and
+    types those its row declares (a field is named once: where the record is declared)."""
+    columns = record_columns(row)
+
+    def rows(rec: Any) -> Iterator[Row]:
+        for record in rec.rows_of(row):
+            t = rec.by_trial[record.trial_id]
+            yield {
+                **rec.key(t),
+                "block": t.block,
+                **record_values(record, columns),
+                **rec.trial_stamp(t),
+            }
+
+    name = str(row.__table__.name)
+    return ExportTable(name, TRIAL_KEY + typed_columns("block:int") + columns, rows)

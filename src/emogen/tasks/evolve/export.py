@@ -10,19 +10,26 @@ from __future__ import annotations
 
 import json
 from collections.abc import Iterator
+from typing import Any
 
-from emogen.study.export_rows import Records, face_values, iso
-from emogen.study.export_spec import TRIAL_KEY, ExportTable, Row, typed_columns
-from emogen.tasks.evolve.tables import FaceRow
-from emogen.tasks.evolve.task import EvolveTask
+from emogen.tasks.evolve.tables import (
+    FaceRow,
+    PopulationRow,
+    RatingRow,
+    RestartRow,
+    SelectionRow,
+)
+from emogen.tasks.export import TRIAL_KEY, ExportTable, Row, iso, typed_columns
+
+Records = Any  # a read's records (emogen.study.export_rows.Records: emogen.tasks.export says)
 
 #: The response times and the idempotency key of a participant's step.
 _TIMING = "submitted_at:time server_response_ms:float load_ms:float client_response_ms:float"
 
 
 def face_rows(rec: Records) -> Iterator[Row]:
-    for f in rec.faces:
-        p = rec.by_population[f.population_id]
+    for f in rec.rows_of(FaceRow):
+        p = rec.by_id(PopulationRow)[f.population_id]
         t = rec.by_trial[p.trial_id]
         s = rec.by_session[t.session_id]
         yield {
@@ -35,14 +42,14 @@ def face_rows(rec: Records) -> Iterator[Row]:
             "parent_b": None if f.parent_b < 0 else f.parent_b,
             "operator": f.operator,
             "shown_at": iso(p.shown_at),
-            **face_values(rec, s, f.genes, f.weights),
+            **rec.face_values(s, f.genes, f.weights),
             **rec.stamp(s),
         }
 
 
 def selection_rows(rec: Records) -> Iterator[Row]:
-    for sel in sorted(rec.selections, key=lambda x: x.id):
-        p = rec.by_population[sel.population_id]
+    for sel in rec.rows_of(SelectionRow):
+        p = rec.by_id(PopulationRow)[sel.population_id]
         t = rec.by_trial[p.trial_id]
         others = json.loads(sel.other_face_ids)
         chosen = [(sel.elite_face_id, "elite")] + [(o, "other") for o in others]
@@ -66,8 +73,8 @@ def selection_rows(rec: Records) -> Iterator[Row]:
 
 
 def restart_rows(rec: Records) -> Iterator[Row]:
-    for r in sorted(rec.restarts, key=lambda x: x.id):
-        p = rec.by_population[r.population_id]
+    for r in rec.rows_of(RestartRow):
+        p = rec.by_id(PopulationRow)[r.population_id]
         t = rec.by_trial[p.trial_id]
         yield {
             **rec.key(t),
@@ -84,7 +91,7 @@ def restart_rows(rec: Records) -> Iterator[Row]:
 
 
 def rating_rows(rec: Records) -> Iterator[Row]:
-    for rt in sorted(rec.ratings, key=lambda x: x.id):
+    for rt in rec.rows_of(RatingRow):
         t = rec.by_trial[rt.trial_id]
         yield {
             **rec.key(t),
@@ -106,13 +113,13 @@ def final_face_rows(rec: Records) -> Iterator[Row]:
     the trial's last attempt, in the latest generation that shows it, with that face's genes
     and weights."""
     latest: dict[tuple[int, int, int], tuple[int, FaceRow]] = {}
-    for f in rec.faces:
-        p = rec.by_population[f.population_id]
+    for f in rec.rows_of(FaceRow):
+        p = rec.by_id(PopulationRow)[f.population_id]
         k = (p.trial_id, p.attempt, f.face_id)
         if k not in latest or p.generation > latest[k][0]:
             latest[k] = (p.generation, f)
     for t in rec.trials:
-        if t.task != EvolveTask.name or t.status != "done" or t.final_face_id is None:
+        if t.task != "evolve" or t.status != "done" or t.final_face_id is None:
             continue
         found = latest.get((t.id, t.attempt, t.final_face_id))
         if found is None:  # not stored: the analysis reports the finished trial without it
@@ -130,7 +137,7 @@ def final_face_rows(rec: Records) -> Iterator[Row]:
             "generation": generation,
             "face_id": f.face_id,
             "finished_at": iso(t.finished_at),
-            **face_values(rec, s, f.genes, f.weights),
+            **rec.face_values(s, f.genes, f.weights),
             **rec.stamp(s),
         }
 
