@@ -254,8 +254,8 @@ class StudyConfig(_Strict):
             block.check(k + 1, self.emotions, self.blocks[:k])
         if self.n_trials > 500:
             raise ValueError(
-                f"a study must have at most 500 trials (evolve: emotions × repetitions × "
-                f"identities; categorise: its faces); got {self.n_trials}"
+                "a study must have at most 500 trials (a GA block: emotions × repetitions × "
+                f"identities; a labelling block: its faces); got {self.n_trials}"
             )
         return self
 

@@ -1,12 +1,10 @@
 """Researcher side: study progress, and tidy export tables in Parquet or CSV.
 
 Tables (one row per …): ``sessions`` (session), ``trials`` (trial of a session), then each
-task's own tables — the evolve task's ``faces`` (face shown, per generation: genes ``g_<gene>``
-and full weights ``w_<column>``), ``selections`` (selected face: role ``elite`` or ``other``),
-``restarts`` (press of "Start again"), ``evolve_ratings`` (rated trial) and ``final_faces``
-(finished evolve trial: its final face, genes and weights) in :mod:`emogen.study.export_evolve`;
-the categorise task's ``categorise_responses`` (categorise trial: face shown and answer) in
-:mod:`emogen.study.export_categorise` —, ``identities`` (identity of a study: its ``shape`` —
+registered task's own tables (:attr:`emogen.tasks.protocol.Task.export_tables`, in the task's
+``export`` module: the GA's ``faces``, ``selections``, ``restarts``, ``evolve_ratings`` and
+``final_faces``; the labelling task's ``categorise_responses``; docs/data.md has them all),
+``identities`` (identity of a study: its ``shape`` —
 a preset name, or ``shape_coefficients`` as a JSON list — and one column per appearance
 parameter, with ``appearance_generator``, so any stimulus can be re-rendered exactly; join on
 ``study`` and ``identity``), and ``study`` (study: its resolved config itself as

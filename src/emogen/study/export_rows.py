@@ -1,6 +1,5 @@
 """The records of an export read, and the study's own per-session tables (``sessions``,
-``trials``); each task's tables are in its own module (:mod:`emogen.study.export_evolve`,
-:mod:`emogen.study.export_categorise`).
+``trials``); each task's tables are in its own package (``emogen.tasks.<task>.export``).
 
 :func:`load_records` reads the sessions (and everything under them) of some studies; each
 table's ``rows`` function turns them into the tidy rows of one table (see
