@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -61,7 +63,7 @@ def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
     metafunc.parametrize("db_url", ["sqlite", "postgresql"] if both else ["sqlite"], indirect=True)
 
 
-@pytest.hookimpl(tryfirst=True)  # before pytest-xdist's loadgroup suffixes the ids
+@pytest.hookimpl(tryfirst=True)  # marks first: `-m` deselects by them after
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Mark every test that needs the model (through the ``ict_dir`` fixture); without the
     model they are skipped with a reason that says how to get it — except in CI, where a
@@ -93,6 +95,22 @@ def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     os.environ["EMOGEN_CACHE_DIR"] = str(tmp_path_factory.mktemp("emogen-cache"))
     os.environ.pop("EMOGEN_MODEL", None)
     os.environ.pop("EMOGEN_MODEL_URL", None)
+
+
+@pytest.fixture(autouse=True)
+def _one_download_test_at_a_time(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[None]:
+    """The tests of ``tiers.DOWNLOADS`` one at a time across pytest-xdist's workers (a lock
+    file in the run's temporary folder, which the workers share)."""
+    if request.node.nodeid.split("::")[0] not in tiers.DOWNLOADS:
+        yield
+        return
+    base = tmp_path_factory.getbasetemp()
+    run = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+    with open(run / "downloads.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        yield
 
 
 @pytest.fixture(scope="session")

@@ -146,3 +146,17 @@ BOTH_DATABASES: dict[str, str] = {
     "tests/web/test_storage_faults.py": "storage faults of each backend",
     "tests/web/test_schemathesis.py": "the API fuzzed on each backend (issue #38 keeps it on both)",
 }
+
+#: Test files whose tests download exports: the server writes emogen-download-* folders in /tmp,
+#: and test_exports and test_leftovers assert on every such folder there. Under pytest-xdist
+#: their tests take one lock (tests/conftest.py), so no two of them run at once.
+DOWNLOADS: frozenset[str] = frozenset(
+    {
+        "tests/test_leftovers.py",
+        "tests/web/test_api.py",
+        "tests/web/test_dashboard.py",
+        "tests/web/test_exports.py",
+        "tests/web/test_hardening.py",
+        "tests/web/test_security.py",
+    }
+)
