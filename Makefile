@@ -1,4 +1,5 @@
-# EmoGen: `make demo` sets everything up and runs the main job; `make test` runs every check.
+# EmoGen: `make demo` sets everything up and runs the main job; `make test` runs every check,
+# `make check` the fast tier of them (while working).
 SHELL := /bin/bash
 PY ?= python3
 VENV := .venv
@@ -13,7 +14,12 @@ VIEWER := src/emogen/web/static/build/.built
 PLUGIN_DIR := packages/jspsych-plugin-emogen
 PLUGIN := $(PLUGIN_DIR)/dist/.built
 
-.PHONY: setup system test lint demo demo-analyse bench clean
+# The tests run spread over the CPU's cores (pytest-xdist; TEST_WORKERS=0: in one process), a
+# test file at a time per worker: a module's fixtures, servers and browser stay in one process.
+TEST_WORKERS ?= auto
+PYTEST_OPTIONS := -q -n $(TEST_WORKERS) --dist loadfile
+
+.PHONY: setup system test check lint demo demo-analyse bench clean
 
 setup: system $(VENV)/.installed node_modules/.installed $(VIEWER) $(PLUGIN)
 
@@ -45,11 +51,18 @@ lint: setup
 	npx --no-install eslint .
 	npx --no-install tsc -p tsconfig.json
 
+# Everything CI runs (.ci/run): lint, types, the JavaScript tests and every pytest test.
 # The CPU and BLAS kernel first: floating-point results can differ in the last bits between them.
 test: lint
 	$(BIN)/python scripts/platform_report.py
 	node --test tests/web/js/ $(PLUGIN_DIR)/tests/
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest $(PYTEST_OPTIONS)
+
+# The fast tier, to run while working: lint, types, the JavaScript tests and every pytest test
+# not marked slow, browser or postgres (tests/tiers.py says which and why); about 3 minutes.
+check: lint
+	node --test tests/web/js/ $(PLUGIN_DIR)/tests/
+	$(BIN)/python -m pytest $(PYTEST_OPTIONS) -m "not slow and not browser and not postgres"
 
 demo: setup
 	@if [ -z "$$EMOGEN_MODEL" ] && [ ! -d "$$($(BIN)/python -c 'from emogen.model.io.fetch import default_model_dir; print(default_model_dir())')/FaceXModel" ]; then \

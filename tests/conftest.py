@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests import tiers
 from tests.r_readers import R_MISSING, r_available
 
 REPO = Path(__file__).resolve().parents[1]
@@ -28,12 +31,54 @@ def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "model: needs the ICT-FaceKit model (skipped without it)")
 
 
+def _listed(entries: dict[str, str], nodeid: str) -> bool:
+    """Whether ``tests/tiers.py``'s ``entries`` name this test: by module, by function (every
+    parameter) or by its whole id."""
+    return bool({nodeid.split("::")[0], nodeid.split("[")[0], nodeid} & entries.keys())
+
+
+def _check_entries(entries: dict[str, str], name: str, items: list[pytest.Item]) -> None:
+    """Every entry of a module that was collected names a test function of that module (a
+    renamed test must not leave its tier or its databases silently)."""
+    modules = {item.nodeid.split("::")[0]: getattr(item, "module", None) for item in items}
+    for entry in entries:
+        path, _, test = entry.partition("::")
+        module = modules.get(path)
+        if module is not None and test and not hasattr(module, test.split("[")[0]):
+            raise pytest.UsageError(f"tests/tiers.py {name} names no test of {path}: {entry}")
+
+
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
+    """``db_url`` (tests/study_fixtures.py): SQLite, and PostgreSQL as well for the tests of
+    ``tiers.BOTH_DATABASES``, unless a test pins its backends itself."""
+    if "db_url" not in metafunc.fixturenames:
+        return
+    for mark in metafunc.definition.iter_markers("parametrize"):
+        names = mark.args[0] if mark.args else mark.kwargs.get("argnames", ())
+        if isinstance(names, str):
+            names = [n.strip() for n in names.split(",")]
+        if "db_url" in names:
+            return
+    both = _listed(tiers.BOTH_DATABASES, metafunc.definition.nodeid)
+    metafunc.parametrize("db_url", ["sqlite", "postgresql"] if both else ["sqlite"], indirect=True)
+
+
+@pytest.hookimpl(tryfirst=True)  # marks first: `-m` deselects by them after
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Mark every test that needs the model (through the ``ict_dir`` fixture); without the
     model they are skipped with a reason that says how to get it — except in CI, where a
-    missing model is an error, so that nothing passes by being skipped."""
+    missing model is an error, so that nothing passes by being skipped. Mark the tests of
+    ``tiers.SLOW`` slow, and every test on PostgreSQL ``postgres``."""
+    _check_entries(tiers.SLOW, "SLOW", items)
+    _check_entries(tiers.BOTH_DATABASES, "BOTH_DATABASES", items)
     have = (ICT_DIR / "generic_neutral_mesh.obj").is_file()
     for item in items:
+        if _listed(tiers.SLOW, item.nodeid):
+            item.add_marker(pytest.mark.slow)
+        callspec = getattr(item, "callspec", None)
+        on_postgres = callspec is not None and callspec.params.get("db_url") == "postgresql"
+        if on_postgres or "pg_cluster" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.postgres)
         if "ict_dir" in getattr(item, "fixturenames", ()):
             item.add_marker(pytest.mark.model)
             if not have and not os.environ.get("CI"):
@@ -50,6 +95,22 @@ def _isolated_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     os.environ["EMOGEN_CACHE_DIR"] = str(tmp_path_factory.mktemp("emogen-cache"))
     os.environ.pop("EMOGEN_MODEL", None)
     os.environ.pop("EMOGEN_MODEL_URL", None)
+
+
+@pytest.fixture(autouse=True)
+def _one_download_test_at_a_time(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[None]:
+    """The tests of ``tiers.DOWNLOADS`` one at a time across pytest-xdist's workers (a lock
+    file in the run's temporary folder, which the workers share)."""
+    if request.node.nodeid.split("::")[0] not in tiers.DOWNLOADS:
+        yield
+        return
+    base = tmp_path_factory.getbasetemp()
+    run = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+    with open(run / "downloads.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        yield
 
 
 @pytest.fixture(scope="session")

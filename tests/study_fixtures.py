@@ -1,6 +1,9 @@
 """Database fixtures for the study and web tests: SQLite files and a throwaway PostgreSQL cluster.
 
-``db_url`` is parametrised over both backends. The PostgreSQL cluster is made once per test run
+``db_url`` is parametrised by ``tests/conftest.py``: SQLite for every test, PostgreSQL as well for
+the tests of ``tests/tiers.py``'s ``BOTH_DATABASES`` (storage, concurrency, faults), marked
+``postgres``; a test may pin its backends with ``@pytest.mark.parametrize("db_url", [...],
+indirect=True)``. The PostgreSQL cluster is made once per test process (per pytest-xdist worker)
 with Debian's ``initdb``/``pg_ctl`` (package ``postgresql``), listening only on a unix socket in
 a temporary folder; as root it runs as the ``postgres`` user. Missing binaries are a failure,
 not a skip: CI installs them.
@@ -110,10 +113,11 @@ def pg_cluster() -> Iterator[PgCluster]:
         shutil.rmtree(folder, ignore_errors=True)
 
 
-@pytest.fixture(params=["sqlite", "postgresql"])
+@pytest.fixture
 def db_url(request: pytest.FixtureRequest, tmp_path: Path) -> str:
-    """A fresh, empty database on each backend."""
-    if request.param == "sqlite":
+    """A fresh, empty database on the backend the test is parametrised with."""
+    backend = getattr(request, "param", "sqlite")
+    if backend == "sqlite":
         return f"sqlite:///{tmp_path / 'study.sqlite'}"
     cluster: PgCluster = request.getfixturevalue("pg_cluster")
     return cluster.new_database()
