@@ -10,10 +10,13 @@ from typing import Any
 import pytest
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def playwright_api() -> Iterator[Any]:
-    """One Playwright driver for the whole run (a second sync_playwright() in the same process
-    would clash with the first's event loop)."""
+    """One Playwright driver per test module (a second sync_playwright() open at once in the
+    same process would clash with the first's event loop), stopped at the module's end: while
+    it runs, its event loop runs in this thread, and ``asyncio.run`` (a TestClient, a download)
+    in a later module of the same pytest-xdist worker would fail with "cannot be called from a
+    running event loop"."""
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:

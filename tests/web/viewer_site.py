@@ -189,7 +189,7 @@ def launch(playwright: Any, *extra: str) -> Any:
     )
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")  # as playwright_api (tests/web/conftest.py)
 def chromium(playwright_api: Any) -> Iterator[Any]:
     b = launch(playwright_api)
     try:
