@@ -113,7 +113,7 @@ def test_cli_status_export_replay(service: StudyService, tmp_path: Path, ict_dir
     assert "study small" in result.output and "1 sessions (1 done)" in result.output
     assert "C-1" in result.output
     result = runner.invoke(study_app, ["status", "--database-url", url, "--json"])
-    assert json.loads(result.output)["studies"][0]["selections"] == 6
+    assert json.loads(result.output)["studies"][0]["steps"]["select"] == 6
     out = tmp_path / "export"
     result = runner.invoke(
         study_app, ["export", "--database-url", url, "--format", "csv", "--out", str(out)]

@@ -63,7 +63,8 @@ def status(
     sessions: Annotated[bool, typer.Option("--sessions", help="One line per session.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
 ) -> None:
-    """Sessions by stage, trials done and selections made, per study in the database."""
+    """Sessions by stage, trials done and steps taken (by command), per study in the
+    database."""
     from emogen.study.export import study_status
     from emogen.study.progress import progress_as_shown
 
@@ -78,9 +79,10 @@ def status(
         typer.echo("no studies yet")
     for s in studies:
         stages = ", ".join(f"{n} {k}" for k, n in s["by_stage"].items()) or "none"
+        steps = ", ".join(f"{n} {k}" for k, n in s["steps"].items()) or "none"
         typer.echo(
             f"study {s['name']} (config {s['config_hash'][:12]}): {s['sessions']} sessions "
-            f"({stages}); {s['trials_done']} trials done; {s['selections']} selections"
+            f"({stages}); {s['trials_done']} trials done; steps: {steps}"
         )
     for line in lines:
         typer.echo(

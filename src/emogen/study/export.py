@@ -35,8 +35,7 @@ from emogen.study.config import StudyConfig
 from emogen.study.dashboard import seconds_between
 from emogen.study.export_rows import SESSIONS, TRIALS, iso, load_records
 from emogen.study.storage import Store
-from emogen.study.tables import SCHEMA_VERSION, SessionRow, StudyRow, TrialRow
-from emogen.tasks.evolve.tables import SelectionRow
+from emogen.study.tables import SCHEMA_VERSION, SessionRow, StepRow, StudyRow, TrialRow
 from emogen.tasks.export import ExportTable, Row
 from emogen.tasks.registry import TASKS
 
@@ -74,7 +73,8 @@ STAMPS = ("schema_version", "package_version", "model_hash", "study_config_hash"
 
 
 def study_status(store: Store) -> list[dict[str, Any]]:
-    """Per study: sessions by stage, trials done, selections made."""
+    """Per study: sessions by stage, trials done, and the steps taken by command (``select``,
+    ``answer``, …: one a page's request the server acted on, a repeat not counted)."""
     out = []
     with store.read() as db:
         for study in db.scalars(select(StudyRow).order_by(StudyRow.id)):
@@ -91,12 +91,13 @@ def study_status(store: Store) -> list[dict[str, Any]]:
                 .join(SessionRow, TrialRow.session_id == SessionRow.id)
                 .where(SessionRow.study_id == study.id, TrialRow.status == "done")
             )
-            n_sel = db.scalar(
-                select(func.count())
-                .select_from(SelectionRow)
-                .join(TrialRow, SelectionRow.trial_id == TrialRow.id)
-                .join(SessionRow, TrialRow.session_id == SessionRow.id)
-                .where(SessionRow.study_id == study.id)
+            steps = dict(
+                db.execute(
+                    select(StepRow.kind, func.count())
+                    .join(SessionRow, StepRow.session_id == SessionRow.id)
+                    .where(SessionRow.study_id == study.id)
+                    .group_by(StepRow.kind)
+                ).all()
             )
             out.append(
                 {
@@ -108,7 +109,7 @@ def study_status(store: Store) -> list[dict[str, Any]]:
                     "sessions": int(sum(stages.values())),
                     "by_stage": {k: int(v) for k, v in sorted(stages.items())},
                     "trials_done": int(trials_done or 0),
-                    "selections": int(n_sel or 0),
+                    "steps": {str(k): int(v) for k, v in sorted(steps.items())},
                 }
             )
     return out

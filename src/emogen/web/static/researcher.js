@@ -123,7 +123,11 @@ async function refresh() {
     $("summary").textContent = mine
       ? `${mine.sessions} sessions (${Object.entries(mine.by_stage)
           .map(([k, v]) => `${v} ${k}`)
-          .join(", ")}); ${mine.trials_done} trials done; ${mine.selections} selections.`
+          .join(", ")}); ${mine.trials_done} trials done; steps: ${
+          Object.entries(mine.steps)
+            .map(([k, v]) => `${v} ${k}`)
+            .join(", ") || "none"
+        }.`
       : "No sessions yet.";
     showWarnings(status.warnings);
     showDurations(status);
