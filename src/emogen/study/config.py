@@ -261,7 +261,7 @@ class StudyConfig(_Strict):
 
     @property
     def n_trials(self) -> int:
-        """How many trials a session has (a categorise block's ``file`` without ``file_faces``
+        """How many trials a session has (a block's face table read without a count of its faces
         counts as 0 here: its rows are counted when the server reads the file)."""
         return len(self.conditions())
 
@@ -315,7 +315,7 @@ class StudyConfig(_Strict):
             del data["identity"]
         if not data["collect_user_agent"]:  # nor do studies that do not collect user agents
             del data["collect_user_agent"]
-        if not data["blocks"]:  # nor studies of one evolve block (written before blocks)
+        if not data["blocks"]:  # nor studies of one default-task block (written before blocks)
             del data["blocks"]
         for key, default in (
             ("custom_emotions", []),

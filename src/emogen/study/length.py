@@ -10,7 +10,7 @@ check``), not measurements of this study:
   11 selection screens and a rating) took about 10–16 minutes: (600 s − 60 s − 8 × 3 s) / 88 =
   5.9 s and (960 s − 120 s − 8 × 5 s) / 88 = 9.1 s a selection screen. This estimate gives
   that study "about 10–16 minutes";
-* a **categorise** screen (one face, a label, perhaps two ratings) 4–8 s (an assumption: no
+* a **labelling** screen (one face, a label, perhaps two ratings) 4–8 s (an assumption: no
   study of this kind was timed yet).
 
 Restarts ("Start again") are not counted: a session with restarts takes longer. Once sessions

@@ -10,7 +10,7 @@ with ``participant_source = "simulated"`` (a column of every exported table).
 With one worker the participants run one after another, so participant ``i`` draws others'
 faces from participants ``< i``: the same seed gives the same data. With several workers each
 runs a share of the participants in its own process on the same database; everything but
-which other participants' faces a categorise block finds complete is the same.
+which other participants' faces a labelling block finds complete is the same.
 """
 
 from __future__ import annotations
