@@ -58,7 +58,7 @@ def test_chunked_export_holds_what_one_table_holds(
     state = do(service, "begin", token, new_key())
     run_to_end(state, service_caller(service, token), stop=lambda s: s["progress"]["trial"] == 1)
     service.create_session("S-4")  # never began: no trials, no faces
-    monkeypatch.setattr(export_stream, "CHUNK_FACES", 25)  # a chunk per session or so
+    monkeypatch.setattr(export_stream, "CHUNK_ROWS", 25)  # a chunk per session or so
     chunks = export_stream.session_chunks(service.store, [service.ctx.study_id], None, None)
     assert len(chunks) >= 4 and sorted(s for c in chunks for s in c) == [1, 2, 3, 4]
     result = export_study(service.store, tmp_path / "out", fmt)

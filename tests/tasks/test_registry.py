@@ -50,6 +50,25 @@ def test_the_study_and_web_layers_name_no_task() -> None:
     assert found == [], "task or command names outside the tasks:\n" + "\n".join(found)
 
 
+def test_the_study_and_web_layers_import_no_task_package() -> None:
+    """They reach a task through the registry and the protocol only, never its package."""
+    packages = {type(t).__module__.rsplit(".", 1)[0] for t in TASKS.values()}
+    assert "emogen.tasks.evolve" in packages  # the check sees the real tasks
+    files = [p for p in (SRC / "study").rglob("*.py") if "migrations" not in p.parts]
+    files += list((SRC / "web").glob("*.py"))
+    found = []
+    for p in files:
+        for node in ast.walk(ast.parse(p.read_text())):
+            names = [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            names += [a.name for a in node.names] if isinstance(node, ast.Import) else []
+            found += [
+                f"{p.relative_to(SRC)}:{node.lineno}: {n}"
+                for n in names
+                if any(n == pkg or n.startswith(pkg + ".") for pkg in packages)
+            ]
+    assert found == [], "task packages imported outside the tasks:\n" + "\n".join(found)
+
+
 def test_the_page_s_shared_modules_name_no_task() -> None:
     names = "|".join(sorted(TASKS))
     quoted = re.compile(rf"""["'`]({names})["'`]""")

@@ -36,7 +36,7 @@ from typing import Any
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
-from sqlalchemy import func, select
+from sqlalchemy import select
 
 from emogen import columns as tidy
 from emogen.errors import ConfigError
@@ -53,13 +53,14 @@ from emogen.study.export import (
 )
 from emogen.study.export_rows import iso, load_records
 from emogen.study.storage import Store
-from emogen.study.tables import SessionRow, StudyRow, TrialRow, as_utc
-from emogen.tasks.evolve.tables import FaceRow, PopulationRow
+from emogen.study.tables import SessionRow, StudyRow, as_utc
+from emogen.tasks.registry import TASKS
 
 #: How long before an incremental export's start its cut-off lies (see the module docstring).
 SETTLE = timedelta(seconds=60)
-#: Rows of the faces table per chunk (the largest table; the others follow its sessions).
-CHUNK_FACES = 500
+#: Rows of the tasks' export tables per chunk (each task says how many a session has: the GA's
+#: faces are the largest table).
+CHUNK_ROWS = 500
 #: A Parquet row group: several chunks, up to this many rows or this many bytes in memory
 #: (the faces table is wide: ~100 columns).
 ROW_GROUP_ROWS = 8192
@@ -119,16 +120,9 @@ def _studies(store: Store, study: str | None) -> dict[int, StudyRow]:
 def session_chunks(
     store: Store, study_ids: list[int], since: datetime | None, until: datetime | None
 ) -> list[list[int]]:
-    """The sessions to export, in id order, in chunks of about :data:`CHUNK_FACES` faces."""
-    query = (
-        select(SessionRow.id, func.count(FaceRow.id))
-        .outerjoin(TrialRow, TrialRow.session_id == SessionRow.id)
-        .outerjoin(PopulationRow, PopulationRow.trial_id == TrialRow.id)
-        .outerjoin(FaceRow, FaceRow.population_id == PopulationRow.id)
-        .where(SessionRow.study_id.in_(study_ids))
-        .group_by(SessionRow.id)
-        .order_by(SessionRow.id)
-    )
+    """The sessions to export, in id order, in chunks of about :data:`CHUNK_ROWS` rows of the
+    tasks' export tables."""
+    query = select(SessionRow.id).where(SessionRow.study_id.in_(study_ids)).order_by(SessionRow.id)
     if until is not None:
         query = query.where(SessionRow.completed_at.is_not(None), SessionRow.completed_at < until)
     if since is not None:
@@ -136,12 +130,16 @@ def session_chunks(
     chunks: list[list[int]] = []
     size = 0
     with store.read() as db:
-        for sid, n_faces in db.execute(query):
-            if not chunks or size + int(n_faces) > CHUNK_FACES:
+        rows: dict[int, int] = {}
+        for task in TASKS.values():
+            for sid, n in task.export_size(db, query.order_by(None)).items():
+                rows[sid] = rows.get(sid, 0) + n
+        for sid in db.scalars(query):
+            if not chunks or size + rows.get(sid, 0) > CHUNK_ROWS:
                 chunks.append([])
                 size = 0
             chunks[-1].append(int(sid))
-            size += int(n_faces)
+            size += rows.get(sid, 0)
     return chunks
 
 

@@ -143,6 +143,25 @@ class Outcome:
     shown: Any = None
 
 
+@dataclass(frozen=True)
+class ExportedStudy:
+    """One study of an export folder (``emogen study export``), for a replay from the files.
+
+    config : the study's resolved config (:class:`emogen.study.config.StudyConfig`)
+    genes, weights : the gene and weight column names (``g_<gene>``, ``w_<weight>``)
+    tables : the export's tables, by name, holding this study's rows only
+    sessions : the session ids to replay
+    rig : the face model's rig
+    """
+
+    config: Any
+    genes: list[str]
+    weights: list[str]
+    tables: dict[str, Any]
+    sessions: frozenset[int]
+    rig: Any
+
+
 @dataclass
 class Replayed:
     """A trial's replay: what was checked and what differed (``deviation``: the largest
@@ -173,6 +192,8 @@ class Task(Protocol):
     #: its export tables (:class:`emogen.tasks.export.ExportTable`: name, typed columns, rows
     #: from a read's records; :func:`emogen.tasks.export.record_table` makes one from a record)
     export_tables: ClassVar[tuple[Any, ...]]
+    #: the export tables :meth:`replay_exported` reads (``emogen study replay --from-export``)
+    replay_tables: ClassVar[tuple[str, ...]]
     #: what the study's default instructions say of its blocks
     instructions: ClassVar[str]
     #: screens a trial shows a participant, and the seconds each takes (low, high): an
@@ -218,6 +239,14 @@ class Task(Protocol):
     def replay(self, env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed:
         """Re-run the trial from its seed and recorded commands; compare with its records."""
 
+    def replay_exported(self, env: TaskEnv, study: ExportedStudy) -> dict[int, list[Replayed]]:
+        """Replay this task's trials of ``study``'s sessions from the exported files alone, in
+        trial order: the replays of each session, by session id."""
+
+    def export_size(self, db: Session, sessions: Any) -> dict[int, int]:
+        """The rows this task's export tables hold for each session in ``sessions`` (a SELECT
+        of session ids): the export is written a few sessions at a time, sized by them."""
+
     def simulate(self, who: Any, view: dict[str, Any], trial: int) -> dict[str, Any]:
         """The command (a JSON body, without its key) a simulated participant sends to
         ``view`` (``who``: :class:`emogen.tasks.simulated.SimulatedPeople`)."""
@@ -245,9 +274,11 @@ def conditions_of(blocks: Sequence[TaskBlock], study: Any, rows: dict[int, int])
 class TaskDefaults:
     """What a task that has no more to say answers (subclass it and write the rest): nothing
     to prepare, no face table, no face served as PNG, no result for an embedding page, no
-    faces made, a replay that checks nothing, and its name on the dashboard."""
+    faces made, a replay that checks nothing (from the database or from an export), rows too
+    few to size an export by, and its name on the dashboard."""
 
     name: ClassVar[str]
+    replay_tables: ClassVar[tuple[str, ...]] = ()
 
     def prepare(self, ctx: Any, k: int, block: Any) -> Any:
         return None
@@ -268,6 +299,12 @@ class TaskDefaults:
 
     def replay(self, env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed:
         return Replayed()
+
+    def replay_exported(self, env: TaskEnv, study: ExportedStudy) -> dict[int, list[Replayed]]:
+        return {}
+
+    def export_size(self, db: Session, sessions: Any) -> dict[int, int]:
+        return {}
 
     def state_facts(self, state: str | None) -> dict[str, Any]:
         return {}

@@ -16,7 +16,7 @@ from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import Field
-from sqlalchemy import select
+from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from emogen.tasks.blocks import Condition, TaskBlock
@@ -34,6 +34,7 @@ from emogen.tasks.categorise.view import (
 )
 from emogen.tasks.errors import StepConflict
 from emogen.tasks.protocol import (
+    ExportedStudy,
     FaceView,
     MadeFace,
     Millis,
@@ -76,6 +77,8 @@ class CategoriseTask:
     tables: ClassVar[tuple[type, ...]] = (StimulusRow, ResponseRow)
     #: categorise_responses: each face shown and its answer (:mod:`.export`)
     export_tables: ClassVar[tuple[Any, ...]] = CATEGORISE_TABLES
+    #: its replay reads the database only
+    replay_tables: ClassVar[tuple[str, ...]] = ()
     #: what the default instructions say of its blocks (after "In this study " or "In another
     #: part of the study ")
     instructions: ClassVar[str] = (
@@ -173,6 +176,21 @@ class CategoriseTask:
 
     def replay(self, env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed:
         return check_stimulus(env, db, row, rig)
+
+    def replay_exported(self, env: TaskEnv, study: ExportedStudy) -> dict[int, list[Replayed]]:
+        """Nothing to rebuild: a stimulus is checked against the record it was drawn from
+        (:meth:`replay`), which an export holds only in part."""
+        return {}
+
+    def export_size(self, db: Session, sessions: Any) -> dict[int, int]:
+        """A response row per trial shown."""
+        query = (
+            select(TrialRow.session_id, func.count(StimulusRow.id))
+            .join(StimulusRow, StimulusRow.trial_id == TrialRow.id)
+            .where(TrialRow.session_id.in_(sessions))
+            .group_by(TrialRow.session_id)
+        )
+        return {int(sid): int(n) for sid, n in db.execute(query)}
 
     def simulate(self, who: Any, view: dict[str, Any], trial: int) -> dict[str, Any]:
         """The judge's label for the face, with the ratings the block asks."""

@@ -11,7 +11,7 @@ from datetime import datetime
 from typing import Any
 
 import numpy as np
-from sqlalchemy import bindparam, insert, select
+from sqlalchemy import bindparam, func, insert, select
 from sqlalchemy.orm import Session, selectinload
 
 from emogen.ga.engine import Engine, Population
@@ -192,3 +192,15 @@ def final_faces(db: Session, task: str, where: Sequence[Any]) -> list[MadeFace]:
         }
         for t, f in latest.values()
     ]
+
+
+def faces_per_session(db: Session, sessions: Any) -> dict[int, int]:
+    """The faces stored for each session in ``sessions`` (a SELECT of session ids)."""
+    query = (
+        select(TrialRow.session_id, func.count(FaceRow.id))
+        .join(PopulationRow, PopulationRow.trial_id == TrialRow.id)
+        .join(FaceRow, FaceRow.population_id == PopulationRow.id)
+        .where(TrialRow.session_id.in_(sessions))
+        .group_by(TrialRow.session_id)
+    )
+    return {int(sid): int(n) for sid, n in db.execute(query)}

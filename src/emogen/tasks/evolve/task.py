@@ -23,10 +23,12 @@ from emogen.errors import SelectionError
 from emogen.ga.state import collision_solver_of_state, stream_of_state
 from emogen.tasks.blocks import Condition, TaskBlock
 from emogen.tasks.errors import StepConflict
+from emogen.tasks.evolve import replay_export
 from emogen.tasks.evolve.block import EvolveBlock
 from emogen.tasks.evolve.export import EVOLVE_TABLES
 from emogen.tasks.evolve.replay import replay_trial
 from emogen.tasks.evolve.store import (
+    faces_per_session,
     final_face,
     final_faces,
     last_selection_time,
@@ -45,6 +47,7 @@ from emogen.tasks.evolve.tables import (
 )
 from emogen.tasks.evolve.view import EvolveResult, EvolveView, evolve_view
 from emogen.tasks.protocol import (
+    ExportedStudy,
     FaceId,
     Index,
     MadeFace,
@@ -108,6 +111,7 @@ class EvolveTask:
     )
     #: faces, selections, restarts, evolve_ratings, final_faces (:mod:`.export`)
     export_tables: ClassVar[tuple[Any, ...]] = EVOLVE_TABLES
+    replay_tables: ClassVar[tuple[str, ...]] = replay_export.TABLES
     #: the default instructions of its blocks
     instructions: ClassVar[str] = (
         "You will see ten faces at a time. Click the face that best shows the emotion you are "
@@ -255,6 +259,13 @@ class EvolveTask:
 
     def replay(self, env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed:
         return replay_trial(env, db, row, rig)
+
+    def replay_exported(self, env: TaskEnv, study: ExportedStudy) -> dict[int, list[Replayed]]:
+        return replay_export.replay_exported(env, study)
+
+    def export_size(self, db: Session, sessions: Any) -> dict[int, int]:
+        """Its faces: the export's largest table."""
+        return faces_per_session(db, sessions)
 
     def simulate(self, who: Any, view: dict[str, Any], trial: int) -> dict[str, Any]:
         """The maker's selection of the shown faces, or their rating of the final face."""
