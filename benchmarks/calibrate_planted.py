@@ -7,12 +7,15 @@ EmoGen's study format and read back by ``load_people``.
     python benchmarks/calibrate_planted.py --studies 50 --conditions null
 
 Conditions: ``null`` (labels by the population's prototypes, own_weight 0), ``ignore`` (labels
-ignore the faces: the intended label with P 0.7), ``effect`` (own_weight 0.5). For each, prints
+ignore the faces: the intended label with P 0.7; people's emotions more or less distinct,
+distinctness_sd 0.6: the null of fields ↔ accuracy), ``effect`` (own_weight 0.5), ``fields``
+(labels by one's own prototypes, distinctness_sd 0.6: fields ↔ accuracy planted). For each, prints
 the studies with a crash, a NaN anywhere in a result, and each test's fits without an estimate
 or with a fallback; then per test the rejection rate at α with its Wilson 95% interval: the
 primary conditional logit with two-way clustering, the secondary GEE, two-stage and shuffled
 control, and the same pooled conditional logit with model-based (unclustered) SEs — the
-reference the primary test's power is compared with.
+reference the primary test's power is compared with — and the fields ↔ accuracy test
+(:mod:`emogen.analysis.fields_accuracy`, 999 permutations).
 """
 
 from __future__ import annotations
@@ -29,10 +32,11 @@ from benchmarks.planted_study import PlantedDesign, write_planted_study
 
 CONDITIONS = {
     "null": {"own_weight": 0.0},
-    "ignore": {"labelling": "ignore_faces"},
+    "ignore": {"labelling": "ignore_faces", "distinctness_sd": 0.6},
     "effect": {"own_weight": 0.5},
+    "fields": {"own_weight": 1.0, "distinctness_sd": 0.6},
 }
-TESTS = ("primary", "gee", "two_stage", "control", "pooled_naive")
+TESTS = ("primary", "gee", "two_stage", "control", "pooled_naive", "fields_accuracy")
 
 
 def naive_p(table) -> float | None:  # type: ignore[no-untyped-def]
@@ -53,6 +57,7 @@ def naive_p(table) -> float | None:  # type: ignore[no-untyped-def]
 def one_study(design: PlantedDesign, seed: int, shuffles: int) -> dict[str, object]:
     """Crash, NaN, failures and p of every test of one planted study."""
     from emogen.analysis.categorisation_models import OwnDistance, own_distance
+    from emogen.analysis.fields_accuracy import distinctness_accuracy
     from emogen.analysis.people import load_people
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -72,6 +77,9 @@ def one_study(design: PlantedDesign, seed: int, shuffles: int) -> dict[str, obje
     text = json.dumps(tests, default=lambda o: o.tolist() if hasattr(o, "tolist") else str(o))
     p = {name: t.get("p_t" if name == "two_stage" else "p") for name, t in tests.items()}
     p["pooled_naive"] = naive_p(res.table)
+    fa = distinctness_accuracy(people, rng=np.random.default_rng(seed), permutations=999)
+    p["fields_accuracy"] = fa["p_perm"]
+    text += json.dumps({k: v for k, v in fa.items() if k != "table"})
     return {
         "crash": "",
         "nan": "NaN" in text or "Infinity" in text,

@@ -19,6 +19,11 @@ The generating assumptions differ on purpose from those the analysis makes:
   - ``"ignore_faces"``: the face plays no part: the intended label with probability
     ``accuracy``, else one of the others uniformly (random faces: uniformly);
 
+* **distinctness** (``distinctness_sd`` > 0): participant i's prototypes are
+  c + s_i (p_e − c) + deviation, with c the mean of the population prototypes over emotions and
+  log s_i ~ N(0, distinctness_sd²): some people's emotions lie closer together than others'.
+  Labelling by one's own prototypes (``own_weight`` 1), a participant whose prototypes are
+  less distinct confuses more labels — the fields ↔ accuracy relation, planted;
 * **categorise block**: ``n_other`` faces of other participants (drawn from everyone else's
   final faces), ``n_random`` random faces (Beta(0.6, 1.2) genes) and ``n_own`` of the
   participant's own final faces, all labels offered in a shuffled order.
@@ -71,6 +76,7 @@ class PlantedDesign:
     n_other: int = 16
     n_random: int = 6
     n_own: int = 2
+    distinctness_sd: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -140,7 +146,12 @@ def _prototypes(design: PlantedDesign, rng: np.random.Generator) -> tuple[np.nda
         active = rng.choice(g, size=design.active_genes, replace=False)
         pop[k, active] = rng.uniform(0.4, 0.9, size=design.active_genes)
     dev = design.spread * rng.standard_t(3, size=(design.participants, e, g))
-    return pop, np.clip(pop[None] + dev, 0.0, 1.0)
+    own = pop[None] + dev
+    if design.distinctness_sd > 0:  # each participant's emotions pulled together or apart
+        s = np.exp(design.distinctness_sd * rng.standard_normal(design.participants))
+        centre = pop.mean(axis=0)
+        own = centre + s[:, None, None] * (pop[None] - centre) + dev
+    return pop, np.clip(own, 0.0, 1.0)
 
 
 def _final_faces(design: PlantedDesign, own: np.ndarray, rng: np.random.Generator) -> pd.DataFrame:

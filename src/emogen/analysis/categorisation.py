@@ -24,6 +24,7 @@ import pandas as pd
 
 from emogen.analysis import recognition as rec
 from emogen.analysis.analyse_options import AnalysisOptions
+from emogen.analysis.fields_accuracy import fields_accuracy_section
 from emogen.analysis.own_distance_report import own_distance_section
 from emogen.analysis.people import People
 from emogen.errors import DataError
@@ -134,6 +135,7 @@ def categorisation_section(
         )
         return
     own_distance_section(full, report, out, opts)
+    fields_accuracy_section(full, report, out, opts)
 
 
 def _long(report: Report, table: pd.DataFrame, name: str, caption: str, shown: int = 8) -> None:
