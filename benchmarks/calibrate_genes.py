@@ -29,7 +29,7 @@ from emogen.analysis.simulated_study import PeopleDesign, as_people, simulate_pe
 from emogen.tasks.simulated import SimulatedDesign
 
 ALPHA = 0.05
-OPTS = GeneTestOptions(permutations=2000, bootstrap=200)
+OPTS = GeneTestOptions(permutations=2000)
 NULL = PeopleDesign(
     emotions=("happy", "sad"),
     identities=("female-medium",),

@@ -14,6 +14,7 @@ import pytest
 
 from emogen.analysis import categorisation_fits as fits
 from emogen.analysis import categorisation_models as cm
+from emogen.analysis.categorisation_clogit import conditional_logit
 from emogen.analysis.simulated_study import PeopleDesign, as_people, simulate_people
 
 SMALL = dict(participants=20, repetitions=2, identities=("female-medium",))
@@ -39,7 +40,9 @@ def test_conditional_logit_matches_statsmodels() -> None:
     avail[:, :2] = True
     util = np.where(avail, x @ np.array([-1.5, 0.7]), -np.inf) + rng.gumbel(size=(n, labels))
     chosen = np.argmax(util, axis=1)
-    beta, info, _ = fits.conditional_logit(x, avail, chosen)
+    fit = conditional_logit(x, avail, chosen)
+    assert fit.converged, fit.reason
+    beta, info = fit.beta, fit.info
     rows, cols = np.nonzero(avail)
     ref = ConditionalLogit((chosen[rows] == cols).astype(float), x[rows, cols], groups=rows).fit(
         method="newton", maxiter=100, disp=False
@@ -105,10 +108,12 @@ def test_gee_matches_statsmodels_formula_gee(study) -> None:  # type: ignore[no-
 def test_the_own_distance_effect_is_found_when_present(study) -> None:  # type: ignore[no-untyped-def]
     res = cm.own_distance(study, rng=np.random.default_rng(1), n_shuffles=99)
     assert isinstance(res, cm.OwnDistance)
+    assert res.primary["status"] == "ok" and res.primary["contrast"] < 0
+    assert res.primary["p"] < 1e-3
     assert res.gee["contrast"] < 0 and res.gee["p"] < 1e-3
     assert res.two_stage["mean_contrast"] < 0 and res.two_stage["p_t"] < 1e-3
     assert res.control["p"] <= 0.02 and res.control["slope_own"] < res.control["control_low"]
-    assert len(res.slopes) == res.gee["n_participants"] == 20
+    assert len(res.slopes) == res.gee["n_participants"] == res.primary["n_participants"] == 20
 
 
 def test_the_contrast_holds_alpha_when_prototypes_are_shuffled(rig) -> None:  # type: ignore[no-untyped-def]
@@ -121,8 +126,8 @@ def test_the_contrast_holds_alpha_when_prototypes_are_shuffled(rig) -> None:  # 
         people = as_people(simulate_people(design, rig, seed=500 + seed))
         res = cm.own_distance(people, rng=np.random.default_rng(seed), n_shuffles=49)
         assert isinstance(res, cm.OwnDistance)
-        p.append([res.gee["p"], res.two_stage["p_t"], res.control["p"]])
-        naive.append(res.gee["ci_high_own"] < 0)
+        p.append([res.primary["p"], res.gee["p"], res.two_stage["p_t"], res.control["p"]])
+        naive.append(res.primary["ci_high_own"] < 0)
     rejected = (np.array(p) <= 0.05).sum(axis=0)
     assert (rejected <= 2).all(), rejected
     assert np.mean(naive) > 0.8

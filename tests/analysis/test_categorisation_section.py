@@ -49,7 +49,7 @@ def test_the_section_of_a_study_with_a_categorise_block(people, tmp_path: Path) 
     assert len(tests) >= 5 and all("participant" in t for t in tests)
     assert any("seed 3" in t for t in text)
     got = summary["categorisation"]
-    assert got["n_answers"] == len(people.responses) and got["own_distance"]["gee"]["p"] < 0.05
+    assert got["n_answers"] == len(people.responses) and got["own_distance"]["primary"]["p"] < 0.05
     # the CSV holds every row of a long table the report shows the head of
     long = pd.read_csv(tmp_path / "tables" / "categorisation_hit_rates.csv")
     assert len(long) == 12 * 4

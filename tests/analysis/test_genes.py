@@ -70,7 +70,7 @@ def test_facs_map_covers_every_gene_of_the_model(ict_model) -> None:  # type: ig
     assert table.set_index("gene").loc["browInnerUp", "facs_code"] == "AU1"
 
 
-OPTS = GeneTestOptions(permutations=1000, bootstrap=200)
+OPTS = GeneTestOptions(permutations=1000)
 NULL = PeopleDesign(
     emotions=("happy", "sad"),
     identities=("female-medium",),
@@ -129,3 +129,24 @@ def test_planted_group_shift_is_found_on_its_gene(rig) -> None:  # type: ignore[
 @pytest.fixture(scope="module")
 def rig(ict_model):  # type: ignore[no-untyped-def]
     return ict_model.rig
+
+
+def test_gene_intervals_are_scipys_t_intervals() -> None:
+    """The per-gene CIs against scipy: Student's t on paired differences, Welch's t between
+    groups (a gene nobody uses: the point interval at 0)."""
+    from scipy import stats
+
+    from emogen.analysis.permutation import t_mean_ci, welch_difference_ci
+
+    rng = np.random.default_rng(9)
+    d = rng.beta(0.5, 2.0, size=(8, 3, 4)) - 0.2
+    lo, hi = t_mean_ci(d, level=0.9)
+    ref = stats.ttest_1samp(d[:, 1, 2], 0.0).confidence_interval(0.9)
+    assert (lo[1, 2], hi[1, 2]) == pytest.approx((ref.low, ref.high), rel=1e-12)
+    x = rng.beta(0.5, 2.0, size=(15, 2, 4))
+    x[:, 0, 3] = 0.0
+    member = np.arange(15) < 8
+    lo, hi = welch_difference_ci(x, member, level=0.95)
+    ref = stats.ttest_ind(x[member, 1, 1], x[~member, 1, 1], equal_var=False)
+    assert (lo[1, 1], hi[1, 1]) == pytest.approx(tuple(ref.confidence_interval(0.95)), rel=1e-10)
+    assert (lo[0, 3], hi[0, 3]) == (0.0, 0.0)

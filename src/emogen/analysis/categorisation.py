@@ -24,15 +24,14 @@ import pandas as pd
 
 from emogen.analysis import recognition as rec
 from emogen.analysis.analyse_options import AnalysisOptions
+from emogen.analysis.fields_accuracy import fields_accuracy_section
+from emogen.analysis.own_distance_report import own_distance_section
 from emogen.analysis.people import People
 from emogen.errors import DataError
 
 if TYPE_CHECKING:
     from emogen.analysis.report import Report
     from emogen.model.face import FaceModel
-
-#: Shuffles (derangements of participants) of the report's shuffled-prototype control.
-SHUFFLES = 199
 
 
 def accuracy_by_source(responses: pd.DataFrame) -> pd.DataFrame:
@@ -135,7 +134,8 @@ def categorisation_section(
             "this call did not receive)."
         )
         return
-    _own_distance_model(full, report, out, opts)
+    own_distance_section(full, report, out, opts)
+    fields_accuracy_section(full, report, out, opts)
 
 
 def _long(report: Report, table: pd.DataFrame, name: str, caption: str, shown: int = 8) -> None:
@@ -260,111 +260,4 @@ def _sources(
         f"{adv['accuracy_own']:.3f}, others' {adv['accuracy_other']:.3f}, difference "
         f"{adv['difference']:+.3f}, 95% CI [{adv['ci_low']:+.3f}, {adv['ci_high']:+.3f}], "
         f"t = {adv['t']:.2f}, p = {adv['p']:.3g}."
-    )
-
-
-def _own_distance_model(
-    people: People, report: Report, out: dict[str, Any], opts: AnalysisOptions
-) -> None:
-    from emogen.analysis import categorisation_models as cm
-    from emogen.analysis.categorisation_figures import own_distance_figure
-
-    res = cm.own_distance(people, rng=np.random.default_rng(opts.seed), n_shuffles=SHUFFLES)
-    report.heading("Own faces predict labels (Binetti et al. 2022)", level=3)
-    if isinstance(res, str):
-        report.paragraph(f"No own-distance model: {res}.")
-        out["own_distance"] = {"note": res}
-        return
-    g, two, ctl = res.gee, res.two_stage, res.control
-    out["own_distance"] = {
-        "gee": g,
-        "two_stage": two,
-        "control": {k: v for k, v in ctl.items() if k != "control"},
-    }
-    _long(
-        report,
-        res.table,
-        "categorisation_model_long",
-        "The own-distance model's long table (answer × offered label)",
-    )
-    _long(
-        report,
-        res.slopes,
-        "categorisation_model_slopes",
-        "Per-participant slopes (two-stage model, first stage)",
-    )
-    report.paragraph(
-        f"For each answer to a face the participant did not make (others' and random faces: "
-        f"{g['n_answers']} answers of {g['n_participants']} participants), d_own is the gene-"
-        "space Euclidean distance from the test face to the mean of the participant's own "
-        "final faces of each offered label, and d_ref the same distance to the faces of a "
-        "reference participant (a random derangement of participants: nobody is their own "
-        f"reference; seed {opts.seed}; answers to faces the reference made are left out). "
-        "Own faces are not test faces here: one's other faces of an emotion were made toward "
-        "the same internal face, so they would predict an own face's label even without any "
-        "labeller effect. Everyone's faces of an emotion lie near the population's, so d_own "
-        "alone predicts labels without individual prototypes; the individual effect is d_own "
-        "beyond d_ref — the contrast of the two slopes (negative: one's own faces predict "
-        "one's labels better)."
-    )
-    _own_distance_tests(report, g, two, ctl, opts)
-    path = own_distance_figure(res, report.figures / "categorisation_own_distance.png")
-    report.figure(
-        path,
-        "A: per participant, the share of answers whose label is the offered emotion "
-        "with the nearest mean face among one's own faces (y) and among the reference "
-        "participant's (x); above the diagonal, one's own faces predict one's labels better "
-        "(descriptive). B: the shuffled control's slopes (derangements of participants) and "
-        "the slope with one's own faces.",
-    )
-
-
-def _own_distance_tests(
-    report: Report,
-    g: dict[str, Any],
-    two: dict[str, Any],
-    ctl: dict[str, Any],
-    opts: AnalysisOptions,
-) -> None:
-    """The own-distance model's three tests: GEE (primary), two-stage, shuffled control."""
-    from emogen.analysis.categorisation_fits import RIDGE
-
-    report.paragraph(
-        "Primary test — GEE (binomial, logit link; the long table of answer × offered label, "
-        "chosen 0/1, on d_own, d_ref and one intercept per label; exchangeable working "
-        "correlation within participant, robust sandwich SE: the participant is the unit; "
-        "assumes a logit-linear effect of distance, independent participants, enough of them "
-        f"for the sandwich, ≥ 30 or so): slope on d_own {g['slope_own']:+.2f} "
-        f"[{g['ci_low_own']:+.2f}, {g['ci_high_own']:+.2f}] per unit distance (odds ratio "
-        f"{g['odds_ratio_own']:.3g} per unit, {np.exp(g['slope_own'] / 10):.3g} per 0.1), on d_ref {g['slope_ref']:+.2f} "
-        f"[{g['ci_low_ref']:+.2f}, {g['ci_high_ref']:+.2f}] (odds ratio "
-        f"{g['odds_ratio_ref']:.3g}); contrast own − ref {g['contrast']:+.2f}, 95% CI "
-        f"[{g['ci_low']:+.2f}, {g['ci_high']:+.2f}], z = {g['z']:.2f}, p = {g['p']:.3g} "
-        f"(working correlation {g['correlation']:+.3f})."
-        + (
-            f" With {g['n_participants']} participants the sandwich SE runs small: read this "
-            "p with the two-stage test and the control below."
-            if g["n_participants"] < 30
-            else ""
-        )
-    )
-    report.paragraph(
-        "Robustness — two-stage (per participant a conditional logit of the chosen label on "
-        f"d_own and d_ref, ridge {RIDGE} on both slopes alike; then over participants, the "
-        "unit): mean contrast "
-        f"{two['mean_contrast']:+.2f}, 95% CI [{two['ci_low']:+.2f}, {two['ci_high']:+.2f}], "
-        f"t = {two['t']:.2f}, p = {two['p_t']:.3g}; Wilcoxon signed-rank p = "
-        f"{two['p_wilcoxon']:.3g} (n = {two['n_participants']}; assumes independent "
-        "participants; the Wilcoxon test a symmetric distribution of contrasts)."
-    )
-    report.paragraph(
-        "Shuffled-prototype control — a permutation over participants: the pooled "
-        "conditional-logit slope on distance to one's own faces (label intercepts; answers "
-        f"to others' and random faces) is {ctl['slope_own']:+.2f}; with each participant's "
-        f"faces replaced by another participant's ({ctl['n_shuffles']} random derangements, "
-        f"seed {opts.seed}; answers to faces of the stand-in left out) it is "
-        f"{ctl['control_mean']:+.2f} on average (95% of shuffles in "
-        f"[{ctl['control_low']:+.2f}, {ctl['control_high']:+.2f}]); one-sided p = "
-        f"{ctl['p']:.3g} (own faces closer to the labels than another's; assumes participants "
-        "exchangeable under the null)."
     )

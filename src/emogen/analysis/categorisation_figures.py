@@ -93,8 +93,20 @@ def own_distance_figure(res: OwnDistance, path: Path) -> Path:
     left.set_ylabel("label = nearest of one's own faces (share)")
     left.set_title(f"A. one dot per participant (n = {len(agree)})", fontsize=8)
     c = res.control
-    right.hist(c["control"], bins=20, color=plots.colour(4), label="shuffled (derangements)")
-    right.axvline(c["slope_own"], color=plots.colour(5), lw=2, label="own faces")
+    if c["status"] == "ok":
+        right.hist(c["control"], bins=20, color=plots.colour(4), label="shuffled (derangements)")
+        right.axvline(c["slope_own"], color=plots.colour(5), lw=2, label="own faces")
+    else:
+        right.text(
+            0.5,
+            0.5,
+            f"no estimate:\n{c['reason']}",
+            ha="center",
+            va="center",
+            fontsize=7,
+            wrap=True,
+            transform=right.transAxes,
+        )
     right.set_xlabel("conditional-logit slope on distance (per gene-ED unit)")
     right.set_ylabel("shuffles")
     right.set_title("B. shuffled-prototype control", fontsize=8)

@@ -24,14 +24,20 @@ the contrast β_own − β_ref = 0 (negative: one's own faces predict one's labe
 
 **Models.**
 
-* primary, population-averaged: a GEE on the long table (answer × offered label, chosen 0/1,
-  d_own, d_ref, one intercept per label), binomial family, logit link, exchangeable working
-  correlation within participant, robust (sandwich) standard errors over participants
-  (statsmodels ``GEE``; Liang & Zeger 1986);
-* robustness, two-stage: per participant a conditional logit (McFadden 1974) of the chosen label
-  on d_own and d_ref with a small ridge penalty (the same on both slopes, so the null stays
-  symmetric; it keeps a participant whose labels are perfectly separated finite), then a one-
-  sample t and a Wilcoxon signed-rank test of the per-participant contrasts over participants;
+* primary: the pooled conditional logit (McFadden 1974) of the label chosen among those
+  offered on d_own, d_ref and one constant per label, with participant- and stimulus-level
+  (two-way) cluster-robust standard errors (Cameron, Gelbach & Miller 2011; why this and not a
+  crossed random-effects GLMM: :mod:`emogen.analysis.categorisation_clogit`), a t test of the
+  contrast on min(participants, faces) − 1 degrees of freedom;
+* secondary, population-averaged: a GEE on the long table (answer × offered label, chosen
+  0/1, d_own, d_ref, one intercept per label), binomial family, logit link, exchangeable
+  working correlation within participant (independence as the named fallback when that fit
+  fails), robust (sandwich) standard errors over participants (statsmodels ``GEE``; Liang &
+  Zeger 1986); faces are not clusters here;
+* secondary, two-stage: per participant the maximum-likelihood conditional logit of the chosen
+  label on d_own and d_ref (unpenalised; a participant whose labels are perfectly separated
+  has no estimate and is named and left out), then a one-sample t and a Wilcoxon signed-rank
+  test of the per-participant contrasts over participants;
 * shuffled-prototype control, a permutation over participants: the pooled conditional-logit
   slope on own distance against the same slope with every participant's own faces replaced by
   another participant's (``n_shuffles`` random derangements; answers to faces made by the
@@ -46,10 +52,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from emogen.analysis.categorisation_clogit import clogit_contrast, conditional_logit
 from emogen.analysis.categorisation_fits import (
-    conditional_logit,
     gee_contrast,
-    label_dummies,
+    label_constants,
     per_participant_slopes,
     two_stage,
 )
@@ -62,7 +68,8 @@ class ModelAnswers:
     index space of ``who``, ``maker`` and a reference); means: (participants, emotions, genes)
     mean genes of each one's final faces of each emotion (NaN where none); who, maker: (answers,)
     the answerer and the face's maker (-1: nobody's, a random face); genes: (answers, genes);
-    offered: (answers, emotions) the labels offered; chosen: (answers,) the label's index."""
+    offered: (answers, emotions) the labels offered; chosen: (answers,) the label's index;
+    stimulus: (answers,) which face was shown (answers to identical genes share a number)."""
 
     participants: tuple[str, ...]
     emotions: tuple[str, ...]
@@ -74,6 +81,7 @@ class ModelAnswers:
     chosen: np.ndarray
     source: np.ndarray
     trial: np.ndarray
+    stimulus: np.ndarray
 
 
 def model_answers(people: People) -> ModelAnswers | str:
@@ -106,19 +114,22 @@ def model_answers(people: People) -> ModelAnswers | str:
     f = people.faces.assign(participant_id=people.faces["participant_id"].astype(str))
     for (pid, emotion), rows in f.groupby(["participant_id", "emotion"])[genes]:
         means[index[pid], emotions.index(str(emotion))] = rows.to_numpy(dtype=np.float64).mean(0)
+    gene_values = r[genes].to_numpy(dtype=np.float64)
+    _faces, stimulus = np.unique(np.round(gene_values, 9), axis=0, return_inverse=True)
     return ModelAnswers(
         participants=ids,
         emotions=emotions,
         means=means,
         who=who.to_numpy(dtype=np.int64),
         maker=maker,
-        genes=r[genes].to_numpy(dtype=np.float64),
+        genes=gene_values,
         offered=offered,
         chosen=r["label"].map({e: k for k, e in enumerate(emotions)}).to_numpy(dtype=np.int64),
         source=r["source"].astype(str).to_numpy(),
         trial=(r["trial"] if "trial" in r.columns else pd.Series(np.arange(len(r)))).to_numpy(
             dtype=np.int64
         ),
+        stimulus=stimulus.reshape(-1).astype(np.int64),
     )
 
 
@@ -173,6 +184,7 @@ def long_table(ans: ModelAnswers, reference: np.ndarray) -> pd.DataFrame:
             "answer": n.astype(np.int64),
             "trial": ans.trial[n],
             "source": ans.source[n],
+            "stimulus": ans.stimulus[n],
             "reference_participant_id": ids[reference[ans.who[n]]],
             "label": np.array(ans.emotions, dtype=object)[e],
             "chosen": (ans.chosen[n] == e).astype(np.int64),
@@ -186,26 +198,52 @@ def shuffled_control(
     ans: ModelAnswers, *, n_shuffles: int, rng: np.random.Generator
 ) -> dict[str, Any]:
     """The pooled conditional-logit slope on own distance (with label constants) against the
-    same slope with each participant's faces replaced by a derangement's (module docstring)."""
+    same slope with each participant's faces replaced by a derangement's (module docstring).
+    A shuffle whose fit has no estimate is left out and counted; without the observed slope,
+    ``status`` is ``failed``."""
     n_people = len(ans.participants)
 
-    def slope(reference: np.ndarray) -> float:
+    def slope(reference: np.ndarray) -> tuple[float, str]:
         d = distances(ans, reference)
         keep, avail = usable(ans, d, reference=reference)
-        x = np.concatenate([d[..., None], label_dummies(avail)], axis=2)[keep]
-        beta, _info, _s = conditional_logit(x, avail[keep], ans.chosen[keep])
-        return float(beta[0])
+        avail = avail[keep] & (np.bincount(ans.chosen[keep], minlength=avail.shape[1]) > 0)
+        keep_rows = avail.sum(axis=1) >= 2
+        x = np.concatenate([d[keep][..., None], label_constants(avail)], axis=2)
+        fit = conditional_logit(x[keep_rows], avail[keep_rows], ans.chosen[keep][keep_rows])
+        return (float(fit.beta[0]), "") if fit.converged else (float("nan"), fit.reason)
 
-    observed = slope(np.arange(n_people))
-    control = np.array([slope(derangement(n_people, rng)) for _ in range(n_shuffles)])
-    return {
+    out: dict[str, Any] = {
         "test": "permutation over participants (own faces replaced by another's, derangements)",
+        "unit": "participant",
+        "n_shuffles": n_shuffles,
+        "warnings": [],
+    }
+    observed, reason = slope(np.arange(n_people))
+    if not np.isfinite(observed):
+        gone = ("slope_own", "control_mean", "control_low", "control_high", "p")
+        return out | dict.fromkeys(gone) | {"status": "failed", "reason": reason}
+    control = np.array([slope(derangement(n_people, rng))[0] for _ in range(n_shuffles)])
+    failed = int(np.sum(~np.isfinite(control)))
+    control = control[np.isfinite(control)]
+    if failed:
+        out["warnings"].append(f"{failed} of {n_shuffles} shuffles had no estimate; left out")
+    if not len(control):
+        keys = ("control_mean", "control_low", "control_high", "p")
+        reason = "no shuffle had an estimate"
+        return (
+            out
+            | dict.fromkeys(keys)
+            | {"slope_own": observed, "status": "failed", "reason": reason}
+        )
+    return out | {
+        "status": "ok",
+        "reason": "",
         "slope_own": observed,
         "control_mean": float(control.mean()),
         "control_low": float(np.quantile(control, 0.025)),
         "control_high": float(np.quantile(control, 0.975)),
-        "n_shuffles": n_shuffles,
-        "p": float((1 + np.sum(control <= observed)) / (1 + n_shuffles)),
+        "n_shuffles_fitted": len(control),
+        "p": float((1 + np.sum(control <= observed)) / (1 + len(control))),
         "control": control,
     }
 
@@ -217,10 +255,12 @@ MIN_PARTICIPANTS = 6
 @dataclass(frozen=True, eq=False)
 class OwnDistance:
     """The own-distance model of a study: the long table, the per-participant slopes, and the
-    three tests (GEE contrast, two-stage, shuffled-prototype control) as dicts."""
+    four tests as dicts: the primary conditional logit with two-way clustering, and the
+    secondary GEE contrast, two-stage and shuffled-prototype control."""
 
     table: pd.DataFrame
     slopes: pd.DataFrame
+    primary: dict[str, Any]
     gee: dict[str, Any]
     two_stage: dict[str, Any]
     control: dict[str, Any]
@@ -252,6 +292,7 @@ def own_distance(
     return OwnDistance(
         table=table,
         slopes=slopes,
+        primary=clogit_contrast(table, confidence),
         gee=gee_contrast(table, confidence),
         two_stage=two_stage(slopes, confidence),
         control=shuffled_control(ans, n_shuffles=n_shuffles, rng=rng),

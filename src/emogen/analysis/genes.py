@@ -14,7 +14,7 @@ repetitions): one value per participant × emotion × gene (:func:`participant_g
 
 Family-wise control: max-T over every gene × contrast of a table (``p_maxt``), and separately
 Benjamini–Hochberg FDR over the same family (``q_bh``). Effect sizes: the mean difference (gene
-units: a gene in [0, 1]) with a percentile bootstrap CI over participants. Gene values are
+units: a gene in [0, 1]) with a t interval over participants (paired: Student; groups: Welch). Gene values are
 bounded and often exactly zero (a shape left off): no p-value here assumes normality, and the
 tables give the share of participants who used the gene (participant mean > :data:`USED`).
 """
@@ -31,10 +31,10 @@ from emogen.analysis.facs import facs_code, gene_base
 from emogen.analysis.people import People
 from emogen.analysis.permutation import (
     PermutationResult,
-    bootstrap_difference_ci,
-    bootstrap_mean_ci,
     group_permutation,
     paired_signflip,
+    t_mean_ci,
+    welch_difference_ci,
 )
 from emogen.errors import ConfigError
 
@@ -45,10 +45,9 @@ USED = 0.01
 @dataclass(frozen=True)
 class GeneTestOptions:
     """``permutations``: relabellings per test (exact enumeration when fewer exist);
-    ``bootstrap``: resamples of participants for the CIs; ``level``: CI level (1 − α)."""
+    ``level``: CI level (1 − α)."""
 
     permutations: int = 5000
-    bootstrap: int = 2000
     level: float = 0.95
 
 
@@ -85,7 +84,7 @@ def emotion_gene_tests(
     pairs = list(itertools.combinations(range(len(emotions)), 2))
     d = np.stack([cube[:, a] - cube[:, b] for a, b in pairs], axis=1)  # (n, C, G)
     res = paired_signflip(d, permutations=opts.permutations, rng=rng)
-    lo, hi = bootstrap_mean_ci(d, level=opts.level, draws=opts.bootstrap, rng=rng)
+    lo, hi = t_mean_ci(d, level=opts.level)
     used = (cube > USED).mean(axis=0)  # (E, G)
     rows = []
     for c, (a, b) in enumerate(pairs):
@@ -153,7 +152,7 @@ def group_gene_tests(
         if member.sum() < 2 or (~member).sum() < 2:
             raise ConfigError(f"groups '{ga}' and '{gb}' need >= 2 participants each")
         res = group_permutation(x, member, permutations=opts.permutations, rng=rng)
-        lo, hi = bootstrap_difference_ci(x, member, level=opts.level, draws=opts.bootstrap, rng=rng)
+        lo, hi = welch_difference_ci(x, member, level=opts.level)
         tables.append(_group_rows(people, emotions, x, member, (ga, gb), res, (lo, hi)))
         if len(pairs) > 1:  # Bonferroni over the pairs of groups
             t = tables[-1]

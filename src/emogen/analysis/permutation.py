@@ -142,28 +142,28 @@ def group_permutation(
     return _finish(t, chunks, exact)
 
 
-def bootstrap_mean_ci(
-    d: np.ndarray, *, level: float, draws: int, rng: np.random.Generator
-) -> tuple[np.ndarray, np.ndarray]:
-    """Percentile CI of the mean over participants (axis 0) of ``d``, resampling participants."""
+def t_mean_ci(d: np.ndarray, *, level: float) -> tuple[np.ndarray, np.ndarray]:
+    """Student-t CI of the mean over participants (axis 0) of ``d``: mean ± t(n − 1)·s/√n.
+    (The percentile bootstrap it replaced covered 90.5% at 8 participants: it has no t
+    quantile and its spread is s·√((n − 1)/n); ``benchmarks/coverage_intervals.py``.)"""
     n = d.shape[0]
-    lo, hi = (1 - level) / 2, 1 - (1 - level) / 2
-    means = np.stack([d[rng.integers(0, n, n)].mean(axis=0) for _ in range(draws)])
-    return np.quantile(means, lo, axis=0), np.quantile(means, hi, axis=0)
+    half = stats.t.ppf((1 + level) / 2, n - 1) * d.std(axis=0, ddof=1) / np.sqrt(n)
+    mean = d.mean(axis=0)
+    return mean - half, mean + half
 
 
-def bootstrap_difference_ci(
-    x: np.ndarray, member: np.ndarray, *, level: float, draws: int, rng: np.random.Generator
+def welch_difference_ci(
+    x: np.ndarray, member: np.ndarray, *, level: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Percentile CI of mean(group 1) − mean(group 0) over axis 0 of ``x``, resampling
-    participants within each group (stratified bootstrap)."""
+    """Welch CI of mean(group 1) − mean(group 0) over axis 0 of ``x``: the difference ± t(ν)
+    · SE with Welch–Satterthwaite ν (unequal variances; a gene that nobody in either group
+    uses has SE 0 and the point interval [0, 0])."""
     a, b = x[member], x[~member]
-    lo, hi = (1 - level) / 2, 1 - (1 - level) / 2
-    diffs = np.stack(
-        [
-            a[rng.integers(0, len(a), len(a))].mean(axis=0)
-            - b[rng.integers(0, len(b), len(b))].mean(axis=0)
-            for _ in range(draws)
-        ]
-    )
-    return np.quantile(diffs, lo, axis=0), np.quantile(diffs, hi, axis=0)
+    va, vb = a.var(axis=0, ddof=1) / len(a), b.var(axis=0, ddof=1) / len(b)
+    se2 = va + vb
+    with np.errstate(invalid="ignore", divide="ignore"):
+        nu = se2**2 / (va**2 / (len(a) - 1) + vb**2 / (len(b) - 1))
+    nu = np.where(np.isfinite(nu), nu, len(a) + len(b) - 2)
+    half = stats.t.ppf((1 + level) / 2, nu) * np.sqrt(se2)
+    diff = a.mean(axis=0) - b.mean(axis=0)
+    return diff - half, diff + half
