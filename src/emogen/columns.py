@@ -59,7 +59,7 @@ _STR = frozenset({
     "package_version", "model_hash", "study_config_hash", "shape", "shape_coefficients",
     "config_json", "model_name", "group", "statistic", "unit", "block_name", "task", "source",
     "source_participant_id", "source_label", "intended", "labels", "label",
-    "framing",
+    "framing", "block_order",
 })  # fmt: skip
 #: Booleans by name (a study export's categorisation: a fallback face, a correct answer).
 _BOOL = frozenset(("fallback", "correct"))

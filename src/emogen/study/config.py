@@ -40,6 +40,7 @@ from pydantic import (
 from emogen.appearance.identities import PRESETS, Identity, identity_from_dict, identity_table
 from emogen.config import GAConfig, _Strict, read_toml, validate_config
 from emogen.errors import ConfigError
+from emogen.study.block_order import block_names_of, check_block_order
 from emogen.study.framing import check_framing
 from emogen.study.length import session_length
 from emogen.study.origins import check_origin
@@ -111,6 +112,12 @@ class StudyConfig(_Strict):
     #: id: balanced in expectation, the same row whoever came first) or ``arrival`` (exact: the
     #: k-th session of the study gets row k modulo the rows, under the database's lock).
     counterbalance: Literal["hash", "arrival"] = "hash"
+    #: The order of the blocks: ``fixed`` (config order), ``latin_square`` (rows of a balanced
+    #: Latin square over ``reordered_blocks``, assigned as ``counterbalance`` says) or ``random``
+    #: (seeded per session): :mod:`emogen.study.block_order`.
+    block_order: Literal["fixed", "latin_square", "random"] = "fixed"
+    #: The blocks that trade places (their names; one run in the config): default every block.
+    reordered_blocks: tuple[str, ...] = ()
     #: URL parameter carrying the participant id (e.g. Prolific's PROLIFIC_PID); also accepted:
     #: ``participant``. Without one, an id is generated (unless ``participant_required``).
     participant_param: str = "PROLIFIC_PID"
@@ -252,6 +259,14 @@ class StudyConfig(_Strict):
             )
         for k, block in enumerate(self.blocks):
             block.check(k + 1, self.emotions, self.blocks[:k])
+        names = block_names_of(self.blocks)
+        doubled = sorted({n for n in names if names.count(n) > 1})
+        if doubled:
+            raise ValueError(
+                f"blocks: two blocks are named {', '.join(map(repr, doubled))}: the exports "
+                "tell blocks apart by name (give each its own name)"
+            )
+        check_block_order(self)
         if self.n_trials > 500:
             raise ValueError(
                 "a study must have at most 500 trials (a GA block: emotions × repetitions × "
@@ -322,6 +337,8 @@ class StudyConfig(_Strict):
             ("participant_required", False),
             ("counterbalance", "hash"),
             ("framing", "face"),
+            ("block_order", "fixed"),
+            ("reordered_blocks", []),
         ):
             if data[key] == default:  # studies without them keep their hash
                 del data[key]
