@@ -41,7 +41,10 @@ def test_demo_study_loads() -> None:
         ({"ga": {"generations": -1}}, "'ga.generations' must be >= 0"),
         ({"ga": {"mutaton_genes": 1}}, r"unknown key 'mutaton_genes' in \[ga\]"),
         ({"rating": {"points": 1}}, "'rating.points' must be >= 2"),
-        ({"completion": {"redirect_url": "ftp://x"}}, "redirect_url must start with http"),
+        (
+            {"completion": {"redirect_url": "ftp://x"}},
+            "'completion.redirect_url' must start with http",
+        ),
         ({"participant_param": "PROLIFIC PID"}, "participant_param"),
         ({"name": "has space"}, "'name'"),
         (

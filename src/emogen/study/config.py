@@ -52,7 +52,7 @@ from emogen.study.texts import (
     default_consent,
     default_instructions,
 )
-from emogen.tasks.blocks import Condition, TaskBlock
+from emogen.tasks.blocks import Condition, TaskBlock, fill_emotion
 from emogen.tasks.protocol import conditions_of
 from emogen.tasks.registry import DEFAULT_TASK, blocks_from, task_named
 
@@ -64,7 +64,8 @@ _IDENTITY = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 
 
 class RatingConfig(_Strict):
-    """The satisfaction rating of each trial's final face."""
+    """The satisfaction rating of each trial's final face (``question`` fills in ``{EMOTION}``
+    and ``{emotion}`` as the prompt does; the prompt stays above it)."""
 
     question: str = "How well does this face show the emotion you were asked for?"
     low_label: str = "not at all"
@@ -318,7 +319,7 @@ class StudyConfig(_Strict):
         )
 
     def prompt_for(self, emotion: str) -> str:
-        return self.prompt.replace("{EMOTION}", emotion.upper()).replace("{emotion}", emotion)
+        return fill_emotion(self.prompt, emotion)
 
     def config_hash(self) -> str:
         """SHA-256 of the resolved config (canonical JSON): stamped on every exported row."""

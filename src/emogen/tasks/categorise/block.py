@@ -24,6 +24,8 @@ SOURCES: tuple[Source, ...] = ("own", "other", "file", "random")
 #: The answer of a categorisation that picks none of the labels (when the block offers it).
 NONE_LABEL = "none"
 QUESTIONS = ("question", "intensity_question", "confidence_question")
+#: The keys naming face tables (read when the server starts).
+FILE_KEYS = ("file", "others_fallback")
 
 
 class CategoriseBlock(TaskBlock):
@@ -109,6 +111,9 @@ class CategoriseBlock(TaskBlock):
         for key in ("intensity_labels", "confidence_labels"):
             out.update({f"{key}[{j}]": t for j, t in enumerate(getattr(self, key))})
         return out
+
+    def files(self) -> dict[str, Path]:
+        return {key: Path(p) for key in FILE_KEYS if (p := getattr(self, key)) is not None}
 
     def check(self, k: int, emotions: tuple[str, ...], earlier: tuple[TaskBlock, ...]) -> None:
         check_words(k, "labels", self.labels, emotions)

@@ -11,7 +11,7 @@ import numpy as np
 
 from emogen.errors import ConfigError
 from emogen.model.face_table import read_face_table
-from emogen.tasks.categorise.block import CategoriseBlock
+from emogen.tasks.categorise.block import FILE_KEYS, CategoriseBlock
 
 
 @dataclass(frozen=True)
@@ -59,7 +59,7 @@ def read_file_faces(path: Path, ctx: Any, where: str) -> FileFaces:
 def block_files(ctx: Any, k: int, block: CategoriseBlock) -> dict[str, FileFaces]:
     """Block ``k``'s face tables by key (``file``, ``others_fallback``), read and checked."""
     out: dict[str, FileFaces] = {}
-    for key in ("file", "others_fallback"):
+    for key in FILE_KEYS:
         path = getattr(block, key)
         if path is not None:
             out[key] = read_file_faces(Path(path), ctx, f"blocks[{k + 1}].{key}")
