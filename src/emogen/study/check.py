@@ -259,6 +259,16 @@ def check_field_traps(config: StudyConfig) -> list[Finding]:
     return out
 
 
+def check_launch(config: StudyConfig) -> list[Finding]:
+    """What each block warns that a launch (many participants at once) would see."""
+    conditions = config.conditions()
+    return [
+        Finding("warning", key, message)
+        for k, block in enumerate(config.blocks)
+        for key, message in block.warnings(k + 1, sum(c.block == k for c in conditions)).items()
+    ]
+
+
 def check_study(config: StudyConfig, rig: Rig | None = None) -> CheckReport:
     """Every finding about ``config`` (with ``rig``: its identities' shapes too)."""
     findings = [
@@ -266,6 +276,7 @@ def check_study(config: StudyConfig, rig: Rig | None = None) -> CheckReport:
         *check_emotions(config),
         *check_files(config),
         *check_field_traps(config),
+        *check_launch(config),
     ]
     if rig is not None:
         try:

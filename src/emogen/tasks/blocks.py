@@ -84,6 +84,11 @@ class TaskBlock(_Strict):
         """The block's texts participants read, by key (``key[j]`` for a list's entries)."""
         return {}
 
+    def warnings(self, k: int, n_trials: int) -> dict[str, str]:
+        """What ``emogen study check`` warns of block ``k`` (with ``n_trials`` trials), by key:
+        what a launch would see that a quiet pilot does not."""
+        return {}
+
     def files(self) -> dict[str, Path]:
         """The files the block reads when the server starts, by key (``emogen study check``
         says where one is missing)."""
