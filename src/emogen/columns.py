@@ -46,7 +46,7 @@ _INT = frozenset({
     "face_id", "parent_a", "parent_b", "rank", "n_selected", "n_trials", "value", "points",
     "run", "slot", "appearance_generator", "cell_runs", "n_samples", "n_groups", "sample_size",
     "n", "block", "source_session_id", "source_trial", "source_face_id", "source_row",
-    "label_position", "intensity", "confidence",
+    "label_position", "intensity", "confidence", "retest_of_session_id",
 })  # fmt: skip
 _SEED = frozenset(("seed", "run_seed"))
 _FLOAT = frozenset({

@@ -119,6 +119,9 @@ class StudyConfig(_Strict):
     block_order: Literal["fixed", "latin_square", "random"] = "fixed"
     #: The blocks that trade places (their names; one run in the config): default every block.
     reordered_blocks: tuple[str, ...] = ()
+    #: This study is the retest of the study of this name (same database): only participants
+    #: who completed it take part, matched by id (:mod:`emogen.study.retest`).
+    retest_of: str | None = None
     #: URL parameter carrying the participant id (e.g. Prolific's PROLIFIC_PID); also accepted:
     #: ``participant``. Without one, an id is generated (unless ``participant_required``).
     participant_param: str = "PROLIFIC_PID"
@@ -172,6 +175,13 @@ class StudyConfig(_Strict):
                 f"name must be 1-64 letters, digits, '_', '.', '-' (starting with a letter or "
                 f"digit); got {v!r}"
             )
+        return v
+
+    @field_validator("retest_of")
+    @classmethod
+    def _retest(cls, v: str | None) -> str | None:
+        if v is not None and not _NAME.fullmatch(v):
+            raise ValueError(f"retest_of must be a study name; got {v!r}")
         return v
 
     @field_validator("participant_param")
@@ -268,6 +278,11 @@ class StudyConfig(_Strict):
                 "tell blocks apart by name (give each its own name)"
             )
         check_block_order(self)
+        if self.retest_of == self.name:
+            raise ValueError(
+                f"retest_of = {self.name!r} names this study itself: a retest is a study of its "
+                "own name (e.g. name = 'mystudy-retest', retest_of = 'mystudy')"
+            )
         if self.n_trials > 500:
             raise ValueError(
                 "a study must have at most 500 trials (a GA block: emotions × repetitions × "
@@ -340,6 +355,7 @@ class StudyConfig(_Strict):
             ("framing", "face"),
             ("block_order", "fixed"),
             ("reordered_blocks", []),
+            ("retest_of", None),
         ):
             if data[key] == default:  # studies without them keep their hash
                 del data[key]

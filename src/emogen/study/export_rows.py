@@ -16,6 +16,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from emogen.study.retest import retest_links
 from emogen.study.tables import SCHEMA_VERSION, SessionRow, StudyRow, TrialRow, core_table
 from emogen.tasks.export import TRIAL_KEY, ExportTable, Row, iso, typed_columns
 from emogen.tasks.registry import TASKS, task_named
@@ -41,6 +42,8 @@ class Records:
     _corrects: dict[int, bool] = field(init=False, default_factory=dict)
     _block_names: dict[int, list[str]] = field(init=False, default_factory=dict)
     _trials_of: dict[int, list[TrialRow]] = field(init=False, default_factory=dict)
+    #: a retest session's first session, by the retest session's id (emogen.study.retest)
+    retests: dict[int, int] = field(init=False, default_factory=dict)
     _face_columns: dict[int, tuple[list[str], list[str]]] = field(init=False, default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -155,7 +158,9 @@ def load_records(
     )
     participants = {int(i): str(p) for i, p in db.execute(sources)}
     records = task_records(db, [t.id for t in trials])
-    return Records(studies, sessions, trials, records, participants)
+    out = Records(studies, sessions, trials, records, participants)
+    out.retests = retest_links(db, studies, sessions)
+    return out
 
 
 def task_records(db: Session, trial_ids: list[int]) -> dict[type, list[Any]]:
@@ -201,6 +206,7 @@ def session_rows(rec: Records) -> Iterator[Row]:
             "order_kind": s.order_kind,
             "order_row": None if s.order_row < 0 else s.order_row,
             "block_order": rec.block_order(s),
+            "retest_of_session_id": rec.retests.get(s.id),
             "stage": s.stage,
             "n_trials": len(json.loads(s.trial_order)),
             "user_agent": s.user_agent,
@@ -242,7 +248,7 @@ SESSIONS = ExportTable(
     "sessions",
     typed_columns(
         "study:str session_id:int participant_id:str participant_source:str session_number:int "
-        "seed:seed order_kind:str order_row:int block_order:str stage:str n_trials:int user_agent:str "
+        "seed:seed order_kind:str order_row:int block_order:str retest_of_session_id:int stage:str n_trials:int user_agent:str "
         "created_at:time consented_at:time started_at:time completed_at:time"
     ),
     session_rows,
