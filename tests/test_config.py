@@ -61,7 +61,7 @@ def test_load_toml(tmp_path: Path) -> None:
         ("generations = 'ten'", "'generations' must be a whole number"),
         ("[init]\nkind = 'random'", "'init.kind' must be 'protocol' or 'fixed'"),
         ("[init]\nactivation_range = [8, 3]", r"activation_range must be \[lo, hi\]"),
-        ("[init]\nactivation_range = [0, 3]", "'init.activation_range.0' must be >= 1"),
+        ("[init]\nactivation_range = [0, 3]", r"'init.activation_range\[1\]' must be >= 1"),
         ("min_selections = 5\nmax_selections = 3", r"min_selections \(5\) must not exceed"),
         ("max_selections = 11", r"max_selections must be at most population_size \(10\)"),
         ("random_faces = 10", "random_faces must leave room for the elite"),

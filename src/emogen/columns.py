@@ -46,7 +46,7 @@ _INT = frozenset({
     "face_id", "parent_a", "parent_b", "rank", "n_selected", "n_trials", "value", "points",
     "run", "slot", "appearance_generator", "cell_runs", "n_samples", "n_groups", "sample_size",
     "n", "block", "source_session_id", "source_trial", "source_face_id", "source_row",
-    "label_position", "intensity", "confidence",
+    "label_position", "intensity", "confidence", "retest_of_session_id",
 })  # fmt: skip
 _SEED = frozenset(("seed", "run_seed"))
 _FLOAT = frozenset({
@@ -59,7 +59,7 @@ _STR = frozenset({
     "package_version", "model_hash", "study_config_hash", "shape", "shape_coefficients",
     "config_json", "model_name", "group", "statistic", "unit", "block_name", "task", "source",
     "source_participant_id", "source_label", "intended", "labels", "label",
-    "framing",
+    "framing", "block_order",
 })  # fmt: skip
 #: Booleans by name (a study export's categorisation: a fallback face, a correct answer).
 _BOOL = frozenset(("fallback", "correct"))

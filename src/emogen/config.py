@@ -11,9 +11,12 @@ from __future__ import annotations
 
 import tomllib
 from pathlib import Path
-from typing import Annotated, Any, Literal, TypeVar
+from types import UnionType
+from typing import Annotated, Any, Literal, TypeVar, Union, get_args, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic.fields import FieldInfo
+from pydantic_core import PydanticCustomError
 
 from emogen.errors import ConfigError
 
@@ -25,6 +28,63 @@ PROTOCOL_EMOTIONS: tuple[str, ...] = ("happy", "sad", "angry", "fearful")
 
 class _Strict(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _no_quoted_numbers(cls, data: Any) -> Any:
+        """A number or true/false written in quotes (``generations = "10"``) is refused, naming
+        the key: pydantic would take the text, and a typo in it would go unnoticed."""
+        if isinstance(data, dict):
+            quoted = [
+                (key, value)
+                for key, value in data.items()
+                if isinstance(value, str)
+                and _reads_as_number(value)
+                and key in cls.model_fields
+                and _numbers_only(cls.model_fields[key].annotation)
+            ]
+            if quoted:
+                raise ValidationError.from_exception_data(
+                    cls.__name__,
+                    [
+                        {
+                            "type": PydanticCustomError(
+                                "quoted",
+                                "is text in quotes: write numbers and true/false without "
+                                "them ({key} = {value})",
+                                {"key": key, "value": value},
+                            ),
+                            "loc": (key,),
+                            "input": value,
+                        }
+                        for key, value in quoted
+                    ],
+                )
+        return data
+
+
+def _reads_as_number(text: str) -> bool:
+    """Whether pydantic would take ``text`` as a number or a boolean."""
+    if text.strip().lower() in ("true", "false", "yes", "no", "on", "off"):
+        return True
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _numbers_only(annotation: Any) -> bool:
+    """Whether a field takes numbers or booleans only (with None): not text, not a Literal."""
+    kinds, stack = set(), [annotation]
+    while stack:
+        a = stack.pop()
+        if get_origin(a) in (Union, UnionType, Annotated):
+            stack += [x for x in get_args(a) if not isinstance(x, FieldInfo)]
+            continue
+        kinds.add(a)
+    kinds.discard(type(None))
+    return bool(kinds) and kinds <= {int, float, bool}
 
 
 class InitConfig(_Strict):
@@ -242,21 +302,35 @@ def plain_words(err: Any) -> str | None:
     return _PLAIN.get(err["type"])
 
 
+def key_path(loc: Any) -> str:
+    """A pydantic error's location as the config file reads: ``blocks[3].points`` (list entries
+    counted from 1)."""
+    out = ""
+    for p in loc:
+        out += f"[{p + 1}]" if isinstance(p, int) else ("." if out else "") + str(p)
+    return out
+
+
 def format_validation_error(exc: ValidationError, source: str) -> str:
     """One line naming every bad key: ``unknown key 'x'``, ``'ga.generations' must be …``."""
     parts = []
     for err in exc.errors():
         loc = [str(p) for p in err["loc"]]
         if err["type"] == "extra_forbidden":
-            where = f" in [{'.'.join(loc[:-1])}]" if len(loc) > 1 else ""
+            where = f" in [{key_path(err['loc'][:-1])}]" if len(loc) > 1 else ""
             parts.append(f"unknown key '{loc[-1]}'{where}")
             continue
         msg = plain_words(err) or err["msg"].removeprefix("Value error, ")
         msg = msg.replace("Input should be", "must be").replace("greater than or equal to", ">=")
         msg = msg.replace("less than or equal to", "<=").replace("greater than", ">")
         msg = msg.replace("less than", "<")
+        if loc and msg.startswith(f"{loc[-1]} must "):  # "name must be …" under 'name'
+            msg = msg[len(loc[-1]) + 1 :]
+        said = "got " in msg or err["type"] == "quoted"  # the message names the value itself
         if loc:
-            parts.append(f"'{'.'.join(loc)}' {msg}; got {err.get('input')!r}")
+            parts.append(
+                f"'{key_path(err['loc'])}' {msg}" + ("" if said else f"; got {err.get('input')!r}")
+            )
         else:
             parts.append(msg)
     return f"invalid config {source}: " + "; ".join(parts)

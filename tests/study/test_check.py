@@ -63,7 +63,9 @@ def test_unknown_placeholders_in_any_text_are_errors() -> None:
     assert [f.split(":")[0] for f in found] == ["title", "consent"]
     assert all("fills in no placeholders" in f for f in found)
     blocks = [{"task": "evolve"}, {"task": "categorise", "own": True, "question": "Which {x}?"}]
-    assert [f.split(":")[0] for f in _where({**FIELD, "blocks": blocks})] == ["blocks[1].question"]
+    assert [f.split(":")[0] for f in _where({**FIELD, "blocks": blocks})] == [
+        "blocks[2].question"
+    ]  # numbered from 1
 
 
 def test_emotion_words_are_checked_with_did_you_mean() -> None:

@@ -165,8 +165,10 @@ def test_every_view_fits_the_screen(
     page.click("#next")
     wait_ready(page, "rating")
     no_horizontal_overflow(page)
-    inside_viewport(page, "#prompt")  # the rating's own question, not "Make the face look …"
-    assert page.inner_text("#prompt").startswith("How well does this face show")
+    inside_viewport(page, "#prompt")  # the prompt stays above the rating ("Make the face …")
+    assert page.inner_text("#prompt").startswith("Make the face look")
+    inside_viewport(page, "#rating-question")
+    assert page.inner_text("#rating-question").startswith("How well does this face show")
     page.get_by_label("4", exact=True).check()
     inside_viewport(page, "#rate")
     if (width, height) == (390, 844):

@@ -194,8 +194,9 @@ def test_participant_completes_two_trials(
 
     # ---- rating of trial 1 ----
     wait_ready(page, "rating")
-    # the rating screen asks its own question (the study's [rating] question), not the prompt
-    assert page.inner_text("#prompt") == (
+    # the prompt stays the heading; the rating's own question is the scale's legend
+    assert page.inner_text("#prompt") == "Make the face look HAPPY"
+    assert page.inner_text("#rating-question") == (
         "How well does this face show the emotion you were asked for?"
     )
     page.screenshot(path=str(SCREENSHOTS / "rating-1366x768.png"))

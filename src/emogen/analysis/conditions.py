@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from emogen.analysis.analyse_options import AnalysisOptions
+from emogen.analysis.block_positions import order_sentence
 from emogen.analysis.people import People
 from emogen.analysis.report import Report
 from emogen.errors import ConfigError
@@ -218,7 +219,7 @@ def conditions_section(
         "identity difference is the same for every emotion (each cell's deviation from its "
         "emotion's mean over identities, permuted over emotions). Assumes participants "
         "independent and, under H0, the conditions exchangeable within a participant (no order "
-        "effect tied to the condition: the block order is counterbalanced). Effect: partial η² "
+        f"effect tied to the condition). {order_sentence(people.trials)} Effect: partial η² "
         "(within-participant sum of squares explained) and its bootstrap bias-corrected value "
         f"with a {1 - opts.alpha:.0%} basic bootstrap CI over participants ({draws} resamples). Not a mixed "
         f"model. {left_out} participant(s) without every cell left out."

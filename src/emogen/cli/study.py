@@ -16,6 +16,7 @@ import typer
 from emogen.cli.options import JsonOpt, friendly_errors, show_result
 from emogen.cli.outputs import ForceOpt, check_out_folder, moved, output_folder
 from emogen.cli.study_check import check_study_command
+from emogen.cli.study_retest import retest_command
 from emogen.cli.study_simulate import simulate_study_command
 from emogen.errors import ConfigError
 
@@ -27,6 +28,7 @@ study_app = typer.Typer(
 )
 study_app.command("simulate")(simulate_study_command)
 study_app.command("check")(check_study_command)
+study_app.command("retest-reliability")(retest_command)
 
 DatabaseOpt = Annotated[
     str | None,

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from emogen.cli.options import JsonOpt, friendly_errors, show_result, stage_printer
+from emogen.errors import ConfigError
 
 if TYPE_CHECKING:
     from emogen.study.config import StudyConfig
@@ -50,6 +51,15 @@ def simulate_study_command(
     model: Annotated[
         Path | None, typer.Option("--model", help="Face model (default: as in the config).")
     ] = None,
+    arrivals: Annotated[
+        tuple[str, int],
+        typer.Option(
+            "--arrivals",
+            help="How participants arrive: 'sequential 1' (one after another) or 'concurrent N' "
+            "(waves of N at once, as a panel's launch: nobody in a wave finishes before the "
+            "others reach a labelling block).",
+        ),
+    ] = ("sequential", 1),
     as_json: JsonOpt = False,
 ) -> None:
     """Simulated participants run the whole study (every block, categorisation included)
@@ -58,6 +68,11 @@ def simulate_study_command(
     from emogen.study.simulate import SimulationPlan, simulate_study
     from emogen.tasks.simulated import SimulatedDesign
 
+    how, wave = arrivals
+    if how not in ("sequential", "concurrent") or wave < 1 or (how == "sequential" and wave != 1):
+        raise ConfigError(
+            f"--arrivals must be 'sequential 1' or 'concurrent N' (N >= 1); got '{how} {wave}'"
+        )
     study, url = _study_and_database(config, seed, database_url)
     plan = SimulationPlan(
         config=study,
@@ -67,6 +82,7 @@ def simulate_study_command(
         design=SimulatedDesign(spread=spread, select_noise=select_noise, label_noise=label_noise),
         shuffle_prototypes=shuffle_prototypes,
         model_path=model,
+        concurrent=wave,
     )
     show = stage_printer()
     if show is not None:
@@ -93,7 +109,6 @@ def _study_and_database(
 ) -> tuple[StudyConfig, str]:
     """The study config (seeded with ``seed`` when it names none: simulated sessions must
     replay from the seed they were given) and the database URL the simulation writes to."""
-    from emogen.errors import ConfigError
     from emogen.study.config import load_study_config
 
     if not config.is_file():

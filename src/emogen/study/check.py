@@ -20,78 +20,19 @@ import difflib
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
 from emogen.appearance.identities import PRESETS
 from emogen.errors import ConfigError, EmoGenError
 from emogen.study.config import StudyConfig
+from emogen.study.emotion_words import KNOWN_EMOTIONS
 from emogen.study.length import SessionLength, session_length
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
     from emogen.model.rig import Rig
 
-#: Emotion words a study may ask for without marking them: the six basic emotions of the rig's
-#: prototypes and their nouns, and common others of the facial-expression literature.
-KNOWN_EMOTIONS = frozenset(
-    [
-        "happy",
-        "sad",
-        "angry",
-        "fearful",
-        "surprised",
-        "disgusted",
-        "contemptuous",
-        "neutral",
-        "happiness",
-        "sadness",
-        "anger",
-        "fear",
-        "surprise",
-        "disgust",
-        "contempt",
-        "neutrality",
-        "afraid",
-        "scared",
-        "amused",
-        "bored",
-        "calm",
-        "confused",
-        "content",
-        "embarrassed",
-        "excited",
-        "guilty",
-        "ashamed",
-        "proud",
-        "relieved",
-        "interested",
-        "pain",
-        "pained",
-        "tired",
-        "sleepy",
-        "anxious",
-        "worried",
-        "nervous",
-        "annoyed",
-        "irritated",
-        "joyful",
-        "pleased",
-        "shocked",
-        "sceptical",
-        "skeptical",
-        "suspicious",
-        "determined",
-        "jealous",
-        "envious",
-        "shy",
-        "love",
-        "loving",
-        "tender",
-        "hopeful",
-        "disappointed",
-        "frustrated",
-    ]
-)
 #: Placeholders of ``completion.redirect_url`` besides the study's ``{participant_param}``:
 #: what each is filled with.
 REDIRECT = {
@@ -172,13 +113,13 @@ def texts(config: StudyConfig) -> dict[str, str]:
     if config.completion.redirect_url is not None:
         out["completion.redirect_url"] = config.completion.redirect_url
     for k, block in enumerate(config.blocks):
-        out.update({f"blocks[{k}].{key}": text for key, text in block.texts().items()})
+        out.update({f"blocks[{k + 1}].{key}": text for key, text in block.texts().items()})
     return out
 
 
 def placeholders_of(config: StudyConfig, key: str) -> dict[str, str]:
     """The placeholders the text at ``key`` fills in, and with what."""
-    if key == "prompt":
+    if key in ("prompt", "rating.question"):
         return PROMPT
     if key == "completion.redirect_url":
         return {**REDIRECT, config.participant_param: "the participant id"}
@@ -262,9 +203,81 @@ def check_emotions(config: StudyConfig) -> list[Finding]:
     return out
 
 
+def check_files(config: StudyConfig) -> list[Finding]:
+    """Every file the server reads at start must be there: the model, the rig, the GA's fixed
+    initial faces and each block's face tables."""
+    wanted: dict[str, Path | None] = {
+        "model": config.model,
+        "rig": config.rig,
+        "ga.init.fixed_file": config.ga.init.fixed_file,
+    }
+    for k, block in enumerate(config.blocks):
+        wanted.update({f"blocks[{k + 1}].{key}": p for key, p in block.files().items()})
+    out = []
+    for key, path in wanted.items():
+        if path is None or Path(path).exists():
+            continue
+        out.append(Finding("error", key, f"{path} does not exist: `emogen serve` would refuse"))
+    return out
+
+
+#: URL parameters recruitment panels put in their links (exactly so: names are case-sensitive).
+PANEL_PARAMS = {"PROLIFIC_PID": "Prolific", "workerId": "MTurk", "participantId": "CloudResearch"}
+
+
+def check_field_traps(config: StudyConfig) -> list[Finding]:
+    """What passes every rule but fails in the field: a redirect that sends no completion code,
+    a participant parameter a panel never sends."""
+    out = []
+    url = config.completion.redirect_url or ""
+    if config.completion.code is None and ("{code}" in url or "{completion_code}" in url):
+        out.append(
+            Finding(
+                "error",
+                "completion.redirect_url",
+                "fills in {code}, but completion.code is not set: the panel would get an empty "
+                "code and credit nobody (set [completion] code = …)",
+            )
+        )
+    param = config.participant_param
+    for name, panel in PANEL_PARAMS.items():
+        if param != name and param.lower() == name.lower():
+            refused = config.participant_required
+            out.append(
+                Finding(
+                    "error" if refused else "warning",
+                    "participant_param",
+                    f"'{param}' is not what {panel}'s links carry ('{name}'; names are "
+                    "case-sensitive): "
+                    + (
+                        "with participant_required = true every participant would be refused"
+                        if refused
+                        else "every participant would start an anonymous session"
+                    ),
+                )
+            )
+    return out
+
+
+def check_launch(config: StudyConfig) -> list[Finding]:
+    """What each block warns that a launch (many participants at once) would see."""
+    conditions = config.conditions()
+    return [
+        Finding("warning", key, message)
+        for k, block in enumerate(config.blocks)
+        for key, message in block.warnings(k + 1, sum(c.block == k for c in conditions)).items()
+    ]
+
+
 def check_study(config: StudyConfig, rig: Rig | None = None) -> CheckReport:
     """Every finding about ``config`` (with ``rig``: its identities' shapes too)."""
-    findings = [*check_placeholders(config), *check_emotions(config)]
+    findings = [
+        *check_placeholders(config),
+        *check_emotions(config),
+        *check_files(config),
+        *check_field_traps(config),
+        *check_launch(config),
+    ]
     if rig is not None:
         try:
             check_identities(config, rig)

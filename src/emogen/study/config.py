@@ -40,6 +40,7 @@ from pydantic import (
 from emogen.appearance.identities import PRESETS, Identity, identity_from_dict, identity_table
 from emogen.config import GAConfig, _Strict, read_toml, validate_config
 from emogen.errors import ConfigError
+from emogen.study.block_order import block_names_of, check_block_order
 from emogen.study.framing import check_framing
 from emogen.study.length import session_length
 from emogen.study.origins import check_origin
@@ -51,7 +52,7 @@ from emogen.study.texts import (
     default_consent,
     default_instructions,
 )
-from emogen.tasks.blocks import Condition, TaskBlock
+from emogen.tasks.blocks import Condition, TaskBlock, fill_emotion
 from emogen.tasks.protocol import conditions_of
 from emogen.tasks.registry import DEFAULT_TASK, blocks_from, task_named
 
@@ -63,7 +64,8 @@ _IDENTITY = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 
 
 class RatingConfig(_Strict):
-    """The satisfaction rating of each trial's final face."""
+    """The satisfaction rating of each trial's final face (``question`` fills in ``{EMOTION}``
+    and ``{emotion}`` as the prompt does; the prompt stays above it)."""
 
     question: str = "How well does this face show the emotion you were asked for?"
     low_label: str = "not at all"
@@ -111,6 +113,15 @@ class StudyConfig(_Strict):
     #: id: balanced in expectation, the same row whoever came first) or ``arrival`` (exact: the
     #: k-th session of the study gets row k modulo the rows, under the database's lock).
     counterbalance: Literal["hash", "arrival"] = "hash"
+    #: The order of the blocks: ``fixed`` (config order), ``latin_square`` (rows of a balanced
+    #: Latin square over ``reordered_blocks``, assigned as ``counterbalance`` says) or ``random``
+    #: (seeded per session): :mod:`emogen.study.block_order`.
+    block_order: Literal["fixed", "latin_square", "random"] = "fixed"
+    #: The blocks that trade places (their names; one run in the config): default every block.
+    reordered_blocks: tuple[str, ...] = ()
+    #: This study is the retest of the study of this name (same database): only participants
+    #: who completed it take part, matched by id (:mod:`emogen.study.retest`).
+    retest_of: str | None = None
     #: URL parameter carrying the participant id (e.g. Prolific's PROLIFIC_PID); also accepted:
     #: ``participant``. Without one, an id is generated (unless ``participant_required``).
     participant_param: str = "PROLIFIC_PID"
@@ -164,6 +175,13 @@ class StudyConfig(_Strict):
                 f"name must be 1-64 letters, digits, '_', '.', '-' (starting with a letter or "
                 f"digit); got {v!r}"
             )
+        return v
+
+    @field_validator("retest_of")
+    @classmethod
+    def _retest(cls, v: str | None) -> str | None:
+        if v is not None and not _NAME.fullmatch(v):
+            raise ValueError(f"retest_of must be a study name; got {v!r}")
         return v
 
     @field_validator("participant_param")
@@ -252,6 +270,19 @@ class StudyConfig(_Strict):
             )
         for k, block in enumerate(self.blocks):
             block.check(k + 1, self.emotions, self.blocks[:k])
+        names = block_names_of(self.blocks)
+        doubled = sorted({n for n in names if names.count(n) > 1})
+        if doubled:
+            raise ValueError(
+                f"blocks: two blocks are named {', '.join(map(repr, doubled))}: the exports "
+                "tell blocks apart by name (give each its own name)"
+            )
+        check_block_order(self)
+        if self.retest_of == self.name:
+            raise ValueError(
+                f"retest_of = {self.name!r} names this study itself: a retest is a study of its "
+                "own name (e.g. name = 'mystudy-retest', retest_of = 'mystudy')"
+            )
         if self.n_trials > 500:
             raise ValueError(
                 "a study must have at most 500 trials (a GA block: emotions × repetitions × "
@@ -303,7 +334,7 @@ class StudyConfig(_Strict):
         )
 
     def prompt_for(self, emotion: str) -> str:
-        return self.prompt.replace("{EMOTION}", emotion.upper()).replace("{emotion}", emotion)
+        return fill_emotion(self.prompt, emotion)
 
     def config_hash(self) -> str:
         """SHA-256 of the resolved config (canonical JSON): stamped on every exported row."""
@@ -322,6 +353,9 @@ class StudyConfig(_Strict):
             ("participant_required", False),
             ("counterbalance", "hash"),
             ("framing", "face"),
+            ("block_order", "fixed"),
+            ("reordered_blocks", []),
+            ("retest_of", None),
         ):
             if data[key] == default:  # studies without them keep their hash
                 del data[key]

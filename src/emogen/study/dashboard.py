@@ -115,6 +115,17 @@ def row_counts(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) ->
     return {"order": "latin_square", "counterbalance": config.counterbalance, "rows": counts}
 
 
+def block_notes(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) -> list[str]:
+    """What each block's task says needs the researcher's eye (:meth:`Task.notes`)."""
+    sessions = select(SessionRow.id).where(SessionRow.study_id.in_(study_ids))
+    with store.read() as db:
+        return [
+            note
+            for k, block in enumerate(config.study_blocks())
+            for note in task_named(block.task).notes(db, sessions, k, block)
+        ]
+
+
 def overview(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) -> dict[str, Any]:
     """The dashboard's figures for the study rows ``study_ids`` of ``config``'s design."""
     length = session_length(config.conditions(), config.ga.generations)

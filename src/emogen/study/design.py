@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from emogen.rng import fresh_seed
+from emogen.study.block_order import reordered
 from emogen.study.config import StudyConfig
 from emogen.tasks.blocks import Condition
 
@@ -65,6 +66,9 @@ class TrialOrder:
     order: tuple[int, ...]
     kind: str
     row: int
+    #: the blocks in the order shown, and the block order's Latin-square row (-1: none)
+    blocks: tuple[int, ...] = ()
+    block_row: int = -1
 
 
 def balanced_latin_square(n: int) -> list[list[int]]:
@@ -93,6 +97,27 @@ def _block_order(order: str, n: int, slot: int, rng: np.random.Generator) -> Tri
     return TrialOrder(tuple(int(i) for i in rng.permutation(n)), "random", -1)
 
 
+def block_sequence(
+    config: StudyConfig, slot: int, trial_rows: int, rng: np.random.Generator
+) -> tuple[list[int], int]:
+    """The session's blocks in the order shown, and the block order's row (-1: none):
+    :mod:`emogen.study.block_order`. ``trial_rows``: the rows of the trials' own Latin square
+    (1 when none), so that block rows cross trial rows; ``rng`` is drawn only for ``random``."""
+    n = len(config.study_blocks())
+    run = sorted(reordered(config))
+    if not run:
+        return list(range(n)), -1
+    if config.block_order == "random":
+        local, row = [int(i) for i in rng.permutation(len(run))], -1
+    else:
+        rows = balanced_latin_square(len(run))
+        row = (slot // max(1, trial_rows)) % len(rows)
+        local = rows[row]
+    out = list(range(n))
+    out[run[0] : run[-1] + 1] = [run[j] for j in local]
+    return out, row
+
+
 def trial_order(
     config: StudyConfig,
     conditions: Sequence[Condition] | None = None,
@@ -106,12 +131,21 @@ def trial_order(
     sessions recorded before it used their number). ``kind`` and ``row`` are those of the first
     counterbalanced block (another block's order is ``random`` or ``fixed``)."""
     conditions = config.conditions() if conditions is None else conditions
+    blocks = config.study_blocks()
+    sizes = [sum(c.block == k for c in conditions) for k in range(len(blocks))]
+    square = [
+        len(balanced_latin_square(n))
+        for b, n in zip(blocks, sizes, strict=True)
+        if b.counterbalanced and b.order == "latin_square"
+    ]
+    sequence, block_row = block_sequence(config, slot, max(square, default=1), rng)
     order: list[int] = []
     kind, row = "", -1
-    for k, block in enumerate(config.study_blocks()):
+    for k in sequence:
+        block = blocks[k]
         indices = [i for i, c in enumerate(conditions) if c.block == k]
         local = _block_order(block.order or "random", len(indices), slot, rng)
         order += [indices[j] for j in local.order]
         if not kind and block.counterbalanced:
             kind, row = local.kind, local.row
-    return TrialOrder(tuple(order), kind or "random", row)
+    return TrialOrder(tuple(order), kind or "random", row, tuple(sequence), block_row)

@@ -29,6 +29,7 @@ from emogen.study.queries import (
     session_of_create_key,
     session_of_participant,
 )
+from emogen.study.retest import check_retest
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, TrialRow, dumps, utcnow
 from emogen.study.view import SessionState, session_state
@@ -205,6 +206,7 @@ def create_session(
         lock_study(db, ctx.study_id)  # one new session at a time per study (session numbers)
         existing = _existing(db, ctx, pid, given, resume_token, hashed)
         if existing is None:
+            check_retest(db, cfg.retest_of, pid)  # a retest: only the first session's people
             existing = _new_session(db, ctx, pid, source, user_agent, hashed)
         return existing.token, session_state(db, env, existing)
 

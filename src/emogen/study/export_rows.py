@@ -16,6 +16,7 @@ from typing import Any
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from emogen.study.retest import retest_links
 from emogen.study.tables import SCHEMA_VERSION, SessionRow, StudyRow, TrialRow, core_table
 from emogen.tasks.export import TRIAL_KEY, ExportTable, Row, iso, typed_columns
 from emogen.tasks.registry import TASKS, task_named
@@ -40,6 +41,9 @@ class Records:
     _by_id: dict[type, dict[int, Any]] = field(init=False, default_factory=dict)
     _corrects: dict[int, bool] = field(init=False, default_factory=dict)
     _block_names: dict[int, list[str]] = field(init=False, default_factory=dict)
+    _trials_of: dict[int, list[TrialRow]] = field(init=False, default_factory=dict)
+    #: a retest session's first session, by the retest session's id (emogen.study.retest)
+    retests: dict[int, int] = field(init=False, default_factory=dict)
     _face_columns: dict[int, tuple[list[str], list[str]]] = field(init=False, default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -97,6 +101,21 @@ class Records:
         names = self._block_names[st.id]
         return names[trial.block] if trial.block < len(names) else f"block{trial.block + 1}"
 
+    def block_order(self, session: SessionRow) -> str | None:
+        """The session's blocks in the order shown, by name (``make_male>make_female>…``), read
+        from its trials' positions (None: no trials)."""
+        shown: dict[str, None] = {}
+        for t in self.trials_of(session.id):
+            shown.setdefault(self.block_name(t), None)
+        return ">".join(shown) or None
+
+    def trials_of(self, session_id: int) -> list[TrialRow]:
+        """The session's trials in position order."""
+        if not self._trials_of:
+            for t in self.trials:
+                self._trials_of.setdefault(t.session_id, []).append(t)
+        return sorted(self._trials_of.get(session_id, []), key=lambda t: t.position)
+
     def corrects(self, trial: TrialRow) -> bool:
         """Whether the trial's study corrects its faces (``correct`` in its config)."""
         st = self.studies[self.by_session[trial.session_id].study_id]
@@ -139,7 +158,9 @@ def load_records(
     )
     participants = {int(i): str(p) for i, p in db.execute(sources)}
     records = task_records(db, [t.id for t in trials])
-    return Records(studies, sessions, trials, records, participants)
+    out = Records(studies, sessions, trials, records, participants)
+    out.retests = retest_links(db, studies, sessions)
+    return out
 
 
 def task_records(db: Session, trial_ids: list[int]) -> dict[type, list[Any]]:
@@ -184,6 +205,8 @@ def session_rows(rec: Records) -> Iterator[Row]:
             "seed": s.seed,
             "order_kind": s.order_kind,
             "order_row": None if s.order_row < 0 else s.order_row,
+            "block_order": rec.block_order(s),
+            "retest_of_session_id": rec.retests.get(s.id),
             "stage": s.stage,
             "n_trials": len(json.loads(s.trial_order)),
             "user_agent": s.user_agent,
@@ -225,7 +248,7 @@ SESSIONS = ExportTable(
     "sessions",
     typed_columns(
         "study:str session_id:int participant_id:str participant_source:str session_number:int "
-        "seed:seed order_kind:str order_row:int stage:str n_trials:int user_agent:str "
+        "seed:seed order_kind:str order_row:int block_order:str retest_of_session_id:int stage:str n_trials:int user_agent:str "
         "created_at:time consented_at:time started_at:time completed_at:time"
     ),
     session_rows,

@@ -8,7 +8,11 @@ of the seed (:func:`numpy.random.SeedSequence.spawn`); they answer what the page
 with ``participant_source = "simulated"`` (a column of every exported table).
 
 With one worker the participants run one after another, so participant ``i`` draws others'
-faces from participants ``< i``: the same seed gives the same data. With several workers each
+faces from participants ``< i``: the same seed gives the same data. ``concurrent = N``
+(``--arrivals concurrent N``) runs them in waves of N that arrive at once, as a launch on a
+panel does: each takes one step in turn, so nobody in a wave finishes before the others reach
+a labelling block — the first wave finds no other participant's faces (fallback faces, or the
+block's ``others_pool``). Still one seed, the same data. With several workers each
 runs a share of the participants in its own process on the same database; everything but
 which other participants' faces a labelling block finds complete is the same.
 """
@@ -56,6 +60,9 @@ class SimulationPlan:
     design: SimulatedDesign
     shuffle_prototypes: bool
     model_path: Path | None = None
+    #: Participants who arrive at once (``--arrivals concurrent N``): waves of N, each taking
+    #: its steps in turn; 1: one after another.
+    concurrent: int = 1
 
 
 @dataclass
@@ -93,25 +100,68 @@ def all_prototypes(plan: SimulationPlan, rig: Any) -> list[dict[str, np.ndarray]
     return [participant_stream(plan, rig, i)[0] for i in range(plan.participants)]
 
 
+class Walker:
+    """Participant ``i`` in the study: their session made on creation, one step at a time."""
+
+    def __init__(
+        self,
+        service: StudyService,
+        plan: SimulationPlan,
+        i: int,
+        prototypes: list[dict[str, np.ndarray]],
+    ) -> None:
+        rig, eyes = service.ctx.rig, plan.config.ga.eye_motion
+        _, rng = participant_stream(plan, rig, i)
+        n = plan.participants
+        labeller = prototypes[(i + 1) % n] if plan.shuffle_prototypes else prototypes[i]
+        maker = SimulatedParticipant(prototypes[i], plan.design, rig, eyes, rng)
+        judge = SimulatedParticipant(labeller, plan.design, rig, eyes, rng)
+        self.who = SimulatedPeople(maker=maker, judge=judge)
+        self.service, self.i = service, i
+        self.token, self.state = service.create_session(participant_id(i), source=SOURCE)
+        self.counts: dict[str, int] = {}
+        self.k = 0
+
+    @property
+    def done(self) -> bool:
+        return bool(self.state["stage"] == "done")
+
+    def step(self) -> None:
+        self.k += 1
+        body = _command(self.who, self.state)
+        key = f"sim{self.i + 1:05d}s{self.k:05d}"
+        self.state = self.service.step(self.token, {**body, "key": key})
+        self.counts[body["command"]] = self.counts.get(body["command"], 0) + 1
+
+
 def run_participant(
     service: StudyService, plan: SimulationPlan, i: int, prototypes: list[dict[str, np.ndarray]]
 ) -> dict[str, int]:
     """Participant ``i`` through the whole study; the steps taken per kind."""
-    rig = service.ctx.rig
-    _, rng = participant_stream(plan, rig, i)
-    labeller = prototypes[(i + 1) % plan.participants] if plan.shuffle_prototypes else prototypes[i]
-    maker = SimulatedParticipant(prototypes[i], plan.design, rig, plan.config.ga.eye_motion, rng)
-    judge = SimulatedParticipant(labeller, plan.design, rig, plan.config.ga.eye_motion, rng)
-    who = SimulatedPeople(maker=maker, judge=judge)
-    token, state = service.create_session(participant_id(i), source=SOURCE)
-    counts: dict[str, int] = {}
-    k = 0
-    while state["stage"] != "done":
-        k += 1
-        body = _command(who, state)
-        state = service.step(token, {**body, "key": f"sim{i + 1:05d}s{k:05d}"})
-        counts[body["command"]] = counts.get(body["command"], 0) + 1
-    return counts
+    walker = Walker(service, plan, i, prototypes)
+    while not walker.done:
+        walker.step()
+    return walker.counts
+
+
+def run_wave(
+    service: StudyService,
+    plan: SimulationPlan,
+    wave: Sequence[int],
+    prototypes: list[dict[str, np.ndarray]],
+) -> dict[str, int]:
+    """Participants ``wave`` at once, as a launch sees them: all consent, then each takes one
+    step in turn until every one is done (no one finishes before the others have started)."""
+    walkers = [Walker(service, plan, i, prototypes) for i in wave]
+    while not all(w.done for w in walkers):
+        for w in walkers:
+            if not w.done:
+                w.step()
+    total: dict[str, int] = {}
+    for w in walkers:
+        for kind, n in w.counts.items():
+            total[kind] = total.get(kind, 0) + n
+    return total
 
 
 def _command(who: SimulatedPeople, state: Any) -> dict[str, Any]:
@@ -180,6 +230,13 @@ def simulate_study(
         raise ConfigError(f"--participants must be >= 1; got {plan.participants}")
     if workers < 1:
         raise ConfigError(f"--workers must be >= 1; got {workers}")
+    if plan.concurrent < 1:
+        raise ConfigError(f"--arrivals concurrent N needs N >= 1; got {plan.concurrent}")
+    if plan.concurrent > 1 and workers > 1:
+        raise ConfigError(
+            "--arrivals concurrent runs its waves in one process (their steps interleaved, the "
+            f"same data for the same seed): use --workers 1; got --workers {workers}"
+        )
     started = time.perf_counter()
     service, store = _service(plan, model)
     try:
@@ -187,11 +244,13 @@ def simulate_study(
         total: dict[str, int] = {}
         if workers == 1:
             prototypes = all_prototypes(plan, service.ctx.rig)
-            for i in range(plan.participants):
-                for kind, n in run_participant(service, plan, i, prototypes).items():
+            size = plan.concurrent
+            for start in range(0, plan.participants, size):
+                wave = range(start, min(start + size, plan.participants))
+                for kind, n in run_wave(service, plan, wave, prototypes).items():
                     total[kind] = total.get(kind, 0) + n
                 if progress is not None:
-                    progress(i + 1, plan.participants)
+                    progress(wave[-1] + 1, plan.participants)
         else:
             if plan.model_path is None and model is not None and model.source:
                 plan = replace(plan, model_path=Path(model.source))  # workers load the same

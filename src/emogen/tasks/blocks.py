@@ -22,6 +22,7 @@ top-level values (``emotions``, ``identities``, ``repetitions``, ``order``).
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from typing import Any, ClassVar, Literal, NamedTuple, Self
 
 from pydantic import Field, field_validator
@@ -83,6 +84,16 @@ class TaskBlock(_Strict):
         """The block's texts participants read, by key (``key[j]`` for a list's entries)."""
         return {}
 
+    def warnings(self, k: int, n_trials: int) -> dict[str, str]:
+        """What ``emogen study check`` warns of block ``k`` (with ``n_trials`` trials), by key:
+        what a launch would see that a quiet pilot does not."""
+        return {}
+
+    def files(self) -> dict[str, Path]:
+        """The files the block reads when the server starts, by key (``emogen study check``
+        says where one is missing)."""
+        return {}
+
     def check(self, k: int, emotions: tuple[str, ...], earlier: tuple[TaskBlock, ...]) -> None:
         """Raise ValueError naming ``blocks[k]`` and the key where the block does not fit the
         study (its ``emotions``, the blocks before it)."""
@@ -93,6 +104,12 @@ class TaskBlock(_Strict):
         """The block's trials in config order (``k``: its index; ``earlier``: the trials of the
         blocks before it; ``rows``: the rows of its face table where it reads one)."""
         raise NotImplementedError
+
+
+def fill_emotion(text: str, emotion: str) -> str:
+    """``text`` with ``{EMOTION}`` (upper-case) and ``{emotion}`` (as written) filled in: the
+    prompt and the rating question."""
+    return text.replace("{EMOTION}", emotion.upper()).replace("{emotion}", emotion)
 
 
 def check_words(k: int, key: str, words: tuple[str, ...] | None, emotions: tuple[str, ...]) -> None:

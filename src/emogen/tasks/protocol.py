@@ -262,6 +262,10 @@ class Task(Protocol):
         ("generation 3 of 11", "rating", the task's name), and the generation shown (from 1),
         if any."""
 
+    def notes(self, db: Session, sessions: Any, k: int, block: Any) -> list[str]:
+        """What the researcher's dashboard should say of block ``k`` over ``sessions`` (a
+        SELECT of the study's session ids): what went otherwise than the design meant."""
+
 
 def conditions_of(blocks: Sequence[TaskBlock], study: Any, rows: dict[int, int]) -> list[Condition]:
     """Every trial in config order, block by block (``rows``: each block's face-table rows)."""
@@ -313,3 +317,6 @@ class TaskDefaults:
         self, status: str, generation: int, generations: int
     ) -> tuple[str, int | None]:
         return self.name, None
+
+    def notes(self, db: Session, sessions: Any, k: int, block: Any) -> list[str]:
+        return []

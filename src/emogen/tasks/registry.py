@@ -14,6 +14,7 @@ import re
 from typing import Any
 
 from pydantic import ValidationError
+from pydantic_core import PydanticCustomError
 
 from emogen.errors import ConfigError
 from emogen.tasks.blocks import TaskBlock
@@ -149,7 +150,10 @@ def blocks_from(tables: Any) -> tuple[TaskBlock, ...]:
             out.append(task.block.model_validate({"task": task.name, **data}))
         except ValidationError as exc:
             for e in exc.errors():
-                errors.append({**e, "loc": (k, task.name, *e["loc"])})
+                kind: str | PydanticCustomError = e["type"]
+                if kind == "quoted":  # our own error type (emogen.config): carried as it was
+                    kind = PydanticCustomError("quoted", e["msg"].replace("{", "{{"))
+                errors.append({**e, "type": kind, "loc": (k, *e["loc"])})
     if errors:
         raise ValidationError.from_exception_data("blocks", errors)
     return tuple(out)

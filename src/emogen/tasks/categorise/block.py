@@ -24,6 +24,8 @@ SOURCES: tuple[Source, ...] = ("own", "other", "file", "random")
 #: The answer of a categorisation that picks none of the labels (when the block offers it).
 NONE_LABEL = "none"
 QUESTIONS = ("question", "intensity_question", "confidence_question")
+#: The keys naming face tables (read when the server starts).
+FILE_KEYS = ("file", "others_fallback", "others_pool")
 
 
 class CategoriseBlock(TaskBlock):
@@ -53,6 +55,11 @@ class CategoriseBlock(TaskBlock):
     #: A face table standing in for others' faces while too few sessions are complete (without
     #: it: random draws, ``random_kind``); recorded as a fallback face.
     others_fallback: Path | None = None
+    #: Others' faces from before the study (a face table with a ``label``/``emotion`` column,
+    #: or a study export's folder: its ``final_faces``, e.g. the pilot's): drawn as other
+    #: participants' faces from the first participant on, the live study's completed faces
+    #: joining them as they arrive (recorded with ``source_row``, not as fallback faces).
+    others_pool: Path | None = None
     #: A face table (CSV or Parquet: shape/gene columns, optional ``identity`` and ``label`` or
     #: ``emotion`` columns) and how many of its rows each participant sees (default: all).
     file: Path | None = None
@@ -75,8 +82,9 @@ class CategoriseBlock(TaskBlock):
             )
         if self.file_faces is not None and self.file is None:
             raise ValueError("file_faces is set but file is not: name the face table (file = …)")
-        if self.others_fallback is not None and not self.others:
-            raise ValueError("others_fallback is set but others is 0")
+        for key in ("others_fallback", "others_pool"):
+            if getattr(self, key) is not None and not self.others:
+                raise ValueError(f"{key} is set but others is 0")
         lo, hi = self.random_genes
         if lo > hi:
             raise ValueError(f"random_genes must be [lo, hi] with lo <= hi; got [{lo}, {hi}]")
@@ -109,6 +117,25 @@ class CategoriseBlock(TaskBlock):
         for key in ("intensity_labels", "confidence_labels"):
             out.update({f"{key}[{j}]": t for j, t in enumerate(getattr(self, key))})
         return out
+
+    def warnings(self, k: int, n_trials: int) -> dict[str, str]:
+        if not self.others or self.others_pool is not None:
+            return {}
+        stand_in = "rows of others_fallback" if self.others_fallback else "random faces"
+        return {
+            f"blocks[{k}].others": (
+                f"until a session is complete nobody has others' faces to see: everyone who "
+                f"reaches this block before then gets {stand_in} instead — expected fallback "
+                f"share 100% of the {self.others} others' faces ({self.others} of {n_trials} "
+                "faces) for the whole first wave, e.g. every participant of a panel opened to "
+                "50 at once; they drop out of the own-vs-others comparison. Set others_pool = "
+                "a face table or a pilot's export folder to draw others' faces from the first "
+                "participant on (`emogen study simulate … --arrivals concurrent N` shows it)"
+            )
+        }
+
+    def files(self) -> dict[str, Path]:
+        return {key: Path(p) for key in FILE_KEYS if (p := getattr(self, key)) is not None}
 
     def check(self, k: int, emotions: tuple[str, ...], earlier: tuple[TaskBlock, ...]) -> None:
         check_words(k, "labels", self.labels, emotions)

@@ -112,10 +112,20 @@ class BlockDraw:
         done = self.env.sessions_done(self.session_id)
         found = self.env.made_faces(self.db, (TrialRow.session_id.in_(done),))
         found.sort(key=lambda f: (f["session_id"], f["trial"]))
-        picks = balanced_pick([f["emotion"] for f in found], self.block.labels or (), n, rng)
+        pool = self.files.get("others_pool")
+        emotions = [f["emotion"] for f in found] + [str(x) for x in (pool.labels if pool else [])]
+        picks = balanced_pick(emotions, self.block.labels or (), n, rng)
         missing = sum(p is None for p in picks)
         spare = iter(self._fallback(missing, rng) if missing else [])
-        return [_made("other", found[p]) if p is not None else next(spare) for p in picks]
+        out = []
+        for p in picks:
+            if p is None:
+                out.append(next(spare))
+            elif p < len(found) or pool is None:
+                out.append(_made("other", found[p]))
+            else:
+                out.append(self._row_face(pool, p - len(found), p, "other"))
+        return out
 
     def _fallback(self, n: int, rng: np.random.Generator) -> list[Picked]:
         table = self.files.get("others_fallback")
@@ -135,13 +145,15 @@ class BlockDraw:
         self, table: FileFaces, n: int, rng: np.random.Generator, source: str
     ) -> list[Picked]:
         rows = pick_rows(len(table.weights), n, rng)
+        return [self._row_face(table, r, k, source) for k, r in enumerate(rows)]
+
+    def _row_face(self, table: FileFaces, r: int, k: int, source: str) -> Picked:
+        """Row ``r`` of a face table, the ``k``-th face drawn (a row without an identity takes
+        the block's identities in turn)."""
         idents = self.block.identities or self.env.config.identities
-        faces = []
-        for k, r in enumerate(rows):
-            identity = table.identities[r] or idents[k % len(idents)]
-            full = self._full(table.weights[r : r + 1], identity)
-            faces.append(Picked(source, identity, full, intended=table.labels[r], source_row=r))
-        return faces
+        identity = table.identities[r] or idents[k % len(idents)]
+        full = self._full(table.weights[r : r + 1], identity)
+        return Picked(source, identity, full, intended=table.labels[r], source_row=r)
 
     def _random(self, n: int, rng: np.random.Generator, source: str = "random") -> list[Picked]:
         ga, rig = self.env.config.ga, self.env.ctx.rig

@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from emogen.errors import ConfigError
-from emogen.model.face_table import read_face_table
-from emogen.tasks.categorise.block import CategoriseBlock
+from emogen.errors import ConfigError, DataError
+from emogen.model.face_table import FaceTable, face_weights, read_table
+from emogen.tasks.categorise.block import FILE_KEYS, CategoriseBlock
 
 
 @dataclass(frozen=True)
@@ -37,12 +37,37 @@ def _column(frame: object, names: tuple[str, ...]) -> list[str | None] | None:
     return None
 
 
+def table_of(path: Path) -> Path:
+    """A face table's file: ``path``, or a study export's ``final_faces`` table in a folder."""
+    if not path.is_dir():
+        return path
+    for name in ("final_faces.parquet", "final_faces.csv"):
+        if (path / name).is_file():
+            return path / name
+    raise ConfigError(
+        f"{path} is a folder without final_faces.parquet or final_faces.csv: name a face table "
+        "or a study export's folder"
+    )
+
+
+def face_table_at(path: Path, rig: Any, where: str) -> FaceTable:
+    """The faces of a table file; a study export's table (``w_`` weight columns beside ``g_``
+    gene columns, e.g. ``final_faces``) is read by its weights."""
+    frame = read_table(path, what=where)
+    if len(frame) == 0:
+        raise DataError(f"{where} {path} has no rows: no faces (a header row, one row a face)")
+    if any(str(c).startswith("w_") for c in frame.columns):
+        frame = frame[[c for c in frame.columns if not str(c).startswith("g_")]]
+    return face_weights(
+        frame, rig, f"{where} {path}", label_columns=("label", "emotion", "identity")
+    )
+
+
 def read_file_faces(path: Path, ctx: Any, where: str) -> FileFaces:
     """A categorise block's face table (``file`` or ``others_fallback``), checked: its rows'
     identities must be the study's (errors name the block key, the file and the row)."""
-    table = read_face_table(
-        path, ctx.rig, what=where, label_columns=("label", "emotion", "identity")
-    )
+    path = table_of(path)
+    table = face_table_at(path, ctx.rig, where)
     n = len(table.weights)
     identities = _column(table.frame, ("identity",)) or [None] * n
     labels = _column(table.frame, ("label", "emotion")) or [None] * n
@@ -53,13 +78,18 @@ def read_file_faces(path: Path, ctx: Any, where: str) -> FileFaces:
                 f"{where} {path} row {row + 1}: identity {name!r} is not one of the study's "
                 f"identities ({', '.join(sorted(known))})"
             )
+    if where.endswith("others_pool") and any(label is None for label in labels):
+        raise ConfigError(
+            f"{where} {path}: every row needs the emotion its face was made for (a 'label' or "
+            "'emotion' column): others' faces are drawn balanced over the labels"
+        )
     return FileFaces(path, table.weights, identities, labels)
 
 
 def block_files(ctx: Any, k: int, block: CategoriseBlock) -> dict[str, FileFaces]:
     """Block ``k``'s face tables by key (``file``, ``others_fallback``), read and checked."""
     out: dict[str, FileFaces] = {}
-    for key in ("file", "others_fallback"):
+    for key in FILE_KEYS:
         path = getattr(block, key)
         if path is not None:
             out[key] = read_file_faces(Path(path), ctx, f"blocks[{k + 1}].{key}")

@@ -24,9 +24,9 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from emogen.errors import EmoGenError
-from emogen.model.face_table import read_face_table
 from emogen.model.rig import Rig
 from emogen.tasks.categorise.block import CategoriseBlock
+from emogen.tasks.categorise.faces import face_table_at, table_of
 from emogen.tasks.categorise.sources import label_order
 from emogen.tasks.categorise.tables import StimulusRow
 from emogen.tasks.protocol import Replayed, TaskEnv
@@ -97,11 +97,14 @@ def _made_face(
 def _file_face(
     block: CategoriseBlock, stim: StimulusRow, rig: Rig, weights: np.ndarray, where: str
 ) -> Checked:
-    path = block.others_fallback if stim.source == "other" else block.file
-    if path is None or not Path(path).is_file():
+    path = block.file
+    if stim.source == "other":
+        path = block.others_fallback if stim.fallback else block.others_pool
+    if path is None or not Path(path).exists():
         return [], 0.0  # the table is not here: the stored face stands
     try:
-        table = read_face_table(Path(path), rig, label_columns=("label", "emotion", "identity"))
+        path = table_of(Path(path))
+        table = face_table_at(path, rig, "face table")
     except EmoGenError as exc:
         return [f"{where}: cannot read its face table: {exc}"], 0.0
     row = int(stim.source_row or 0)

@@ -209,6 +209,29 @@ class CategoriseTask:
     def state_facts(self, state: str | None) -> dict[str, Any]:
         return {}
 
+    def notes(self, db: Session, sessions: Any, k: int, block: CategoriseBlock) -> list[str]:
+        """The share of others' faces that were fallback faces so far (when any were)."""
+        query = (
+            select(StimulusRow.fallback, func.count())
+            .join(TrialRow, StimulusRow.trial_id == TrialRow.id)
+            .where(
+                TrialRow.session_id.in_(sessions),
+                TrialRow.block == k,
+                StimulusRow.source == "other",
+            )
+            .group_by(StimulusRow.fallback)
+        )
+        counts = {bool(f): int(n) for f, n in db.execute(query)}
+        fell, total = counts.get(True, 0), sum(counts.values())
+        if not fell:
+            return []
+        return [
+            f"block {k + 1}: {fell} of the {total} others' faces drawn so far "
+            f"({fell / total:.0%}) were fallback faces (no other session was complete when the "
+            "participant reached the block): those participants drop out of the own-vs-others "
+            "comparison. A pool of others' faces (others_pool = a pilot's export) prevents it"
+        ]
+
     def progress_step(
         self, status: str, generation: int, generations: int
     ) -> tuple[str, int | None]:

@@ -306,6 +306,10 @@ class EvolveTask:
             return "rating", None
         return f"generation {generation + 1} of {generations + 1}", generation + 1
 
+    def notes(self, db: Session, sessions: Any, k: int, block: Any) -> list[str]:
+        """Nothing the GA's blocks need say on the dashboard."""
+        return []
+
 
 def _shown(db: Session, row: TrialRow, cmd: _Shown) -> PopulationRow:
     """The population a selection or restart is for (a conflict if the request is not for what

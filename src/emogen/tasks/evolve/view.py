@@ -9,6 +9,7 @@ from typing import Any, Literal
 from sqlalchemy.orm import Session
 from typing_extensions import TypedDict
 
+from emogen.tasks.blocks import fill_emotion
 from emogen.tasks.evolve.store import ShownPopulation, final_face, population_at
 from emogen.tasks.protocol import FaceView, TaskEnv
 from emogen.tasks.records import TrialRow
@@ -86,7 +87,7 @@ def _rating(db: Session, config: Any, row: TrialRow) -> RatingView:
     face = final_face(db, row)
     r = config.rating
     return {
-        "question": r.question,
+        "question": fill_emotion(r.question, row.emotion),
         "low_label": r.low_label,
         "high_label": r.high_label,
         "points": r.points,

@@ -27,7 +27,7 @@ const markup = `
     <div class="rating-face" data-viewer-container><div class="slot big" id="rating-slot"></div></div>
     <form id="rating-form" class="rating-form">
       <fieldset>
-        <legend id="rating-question" class="sr-only">&nbsp;</legend>
+        <legend id="rating-question">&nbsp;</legend>
         <div class="scale" id="rating-scale"></div>
         <div class="scale-labels"><span id="rating-low"></span><span id="rating-high"></span></div>
       </fieldset>
@@ -295,8 +295,9 @@ function progress(state) {
   return { step, within: (view.generation + 1) / (view.generations + 2) };
 }
 
-/** The rating asks its own question (the study's ``[rating] question``). @param {any} state */
-const prompt = (state) => (state.trial.status === "rating" && state.view.rating ? state.view.rating.question : null);
+/** The heading stays the trial's prompt ("Make the face look SAD") through the rating: the
+ * rating's own question is the scale's legend below the face. @param {any} state */
+const prompt = () => null;
 
 /** The emotion to make: "next: SAD". @param {any} state */
 const upcoming = (state) => state.view.emotion.toUpperCase();
