@@ -20,6 +20,7 @@ import pandas as pd
 from emogen import columns as tidy
 from emogen.errors import ConfigError, EmoGenError
 from emogen.ga.engine import Engine
+from emogen.model.load import model_for_recorded_hash
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
 from emogen.study.context import accepted_hashes
@@ -120,16 +121,20 @@ def replay_exported(
                 index=False
             )
         }
-        correctors = StudyCorrectors(config, model)
+        s_model, s_rig, s_hash = model, rig, model_hash
+        if model is not None and study["model_hash"] not in accepted_hashes(model_hash, model):
+            s_model = model_for_recorded_hash(model, study["model_hash"])  # an older packaged rig
+            s_rig, s_hash = s_model.rig, s_model.model_hash
+        correctors = StudyCorrectors(config, s_model)
         trials = mine["trials"].sort_values(["session_id", "trial"])
         for sid in sorted(int(s) for s in mine["sessions"]["session_id"]):
             if session_ids is not None and sid not in session_ids:
                 continue
-            matches = study["model_hash"] in accepted_hashes(model_hash, model)
+            matches = study["model_hash"] in accepted_hashes(s_hash, s_model)
             report = ReplayReport(sid, model_hash_matches=matches)
             for row in trials[trials["session_id"] == sid].to_dict("records"):
                 trial = {str(k): v for k, v in row.items()}
-                _replay_trial(report, config, rig, correctors, trial, faces, sels, restarts)
+                _replay_trial(report, config, s_rig, correctors, trial, faces, sels, restarts)
             reports.append(report)
     if session_ids is not None and not reports:
         raise ConfigError(f"no session {session_ids} in the export at {folder}")
