@@ -21,7 +21,8 @@ Version 1 (``[reach] version = 1`` in the rig; rig 2, ``ict_rig.toml``):
 name (per side)             drivers                   offsets
 ==========================  ========================  =============================================
 ``reach_browDown``          browDown                  0.8 × browDown (lowers the brow further),
-                                                      knit: inner brow 3 mm towards the midline
+                                                      knit: inner brow 0.6 mm more towards the
+                                                      midline
                                                       (0 at the midline), glabellar bulge 1.2 mm
 ``reach_browRaiseKnit``     browInnerUp × browDown    undoes 1.4 × browDown's lowering (y, z),
                                                       keeps its knitting: AU1+4 raised and knit
@@ -139,7 +140,7 @@ def _brow_down(b: _Builder, s: int) -> np.ndarray:
     half = smoothstep(-0.3, 0.3, s * p[:, 0])
     bulge = falloff(ellipse(p, (s * 0.45, inner[1] - 0.85), (0.9, 1.0))) * half
     extra = np.zeros_like(p)
-    extra[:, 0] = -s * 0.30 * knit
+    extra[:, 0] = -s * 0.06 * knit
     extra[:, 1] = 0.03 * bulge
     extra[:, 2] = 0.12 * bulge
     return own + b.field(extra)
