@@ -135,7 +135,12 @@ async function oneTry(path, init, ms) {
   }
 }
 
-/** Why a request ended without an answer, in words for people. */
+/**
+ * Why a request ended without an answer, in words for people.
+ * @param {number} status
+ * @param {boolean} timedOut
+ * @param {number} elapsedMs
+ */
 function unanswered(status, timedOut, elapsedMs) {
   if (timedOut) return `The study server has not answered for ${Math.round(elapsedMs / 1000)} s.`;
   return status === 0
