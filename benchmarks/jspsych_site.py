@@ -33,7 +33,7 @@ def _sources() -> list[Path]:
     web = REPO / "src" / "emogen" / "web"
     return [
         PLUGIN / "build.mjs",
-        *(PLUGIN / "src").glob("*.js"),
+        *(PLUGIN / "src").glob("*"),
         *(web / "static").glob("*.js"),
         *(web / "static" / "tasks").glob("*.js"),
         web / "static" / "study.css",
@@ -70,9 +70,10 @@ def local_page(page: str, server: str) -> str:
     return re.sub(r'const SERVER = "[^"]*";', f"const SERVER = {json.dumps(server)};", page)
 
 
-def one_trial_page(server: str, trials: list[dict[str, object]]) -> str:
+def one_trial_page(server: str, trials: list[dict[str, object]], setup: str = "") -> str:
     """A page of emogen trials only (wrong-use tests, the benchmark); ``window.done`` at the end,
-    ``window.firstFacesAt``: performance.now() when the first faces were drawn."""
+    ``window.firstFacesAt``: performance.now() when the first faces were drawn; ``setup``: code
+    run after jsPsych is made (e.g. jsPsych's Prolific recipe, ``jsPsych.data.addProperties``)."""
     timeline = json.dumps([{**t, "server": server} for t in trials])
     return f"""<!doctype html><html><head><meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
@@ -89,6 +90,7 @@ new MutationObserver((_, observer) => {{
   }}
 }}).observe(document, {{ subtree: true, attributes: true, childList: true }});
 const jsPsych = initJsPsych({{ on_finish: () => (window.done = true) }});
+{setup}
 jsPsych.run({timeline}.map((t) => ({{ ...t, type: jsPsychEmogen }})));
 </script></html>"""
 

@@ -4,7 +4,8 @@
 //   dist/index.js               ES module (import EmogenPlugin from "jspsych-plugin-emogen")
 //   dist/index.browser.min.js   <script> build: the global jsPsychEmogen (jsPsych's jsPsychModule)
 //   dist/emogen.css             the study page's styles, scoped to the trial (.emogen-trial)
-import { mkdir, readFile, writeFile } from "node:fs/promises";
+//   dist/index.d.ts             TypeScript declarations (src/index.d.ts)
+import { copyFile, mkdir, readFile, writeFile } from "node:fs/promises";
 import { dirname, join } from "node:path";
 import { fileURLToPath } from "node:url";
 import * as esbuild from "esbuild";
@@ -15,10 +16,14 @@ const out = join(here, "dist");
 
 // static/viewer-adapter.js imports the viewer's built bundle (build/study-viewer.js); the
 // plugin bundles the viewer from its source instead (the same module, built once here).
+// The study page's own way to its viewer (faces.js: import("/static/viewer-adapter.js"), an
+// address on the study server) is the same module the plugin bundles: resolved to it, so that
+// no import of a server address is left for a lab's bundler to trip on.
 const viewerFromSource = {
   name: "viewer-from-source",
   setup(build) {
     build.onResolve({ filter: /\/build\/study-viewer\.js$/ }, () => ({ path: join(web, "viewer_entry.js") }));
+    build.onResolve({ filter: /^\/static\/viewer-adapter\.js$/ }, () => ({ path: join(web, "static", "viewer-adapter.js") }));
   },
 };
 // The <script> build takes jsPsych from the page (jsPsych's own script: window.jsPsychModule).
@@ -39,8 +44,6 @@ const common = {
   loader: { ".glsl": "text" },
   legalComments: "eof",
   logLevel: "warning",
-  // the study page's own way to its viewer (faces.js): the plugin passes its own instead
-  external: ["/static/*"],
 };
 
 /** study.css under .emogen-trial: its :root and body rules become the trial's own. */
@@ -66,7 +69,7 @@ async function scopedCss() {
 
 await mkdir(out, { recursive: true });
 await Promise.all([
-  esbuild.build({ ...common, format: "esm", minify: true, outfile: join(out, "index.js"), external: ["jspsych", "/static/*"], plugins: [viewerFromSource] }),
+  esbuild.build({ ...common, format: "esm", minify: true, outfile: join(out, "index.js"), external: ["jspsych"], plugins: [viewerFromSource] }),
   esbuild.build({
     ...common,
     format: "iife",
@@ -77,6 +80,7 @@ await Promise.all([
     plugins: [viewerFromSource, jspsychGlobal],
   }),
   scopedCss().then((css) => writeFile(join(out, "emogen.css"), css)),
+  copyFile(join(here, "src", "index.d.ts"), join(out, "index.d.ts")),
 ]);
 await writeFile(join(out, ".built"), "");
-console.log(`jspsych-plugin-emogen built in ${out}: index.js, index.browser.min.js, emogen.css`);
+console.log(`jspsych-plugin-emogen built in ${out}: index.js, index.browser.min.js, emogen.css, index.d.ts`);

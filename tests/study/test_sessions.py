@@ -16,7 +16,15 @@ from emogen.study.sessions import StudyService, full_weights
 from emogen.study.storage import Store
 from emogen.study.tables import StepRow, TrialRow
 from emogen.tasks.evolve.tables import FaceRow, PopulationRow, SelectionRow
-from tests.study.drive import choose, do, new_key, run_to_end, service_caller, step_args
+from tests.study.drive import (
+    choose,
+    do,
+    new_key,
+    run_to_end,
+    service_caller,
+    step_args,
+    study_service,
+)
 
 
 def count(store: Store, table: type) -> int:
@@ -189,6 +197,28 @@ def test_participant_ids_resume_only_with_their_token(service: StudyService) -> 
     assert state["participant_id"].startswith("anon-") and anon != token
     with pytest.raises(ConfigError, match="participant id"):
         service.create_session("bad id with spaces")
+
+
+def test_resume_by_participant_id_continues_the_session_from_any_browser(
+    db_url: str, small_study, ict_model
+) -> None:
+    """``resume = "participant_id"`` (#40, embedded studies): a reopened link — no token, a new
+    creation key — continues the same session where it stood; a generated (anonymous) id never
+    resumes anyone's session, and the default (``link``) still refuses."""
+    store = Store(db_url)
+    svc = study_service(small_study.model_copy(update={"resume": "participant_id"}), store, ict_model)
+    token, _ = svc.create_session("PROLIFIC-re", create_key="tab-1")
+    state = do(svc, "begin", token, new_key())
+    elite, others = choose(state)
+    moved = do(svc, "select", token, new_key(), **step_args(state), elite=elite, others=others)
+    again, resumed = svc.create_session("PROLIFIC-re", create_key="tab-2")  # a new tab
+    assert again == token
+    assert resumed["progress"] == moved["progress"]
+    assert resumed["view"]["population"] == moved["view"]["population"]
+    anon, _ = svc.create_session(None, create_key="tab-3")
+    assert anon != token
+    assert svc.create_session("PROLIFIC-other")[0] not in (token, anon)
+    store.dispose()
 
 
 def test_sessions_get_recorded_seeds_and_orders(service: StudyService) -> None:

@@ -7,7 +7,7 @@ import { ParameterType } from "jspsych";
 import { TASK_NAMES, taskOf } from "../../../src/emogen/web/static/tasks/index.js";
 import { serverBase, studyInfo } from "./connect.js";
 import { observerDriver, targetVector } from "./driver.js";
-import { DATA_FIELDS, emptyData } from "./record.js";
+import { DATA_FIELDS, emptyData, fieldName, namespaced } from "./record.js";
 import { runTrial } from "./run.js";
 
 const VERSION = "0.1.0";
@@ -31,8 +31,9 @@ const info = /** @type {const} */ ({
     /** The study server's address (``https://study.example.org``); its study config must list
      * this page's origin in ``embed_origins``. */
     server: { type: ParameterType.STRING, default: undefined },
-    /** The task of the trial (the registry's: ``evolve`` or ``categorise``): the study's next
-     * trial must be of this task. */
+    /** The task the timeline expects (the registry's: ``evolve`` or ``categorise``). The trial
+     * runs the study's current trial (the server's order wins); where that is of another task,
+     * the data and the console say so once. */
     task: { type: ParameterType.SELECT, options: TASK_NAMES, default: TASK_NAMES[0] },
     /** The participant id; null: from the URL (the study's participant_param, e.g.
      * PROLIFIC_PID, else ``participant``; JATOS: the study link's query), else one is made. */
@@ -41,15 +42,28 @@ const info = /** @type {const} */ ({
     participant_param: { type: ParameterType.STRING, default: null },
     /** ``auto`` (3D viewer where WebGL 2 works, else the server's images) or ``png``. */
     render: { type: ParameterType.SELECT, options: ["auto", "png"], default: "auto" },
-    /** How often a lost connection or busy answer is retried (1, 2, 4 … s apart) before the
-     * trial ends as failed. */
-    retries: { type: ParameterType.INT, default: 3 },
+    /** One request's wait for an answer (ms) before it is tried again (a server or proxy that
+     * takes the connection and never answers). */
+    timeout_ms: { type: ParameterType.INT, default: 10_000 },
+    /** A request's deadline (ms): a lost connection, a silent or busy server is retried (1, 2,
+     * 4, 8 … s apart, with the same idempotency key) for this long, then the trial ends as
+     * failed. Survives a server restart or a short outage. */
+    patience_ms: { type: ParameterType.INT, default: 30_000 },
+    /** Trial start → its faces drawn (ms, the 3D model's download included): past it, the trial
+     * ends as failed (kind ``timeout``). */
+    load_timeout_ms: { type: ParameterType.INT, default: 90_000 },
     /** After a failure the page says why until Continue is pressed, or this many ms (null: until
      * Continue). */
     failure_wait_ms: { type: ParameterType.INT, default: null },
   },
-  /** Every trial's fields and each task's own (record.js; tasks/<task>.js: ``data``). */
-  data: Object.fromEntries(Object.entries(DATA_FIELDS).map(([name, field]) => [name, declared(field)])),
+  /** Every trial's fields and each task's own (record.js; tasks/<task>.js: ``data``), named
+   * ``emogen_<name>`` (``rt`` is jsPsych's own). */
+  data: Object.fromEntries(Object.entries(DATA_FIELDS).map(([name, field]) => [fieldName(name), declared(field)])),
+  // Inlined when the bundle is built; the paper EmoGen implements (README).
+  citations: {
+    apa: "Roubtsova, N., Parsons, M., Binetti, N., Mareschal, I., Viding, E., & Cosker, D. EmoGen: Quantifiable emotion generation and analysis for experimental psychology.",
+    bibtex: "@article{roubtsova_emogen, title={EmoGen: Quantifiable Emotion Generation and Analysis for Experimental Psychology}, author={Roubtsova, Nadejda and Parsons, Martin and Binetti, Nicola and Mareschal, Isabelle and Viding, Essi and Cosker, Darren}}",
+  },
 });
 
 /** The default target of simulate(): a smile (ICT-FaceKit's shape names). */
@@ -73,15 +87,8 @@ class EmogenPlugin {
   }
 
   /** @param {HTMLElement} element @param {any} trial @param {() => void} onLoad @param {any} [driver] */
-  async run(element, trial, onLoad, driver) {
-    let base;
-    try {
-      base = serverBase(trial.server);
-    } catch (err) {
-      onLoad();
-      return { ...emptyData(trial.task, String(trial.server)), success: false, failure: "server", reason: /** @type {Error} */ (err).message, token: undefined };
-    }
-    return runTrial({ element, params: trial, base, onLoad, driver });
+  run(element, trial, onLoad, driver) {
+    return runTrial({ element, params: trial, onLoad, driver, simulated: driver !== undefined });
   }
 
   /**
@@ -97,15 +104,16 @@ class EmogenPlugin {
   async simulate(trial, mode, options = {}, load = () => {}) {
     if (mode === "visual") {
       const base = serverBase(trial.server);
-      const names = (await studyInfo(base, trial.retries)).weight_names;
+      const timing = { timeoutMs: trial.timeout_ms, patienceMs: trial.patience_ms };
+      const names = (await studyInfo(base, timing)).weight_names;
       const driver = observerDriver({ ...options, target: targetVector(options.target ?? SMILE, names) });
       return this.run(this.jsPsych.getDisplayElement(), trial, load, driver);
     }
     load();
-    const data = { ...emptyData(trial.task, String(trial.server)), simulated: true, token: undefined };
+    const data = { ...emptyData(trial.task, String(trial.server)), simulated: true };
     delete data.token;
     Object.assign(data, taskOf(trial.task).simulate({ ...options, target: options.target ?? SMILE, seed: options.seed ?? 1 }));
-    return this.jsPsych.pluginAPI.mergeSimulationData(data, options);
+    return this.jsPsych.pluginAPI.mergeSimulationData(namespaced(data), options);
   }
 }
 

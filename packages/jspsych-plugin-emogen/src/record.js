@@ -1,8 +1,11 @@
 // The trial's data, as jsPsych stores it: what the page showed and the participant chose, step
 // by step (only steps the server accepted), and the trial's record from the server (the
 // researcher's session id, the seeds, its task's result) — the same rows `emogen study export`
-// writes, so the two can be joined on session_id and trial. The fields every trial has are
-// here; each task adds its own (tasks/<task>.js: `data`, `record`, `result`).
+// writes, so the two can be joined on emogen_session_id and emogen_trial. The fields every
+// trial has are here; each task adds its own (tasks/<task>.js: `data`, `record`, `result`).
+// In jsPsych's data every field is namespaced, ``emogen_<name>`` (jsPsych's own ``rt`` aside):
+// a lab's ``jsPsych.data.addProperties({ subject_id, study_id, session_id })`` (jsPsych's
+// Prolific recipe) or a trial's ``data`` parameter cannot overwrite them.
 import { TASKS, taskOf } from "../../../src/emogen/web/static/tasks/index.js";
 
 /**
@@ -14,8 +17,12 @@ import { TASKS, taskOf } from "../../../src/emogen/web/static/tasks/index.js";
 /** @type {Record<string, Field>} the fields before the tasks' own */
 const HEAD = {
   task: { type: "STRING", value: null },
-  /** false: the trial could not run; ``reason`` says why, ``failure`` names the kind
-   * (unreachable, origin, block, server, finished). */
+  /** The timeline's task where the study's current trial, which the trial ran, is of another
+   * (``warning`` then says so; null: they agree). */
+  timeline_task: { type: "STRING", value: null },
+  warning: { type: "STRING", value: null },
+  /** false: the trial could not run; ``reason`` says why (for the researcher), ``failure``
+   * names the kind (unreachable, timeout, origin, block, server, resume, other-tab, finished). */
   success: { type: "BOOL", value: true },
   reason: { type: "STRING", value: null },
   failure: { type: "STRING", value: null },
@@ -45,8 +52,22 @@ const TAIL = {
   final_weights: { type: "FLOAT", array: true, value: null },
   /** Trial start → first faces drawn (ms), and the whole trial's duration. */
   first_faces_ms: { type: "INT", value: null },
+  duration_ms: { type: "INT", value: null },
+  /** jsPsych's meaning: the response time (ms) — the sum of the trial's responses' times, each
+   * from its screen shown to the response (the loading of faces excluded); null: none. */
   rt: { type: "INT", value: null },
 };
+
+/** The field's name in jsPsych's data: ``emogen_<name>``; ``rt`` is jsPsych's own. @param {string} name */
+export const fieldName = (name) => (name === "rt" ? name : `emogen_${name}`);
+
+/**
+ * The trial's data with jsPsych's names (see {@link fieldName}).
+ * @param {Record<string, any>} data
+ */
+export function namespaced(data) {
+  return Object.fromEntries(Object.entries(data).map(([name, value]) => [fieldName(name), value]));
+}
 
 /** Every data field of the plugin's trials: the shared ones and each task's, in that order. */
 export const DATA_FIELDS = /** @type {Record<string, Field>} */ (
@@ -79,6 +100,7 @@ export function emptyData(task, server) {
  */
 export function recordStep(data, body, state) {
   if (state && state.view) taskOf(state.view.task).record(data, body, state.view);
+  if (typeof body.response_ms === "number") data.rt = (data.rt ?? 0) + body.response_ms;
 }
 
 /**

@@ -1,9 +1,14 @@
 // One emogen trial inside a jsPsych page: the study page's own task component (found by the
 // task registry, static/tasks/index.js) over the same face display, given the context the study
 // page's shell gives it (static/session.js: `page`), against the study server's one step route.
-// The trial ends when the server's session moves past it; what was shown and chosen, and the
+// The trial runs the session's current trial, whatever the timeline expected (the server's
+// order wins: after a failure, a reload or a reopened link the next emogen trial carries on
+// where the session is; a mismatch is reported to the researcher once, in the console and the
+// data). It ends when the server's session moves past it; what was shown and chosen, and the
 // trial's record (session id, seeds, its task's result), are its data. A failure ends it with
-// success false and the reason, said in the page — never a trial that waits for ever.
+// success false and the researcher's reason in the data and console, the participant's words
+// in the page — never a trial that waits for ever: every request has a deadline
+// (``patience_ms``), and the faces must be drawn within ``load_timeout_ms`` of the start.
 import { newKey } from "../../../src/emogen/web/static/api.js";
 import { statusText } from "../../../src/emogen/web/static/connection.js";
 import { createFaceDisplay } from "../../../src/emogen/web/static/faces.js";
@@ -12,8 +17,8 @@ import { SCREENS, TASK_VIEWS, taskOf } from "../../../src/emogen/web/static/task
 import { STATUS_LINES } from "../../../src/emogen/web/static/tasks/markup.js";
 import { createDrawFaces, fillScale } from "../../../src/emogen/web/static/tasks/shell.js";
 import { createViewerDisplay } from "../../../src/emogen/web/static/viewer-adapter.js";
-import { TrialFailure, participantFromUrl, request, session, studyInfo } from "./connect.js";
-import { emptyData, recordStep, withRecord } from "./record.js";
+import { TrialFailure, participantFromUrl, request, serverBase, session, studyInfo } from "./connect.js";
+import { emptyData, namespaced, recordStep, withRecord } from "./record.js";
 
 const SHELL = `
 <div class="emogen-trial" data-emogen-stage="loading">
@@ -25,9 +30,9 @@ const SHELL = `
     <section id="view-loading" class="view text-page"><p class="muted">Connecting to the study…</p></section>
     ${TASK_VIEWS}
     <section id="view-failed" class="view text-page" hidden>
-      <h2>This part of the experiment could not run</h2>
+      <h2 id="failed-heading">This part of the experiment could not go on</h2>
       <p id="failed-reason"></p>
-      <p class="muted">The researcher's data say what happened. Press Continue to go on with the experiment.</p>
+      <p id="failed-next" class="muted">Press Continue to go on with the experiment.</p>
       <div class="actions-row"><button id="failed-continue" class="primary" type="button">Continue</button></div>
     </section>
     ${STATUS_LINES}
@@ -35,25 +40,53 @@ const SHELL = `
 </div>`;
 const VIEWS = ["loading", ...SCREENS, "failed"];
 
+/** What the participant reads when a trial fails, by the failure's kind (the researcher's
+ * reason is in the data and the console). */
+const LOST = "The connection to the study was lost, so this part could not go on. What you did so far is saved; this is not your fault.";
+const PARTICIPANT_WORDS = {
+  unreachable: LOST,
+  timeout: LOST,
+  "other-tab": "You opened this experiment again in another tab or window, and it goes on there. Please close this tab.",
+  other: "This part of the experiment could not be shown. This is not your fault: the researcher will see what happened.",
+};
+
+/** Said once per page in the browser's console (a study whose blocks differ from the timeline). */
+const reported = new Set();
+function reportOnce(text) {
+  if (reported.has(text)) return;
+  reported.add(text);
+  console.warn(`emogen: ${text}`);
+}
+
+/** "a categorise", "an evolve". @param {string} word */
+const article = (word) => (/^[aeiou]/i.test(word) ? `an ${word}` : `a ${word}`);
+
 /**
- * Runs one trial; resolves with its data (never rejects).
- * @param {{ element: HTMLElement, params: any, base: string, onLoad?: () => void,
- *   driver?: (view: string, state: any, root: HTMLElement) => void }} options
+ * Runs one trial; resolves with its data, namespaced (never rejects).
+ * @param {{ element: HTMLElement, params: any, onLoad?: () => void,
+ *   driver?: (view: string, state: any, root: HTMLElement) => void, simulated?: boolean }} options
  */
-export async function runTrial({ element, params, base, onLoad = () => {}, driver }) {
+export async function runTrial({ element, params, onLoad = () => {}, driver, simulated = false }) {
   element.innerHTML = SHELL;
   const root = /** @type {HTMLElement} */ (element.querySelector(".emogen-trial"));
   const $ = (id) => /** @type {any} */ (root.querySelector(`#${id}`));
   const abort = new AbortController();
   const started = performance.now();
-  const data = emptyData(params.task, base);
+  const timing = { timeoutMs: params.timeout_ms, patienceMs: params.patience_ms };
+  const data = emptyData(params.task, String(params.server));
+  data.simulated = simulated;
+  let base = "";
   const ui = {
     state: /** @type {any} */ (null), display: /** @type {any} */ (null), shownAt: 0,
     receivedAt: started, loadMs: 0, key: null, busy: false, loading: false,
     link: /** @type {any} */ ({ kind: "online" }), linkTimer: 0, said: "", ready: false, stage: "loading",
   };
+  let ended = false;
   let finish = (/** @type {any} */ _outcome) => {};
-  const finished = new Promise((resolve) => (finish = resolve));
+  const finished = new Promise((resolve) => (finish = (outcome) => {
+    ended = true;
+    resolve(outcome);
+  }));
   let loaded = false;
 
   const show = (view) => {
@@ -80,7 +113,7 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
     if (ui.link.kind === "online") $("message").textContent = ui.said;
   };
   const call = (path, options = {}) =>
-    request(base, `/api/s/${data.token}${path}`, { retries: params.retries, onLink, ...options });
+    request(base, `/api/s/${data.token}${path}`, { retries: Infinity, ...timing, onLink, ...options });
 
   const page = {
     $, ui, token: "", show, say, setReady, signal: abort.signal,
@@ -103,6 +136,7 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
 
   /** Shows ``state`` if it is still this trial; else the trial is over. */
   async function render(state) {
+    if (ended) return;
     ui.receivedAt = performance.now();
     ui.state = state;
     if (state.stage !== "trial" || state.trial.position !== data.trial) {
@@ -116,9 +150,10 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
     await component.render(state);
   }
 
-  /** One step (its body names the command), sent to the one step route. */
+  /** One step (its body names the command), sent to the one step route: retried with the
+   * same body (its idempotency key) until the server answers or the deadline passes. */
   async function step(body) {
-    if (ui.busy) return;
+    if (ui.busy || ended) return;
     ui.busy = true;
     setReady(false);
     component.paint();
@@ -134,7 +169,7 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
         finish({ ok: false, error: err });
         return;
       }
-      // the page was out of date (a double submission): show the server's state
+      // the page was out of date (a double submission, another device): the server's state
       try {
         await render(await call("/state"));
       } catch (again) {
@@ -144,33 +179,45 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
   }
 
   let component = /** @type {any} */ (null);
+  let held = /** @type {any} */ (null);
+  const takenOver = () =>
+    finish({ ok: false, error: new TrialFailure("the participant's session was opened in another tab or window of this browser, which carries it on; this tab gave way", "other-tab") });
+  const loadDeadline = setTimeout(() => {
+    if (loaded) return;
+    const seconds = Math.round(params.load_timeout_ms / 1000);
+    finish({ ok: false, error: new TrialFailure(`the trial's faces were not drawn within ${seconds} s of its start (load_timeout_ms)`, "timeout") });
+  }, params.load_timeout_ms);
   const outcome = await (async () => {
     try {
-      await start();
+      await Promise.race([start(), finished]);
       return await finished;
     } catch (err) {
       return { ok: false, error: err };
     }
   })();
+  ended = true;
+  clearTimeout(loadDeadline);
+  if (held) held.listeners.delete(takenOver);
 
   async function start() {
     show("loading");
-    const info = await studyInfo(base, params.retries);
+    base = serverBase(params.server);
+    data.server = base;
+    const info = await studyInfo(base, timing);
     data.study = info.name;
-    const blocks = info.blocks.filter((b) => b.task === params.task);
-    if (!blocks.length) {
+    if (!info.blocks.some((b) => b.task === params.task)) {
       const have = info.blocks.map((b) => `${b.name} (${b.task})`).join(", ");
-      throw new TrialFailure(
-        `the study '${info.name}' has no ${params.task} block (its blocks: ${have})`,
-        "block",
-      );
+      throw new TrialFailure(`the study '${info.name}' has no ${params.task} block (its blocks: ${have})`, "block");
     }
     const participant = params.participant_id ?? participantFromUrl(params.participant_param ?? info.participant_param);
-    const made = await session(base, participant, { retries: params.retries, onLink });
-    data.token = page.token = made.token;
+    held = await session(base, participant, { ...timing, onLink, simulated });
+    data.token = page.token = held.token;
+    data.session_id = held.sessionId;
+    if (held.takenOver) return takenOver();
+    held.listeners.add(takenOver);
     // the state the session was made with, for its first trial; the server's now, after that
-    let state = made.used ? await call("/state") : made.state;
-    made.used = true;
+    let state = held.used ? await call("/state") : held.state;
+    held.used = true;
     if (state.stage === "instructions") {
       state = await call("/step", { method: "POST", body: { command: "begin", key: newKey() } });
     }
@@ -178,21 +225,23 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
     if (state.stage === "done") {
       throw new TrialFailure("this participant's session of the study is complete: it has no trial left", "finished");
     }
-    if (state.trial.task !== params.task) {
-      throw new TrialFailure(
-        `the study's next trial (trial ${state.progress.trial + 1} of ${state.progress.trials}) is a ${state.trial.task} trial, not ${params.task}: order the experiment's emogen trials as the study's blocks`,
-        "block",
-      );
-    }
     data.trial = state.trial.position;
+    data.task = state.trial.task;
+    if (state.trial.task !== params.task) {
+      data.timeline_task = params.task;
+      data.warning = `the study's current trial (trial ${state.trial.position + 1} of ${state.progress.trials}) is ${article(state.trial.task)} trial, where the timeline has ${article(params.task)} trial: it runs the study's trial (the study's order wins; order the timeline's emogen trials as the study's blocks)`;
+      reportOnce(data.warning);
+    }
     const png = params.render === "png";
-    ui.display = await createFaceDisplay({
-      token: made.token,
+    const display = await createFaceDisplay({
+      token: held.token,
       base,
       loadViewer: async () => (png ? null : createViewerDisplay({ base, framing: info.framing })),
     });
-    data.display = ui.display.kind;
-    component = taskOf(params.task).create(page);
+    if (ended) return display.dispose();
+    ui.display = display;
+    data.display = display.kind;
+    component = taskOf(state.trial.task).create(page);
     await render(state);
   }
 
@@ -206,20 +255,31 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
     data.success = false;
     data.failure = err instanceof TrialFailure ? err.kind : "error";
     data.reason = err instanceof Error ? err.message : String(err);
-    await showFailure(data.reason);
+    console.error(`emogen: the trial could not go on: ${data.reason}`);
+    // a session with no trial left ends the trial quietly: nothing went wrong for the participant
+    if (data.failure !== "finished") await showFailure(data.failure);
+    else if (!loaded) onLoad();
   }
   abort.abort();
   clearInterval(ui.linkTimer);
   if (ui.display) ui.display.dispose();
-  data.rt = Math.round(performance.now() - started);
+  data.duration_ms = Math.round(performance.now() - started);
   delete data.token; // the session's secret stays out of the experiment's data
-  return data;
+  return namespaced(data);
 
-  /** The reason said in the page until Continue (or ``failure_wait_ms``, if set). */
-  function showFailure(reason) {
-    $("failed-reason").textContent = `${reason.charAt(0).toUpperCase()}${reason.slice(1)}.`;
+  /** The participant's words for a failure of ``kind``, until Continue (or ``failure_wait_ms``). */
+  function showFailure(kind) {
+    $("failed-reason").textContent = PARTICIPANT_WORDS[kind] ?? PARTICIPANT_WORDS.other;
+    if (kind === "other-tab") {
+      // nothing to continue here: the other tab has the session (and the experiment)
+      $("failed-heading").textContent = "This experiment is open in another tab";
+      $("failed-next").hidden = true;
+      $("failed-continue").closest(".actions-row").hidden = true;
+    }
     $("prompt").textContent = "";
     $("gen-progress").textContent = "";
+    $("message").textContent = "";
+    $("load-status").hidden = true;
     show("failed");
     ui.state = null;
     if (!loaded) onLoad();
@@ -230,4 +290,3 @@ export async function runTrial({ element, params, base, onLoad = () => {}, drive
     });
   }
 }
-

@@ -23,6 +23,11 @@ async function until(check, what) {
 }
 
 const root = () => document.querySelector(".emogen-trial");
+
+/** A row of jsPsych's data with the plugin's names unprefixed (``emogen_label`` → ``label``). */
+const plain = (row) => Object.fromEntries(Object.entries(row).map(([k, v]) => [k.replace(/^emogen_/, ""), v]));
+/** Every row of a timeline's data, unprefixed. */
+const rows = (data) => data.values().map(plain);
 const ready = (stage) => () =>
   root() && root().dataset.emogenStage === stage && root().dataset.emogenReady === "true";
 
@@ -43,6 +48,18 @@ async function chooseAndNext(first, second) {
   await clickTarget(document.querySelector("#next"));
 }
 
+/** The fake's evolve trial: faces 2 (best) and 5, then 0 and 9, then rating 5. */
+async function evolveTrial() {
+  await chooseAndNext(2, 5);
+  await until(() => document.querySelector("#gen-progress").textContent === "Round 2 of 2", "generation 2");
+  await chooseAndNext(0, 9);
+  await until(ready("rating"), "the rating");
+  const five = document.querySelector('#rating-scale input[value="5"]');
+  five.checked = true;
+  five.dispatchEvent(new Event("change", { bubbles: true }));
+  await clickTarget(document.querySelector("#rate"));
+}
+
 test("info declares every parameter and data field with a jsPsych type", () => {
   const { parameters, data, name } = EmogenPlugin.info;
   assert.equal(name, "emogen");
@@ -57,21 +74,15 @@ test("an evolve and a categorise trial run on one session; their data are what w
     { type: EmogenPlugin, server: `${SERVER}/`, task: "evolve" },
     { type: EmogenPlugin, server: SERVER, task: "categorise" },
   ]);
-  await chooseAndNext(2, 5); // generation 1: faces 2 (best) and 5
-  await until(() => document.querySelector("#gen-progress").textContent === "Round 2 of 2", "generation 2");
-  await chooseAndNext(0, 9);
-  await until(ready("rating"), "the rating");
-  const five = document.querySelector('#rating-scale input[value="5"]');
-  five.checked = true;
-  five.dispatchEvent(new Event("change", { bubbles: true }));
-  await clickTarget(document.querySelector("#rate"));
+  await evolveTrial();
   await until(ready("categorise"), "the categorise face");
   assert.deepEqual([...displayElement.querySelectorAll("#label-buttons button")].map((b) => b.dataset.label), ["sad", "happy"]);
   await clickTarget(displayElement.querySelector('#label-buttons button[data-label="happy"]'));
   await until(() => getData().count() === 2, "both trials' data");
   await expectFinishedOk(expectFinished);
 
-  const [evolve, categorise] = getData().values();
+  const raw = getData().values();
+  const [evolve, categorise] = rows(getData());
   assert.equal(fake.sessions, 1); // one session for both trials
   const steps = fake.log.filter((r) => r.method === "POST" && r.path.startsWith("/api/s/"));
   assert.ok(steps.every((r) => r.path === `/api/s/${"t".repeat(20)}/step`)); // the one step route
@@ -95,7 +106,11 @@ test("an evolve and a categorise trial run on one session; their data are what w
   assert.equal(evolve.final_face_id, 99);
   assert.equal(evolve.emotion, "happy"); // from the trial record's evolve result
   assert.equal(evolve.display, "png");
-  assert.ok(evolve.first_faces_ms >= 0 && evolve.rt >= evolve.first_faces_ms);
+  assert.ok(evolve.first_faces_ms >= 0 && evolve.duration_ms >= evolve.first_faces_ms);
+  // rt: jsPsych's response time — the trial's responses' times summed (loading excluded)
+  const evolveSteps = steps.filter((r) => ["select", "rate"].includes(r.body.command));
+  assert.equal(evolve.rt, evolveSteps.reduce((t, r) => t + r.body.response_ms, 0));
+  assert.equal(categorise.rt, categorise.response_rt);
   assert.equal(categorise.success, true);
   assert.equal(categorise.label, "happy");
   assert.deepEqual(categorise.labels, ["sad", "happy"]);
@@ -109,8 +124,9 @@ test("an evolve and a categorise trial run on one session; their data are what w
   });
   assert.ok(!("token" in evolve) || evolve.token === undefined); // the session's secret stays out
   const jspsychOwn = ["trial_type", "trial_index", "plugin_version", "time_elapsed"];
-  for (const key of Object.keys(evolve).filter((k) => !jspsychOwn.includes(k))) {
+  for (const key of Object.keys(raw[0]).filter((k) => !jspsychOwn.includes(k))) {
     assert.ok(key in EmogenPlugin.info.data, `data field '${key}' is declared in info.data`);
+    assert.ok(key === "rt" || key.startsWith("emogen_"), `data field '${key}' is namespaced`);
   }
 });
 
@@ -121,13 +137,17 @@ async function expectFinishedOk(expectFinished) {
 }
 
 async function failedTrial(params, what) {
-  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, retries: 0, ...params }]);
+  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, patience_ms: 500, ...params }]);
   await until(() => root() && root().dataset.emogenStage === "failed", what);
   const shown = document.querySelector("#failed-reason").textContent;
   await clickTarget(document.querySelector("#failed-continue"));
   await until(() => getData().count() === 1, "the failed trial's data");
-  return { data: getData().values()[0], shown };
+  return { data: rows(getData())[0], shown };
 }
+
+/** What a participant reads where the reason is the researcher's. */
+const NOT_YOUR_FAULT = /could not be shown\. This is not your fault/;
+const CONNECTION_LOST = /The connection to the study was lost.*What you did so far is saved/;
 
 test("a study without that block: the trial fails with its reason, in the page and the data", async () => {
   fake = fakeServer({ blocks: ["evolve"] });
@@ -136,33 +156,52 @@ test("a study without that block: the trial fails with its reason, in the page a
   assert.equal(data.success, false);
   assert.equal(data.failure, "block");
   assert.match(data.reason, /study 'fake' has no categorise block \(its blocks: block1 \(evolve\)\)/);
-  assert.equal(shown, `T${data.reason.slice(1)}.`); // said in the page as recorded
+  assert.match(shown, NOT_YOUR_FAULT); // the participant's words; the reason is the researcher's
+  assert.ok(!shown.includes("block"));
   assert.equal(fake.sessions, 0); // nothing made for nothing
 });
 
-test("the next trial of another task: fails, saying so", async () => {
-  const { data } = await failedTrial({ task: "categorise" }, "the failure");
-  assert.equal(data.failure, "block");
-  assert.match(data.reason, /next trial \(trial 1 of 2\) is a evolve trial, not categorise/);
+test("the study's current trial of another task: it runs, the mismatch said once to the researcher", async () => {
+  const warned = [];
+  const warn = console.warn;
+  console.warn = (text) => warned.push(text);
+  try {
+    const { getData } = await startTimeline([
+      { type: EmogenPlugin, server: SERVER, task: "categorise" },
+      { type: EmogenPlugin, server: SERVER, task: "evolve" },
+    ]);
+    await evolveTrial(); // the study's trial 1 is the evolve trial: the first one runs it
+    await until(ready("categorise"), "the categorise face, in the timeline's evolve trial");
+    await clickTarget(document.querySelector('#label-buttons button[data-label="sad"]'));
+    await until(() => getData().count() === 2, "both trials' data");
+    const [first, second] = rows(getData());
+    assert.deepEqual([first.task, first.timeline_task, first.trial, first.success], ["evolve", "categorise", 0, true]);
+    assert.deepEqual([second.task, second.timeline_task, second.trial, second.label], ["categorise", "evolve", 1, "sad"]);
+    assert.match(first.warning, /current trial \(trial 1 of 2\) is an evolve trial, where the timeline has a categorise trial/);
+    assert.equal(warned.filter((w) => w.includes("where the timeline has")).length, 2); // one per mismatch
+  } finally {
+    console.warn = warn;
+  }
 });
 
 test("the server gone mid-trial: the trial ends as failed, what was done kept", async () => {
-  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, retries: 0 }]);
+  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, patience_ms: 500 }]);
   await chooseAndNext(1, 2);
   await until(() => document.querySelector("#gen-progress").textContent === "Round 2 of 2", "generation 2");
   await until(ready("trial"), "the faces");
   fake.down = true;
   await chooseAndNext(3, 4);
   await until(() => root().dataset.emogenStage === "failed", "the failure");
-  assert.match(document.querySelector("#failed-reason").textContent, /cannot be reached/);
+  assert.match(document.querySelector("#failed-reason").textContent, CONNECTION_LOST);
   await clickTarget(document.querySelector("#failed-continue"));
   await until(() => getData().count() === 1, "the data");
-  const data = getData().values()[0];
+  const data = rows(getData())[0];
   assert.equal(data.success, false);
   assert.equal(data.failure, "unreachable");
   assert.match(data.reason, /the study server https:\/\/study\.example\.org cannot be reached/);
   assert.equal(data.generations.length, 1); // the first generation was recorded by the server
   assert.equal(data.generations[0].elite, 1);
+  assert.equal(data.session_id, 7); // a failed row carries its session
 });
 
 test("an origin the server does not allow: the reason names the origin and the setting", async () => {
@@ -170,20 +209,22 @@ test("an origin the server does not allow: the reason names the origin and the s
   const { data, shown } = await failedTrial({}, "the failure");
   assert.equal(data.failure, "origin");
   assert.match(data.reason, /does not allow pages of https:\/\/experiments\.example\.org .*embed_origins/);
-  assert.ok(shown.includes("embed_origins"));
+  assert.match(shown, NOT_YOUR_FAULT);
+  assert.ok(!shown.includes("embed_origins")); // researcher's words stay in the data
 });
 
 test("failure_wait_ms ends a failed trial by itself", async () => {
   fake.down = true;
-  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, retries: 0, failure_wait_ms: 20 }]);
+  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, patience_ms: 500, failure_wait_ms: 20 }]);
   await until(() => getData().count() === 1, "the data");
-  assert.equal(getData().values()[0].failure, "unreachable");
+  assert.equal(rows(getData())[0].failure, "unreachable");
 });
 
-test("a server address that is not one: failure without a request", async () => {
-  const { getData } = await startTimeline([{ type: EmogenPlugin, server: "study.example.org" }]);
-  await until(() => getData().count() === 1, "the data");
-  assert.match(getData().values()[0].reason, /'server' must be the study server's address/);
+test("a server address that is not one: the failure screen, no request", async () => {
+  const { data, shown } = await failedTrial({ server: "study.example.org" }, "the failure screen");
+  assert.equal(data.failure, "server");
+  assert.match(data.reason, /'server' must be the study server's address \(http\(s\):\/\/host\[:port\]\); got "study\.example\.org"/);
+  assert.match(shown, NOT_YOUR_FAULT);
   assert.equal(fake.log.length, 0);
 });
 
@@ -193,7 +234,7 @@ test("simulate data-only: an observer near its target, no server, repeatable", a
     const options = { simulation_options: { target, seed, generations: 8, chosen: 3 } };
     const { getData } = await simulateTimeline([{ type: EmogenPlugin, server: SERVER, ...options }], "data-only");
     await until(() => getData().count() === 1, "the simulated data");
-    const data = { ...getData().values()[0] };
+    const data = { ...rows(getData())[0] };
     delete data.time_elapsed; // jsPsych's clock aside
     return data;
   };
@@ -222,7 +263,7 @@ test("simulate data-only categorise: the label of the nearest prototype", async 
     simulation_options: { labels: ["happy", "sad"], prototypes: { happy: [1, 0], sad: [0, 1] }, face: [0.2, 0.9] },
   }], "data-only");
   await until(() => getData().count() === 1, "the data");
-  const data = getData().values()[0];
+  const data = rows(getData())[0];
   assert.equal(data.label, "sad");
   assert.deepEqual(data.final_weights, [0.2, 0.9]);
 });
@@ -234,8 +275,10 @@ test("simulate visual: the tasks' observers drive the real screens through the s
     { type: EmogenPlugin, server: SERVER, task: "categorise", simulation_options },
   ], "visual");
   await until(() => getData().count() === 2, "both simulated trials' data");
-  const [evolve, categorise] = getData().values();
+  const [evolve, categorise] = rows(getData());
   assert.equal(evolve.success, true);
+  assert.equal(evolve.simulated, true);
+  assert.equal(fake.log.find((r) => r.path === "/api/sessions").body.simulated, true); // marked in the export
   // the faces nearest the target (face k has weights [k/10, 1 - k/10, 0.5]): 9 then 8
   assert.deepEqual(evolve.generations.map((g) => [g.elite, g.others]), [[9, [8]], [19, [18]]]);
   assert.equal(evolve.rating, 6);

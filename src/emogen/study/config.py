@@ -127,6 +127,11 @@ class StudyConfig(_Strict):
     participant_param: str = "PROLIFIC_PID"
     #: Refuse sessions without a participant id in the link (a page says the link lacks it).
     participant_required: bool = False
+    #: Who may continue a participant's session: ``link`` (the browser holding it: its session
+    #: link or the consent page's key; another browser is refused) or ``participant_id`` (anyone
+    #: opening the study with that id: for embedded studies, a reopened Prolific link in a new
+    #: tab or after a crash continues the session — docs/jspsych.md says what it trusts).
+    resume: Literal["link", "participant_id"] = "link"
     #: Emotion words the study means although ``emogen study check`` does not know them.
     custom_emotions: tuple[str, ...] = ()
     prompt: str = "Make the face look {EMOTION}"
@@ -356,6 +361,7 @@ class StudyConfig(_Strict):
             ("block_order", "fixed"),
             ("reordered_blocks", []),
             ("retest_of", None),
+            ("resume", "link"),
         ):
             if data[key] == default:  # studies without them keep their hash
                 del data[key]

@@ -166,6 +166,8 @@ def _existing(
             f"participant '{pid}' has already taken part in an earlier version of this study; "
             "please contact the researcher"
         )
+    if ctx.config.resume == "participant_id" and source == "url":
+        return existing  # the study trusts the id (docs/jspsych.md: resuming by id)
     if not _theirs(existing, resume_token, create_key):
         raise StepConflict(
             f"participant '{pid}' already has a session in this study: open your "

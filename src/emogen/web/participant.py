@@ -121,6 +121,7 @@ def create_session(request: Request, body: NewSession) -> JSONResponse:
         resume_token=body.resume_token,
         create_key=body.create_key,
         user_agent=request.headers.get("user-agent", ""),
+        source="simulated" if body.simulated else None,
     )
     if not body.participant_id:
         warn_never_matched(request.app.state, _service(request))

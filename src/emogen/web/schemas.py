@@ -43,6 +43,9 @@ class NewSession(_Body):
     #: A random key the page makes once, before its first try, and sends with every retry: a
     #: retried create (its answer lost) then gets the same session, not a conflict.
     create_key: Annotated[str, Field(pattern=r"^[A-Za-z0-9_-]{16,64}$")] | None = None
+    #: A simulated participant's session (the jsPsych plugin's visual ``simulate()``): the
+    #: export's ``participant_source`` says ``simulated``.
+    simulated: bool = False
 
 
 def command_body() -> Any:

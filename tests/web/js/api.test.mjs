@@ -65,3 +65,53 @@ test("a 429 where waiting is not asked for is an error with the server's sentenc
   });
   assert.equal(times.length, 1);
 });
+
+/** A server that takes every request and never answers (only the request's abort ends it). */
+function silent() {
+  /** @type {number[]} */
+  const times = [];
+  globalThis.fetch = /** @type {any} */ (
+    (/** @type {string} */ _path, /** @type {RequestInit} */ init) =>
+      new Promise((_resolve, reject) => {
+        times.push(Date.now());
+        init.signal?.addEventListener("abort", () => reject(new DOMException("aborted", "AbortError")));
+      })
+  );
+  return times;
+}
+
+test("a server that never answers: each try gives up after timeoutMs, the request at its deadline", async () => {
+  const times = silent();
+  const t0 = Date.now();
+  await assert.rejects(
+    api("/api/study", { retries: Infinity, timeoutMs: 300, patienceMs: 2500 }),
+    (err) => {
+      assert.equal(/** @type {any} */ (err).status, 0);
+      assert.equal(/** @type {any} */ (err).timedOut, true);
+      assert.match(/** @type {Error} */ (err).message, /has not answered for 2 s/);
+      return true;
+    },
+  );
+  const took = Date.now() - t0;
+  // tries at 0, 0.3+1, 1.6+2 would start after the deadline: two tries, ended by the deadline
+  assert.equal(times.length, 2);
+  assert.ok(took >= 1500 && took <= 2600, `the request took ${took} ms; its deadline is 2500 ms`);
+});
+
+test("a slow answer within the deadline is retried with the same request and succeeds", async () => {
+  let n = 0;
+  /** @type {string[]} */
+  const bodies = [];
+  globalThis.fetch = /** @type {any} */ (
+    (/** @type {string} */ _path, /** @type {RequestInit} */ init) => {
+      bodies.push(String(init.body));
+      if (n++ === 0) {
+        return new Promise((_r, reject) => init.signal?.addEventListener("abort", () => reject(new Error("aborted"))));
+      }
+      return Promise.resolve(new Response(JSON.stringify({ ok: 1 }), { status: 200 }));
+    }
+  );
+  const got = await api("/api/s/t/step", { method: "POST", body: { key: "k1" }, timeoutMs: 200, patienceMs: 5000 });
+  assert.deepEqual(got, { ok: 1 });
+  assert.deepEqual(bodies, ['{"key":"k1"}', '{"key":"k1"}']); // the same idempotency key
+});
