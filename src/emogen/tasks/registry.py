@@ -19,6 +19,7 @@ from emogen.errors import ConfigError
 from emogen.tasks.blocks import TaskBlock
 from emogen.tasks.categorise.task import CategoriseTask
 from emogen.tasks.evolve.task import EvolveTask
+from emogen.tasks.gsp.task import GspTask
 from emogen.tasks.protocol import Begin, Command, Task
 
 #: Every registered task, by name, in registration order.
@@ -157,3 +158,4 @@ def blocks_from(tables: Any) -> tuple[TaskBlock, ...]:
 
 register(EvolveTask())
 register(CategoriseTask())
+register(GspTask())
