@@ -132,6 +132,7 @@ BOTH_DATABASES: dict[str, str] = {
     "tests/study/test_sessions.py::test_correct_setting_decides_the_corrective_columns": "the stored weight columns follow the config on each backend",
     "tests/study/test_step_path.py": _WORKERS,
     "tests/study/test_workers.py": _WORKERS,
+    "tests/tasks/test_gsp_chains.py": "GSP chains shared by sessions: each backend's row locks",
     "tests/study/test_counterbalance.py::test_concurrent_arrivals_in_two_workers_stay_balanced": _WORKERS,
     "tests/study/test_versions.py::test_a_retried_create_gets_the_same_session": "an idempotent create on each backend",
     "tests/study/test_categorise.py::test_a_mixed_study_shows_own_faces_and_stores_every_answer": "categorise answers stored and read back",

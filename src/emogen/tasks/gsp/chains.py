@@ -8,11 +8,13 @@ free when no trial holds its current node, or the trial holding it has not answe
 but does not move the chain). A participant does not get the chain their previous trial of the
 concept extended (unless ``repeat_chain``), nor a node they have answered already (aggregation).
 
-**Exactly once.** Every read that decides an assignment or a move locks the concept's chain
-rows (``SELECT … FOR UPDATE`` on PostgreSQL, in chain order so two steps cannot deadlock;
-SQLite runs one writing transaction at a time); chains are made with ``INSERT … ON CONFLICT DO
-NOTHING`` on their unique key, so two first participants arriving at once make them once; and
-an applied answer's (chain, node, member) is unique in the database.
+**Exactly once.** Every step that makes, assigns or moves a concept's chains first takes the
+concept's lock (:func:`emogen.tasks.records.lock_shared`: a transaction-level advisory lock on
+PostgreSQL, after the session's row lock; SQLite runs one writing transaction at a time), then
+reads the chains afresh: two first participants arriving at once make the chains once, two
+participants never get the same node, and an answer moves the chain it was given only if that
+node is still its own. The database holds the last line: a chain's key is unique, and so is an
+applied answer's (chain, node, member).
 """
 
 from __future__ import annotations
@@ -22,16 +24,14 @@ from datetime import datetime, timedelta
 from typing import Any
 
 import numpy as np
-from sqlalchemy import and_, select
-from sqlalchemy.dialects.postgresql import insert as pg_insert
-from sqlalchemy.dialects.sqlite import insert as sqlite_insert
+from sqlalchemy import and_, func, select
 from sqlalchemy.orm import Session
 
 from emogen.model.rig import Rig
 from emogen.tasks.categorise.sources import random_faces
 from emogen.tasks.gsp.block import GspBlock
 from emogen.tasks.gsp.tables import GspChainRow, GspIterationRow
-from emogen.tasks.records import TrialRow, as_utc, core_table, numbers_json, utcnow
+from emogen.tasks.records import TrialRow, as_utc, lock_shared, numbers_json, utcnow
 
 
 def chain_seed(study_seed: int | None, block: int, emotion: int, chain: int, owner: int) -> int:
@@ -60,51 +60,62 @@ def initial_face(
     return face, labels[0]
 
 
-def _insert(db: Session) -> Any:
-    return pg_insert if db.get_bind().dialect.name == "postgresql" else sqlite_insert
+def lock_concept(db: Session, study_id: int, block: int, emotion: str, owner: int) -> None:
+    """Hold the lock of a concept's chains until the step's transaction ends."""
+    lock_shared(db, "gsp", study_id, block, emotion, owner)
 
 
 def make_chains(
     env: Any, db: Session, row: TrialRow, block: GspBlock, owner: int, study_id: int
 ) -> None:
-    """The concept's chains of this block, made where they are not yet (once, whoever asks)."""
+    """The concept's chains of this block, made where they are not yet (under the concept's
+    lock: once, whoever asks first)."""
+    made = db.scalar(
+        select(func.count())
+        .select_from(GspChainRow)
+        .where(
+            GspChainRow.study_id == study_id,
+            GspChainRow.block == row.block,
+            GspChainRow.emotion == row.emotion,
+            GspChainRow.owner == owner,
+        )
+    )
+    if made:
+        return
     rig, ga = env.ctx.rig, env.config.ga
     dims = block.dimension_names(rig, ga.eye_motion)
     concepts = list(block.emotions or ())
     idents = block.identities or env.config.identities
-    values = []
     now = utcnow()
     for c in range(block.chains):
         seed = chain_seed(env.config.seed, row.block, concepts.index(row.emotion), c, owner)
         face, label = initial_face(rig, ga, block, dims, seed)
         genes = numbers_json([float(x) for x in face])
-        values.append(
-            {
-                "trial_id": row.id,
-                "study_id": study_id,
-                "block": row.block,
-                "emotion": row.emotion,
-                "chain": c,
-                "owner": owner,
-                "seed": seed,
-                "identity": idents[c % len(idents)],
-                "source_label": label,
-                "initial_genes": genes,
-                "genes": genes,
-                "iterations": 0,
-                "answers": 0,
-                "created_at": now,
-            }
+        db.add(
+            GspChainRow(
+                trial_id=row.id,
+                study_id=study_id,
+                block=row.block,
+                emotion=row.emotion,
+                chain=c,
+                owner=owner,
+                seed=seed,
+                identity=idents[c % len(idents)],
+                source_label=label,
+                initial_genes=genes,
+                genes=genes,
+                iterations=0,
+                answers=0,
+                created_at=now,
+            )
         )
-    stmt = _insert(db)(core_table(GspChainRow)).values(values)
-    db.execute(stmt.on_conflict_do_nothing(index_elements=["study_id", "block", "emotion",
-                                                            "chain", "owner"]))  # fmt: skip
+    db.flush()
 
 
 def locked_chains(
     db: Session, study_id: int, block: int, emotion: str, owner: int
 ) -> list[GspChainRow]:
-    """The concept's chains, locked for this transaction (in chain order), read afresh."""
+    """The concept's chains (the concept's lock held), read afresh, in chain order."""
     query = (
         select(GspChainRow)
         .where(
@@ -114,7 +125,6 @@ def locked_chains(
             GspChainRow.owner == owner,
         )
         .order_by(GspChainRow.chain)
-        .with_for_update()
         .execution_options(populate_existing=True)
     )
     return list(db.scalars(query))

@@ -23,7 +23,7 @@ from sqlalchemy.orm import Session
 from emogen.tasks.blocks import Condition, TaskBlock
 from emogen.tasks.errors import StepConflict
 from emogen.tasks.gsp.block import GspBlock
-from emogen.tasks.gsp.chains import free_chain, locked_chains, make_chains
+from emogen.tasks.gsp.chains import free_chain, lock_concept, locked_chains, make_chains
 from emogen.tasks.gsp.export import GSP_TABLES
 from emogen.tasks.gsp.replay import replay_trial
 from emogen.tasks.gsp.simulated import slide
@@ -103,6 +103,7 @@ class GspTask:
         block: GspBlock = env.block(row)
         owner = session_id if block.chain_scope == "within" else 0
         study_id = min(env.ctx.accepted)
+        lock_concept(db, study_id, row.block, row.emotion, owner)
         make_chains(env, db, row, block, owner, study_id)
         chains = locked_chains(db, study_id, row.block, row.emotion, owner)
         chain = free_chain(db, chains, block, session_id)
@@ -159,14 +160,11 @@ class GspTask:
         block: GspBlock,
     ) -> None:  # fmt: skip
         """The answer, and the chain moved where the trial still holds its node."""
-        chain = db.scalar(
-            select(GspChainRow)
-            .where(GspChainRow.id == st["chain_id"])
-            .with_for_update()
-            .execution_options(populate_existing=True)
-        )
+        chain = db.get(GspChainRow, st["chain_id"])
         if chain is None:  # pragma: no cover - made before the trial was given it
             raise StepConflict(f"trial {row.position + 1}: its chain is not stored")
+        lock_concept(db, chain.study_id, chain.block, chain.emotion, chain.owner)
+        db.refresh(chain)  # as the lock's holder before us left it
         applied = (
             chain.assigned_trial_id == row.id
             and chain.iterations == st["iteration"]
