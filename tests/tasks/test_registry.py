@@ -95,7 +95,7 @@ def test_a_task_with_a_taken_or_bad_name_is_refused(change: dict[str, Any], mess
     before = dict(TASKS)
     with pytest.raises(ConfigError, match=message):
         register(task)
-    assert "twin" not in TASKS and TASKS == before
+    assert "twin" not in TASKS and before == TASKS
 
 
 def test_a_task_without_its_parts_is_refused_naming_them() -> None:

@@ -178,7 +178,7 @@ def texts(config: StudyConfig) -> dict[str, str]:
 
 def placeholders_of(config: StudyConfig, key: str) -> dict[str, str]:
     """The placeholders the text at ``key`` fills in, and with what."""
-    if key == "prompt":
+    if key == "prompt" or key.endswith("].prompt"):  # a block's own prompt fills the same
         return PROMPT
     if key == "completion.redirect_url":
         return {**REDIRECT, config.participant_param: "the participant id"}

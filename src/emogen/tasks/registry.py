@@ -125,7 +125,11 @@ def parse_command(body: dict[str, Any]) -> Command:
     try:
         return known[word].model_validate(body)
     except ValidationError as exc:
-        raise ConfigError(f"command {word!r}: {exc.errors()[0]['msg']}") from None
+        e = exc.errors()[0]
+        field = ".".join(str(part) for part in e["loc"])
+        where = f"{field}: " if field else ""
+        got = f"; got {e['input']!r}" if field else ""
+        raise ConfigError(f"command {word!r}: {where}{e['msg']}{got}") from None
 
 
 def blocks_from(tables: Any) -> tuple[TaskBlock, ...]:

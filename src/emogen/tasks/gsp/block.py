@@ -22,8 +22,6 @@ from pydantic import Field, model_validator
 
 from emogen.tasks.blocks import Condition, TaskBlock, check_words
 
-DEFAULT_INSTRUCTION = "Move the slider until the face looks as {EMOTION} as possible."
-
 
 class GspBlock(TaskBlock):
     """Gibbs sampling with people: ``iterations`` slider trials per concept per participant,
@@ -52,8 +50,10 @@ class GspBlock(TaskBlock):
     release_after: Annotated[float, Field(gt=0, le=86_400)] = 300.0
     #: Whether a participant may extend the same chain in two trials in a row.
     repeat_chain: bool = False
-    #: The instruction line (``{EMOTION}``: the concept word).
-    instruction: str = Field(default=DEFAULT_INSTRUCTION, min_length=1)
+    #: The instruction line (default: the study's ``prompt``; ``{EMOTION}``: the concept in
+    #: capitals, ``{emotion}``: as written), e.g. "Move the slider until the face looks as
+    #: {emotion} as possible".
+    prompt: str | None = Field(default=None, min_length=1)
     order: Literal["random", "fixed"] = "random"
 
     @model_validator(mode="after")
@@ -90,7 +90,7 @@ class GspBlock(TaskBlock):
         return self.emotions or ()
 
     def texts(self) -> dict[str, str]:
-        return {"instruction": self.instruction}
+        return {} if self.prompt is None else {"prompt": self.prompt}
 
     def check(self, k: int, emotions: tuple[str, ...], earlier: tuple[TaskBlock, ...]) -> None:
         check_words(k, "emotions", self.emotions, emotions)

@@ -20,6 +20,7 @@ import numpy as np
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
+from emogen.errors import ConfigError
 from emogen.tasks.blocks import Condition, TaskBlock
 from emogen.tasks.errors import StepConflict
 from emogen.tasks.gsp.block import GspBlock
@@ -86,7 +87,10 @@ class GspTask:
 
     def prepare(self, ctx: Any, k: int, block: GspBlock) -> None:
         """Check the block's dimensions against the rig before anyone starts."""
-        block.dimension_names(ctx.rig, ctx.config.ga.eye_motion)
+        try:
+            block.dimension_names(ctx.rig, ctx.config.ga.eye_motion)
+        except ValueError as exc:
+            raise ConfigError(f"blocks[{k + 1}].{exc}") from None
 
     def rows(self, prepared: Any) -> int | None:
         return None
@@ -238,8 +242,8 @@ class GspTask:
         return dict(gsp_view(block, row.emotion, self._frames(env, row, st), st["slider_start"]))
 
     def prompt(self, env: TaskEnv, row: TrialRow) -> str:
-        text = str(env.block(row).instruction)
-        return text.replace("{EMOTION}", row.emotion).replace("{emotion}", row.emotion)
+        text = env.block(row).prompt or env.config.prompt
+        return str(text).replace("{EMOTION}", row.emotion.upper()).replace("{emotion}", row.emotion)
 
     def face(
         self, env: TaskEnv, db: Session, row: TrialRow, face_id: int
