@@ -21,6 +21,7 @@ from emogen.errors import ConfigError, SelectionError
 from emogen.study.config import study_from_dict
 from emogen.study.errors import StepConflict
 from emogen.study.storage import Store
+from tests.r_readers import col_types_of, read_in_r, undocumented
 from tests.study.drive import new_key, study_service
 from tests.study_fixtures import db_url, pg_cluster  # noqa: F401
 
@@ -56,7 +57,10 @@ def piloted(tmp_path_factory: pytest.TempPathFactory, ict_dir: Path) -> dict[str
     result = run(app, ["study", "export", "--database-url", url, "--out", str(out),
                        "--format", "csv"])  # fmt: skip
     assert result.exit_code == 0, result.output
-    return {"db": db, "url": url, "out": out}
+    result = run(app, ["study", "export", "--database-url", url, "--out", str(tmp / "pq"),
+                       "--format", "parquet"])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    return {"db": db, "url": url, "out": out, "pq": tmp / "pq"}
 
 
 def test_the_export_holds_every_answer_as_the_database_does(piloted: dict[str, Any]) -> None:
@@ -85,6 +89,28 @@ def test_the_export_holds_every_answer_as_the_database_does(piloted: dict[str, A
         assert after[row.dimension_index] == pytest.approx(row.slider_value)
         assert before[row.dimension_index] == pytest.approx(row.value_before)
         assert json.loads(row.genes_before) == pytest.approx(before)
+
+
+def test_the_tables_read_in_r_with_their_types_and_are_documented(
+    piloted: dict[str, Any], rscript: None
+) -> None:
+    names = ["gsp_iterations", "gsp_chains"]
+    types = col_types_of(piloted["out"])
+    read = read_in_r([piloted["out"] / f"{n}.csv" for n in names], types)
+    for name, table in zip(names, read, strict=True):
+        ref = pd.read_parquet(piloted["pq"] / f"{name}.parquet")
+        assert table.problems == 0 and len(table.frame) == len(ref), name
+        assert not undocumented(list(ref.columns), f"study export: {name}"), name
+        numeric = {c for c, k in table.classes.items() if k == "numeric"}
+        assert numeric == {c for c in ref.columns if pd.api.types.is_numeric_dtype(ref[c])
+                           and not pd.api.types.is_bool_dtype(ref[c]) and c != "seed"}, name  # fmt: skip
+        for c in numeric:
+            np.testing.assert_allclose(table.frame[c].to_numpy(dtype=float),
+                                       ref[c].to_numpy(dtype=float), rtol=1e-12)  # fmt: skip
+    assert (
+        read[0].classes["applied"] == "logical" and read[0].classes["assigned_at"] == "POSIXct:UTC"
+    )
+    assert read[1].classes["seed"] == "character"
 
 
 def _gene_names(db: Path) -> str:
