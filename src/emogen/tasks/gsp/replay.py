@@ -86,10 +86,17 @@ def replay_trial(env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed
         return Replayed(stimuli=1, problems=[f"{where}: its chain or its gsp block is missing"])
     problems: list[str] = []
     config, eye = env.config, env.config.ga.eye_motion
-    owner_seed = chain_seed(
-        config.seed, chain.block, list(block.emotions or ()).index(chain.emotion), chain.chain,
-        chain.owner,
-    ) if config.seed is not None else chain.seed  # fmt: skip
+    owner_seed = (
+        chain_seed(
+            config.seed,
+            chain.block,
+            list(block.emotions or ()).index(chain.emotion),
+            chain.chain,
+            chain.owner,
+        )
+        if config.seed is not None
+        else chain.seed
+    )
     if owner_seed != chain.seed:
         problems.append(f"{where}: chain seed {chain.seed}, the study's seed gives {owner_seed}")
     dims = block.dimension_names(rig, eye)
@@ -127,6 +134,10 @@ def replay_trial(env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed
         worst, _differs(problems, where, "the chosen face", json.loads(it.genes_after), after)
     )
     weights = full_weights(rig, eye, env.correctors(row.identity), after)[0]
-    worst = max(worst, _differs(problems, where, "the chosen face's weights",
-                                json.loads(it.weights_after), weights))  # fmt: skip
+    worst = max(
+        worst,
+        _differs(
+            problems, where, "the chosen face's weights", json.loads(it.weights_after), weights
+        ),
+    )
     return Replayed(stimuli=1, faces=1, problems=problems, deviation=worst)

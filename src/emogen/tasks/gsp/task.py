@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 from datetime import datetime
+from pathlib import Path
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -160,9 +161,14 @@ class GspTask:
         return Outcome(done=True)
 
     def _store(
-        self, env: TaskEnv, db: Session, row: TrialRow, cmd: Slide, st: dict[str, Any],
+        self,
+        env: TaskEnv,
+        db: Session,
+        row: TrialRow,
+        cmd: Slide,
+        st: dict[str, Any],
         block: GspBlock,
-    ) -> None:  # fmt: skip
+    ) -> None:
         """The answer, and the chain moved where the trial still holds its node."""
         chain = db.get(GspChainRow, st["chain_id"])
         if chain is None:  # pragma: no cover - made before the trial was given it
@@ -306,6 +312,15 @@ class GspTask:
 
     def state_facts(self, state: str | None) -> dict[str, Any]:
         return {}
+
+    def analysis_section(
+        self, source: Path, report: Any, summary: dict[str, Any], opts: Any, model: Any
+    ) -> None:
+        """``emogen analyse``'s section on the export's GSP chains
+        (:mod:`emogen.tasks.gsp.analysis_report`)."""
+        from emogen.tasks.gsp.analysis_report import gsp_section
+
+        gsp_section(source, report, summary, opts, model)
 
     def progress_step(
         self, status: str, generation: int, generations: int

@@ -95,8 +95,15 @@ def gsp_view(
     block: GspBlock, emotion: str, frames: np.ndarray | None, start: int | None
 ) -> GspView:
     if frames is None or start is None:
-        return {"task": "gsp", "emotion": emotion, "waiting": True, "face": None,
-                "slider": None, "frames": [], "strip": []}  # fmt: skip
+        return {
+            "task": "gsp",
+            "emotion": emotion,
+            "waiting": True,
+            "face": None,
+            "slider": None,
+            "frames": [],
+            "strip": [],
+        }
     lo, hi = block.slider
     rows = [[float(x) for x in f] for f in frames]
     return {
