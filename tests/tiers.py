@@ -59,6 +59,8 @@ SLOW: dict[str, str] = {
     "tests/study/test_simulate_study.py::test_the_same_seed_gives_the_same_data": f"{_SECONDS}: 10.8",
     "tests/study/test_simulate_study.py::test_two_workers_run_every_participant": f"{_SECONDS}: 6.9",
     "tests/study/test_tidy_export.py::test_csv_export_keeps_seeds_exact_for_r_and_times_with_their_zone": f"{_SECONDS}: 3.3 (R)",
+    "tests/tasks/test_gsp_analysis.py::test_each_aggregate_lands_on_the_planted_prototype": f"{_SECONDS}: 13.8 (40 simulated participants)",
+    "tests/tasks/test_gsp_analysis.py::test_chains_converge_and_the_concepts_separate": f"{_SECONDS}: 13.8 (its fixture, shared)",
     "tests/test_architecture.py::test_the_core_never_imports_the_web_framework": f"{_SECONDS}: 3.2 (a fresh interpreter)",
     "tests/test_cli_errors.py::test_no_colour_with_no_color_set": f"{_SECONDS}: 3.1 (a fresh interpreter)",
     "tests/test_cli_json.py::test_power_json_matches_its_files_and_keeps_assumptions_on_stderr": f"{_SECONDS}: 3.0",

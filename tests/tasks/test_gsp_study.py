@@ -50,15 +50,19 @@ def piloted(tmp_path_factory: pytest.TempPathFactory, ict_dir: Path) -> dict[str
     db = tmp / "gsp.sqlite"
     url = f"sqlite:///{db}"
     run = CliRunner().invoke
-    result = run(app, ["study", "simulate", str(config), "-n", "6", "--seed", "3",
-                       "--database-url", url])  # fmt: skip
+    result = run(
+        app, ["study", "simulate", str(config), "-n", "6", "--seed", "3", "--database-url", url]
+    )
     assert result.exit_code == 0, result.output
     out = tmp / "export"
-    result = run(app, ["study", "export", "--database-url", url, "--out", str(out),
-                       "--format", "csv"])  # fmt: skip
+    result = run(
+        app, ["study", "export", "--database-url", url, "--out", str(out), "--format", "csv"]
+    )
     assert result.exit_code == 0, result.output
-    result = run(app, ["study", "export", "--database-url", url, "--out", str(tmp / "pq"),
-                       "--format", "parquet"])  # fmt: skip
+    result = run(
+        app,
+        ["study", "export", "--database-url", url, "--out", str(tmp / "pq"), "--format", "parquet"],
+    )
     assert result.exit_code == 0, result.output
     return {"db": db, "url": url, "out": out, "pq": tmp / "pq"}
 
@@ -102,11 +106,17 @@ def test_the_tables_read_in_r_with_their_types_and_are_documented(
         assert table.problems == 0 and len(table.frame) == len(ref), name
         assert not undocumented(list(ref.columns), f"study export: {name}"), name
         numeric = {c for c, k in table.classes.items() if k == "numeric"}
-        assert numeric == {c for c in ref.columns if pd.api.types.is_numeric_dtype(ref[c])
-                           and not pd.api.types.is_bool_dtype(ref[c]) and c != "seed"}, name  # fmt: skip
+        assert numeric == {
+            c
+            for c in ref.columns
+            if pd.api.types.is_numeric_dtype(ref[c])
+            and not pd.api.types.is_bool_dtype(ref[c])
+            and c != "seed"
+        }, name
         for c in numeric:
-            np.testing.assert_allclose(table.frame[c].to_numpy(dtype=float),
-                                       ref[c].to_numpy(dtype=float), rtol=1e-12)  # fmt: skip
+            np.testing.assert_allclose(
+                table.frame[c].to_numpy(dtype=float), ref[c].to_numpy(dtype=float), rtol=1e-12
+            )
     assert (
         read[0].classes["applied"] == "logical" and read[0].classes["assigned_at"] == "POSIXct:UTC"
     )
@@ -159,8 +169,9 @@ def test_replay_rebuilds_the_chains_and_names_a_tampered_answer(
     result = run(app, ["replay", "1", "--database-url", url, "--json"])
     report = json.loads(result.output)
     assert result.exit_code != 0 and report["ok"] is False
-    assert any(m.startswith(f"trial {trial + 1} ") and "value 0.123" in m
-               for m in report["mismatches"]), report["mismatches"]  # fmt: skip
+    assert any(
+        m.startswith(f"trial {trial + 1} ") and "value 0.123" in m for m in report["mismatches"]
+    ), report["mismatches"]
 
 
 @pytest.mark.parametrize(
@@ -186,9 +197,15 @@ def test_a_wrong_block_is_refused_by_name(block: dict[str, Any], message: str) -
 
 
 def test_wrong_answers_are_refused_and_leave_nothing(db_url: str, ict_model: Any) -> None:
-    config = study_from_dict({"name": "gsp-wrong", "emotions": ["happy"], "seed": 2,
-                              "correct": False, "blocks": [{"task": "gsp", "steps": 11,
-                                                            "iterations": 1}]})  # fmt: skip
+    config = study_from_dict(
+        {
+            "name": "gsp-wrong",
+            "emotions": ["happy"],
+            "seed": 2,
+            "correct": False,
+            "blocks": [{"task": "gsp", "steps": 11, "iterations": 1}],
+        }
+    )
     store = Store(db_url)
     service = study_service(config, store, ict_model)
     try:
@@ -228,9 +245,17 @@ def test_wrong_answers_are_refused_and_leave_nothing(db_url: str, ict_model: Any
 
 
 def test_within_scope_chains_are_each_participants_own(db_url: str, ict_model: Any) -> None:
-    config = study_from_dict({"name": "gsp-own", "emotions": ["happy"], "seed": 2,
-                              "correct": False, "blocks": [{"task": "gsp", "steps": 11,
-                              "iterations": 4, "chains": 2, "chain_scope": "within"}]})  # fmt: skip
+    config = study_from_dict(
+        {
+            "name": "gsp-own",
+            "emotions": ["happy"],
+            "seed": 2,
+            "correct": False,
+            "blocks": [
+                {"task": "gsp", "steps": 11, "iterations": 4, "chains": 2, "chain_scope": "within"}
+            ],
+        }
+    )
     store = Store(db_url)
     service = study_service(config, store, ict_model)
     try:
