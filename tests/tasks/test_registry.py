@@ -111,9 +111,10 @@ class _Twin(TaskDefaults):
 )
 def test_a_task_with_a_taken_or_bad_name_is_refused(change: dict[str, Any], message: str) -> None:
     task = type("Twin", (_Twin,), change)()
+    before = dict(TASKS)
     with pytest.raises(ConfigError, match=message):
         register(task)
-    assert "twin" not in TASKS and set(TASKS) == {"evolve", "categorise"}
+    assert "twin" not in TASKS and before == TASKS
 
 
 def test_a_task_without_its_parts_is_refused_naming_them() -> None:

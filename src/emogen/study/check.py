@@ -119,7 +119,8 @@ def texts(config: StudyConfig) -> dict[str, str]:
 
 def placeholders_of(config: StudyConfig, key: str) -> dict[str, str]:
     """The placeholders the text at ``key`` fills in, and with what."""
-    if key in ("prompt", "rating.question"):
+    # the study's prompt and rating question, and a block's own prompt, fill the same
+    if key in ("prompt", "rating.question") or key.endswith("].prompt"):
         return PROMPT
     if key == "completion.redirect_url":
         return {**REDIRECT, config.participant_param: "the participant id"}

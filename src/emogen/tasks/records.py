@@ -8,6 +8,7 @@ JSON columns hold compact JSON (:func:`dumps`, :func:`numbers_json`).
 
 from __future__ import annotations
 
+import hashlib
 import json
 from datetime import UTC, datetime
 from typing import Any, cast
@@ -22,8 +23,9 @@ from sqlalchemy import (
     Table,
     Text,
     UniqueConstraint,
+    text,
 )
-from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
+from sqlalchemy.orm import DeclarativeBase, Mapped, Session, mapped_column
 
 
 def utcnow() -> datetime:
@@ -109,3 +111,21 @@ def fields_of(command: Any, row: Any) -> dict[str, Any]:
     once, in the command and the record, never copied by hand)."""
     columns = set(core_table(row).columns.keys())
     return {k: v for k, v in command.model_dump().items() if k in columns}
+
+
+def lock_shared(db: Session, *key: object) -> None:
+    """Hold, until the step's transaction ends, the lock of state that several sessions share
+    (``key`` names it: a task's name and what it shares, e.g. a block's chains of one concept).
+
+    Each step already holds its own session's row; a task whose state is shared between
+    sessions takes this lock before reading it, then no two steps of different sessions read
+    and change it at once. PostgreSQL: a transaction-level advisory lock on a 63-bit hash of the
+    key (taken after the session's row lock, always in that order: no deadlock); SQLite runs
+    one writing transaction at a time, so there is nothing more to lock."""
+    if db.get_bind().dialect.name != "postgresql":
+        return
+    digest = hashlib.sha256(repr(key).encode()).digest()
+    db.execute(
+        text("SELECT pg_advisory_xact_lock(:k)"),
+        {"k": int.from_bytes(digest[:8], "big") >> 1},
+    )

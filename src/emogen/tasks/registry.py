@@ -20,6 +20,7 @@ from emogen.errors import ConfigError
 from emogen.tasks.blocks import TaskBlock
 from emogen.tasks.categorise.task import CategoriseTask
 from emogen.tasks.evolve.task import EvolveTask
+from emogen.tasks.gsp.task import GspTask
 from emogen.tasks.protocol import Begin, Command, Task
 
 #: Every registered task, by name, in registration order.
@@ -125,7 +126,11 @@ def parse_command(body: dict[str, Any]) -> Command:
     try:
         return known[word].model_validate(body)
     except ValidationError as exc:
-        raise ConfigError(f"command {word!r}: {exc.errors()[0]['msg']}") from None
+        e = exc.errors()[0]
+        field = ".".join(str(part) for part in e["loc"])
+        where = f"{field}: " if field else ""
+        got = f"; got {e['input']!r}" if field else ""
+        raise ConfigError(f"command {word!r}: {where}{e['msg']}{got}") from None
 
 
 def blocks_from(tables: Any) -> tuple[TaskBlock, ...]:
@@ -161,3 +166,4 @@ def blocks_from(tables: Any) -> tuple[TaskBlock, ...]:
 
 register(EvolveTask())
 register(CategoriseTask())
+register(GspTask())

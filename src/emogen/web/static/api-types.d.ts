@@ -269,6 +269,24 @@ export interface components {
             trial: number;
         };
         /**
+         * AwaitChain
+         * @description Ask again for a chain while the trial is waiting for one (sent by the page every few
+         *     seconds).
+         */
+        AwaitChain: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "await_chain";
+            /** Key */
+            key: string;
+            /** Response Ms */
+            response_ms?: number | null;
+            /** Trial */
+            trial: number;
+        };
+        /**
          * Begin
          * @description Instructions read: the first trial starts (the study's own command, not a task's).
          */
@@ -418,6 +436,51 @@ export interface components {
             msg: string;
             /** Type */
             type: string;
+        };
+        /**
+         * GspResult
+         * @description A GSP trial's record for an embedding page, once answered: the concept, the position
+         *     and value chosen, where the slider started, and the chosen face's weights.
+         */
+        GspResult: {
+            /** Emotion */
+            emotion: string;
+            /** Position */
+            position: number;
+            /** Slider Start */
+            slider_start: number;
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            task: "gsp";
+            /** Value */
+            value: number;
+            /** Weights */
+            weights: number[];
+        };
+        /**
+         * GspView
+         * @description A GSP trial: the concept, and either ``waiting`` (every chain of the concept is being
+         *     extended by someone else: ask again shortly) or the face at the slider's start, the slider,
+         *     the face at every position and the strip's positions.
+         */
+        GspView: {
+            /** Emotion */
+            emotion: string;
+            face: components["schemas"]["FaceView"] | null;
+            /** Frames */
+            frames: number[][];
+            slider: components["schemas"]["Slider"] | null;
+            /** Strip */
+            strip: number[];
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            task: "gsp";
+            /** Waiting */
+            waiting: boolean;
         };
         /**
          * InvalidRequest
@@ -617,7 +680,49 @@ export interface components {
             stage: "instructions" | "trial" | "done";
             trial: components["schemas"]["TrialView"] | null;
             /** View */
-            view: (components["schemas"]["EvolveView"] | components["schemas"]["CategoriseView"]) | null;
+            view: (components["schemas"]["EvolveView"] | components["schemas"]["CategoriseView"] | components["schemas"]["GspView"]) | null;
+        };
+        /**
+         * Slide
+         * @description The slider's position sent with "Next" (``fallback``: chosen from the picture strip of a
+         *     page without WebGL).
+         */
+        Slide: {
+            /**
+             * @description discriminator enum property added by openapi-typescript
+             * @enum {string}
+             */
+            command: "slide";
+            /**
+             * Fallback
+             * @default false
+             */
+            fallback: boolean;
+            /** Key */
+            key: string;
+            /** Load Ms */
+            load_ms?: number | null;
+            /** Position */
+            position: number;
+            /** Response Ms */
+            response_ms?: number | null;
+            /** Trial */
+            trial: number;
+        };
+        /**
+         * Slider
+         * @description The slider: its range (gene values), its number of positions and where it starts (a
+         *     position drawn per trial, recorded: against anchoring).
+         */
+        Slider: {
+            /** Max */
+            max: number;
+            /** Min */
+            min: number;
+            /** Start */
+            start: number;
+            /** Steps */
+            steps: number;
         };
         /**
          * StudyInfo
@@ -655,7 +760,7 @@ export interface components {
             /** Participant Id */
             participant_id: string;
             /** Result */
-            result: (components["schemas"]["EvolveResult"] | components["schemas"]["CategoriseResult"]) | null;
+            result: (components["schemas"]["EvolveResult"] | components["schemas"]["CategoriseResult"] | components["schemas"]["GspResult"]) | null;
             /** Seed */
             seed: string;
             /** Session Id */
@@ -1134,7 +1239,7 @@ export interface operations {
         };
         requestBody: {
             content: {
-                "application/json": components["schemas"]["Begin"] | components["schemas"]["Select"] | components["schemas"]["Restart"] | components["schemas"]["Rate"] | components["schemas"]["Answer"];
+                "application/json": components["schemas"]["Begin"] | components["schemas"]["Select"] | components["schemas"]["Restart"] | components["schemas"]["Rate"] | components["schemas"]["Answer"] | components["schemas"]["Slide"] | components["schemas"]["AwaitChain"];
             };
         };
         responses: {

@@ -5,9 +5,10 @@
 // its line below.
 import categorise from "./categorise.js";
 import evolve from "./evolve.js";
+import gsp from "./gsp.js";
 
 /** view.task → the task's component. */
-export const TASKS = Object.freeze(Object.fromEntries([evolve, categorise].map((task) => [task.name, task])));
+export const TASKS = Object.freeze(Object.fromEntries([evolve, categorise, gsp].map((task) => [task.name, task])));
 
 /** The tasks' names, in the registry's order. */
 export const TASK_NAMES = Object.keys(TASKS);

@@ -1,0 +1,107 @@
+"""The GSP slider's frame rate: a participant's page (``emogen serve``, SQLite) at 1366×768 in
+headless Chromium with software GL (SwiftShader, as the browser tests), the face of a GSP
+trial (the ``female-medium`` identity, corrected faces) morphed as the slider moves. For
+``--seconds`` the page moves the slider one position per animation frame (an ``input`` event:
+the component sets the viewer's morph weights and the viewer draws); the figures are the
+animation frames per second the page kept up and the time one input event's update takes.
+Target: ≥ 30 frames/s (issue #43).
+
+    python -m benchmarks.bench_gsp_slider [--seconds 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from benchmarks.bench_render import CHROMIUM
+from benchmarks.bench_study import ServerProcess, write_study_toml
+from benchmarks.bench_viewer import ARGS
+
+TARGET_FPS = 30.0
+STUDY: dict[str, Any] = {
+    "name": "gsp-bench",
+    "emotions": ["happy"],
+    "identities": ["female-medium"],
+    "seed": 1,
+    "blocks": [{"task": "gsp", "chains": 2, "iterations": 1, "steps": 41}],
+}
+
+# One slider position per animation frame for ``ms``; each input event's update timed.
+SWEEP = """async (ms) => {
+  const slider = document.getElementById("gsp-slider");
+  const steps = Number(slider.max) + 1;
+  const updates = [];
+  let frames = 0, k = 0;
+  const t0 = performance.now();
+  await new Promise((resolve) => {
+    const frame = () => {
+      const now = performance.now();
+      if (now - t0 >= ms) return resolve();
+      k = (k + 1) % (2 * (steps - 1));
+      slider.value = String(k < steps ? k : 2 * (steps - 1) - k);
+      const u0 = performance.now();
+      slider.dispatchEvent(new Event("input", { bubbles: true }));
+      updates.push(performance.now() - u0);
+      frames += 1;
+      requestAnimationFrame(frame);
+    };
+    requestAnimationFrame(frame);
+  });
+  updates.sort((a, b) => a - b);
+  return { frames, seconds: (performance.now() - t0) / 1000,
+           median_ms: updates[Math.floor(updates.length / 2)],
+           p95_ms: updates[Math.floor(0.95 * (updates.length - 1))] };
+}"""
+
+
+def measure(model: Path, seconds: float) -> dict[str, Any]:
+    from playwright.sync_api import sync_playwright
+
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        config = write_study_toml(STUDY, folder / "gsp.toml")
+        srv = ServerProcess(
+            config, f"sqlite:///{folder / 'db.sqlite'}", model, folder / "server.log"
+        ).start()
+        try:
+            with sync_playwright() as p:
+                browser = p.chromium.launch(executable_path=str(CHROMIUM), args=ARGS)
+                page = browser.new_page(viewport={"width": 1366, "height": 768})
+                page.goto(f"{srv.url}/?PROLIFIC_PID=bench")
+                page.get_by_role("button", name="I agree").click()
+                page.get_by_role("button", name="Begin").click()
+                page.wait_for_selector(
+                    "#gsp-slider:not([disabled])", state="visible", timeout=120_000
+                )
+                while not page.evaluate("() => window.emogenStudy.ready"):
+                    page.wait_for_timeout(100)
+                display = page.evaluate("() => window.emogenStudy.display")
+                out = page.evaluate(SWEEP, seconds * 1000)
+                browser.close()
+        finally:
+            srv.stop()
+    return {"display": display, "fps": out["frames"] / out["seconds"], **out}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=5.0)
+    parser.add_argument("--model", type=Path, default=None, help="ICT-FaceKit FaceXModel folder")
+    args = parser.parse_args()
+    import os
+
+    model = args.model or Path(os.environ.get("EMOGEN_MODEL", "../shared/ict-facekit/FaceXModel"))
+    r = measure(model, args.seconds)
+    print(
+        f"GSP slider, 1366x768, {r['display']} (SwiftShader): {r['fps']:.1f} frames/s over "
+        f"{r['seconds']:.1f} s ({r['frames']} slider moves); one input event's update: median "
+        f"{r['median_ms']:.2f} ms, p95 {r['p95_ms']:.2f} ms; target >= {TARGET_FPS:.0f} "
+        f"frames/s: {'met' if r['fps'] >= TARGET_FPS else 'NOT met'}"
+    )
+
+
+if __name__ == "__main__":
+    main()
