@@ -19,6 +19,7 @@ import pandas as pd
 
 from emogen import columns as tidy
 from emogen.errors import ConfigError, EmoGenError
+from emogen.ga.draws import CURRENT_STREAM
 from emogen.ga.engine import Engine
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
@@ -160,7 +161,7 @@ def _replay_trial(
             corrector=correctors(
                 str(trial["identity"]), 1 if solver is None or pd.isna(solver) else int(solver)
             ),
-            **({} if pd.isna(stream) else {"stream": int(stream)}),
+            stream=CURRENT_STREAM if pd.isna(stream) else int(stream),
         )
         for key in keys:
             where = f"session {sid} trial {pos + 1} attempt {key[2] + 1} generation {key[3]}"
