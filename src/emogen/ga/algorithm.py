@@ -37,7 +37,8 @@ import numpy as np
 
 from emogen.errors import SelectionError, ShapeError
 from emogen.ga.draws import Draws
-from emogen.ga.operators import average, crossover, crossover_pair, mutate, random_faces
+from emogen.ga.genome import STATIC, Genome
+from emogen.ga.operators import crossover, crossover_pair
 
 ELITE = "elite"
 MEAN_ALL = "mean_all"
@@ -62,10 +63,14 @@ class Offspring:
     operators: np.ndarray
 
 
-def _check(genes: np.ndarray, draws: Draws) -> np.ndarray:
+def _check(genes: np.ndarray, draws: Draws, genome: Genome) -> np.ndarray:
     genes = np.asarray(genes, dtype=np.float64)
-    if genes.ndim != 3:
-        raise ShapeError(f"genes must have shape (n_runs, n_faces, n_genes); got {genes.shape}")
+    tail = () if genome.params is None else (len(genome.params),)
+    if genes.ndim != 3 + len(tail) or genes.shape[3:] != tail:
+        raise ShapeError(
+            f"genes must have shape (n_runs, n_faces, n_genes{', ' if tail else ''}"
+            f"{', '.join(map(str, tail))}); got {genes.shape}"
+        )
     if draws.runs != genes.shape[0]:
         raise ShapeError(f"need draws for {genes.shape[0]} runs; got {draws.runs}")
     return genes
@@ -93,6 +98,7 @@ def next_generation(
     random_faces_count: int = 4,
     mutation_genes: int = 2,
     random_genes: int = 6,
+    genome: Genome = STATIC,
 ) -> Offspring:
     """P_{g+1} of R runs from P_g and their selections [α_elite, p_g] = S(P_g) (Algorithm 1).
 
@@ -100,7 +106,8 @@ def next_generation(
     elite : (R,) int, index of α_{g,elite} in each P_g; others : (R, |p_g|) int, indices of
     p_g (every run of a batch has the same number of selections). ``random_faces_count`` is the
     diversity boost (4 of 10), ``mutation_genes`` m (2), ``random_genes`` x (6). Slots are
-    numbered fc = 1..N as in the paper.
+    numbered fc = 1..N as in the paper. ``genome``: what a gene is (:mod:`emogen.ga.genome`);
+    a dynamic genome's genes are (R, N, K, 6), and its M, R and A sample a gene's curve too.
 
     Our reading of Algorithm 1, line by line (S = |p_g| + 1, the number of selections):
 
@@ -131,8 +138,8 @@ def next_generation(
     upwards — slot 3's partner (``integers(|p_g|, ())``), then for each crossover slot the pair
     (``pairs(S)``), the crossover mask and the mutation — and finally all random faces at once.
     """
-    genes = _check(genes, draws)
-    r, n, k = genes.shape
+    genes = _check(genes, draws, genome)
+    r, n, k = genes.shape[:3]
     elite = np.asarray(elite, dtype=np.int64).reshape(r)
     others = np.asarray(others, dtype=np.int64).reshape(r, -1)
     selected = np.concatenate([elite[:, None], others], axis=1)
@@ -150,23 +157,23 @@ def next_generation(
         if slot == 1:
             out[:, i], parents[:, i, 0], ops[i] = elite_genes, elite, ELITE
         elif slot == 2 and s > 2:
-            out[:, i], ops[i] = average(genes[runs[:, None], selected]), MEAN_ALL
+            out[:, i], ops[i] = genome.average(genes[runs[:, None], selected]), MEAN_ALL
         elif slot == 3 and generation not in (1, 2):
             if s >= 2:
                 other = others[runs, draws.integers(s - 1, ())]
-                out[:, i] = average(np.stack([elite_genes, genes[runs, other]], axis=1))
+                out[:, i] = genome.average(np.stack([elite_genes, genes[runs, other]], axis=1))
                 parents[:, i, 0], parents[:, i, 1], ops[i] = elite, other, MEAN_ELITE_OTHER
             else:
                 out[:, i], parents[:, i, 0], ops[i] = genes[:, i], i, KEPT
         else:
-            out[:, i], parents[:, i] = _bred(genes, selected, mutation_genes, draws)
+            out[:, i], parents[:, i] = _bred(genes, selected, mutation_genes, draws, genome)
             ops[i] = CROSSOVER_MUTATION
-    out[:, n_bred:] = random_faces(n - n_bred, k, random_genes, draws)
+    out[:, n_bred:] = genome.random(n - n_bred, k, random_genes, draws)
     return Offspring(out, parents, np.array(ops))
 
 
 def _bred(
-    genes: np.ndarray, selected: np.ndarray, m: int, draws: Draws
+    genes: np.ndarray, selected: np.ndarray, m: int, draws: Draws, genome: Genome
 ) -> tuple[np.ndarray, np.ndarray]:
     """A crossover slot for every run: (child (R, K), parents (R, 2)).
 
@@ -183,7 +190,7 @@ def _bred(
     else:
         child = genes[runs, selected[:, 0]]
         parents[:, 0] = selected[:, 0]
-    return mutate(child[:, None], m, draws)[:, 0], parents
+    return genome.mutate(child[:, None], m, draws)[:, 0], parents
 
 
 def ranked_pairs(n_ranked: int) -> Iterator[tuple[int, int]]:
@@ -201,6 +208,7 @@ def classical_next_generation(
     random_faces_count: int = 4,
     mutation_genes: int = 2,
     random_genes: int = 6,
+    genome: Genome = STATIC,
 ) -> Offspring:
     """P_{g+1} of R runs from P_g and a fitness ranking of (some of) its faces, best first.
 
@@ -208,8 +216,8 @@ def classical_next_generation(
     (L >= 1, the same for every run). Draw order: for each pair its crossover mask and the two
     children's mutations, then the random faces.
     """
-    genes = _check(genes, draws)
-    r, n, k = genes.shape
+    genes = _check(genes, draws, genome)
+    r, n, k = genes.shape[:3]
     ranking = np.asarray(ranking, dtype=np.int64).reshape(r, -1)
     if ranking.shape[1] == 0:
         raise SelectionError(f"ranking must hold indices in [0, {n}); got none")
@@ -228,12 +236,12 @@ def classical_next_generation(
         if pair is None:
             break
         a, b = ranking[:, pair[0]], ranking[:, pair[1]]
-        children = mutate(
+        children = genome.mutate(
             crossover_pair(genes[runs, a], genes[runs, b], draws), mutation_genes, draws
         )
         for c in range(min(2, n_bred - slot)):
             out[:, slot], parents[:, slot, 0], parents[:, slot, 1] = children[:, c], a, b
             ops[slot] = CROSSOVER_MUTATION
             slot += 1
-    out[:, slot:] = random_faces(n - slot, k, random_genes, draws)
+    out[:, slot:] = genome.random(n - slot, k, random_genes, draws)
     return Offspring(out, parents, np.array(ops))

@@ -22,6 +22,7 @@ from emogen.errors import ConfigError, SelectionError
 from emogen.ga.algorithm import Offspring, classical_next_generation, next_generation
 from emogen.ga.corrector import Corrector, correctives_of
 from emogen.ga.draws import CURRENT_STREAM, block_size, check_stream, generation_draws
+from emogen.ga.genome import STATIC, Genome, genome_of
 from emogen.ga.init import first_generation, read_fixed_sets
 from emogen.ga.operators import select
 from emogen.ga.population import Population, readonly
@@ -69,8 +70,9 @@ class Engine:
         *,
         corrector: Corrector | None = None,
         stream: int = CURRENT_STREAM,
+        genome: Genome = STATIC,
     ) -> None:
-        self._setup(config, rig, seed, corrector, stream)
+        self._setup(config, rig, seed, corrector, stream, genome)
         self._show(self._initialise())
 
     def _setup(
@@ -80,8 +82,11 @@ class Engine:
         seed: int,
         corrector: Corrector | None = None,
         stream: int = CURRENT_STREAM,
+        genome: Genome = STATIC,
     ) -> None:
         self.corrector = corrector
+        #: What a gene is (:mod:`emogen.ga.genome`); a dynamic genome is recorded in the state.
+        self.genome = genome
         #: The GA's random stream (:mod:`emogen.ga.draws`), recorded in the state.
         self.stream = check_stream(stream)
         self.config = config
@@ -187,18 +192,20 @@ class Engine:
             shown = self._corrected_population
             self._result = (shown if shown is not None else pop).row(e)
             return
-        g = self.generation
+        g, k = self.generation, pop.genes.shape[1]
         draws = generation_draws(
             [self.seed],
             self.attempt,
             g + 1,
             stream=self.stream,
-            block=block_size(len(pop), pop.genes.shape[1], cfg.mutation_genes, cfg.random_genes),
+            block=block_size(len(pop), k, cfg.mutation_genes, cfg.random_genes)
+            + len(pop) * self.genome.extra_draws(k, cfg.mutation_genes),
         )
-        params = {
+        params: dict[str, Any] = {
             "random_faces_count": cfg.random_faces,
             "mutation_genes": cfg.mutation_genes,
             "random_genes": cfg.random_genes,
+            "genome": self.genome,
         }
         off: Offspring
         genes = pop.genes[None]
@@ -228,6 +235,7 @@ class Engine:
             genes, labels, option = first_generation(
                 self.config, self.rig, self._fixed_sets, rng=rng
             )
+            genes = self.genome.initial(genes, rng)
             if self._fixed_sets is not None:
                 self.fixed_options.append(option)
             self._initial = (readonly(genes), readonly(labels))
@@ -243,13 +251,17 @@ class Engine:
         genes = np.asarray(genes, dtype=np.float64)
         return Population(
             genes=readonly(genes),
-            weights=readonly(self.rig.expand(genes, self.config.eye_motion)),
+            weights=readonly(self._expand(genes)),
             ids=readonly(ids),
             parent_ids=readonly(np.asarray(parent_ids, dtype=np.int64)),
             operators=readonly(np.asarray(operators, dtype=str)),
             generation=self.generation,
             attempt=self.attempt,
         )
+
+    def _expand(self, genes: np.ndarray) -> np.ndarray:
+        """Full weight vectors of genes (a dynamic face's: its amplitudes, the peak profile)."""
+        return self.rig.expand(self.genome.amplitude(genes), self.config.eye_motion)
 
     def _corrected(self, population: Population) -> Population:
         """The population with its corrective weights, when the engine has a corrector."""
@@ -268,9 +280,12 @@ class Engine:
         init = None
         if self._initial is not None:
             init = {"genes": self._initial[0].tolist(), "labels": self._initial[1].tolist()}
+        spec = self.genome.to_dict()
+        dynamic = {} if spec is None else {"genome": spec}  # a static state is as before
         return {
             "schema": STATE_SCHEMA,
             "stream": self.stream,
+            **dynamic,
             "collision_solver": getattr(self.corrector, "solver", None),
             "emogen_version": __version__,
             "config": self.config.model_dump(mode="json"),
@@ -307,7 +322,7 @@ class Engine:
         data = state_data(text)
         self = cls.__new__(cls)
         config, seed, stream = read_state_header(data)
-        self._setup(config, rig, seed, corrector, stream)
+        self._setup(config, rig, seed, corrector, stream, genome_of(data.get("genome")))
         if list(self.gene_names) != data["rig"]["genes"]:
             raise ConfigError(
                 f"engine state was saved with rig '{data['rig']['name']}' genes "
@@ -328,10 +343,11 @@ class Engine:
         return self
 
     def _population_from(self, d: dict[str, Any]) -> Population:
-        genes = np.array(d["genes"], dtype=np.float64).reshape(-1, len(self.gene_names))
+        tail = () if self.genome.params is None else (len(self.genome.params),)
+        genes = np.array(d["genes"], dtype=np.float64).reshape(-1, len(self.gene_names), *tail)
         return Population(
             genes=readonly(genes),
-            weights=readonly(self.rig.expand(genes, self.config.eye_motion)),
+            weights=readonly(self._expand(genes)),
             ids=readonly(np.array(d["ids"], dtype=np.int64)),
             parent_ids=readonly(np.array(d["parent_ids"], dtype=np.int64).reshape(-1, 2)),
             operators=readonly(np.array(d["operators"], dtype=str)),
@@ -353,6 +369,7 @@ class Engine:
         attempt: int | None = None,
         corrector: Corrector | None = None,
         stream: int = CURRENT_STREAM,
+        genome: Genome = STATIC,
     ) -> Engine:
         """A fresh engine driven through recorded selections ({attempt, generation, elite,
         others}).
@@ -361,7 +378,7 @@ class Engine:
         (default: the last recorded selection's attempt). ``stream``: the stream the run was
         recorded with (:func:`stream_of_state` reads it off a stored state).
         """
-        engine = cls(config, rig, seed, corrector=corrector, stream=stream)
+        engine = cls(config, rig, seed, corrector=corrector, stream=stream, genome=genome)
         for s in selections:
             at = selection_attempt(s)
             while engine.attempt < at:

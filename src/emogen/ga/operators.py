@@ -70,11 +70,12 @@ def select(
 def crossover(a: np.ndarray, b: np.ndarray, draws: Draws) -> np.ndarray:
     """B(α_s, α_s') (eq. 7) for every run: each gene from ``b`` if U(0,1) < ½, else from ``a``.
 
-    a, b : (R, K) float, one pair per run. Draws: ``uniforms((K,))``.
-    Returns (R, K): every gene is one parent's, independently per gene.
+    a, b : (R, K) float, one pair per run, or (R, K, P) for genes of P parameters (a dynamic
+    genome: a gene's amplitude and curve go together). Draws: ``uniforms((K,))``.
+    Returns (R, K[, P]): every gene is one parent's, independently per gene.
     """
     a, b = _pair(a, b)
-    take_b = draws.uniforms((a.shape[1],)) < 0.5
+    take_b = _gene_mask(draws.uniforms((a.shape[1],)) < 0.5, a)
     return np.where(take_b, b, a)
 
 
@@ -85,13 +86,18 @@ def crossover_pair(a: np.ndarray, b: np.ndarray, draws: Draws) -> np.ndarray:
     U < ½, then its complement.
     """
     a, b = _pair(a, b)
-    take_b = draws.uniforms((a.shape[1],)) < 0.5
+    take_b = _gene_mask(draws.uniforms((a.shape[1],)) < 0.5, a)
     return np.stack([np.where(take_b, b, a), np.where(take_b, a, b)], axis=1)
+
+
+def _gene_mask(mask: np.ndarray, genes: np.ndarray) -> np.ndarray:
+    """An (R, K) mask over whole genes, broadcast over a gene's parameters."""
+    return mask.reshape(mask.shape + (1,) * (genes.ndim - 2))
 
 
 def _pair(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
-    if a.ndim != 2 or a.shape != b.shape:
+    if a.ndim not in (2, 3) or a.shape != b.shape:
         raise ShapeError(
             f"crossover parents must both have shape (n_runs, n_genes); got {a.shape} and {b.shape}"
         )

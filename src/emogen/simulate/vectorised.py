@@ -20,6 +20,7 @@ engine's 10 at a time gives the same weights, bit for bit.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -71,7 +72,7 @@ def simulate_runs(
     width = len(problem.columns)
     shown_all = np.empty((r_count, n_gen, n, width)) if problem.all_weights else None
     rows = np.arange(r_count)[:, None]
-    params = {
+    params: dict[str, Any] = {
         "random_faces_count": ga.random_faces,
         "mutation_genes": ga.mutation_genes,
         "random_genes": ga.random_genes,

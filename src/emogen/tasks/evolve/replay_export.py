@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from emogen.errors import EmoGenError
+from emogen.ga.draws import CURRENT_STREAM
 from emogen.ga.engine import Engine
 from emogen.tasks.evolve.replay import StoredFaces, compare_population
 from emogen.tasks.protocol import ExportedStudy, Replayed, TaskEnv
@@ -92,7 +93,7 @@ def _replay_trial(
             corrector=env.correctors(
                 str(trial["identity"]), 1 if solver is None or pd.isna(solver) else int(solver)
             ),
-            **({} if stream is None or pd.isna(stream) else {"stream": int(stream)}),
+            stream=CURRENT_STREAM if stream is None or pd.isna(stream) else int(stream),
         )
         for key in keys:
             where = f"session {sid} trial {pos + 1} attempt {key[2] + 1} generation {key[3]}"
