@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-from sqlalchemy import select
+from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from emogen.errors import ConfigError
@@ -40,7 +40,16 @@ from emogen.tasks.gsp.view import (
     gsp_view,
     slider_start,
 )
-from emogen.tasks.protocol import Index, MadeFace, Millis, Outcome, Replayed, TaskEnv, TrialCommand
+from emogen.tasks.protocol import (
+    ExportedStudy,
+    Index,
+    MadeFace,
+    Millis,
+    Outcome,
+    Replayed,
+    TaskEnv,
+    TrialCommand,
+)
 from emogen.tasks.records import TrialRow, dumps, fields_of, numbers_json, server_ms, utcnow
 
 
@@ -326,6 +335,27 @@ class GspTask:
         self, status: str, generation: int, generations: int
     ) -> tuple[str, int | None]:
         return self.name, None
+
+    #: its replay reads the database (the chains' seeds and every iteration's record)
+    replay_tables: ClassVar[tuple[str, ...]] = ()
+
+    def replay_exported(self, env: TaskEnv, study: ExportedStudy) -> dict[int, list[Replayed]]:
+        """Nothing from the files alone: a chain passes between sessions, and an export may
+        hold only some of them (``since``); :meth:`replay` rebuilds every chain."""
+        return {}
+
+    def export_size(self, db: Session, sessions: Any) -> dict[int, int]:
+        """An iteration row per trial answered."""
+        query = (
+            select(TrialRow.session_id, func.count(GspIterationRow.id))
+            .join(GspIterationRow, GspIterationRow.trial_id == TrialRow.id)
+            .where(TrialRow.session_id.in_(sessions))
+            .group_by(TrialRow.session_id)
+        )
+        return {int(sid): int(n) for sid, n in db.execute(query)}
+
+    def notes(self, db: Session, sessions: Any, k: int, block: Any) -> list[str]:
+        return []
 
 
 def _iteration(db: Session, row: TrialRow) -> GspIterationRow | None:
