@@ -6,6 +6,8 @@ and translation undo it), normals int8; without quantization float32 in metres. 
 targets leave out vertices moved less than a tolerance and round their deltas to about that
 step; by default they carry no normal deltas (zero): with their own normals the ICT GLB grows
 past 3 MB gzipped (3.03 MB even with a 4.5/127 normal tolerance), without them it is 2.85 MB.
+The reach shapes (:mod:`emogen.correct.reach`: folds, bulges, furrows, seen by their shading)
+keep their normal deltas, thinned by that tolerance.
 A corrected face is then within this tolerance per unit corrective weight.
 """
 
@@ -17,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from emogen.correct.faces import model_correctives
+from emogen.correct.reach import REACH_PREFIX
 from emogen.model.geometry import vertex_normals
 from emogen.model.io.gltf_asset import CM_TO_M
 
@@ -100,11 +103,14 @@ def morph_targets(
         # Corrective targets are sparser than the shapes (to keep the GLB small on the wire):
         # vertices a corrective moves less than the tolerance are left out of its target.
         cd, cn = delta[model.n_shapes :], dn[model.n_shapes :]
-        cd[np.linalg.norm(cd, axis=-1) < corrective_tolerance_cm] = 0.0
-        if corrective_normals:
-            cn[np.abs(cn).max(axis=-1) < corrective_normal_tolerance] = 0.0
-        else:
-            cn[:] = 0.0
+        # the reach shapes are relief (a fold, a bulge, furrows) and move the lids and lashes
+        # with their drivers: they keep every vertex, the shapes' step and their normals
+        # (+0.08 MB on the wire); the double-counting correctives are thinned
+        relief = np.array([n.startswith(REACH_PREFIX) for n in corrective_names])
+        small = np.linalg.norm(cd, axis=-1) < corrective_tolerance_cm
+        cd[small & ~relief[:, None]] = 0.0
+        cn[~(relief | corrective_normals)] = 0.0
+        cn[np.abs(cn).max(axis=-1) < corrective_normal_tolerance] = 0.0
     return MorphTargets(neutral, shapes, delta, normals0, dn, model.n_shapes, corrective_names)
 
 
@@ -120,7 +126,10 @@ def quantized(t: MorphTargets, corrective_tolerance_cm: float) -> EncodedTargets
     qd = np.rint(t.deltas / step)
     if t.corrective_names:  # coarser steps (multiples of step): fewer distinct bytes to gzip
         f = max(1.0, float(np.floor(corrective_tolerance_cm / step)))
-        qd[t.n_shapes :] = np.rint(t.deltas[t.n_shapes :] / (f * step)) * f
+        coarse = t.n_shapes + np.flatnonzero(
+            [not n.startswith(REACH_PREFIX) for n in t.corrective_names]
+        )  # the reach shapes keep the shapes' step (above)
+        qd[coarse] = np.rint(t.deltas[coarse] / (f * step)) * f
     qd = np.clip(qd, -_Q16, _Q16)
     n0 = np.rint(t.normals0 * _Q8)
     dn = np.rint(t.normal_deltas * _Q8)
