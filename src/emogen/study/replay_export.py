@@ -122,8 +122,8 @@ def replay_exported(
             )
         }
         s_model, s_rig, s_hash = model, rig, model_hash
-        if model is not None and study["model_hash"] not in accepted_hashes(model_hash, model):
-            s_model = model_for_recorded_hash(model, study["model_hash"])  # an older packaged rig
+        if model is not None and model.model_hash == model_hash:  # an older packaged rig?
+            s_model = model_for_recorded_hash(model, study["model_hash"])
             s_rig, s_hash = s_model.rig, s_model.model_hash
         correctors = StudyCorrectors(config, s_model)
         trials = mine["trials"].sort_values(["session_id", "trial"])
