@@ -73,3 +73,26 @@ def test_an_unknown_recorded_hash_keeps_the_model_and_replay_says_it_differs(
         assert not report.model_hash_matches and not report.ok
     finally:
         store.dispose()
+
+
+def test_the_study_server_continues_a_rig_1_study_with_rig_1(tmp_path: Path, ict_model) -> None:
+    """`emogen serve` of the recorded config: the app loads rig 1 (its hash, its GLB's
+    correctives), so the study registers as the same study instead of refusing to start."""
+    from emogen.study.config import StudyConfig
+    from emogen.web import create_app
+
+    copy = tmp_path / "recorded.sqlite"
+    shutil.copyfile(RECORDED, copy)
+    store = Store(f"sqlite:///{copy}")
+    try:
+        study = _study(store)
+        config = StudyConfig.model_validate(json.loads(study.config_json))
+    finally:
+        store.dispose()
+    app = create_app(config, f"sqlite:///{copy}", model=ict_model)
+    try:
+        assert app.state.model.model_hash == study.model_hash
+        assert app.state.model.rig.reach_version is None
+        assert app.state.service.ctx.study_id == study.id
+    finally:
+        app.state.store.dispose()

@@ -62,6 +62,7 @@ CORNER = {+1: 54, -1: 48}
 SIDE = {+1: "_L", -1: "_R"}
 MIRROR = np.array([-1.0, 1.0, 1.0])
 REACH_VERSIONS = (1,)
+REACH_PREFIX = "reach_"  # every reach shape's name starts so
 
 
 @dataclass(frozen=True)

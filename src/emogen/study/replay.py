@@ -103,7 +103,7 @@ def replay_session(
         if study is None:  # pragma: no cover - foreign key
             raise SessionNotFound(f"session {session_id} has no study")
         config = StudyConfig.model_validate(json.loads(study.config_json))
-        if model is not None and study.model_hash not in accepted_hashes(model_hash, model):
+        if model is not None and model.model_hash == model_hash:  # an older packaged rig?
             model = model_for_recorded_hash(model, study.model_hash)
             rig, model_hash = model.rig, model.model_hash
         report = ReplayReport(

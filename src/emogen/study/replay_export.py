@@ -93,8 +93,8 @@ def replay_exported(
         if session_ids is not None:
             sessions = [s for s in sessions if s in session_ids]
         s_model, s_rig, s_hash = model, rig, model_hash
-        if model is not None and study["model_hash"] not in accepted_hashes(model_hash, model):
-            s_model = model_for_recorded_hash(model, study["model_hash"])  # an older packaged rig
+        if model is not None and model.model_hash == model_hash:  # an older packaged rig?
+            s_model = model_for_recorded_hash(model, study["model_hash"])
             s_rig, s_hash = s_model.rig, s_model.model_hash
         exported = ExportedStudy(
             config=config,
