@@ -49,6 +49,7 @@ from emogen.analysis.analyse_people import (
 from emogen.analysis.data import Dataset, load_dataset
 from emogen.analysis.distributions import generation_summary, kl_per_generation
 from emogen.analysis.methods import methods_record, methods_text
+from emogen.analysis.plan import plan_section
 from emogen.analysis.repeatability import BIN_LABELS, repeatability_bins
 from emogen.analysis.report import Report
 from emogen.analysis.study_export import read_table
@@ -108,6 +109,7 @@ def analyse(
     _ratings(ds, report, summary)
     if prepared is not None:
         people_sections(prepared, report, summary, opts, model, step)
+    plan_section(report, summary, opts.primary)
     step("writing the report")
     if ds.has_weights:
         tidy.write_csv(
