@@ -3,9 +3,13 @@ identities, a categorise block of 24: ``examples/published-design.toml``) at sev
 
     python benchmarks/bench_analyse.py                               # 50 100 200 336
     python benchmarks/bench_analyse.py --sizes 50 100 --cores 0,1    # analyse pinned to 2 cores
+    PYTHONPATH=. python benchmarks/bench_analyse.py --planted        # exports in seconds
 
 For each size: ``emogen study simulate`` (``--workers`` processes) and ``emogen study export``
-into a temporary folder (not timed), then ``emogen analyse --progress`` in a fresh process
+into a temporary folder (not timed; ``--planted``: ``benchmarks/planted_study.py`` writes the
+export directly — the same design and table sizes, 11 generations of 10 faces, 8 own, 8
+others' and 8 random faces to label, but weights without correctives, so the reliability
+section says it cannot run and CD omits the correctives), then ``emogen analyse --progress`` in a fresh process
 (optionally pinned by ``taskset -c CORES``), timed. Prints the wall time per size, each
 section's share (from the progress lines), and the growth exponent of every section between
 the smallest and largest size (1: linear in participants; 2: quadratic).
@@ -74,12 +78,32 @@ def one_size(n: int, args: argparse.Namespace, tmp: Path) -> tuple[float, dict[s
     return total, sections(run.stdout + run.stderr, total)
 
 
+def planted_export(n: int, folder: Path, seed: int) -> None:
+    """The published design's export for ``n`` participants by the planted generator."""
+    import emogen
+    from benchmarks.planted_study import PlantedDesign, write_planted_study
+
+    design = PlantedDesign(
+        participants=n,
+        emotions=("angry", "fearful", "happy", "sad"),
+        identities=("female-medium", "male-medium"),
+        generations=11,
+        population=10,
+        own_weight=0.5,
+        n_other=8,
+        n_random=8,
+        n_own=8,
+    )
+    write_planted_study(design, folder, seed=seed, rig=emogen.load_model().rig)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[50, 100, 200, 336])
     ap.add_argument("--workers", type=int, default=max(1, (os.cpu_count() or 2) - 1))
     ap.add_argument("--cores", default=None, help="taskset core list for analyse, e.g. 0,1")
     ap.add_argument("--seed", type=int, default=336)
+    ap.add_argument("--planted", action="store_true", help="exports by planted_study.py")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         runs = {n: one_size(n, args, Path(tmp)) for n in args.sizes}
