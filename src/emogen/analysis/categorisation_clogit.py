@@ -95,8 +95,7 @@ def conditional_logit(
     loglik -= float(ridge * beta @ beta / 2)
     for it in range(1, max_iter + 1):
         info_p = info + penalty
-        eig = np.linalg.eigvalsh(info_p)
-        if eig[0] <= 1e-10 * max(eig[-1], 1e-300):
+        if not _invertible(info_p):
             return _failed(
                 k,
                 it,
@@ -121,8 +120,16 @@ def conditional_logit(
                 "perfectly by the predictors for some answers or participants)",
             )
         if np.max(np.abs(step) * scale) < 1e-10:
+            if not _invertible(info + penalty):
+                return _failed(k, it, "the information matrix is singular at the estimate")
             return ClogitFit(beta, info + penalty, scores, True, it)
     return _failed(k, max_iter, f"no convergence in {max_iter} Newton iterations")
+
+
+def _invertible(info: np.ndarray) -> bool:
+    """Whether a symmetric information matrix is safely invertible (condition < 1e10)."""
+    eig = np.linalg.eigvalsh(info)
+    return bool(np.all(np.isfinite(eig)) and eig[0] > 1e-10 * max(eig[-1], 1e-300))
 
 
 def _spread(xj: np.ndarray, avail: np.ndarray) -> float:
