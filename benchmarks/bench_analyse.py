@@ -35,7 +35,10 @@ LINE = re.compile(r"^\[\s*([\d.]+) s\] (.+)$")
 def emogen(*args: str, cores: str | None = None) -> subprocess.CompletedProcess[str]:
     pin = ["taskset", "-c", cores] if cores else []
     cmd = [*pin, sys.executable, "-m", "emogen", *args]
-    return subprocess.run(cmd, capture_output=True, text=True, check=True)
+    run = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    if run.returncode:
+        raise SystemExit(f"{' '.join(cmd)} failed ({run.returncode}):\n{run.stderr[-3000:]}")
+    return run
 
 
 def sections(progress: str, total: float) -> dict[str, float]:
@@ -50,6 +53,7 @@ def sections(progress: str, total: float) -> dict[str, float]:
 
 
 def one_size(n: int, args: argparse.Namespace, tmp: Path) -> tuple[float, dict[str, float]]:
+    tmp = args.keep or tmp
     db = tmp / f"s{n}.sqlite"
     export, report = tmp / f"e{n}", tmp / f"r{n}"
     start = time.perf_counter()
@@ -104,6 +108,7 @@ def main() -> None:
     ap.add_argument("--cores", default=None, help="taskset core list for analyse, e.g. 0,1")
     ap.add_argument("--seed", type=int, default=336)
     ap.add_argument("--planted", action="store_true", help="exports by planted_study.py")
+    ap.add_argument("--keep", type=Path, default=None, help="a folder to keep exports in")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         runs = {n: one_size(n, args, Path(tmp)) for n in args.sizes}
