@@ -109,3 +109,9 @@ def test_own_advantage_reports_dz() -> None:
     adv = own_advantage(pd.DataFrame(rows))
     diffs = np.array([1, 0, 1, 0, 1, 0], dtype=float)
     assert adv["dz"] == pytest.approx(diffs.mean() / diffs.std(ddof=1))
+
+
+def test_dz_interval_past_scipys_noncentral_t_is_the_normal_approximation() -> None:
+    low, high = dz_interval(-300.0, 50)  # nct.cdf is NaN this far out
+    dz, half = -300.0 / np.sqrt(50), 1.959964 * np.sqrt(1 / 50 + (300.0**2 / 50) / 100)
+    assert (low, high) == pytest.approx((dz - half, dz + half), rel=1e-6)

@@ -94,7 +94,8 @@ def dz_interval(t: float, n: int, confidence: float = 0.95) -> tuple[float, floa
     """CI of Cohen's dz (mean difference / SD of the differences) from a one-sample t on n
     participants: the noncentral-t inversion (exact under normal differences; Steiger & Fouladi
     1997) — the noncentralities whose t distributions put ``t`` at their upper and lower
-    (1 − confidence)/2 tails, divided by √n."""
+    (1 − confidence)/2 tails, divided by √n. Where scipy's noncentral t cannot be inverted
+    (far tails), the normal approximation dz ± z·√(1/n + dz²/(2n))."""
     from scipy import optimize, stats
 
     tail = (1 - confidence) / 2
@@ -104,7 +105,15 @@ def dz_interval(t: float, n: int, confidence: float = 0.95) -> tuple[float, floa
         span = abs(t) + 10.0
         return float(optimize.brentq(f, t - span, t + span)) / np.sqrt(n)
 
-    return at(1 - tail), at(tail)
+    try:
+        low, high = at(1 - tail), at(tail)
+    except ValueError:  # NaN from nct.cdf, or no sign change in the bracket
+        low = high = float("nan")
+    if np.isfinite(low) and np.isfinite(high):
+        return low, high
+    dz = t / np.sqrt(n)
+    half = float(stats.norm.ppf(1 - tail)) * np.sqrt(1 / n + dz**2 / (2 * n))
+    return float(dz - half), float(dz + half)
 
 
 def categorisation_section(
