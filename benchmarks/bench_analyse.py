@@ -57,7 +57,9 @@ def one_size(n: int, args: argparse.Namespace, tmp: Path) -> tuple[float, dict[s
     db = tmp / f"s{n}.sqlite"
     export, report = tmp / f"e{n}", tmp / f"r{n}"
     start = time.perf_counter()
-    if args.planted:
+    if args.keep and (export / "trials.parquet").is_file():
+        pass  # made by an earlier run with --keep
+    elif args.planted:
         planted_export(n, export, args.seed)
     else:
         emogen(
@@ -120,7 +122,9 @@ def main() -> None:
     ap.add_argument("--cores", default=None, help="taskset core list for analyse, e.g. 0,1")
     ap.add_argument("--seed", type=int, default=336)
     ap.add_argument("--planted", action="store_true", help="exports by planted_study.py")
-    ap.add_argument("--keep", type=Path, default=None, help="a folder to keep exports in")
+    ap.add_argument(
+        "--keep", type=Path, default=None, help="a folder to keep exports in (and reuse)"
+    )
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         runs = {n: one_size(n, args, Path(tmp)) for n in args.sizes}
