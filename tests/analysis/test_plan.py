@@ -77,6 +77,18 @@ def test_the_command_refuses_a_bad_primary_before_any_work(tmp_path: Path) -> No
     assert not (tmp_path / "o").exists()
 
 
+def test_the_plan_in_the_json_has_no_nan(tmp_path: Path) -> None:
+    import json
+
+    from emogen.analysis.plan import plan_section
+    from emogen.analysis.report import Report
+
+    summary = {k: v for k, v in SUMMARY.items()}
+    plan_section(Report("t", tmp_path), summary, ("conditions.emotion",))
+    text = json.dumps(summary["plan"])
+    assert "NaN" not in text and summary["plan"]["tests"][0]["p_holm_primary"] == 0.0002
+
+
 def test_collect_skips_the_plan_itself() -> None:
     assert all(not path.startswith("plan") for path, _ in collect_tests({**SUMMARY, "plan": {}}))
 

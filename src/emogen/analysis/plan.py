@@ -147,7 +147,7 @@ def plan_section(report: Report, summary: dict[str, Any], primary: tuple[str, ..
     summary["plan"] = {
         "primary": list(primary),
         "not_run": missing,
-        "tests": table.to_dict(orient="records"),
+        "tests": table.astype(object).where(table.notna(), None).to_dict(orient="records"),
     }
     report.heading("Multiplicity plan: primary and exploratory tests")
     named = ", ".join(f"`{n}`" for n in primary) or "none"
