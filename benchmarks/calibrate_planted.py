@@ -109,7 +109,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=41_000)
     ap.add_argument("--conditions", nargs="+", choices=tuple(CONDITIONS), default=list(CONDITIONS))
     args = ap.parse_args()
-    for c, name in enumerate(args.conditions):
+    for name in args.conditions:
+        c = list(CONDITIONS).index(name)  # a condition's seeds do not depend on the others run
         design = PlantedDesign(
             participants=args.participants,
             repetitions=args.repetitions,

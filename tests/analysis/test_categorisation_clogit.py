@@ -169,3 +169,22 @@ def test_a_planted_own_face_effect_is_found(tmp_path) -> None:
         p = res.primary
         assert p["status"] == "ok" and p["contrast"] < 0 and p["p"] < 0.05, p
         assert math.isfinite(p["ci_high"]) and p["ci_high"] < 0
+
+
+def test_a_two_way_variance_below_zero_falls_back_to_one_way_and_says_so() -> None:
+    """Scores that cancel within every participant and every face but not within their
+    pairs: M_P = M_S = 0, so the two-way meat is −c·M_PS; the larger one-way covariance is
+    used (a one-way meat is positive semi-definite: no negative variance, no NaN SE), and the
+    note says why."""
+    from emogen.analysis.categorisation_clogit import ClogitFit
+
+    person = np.array([0, 0, 1, 1] * 3)
+    face = np.array([0, 1, 0, 1] * 3)
+    sign = np.where(person == face, 1.0, -1.0)
+    scores = np.column_stack([sign, 0.5 * sign]) + np.array([[0.01, 0.0]]) * np.arange(12)[:, None]
+    fit = ClogitFit(np.zeros(2), np.eye(2), scores, True, 1)
+    directions = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, -1.0]])
+    got = two_way_covariance(fit, person, face, directions)
+    assert "not positive" in got.note
+    variances = np.einsum("mk,kj,mj->m", directions, got.cov, directions)
+    assert np.all(variances >= 0) and variances[2] > 0

@@ -171,3 +171,25 @@ def test_fields_section_writes_tables_and_skips_what_it_cannot(rig, tmp_path: Pa
     )
     text = report._markdown()
     assert "Skipped: perceptive fields need at least 6 participants" in text
+
+
+def test_one_embedding_clusters_as_sklearn_does_for_every_k() -> None:
+    """best_clusters embeds once (max_k eigenvectors) and labels each k by cluster_qr on the
+    first k: the same partitions as sklearn's SpectralClustering(k, cluster_qr) fitted per k."""
+    from sklearn.cluster import SpectralClustering
+    from sklearn.manifold import spectral_embedding
+    from sklearn.metrics import adjusted_rand_score
+
+    from emogen.analysis.field_clusters import cluster_qr
+
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        x = np.concatenate([rng.normal(c, 1.0, (20, 3)) for c in (0.0, 2.0, -2.0)])
+        d = np.clip(np.sqrt(((x[:, None] - x[None]) ** 2).sum(-1)) / 4, 0, np.sqrt(2))
+        affinity = np.clip(1 - d**2 / 2, 0, 1)
+        maps = spectral_embedding(affinity, n_components=6, random_state=0, drop_first=False)
+        for k in range(2, 7):
+            ref = SpectralClustering(
+                k, affinity="precomputed", random_state=0, assign_labels="cluster_qr"
+            ).fit_predict(affinity)
+            assert adjusted_rand_score(ref, cluster_qr(maps[:, :k])) == 1.0

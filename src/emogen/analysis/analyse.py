@@ -49,6 +49,7 @@ from emogen.analysis.analyse_people import (
 from emogen.analysis.data import Dataset, load_dataset
 from emogen.analysis.distributions import generation_summary, kl_per_generation
 from emogen.analysis.methods import methods_record, methods_text
+from emogen.analysis.plan import plan_section
 from emogen.analysis.repeatability import BIN_LABELS, repeatability_bins
 from emogen.analysis.report import Report
 from emogen.analysis.study_export import read_table
@@ -114,6 +115,7 @@ def analyse(
             if section is not None:
                 step(f"{task.name} blocks")
                 section(ds.source, report, summary, opts, model)
+    plan_section(report, summary, opts.primary)
     step("writing the report")
     if ds.has_weights:
         tidy.write_csv(

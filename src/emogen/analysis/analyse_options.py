@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from emogen.analysis.exclusions import ExclusionRule
+from emogen.analysis.plan import DEFAULT_PRIMARY
 from emogen.config import GAConfig
 
 
@@ -30,3 +31,5 @@ class AnalysisOptions:
     exclusions: ExclusionRule | None = field(default_factory=ExclusionRule)
     # the command line that made the report (the methods block; default: this process's)
     command: str | None = None
+    # the primary tests (emogen.analysis.plan.PLANNABLE); every other test is exploratory
+    primary: tuple[str, ...] = DEFAULT_PRIMARY

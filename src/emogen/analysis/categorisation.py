@@ -76,14 +76,44 @@ def own_advantage(responses: pd.DataFrame, confidence: float = 0.95) -> dict[str
         return result
     test = stats.ttest_1samp(diff, 0.0)
     ci = test.confidence_interval(confidence)
+    dz_low, dz_high = dz_interval(float(test.statistic), n, confidence)
     result.update(
         ci_low=float(ci.low),
         ci_high=float(ci.high),
         t=float(test.statistic),
         p=float(test.pvalue),
         confidence=confidence,
+        dz=float(test.statistic) / np.sqrt(n),
+        dz_low=dz_low,
+        dz_high=dz_high,
     )
     return result
+
+
+def dz_interval(t: float, n: int, confidence: float = 0.95) -> tuple[float, float]:
+    """CI of Cohen's dz (mean difference / SD of the differences) from a one-sample t on n
+    participants: the noncentral-t inversion (exact under normal differences; Steiger & Fouladi
+    1997) — the noncentralities whose t distributions put ``t`` at their upper and lower
+    (1 − confidence)/2 tails, divided by √n. Where scipy's noncentral t cannot be inverted
+    (far tails), the normal approximation dz ± z·√(1/n + dz²/(2n))."""
+    from scipy import optimize, stats
+
+    tail = (1 - confidence) / 2
+
+    def at(q: float) -> float:
+        f = lambda nc: float(stats.nct.cdf(t, n - 1, nc)) - q  # noqa: E731
+        span = abs(t) + 10.0
+        return float(optimize.brentq(f, t - span, t + span)) / np.sqrt(n)
+
+    try:
+        low, high = at(1 - tail), at(tail)
+    except ValueError:  # NaN from nct.cdf, or no sign change in the bracket
+        low = high = float("nan")
+    if np.isfinite(low) and np.isfinite(high):
+        return low, high
+    dz = t / np.sqrt(n)
+    half = float(stats.norm.ppf(1 - tail)) * np.sqrt(1 / n + dz**2 / (2 * n))
+    return float(dz - half), float(dz + half)
 
 
 def categorisation_section(
@@ -259,5 +289,6 @@ def _sources(
         f"n = {adv['n_participants']}; fallback faces left out): own "
         f"{adv['accuracy_own']:.3f}, others' {adv['accuracy_other']:.3f}, difference "
         f"{adv['difference']:+.3f}, 95% CI [{adv['ci_low']:+.3f}, {adv['ci_high']:+.3f}], "
-        f"t = {adv['t']:.2f}, p = {adv['p']:.3g}."
+        f"t = {adv['t']:.2f}, p = {adv['p']:.3g}; dz = {adv['dz']:.2f} [{adv['dz_low']:.2f}, "
+        f"{adv['dz_high']:.2f}] (noncentral-t interval)."
     )

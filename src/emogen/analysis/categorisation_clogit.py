@@ -95,8 +95,7 @@ def conditional_logit(
     loglik -= float(ridge * beta @ beta / 2)
     for it in range(1, max_iter + 1):
         info_p = info + penalty
-        eig = np.linalg.eigvalsh(info_p)
-        if eig[0] <= 1e-10 * max(eig[-1], 1e-300):
+        if not _invertible(info_p):
             return _failed(
                 k,
                 it,
@@ -121,8 +120,16 @@ def conditional_logit(
                 "perfectly by the predictors for some answers or participants)",
             )
         if np.max(np.abs(step) * scale) < 1e-10:
+            if not _invertible(info + penalty):
+                return _failed(k, it, "the information matrix is singular at the estimate")
             return ClogitFit(beta, info + penalty, scores, True, it)
     return _failed(k, max_iter, f"no convergence in {max_iter} Newton iterations")
+
+
+def _invertible(info: np.ndarray) -> bool:
+    """Whether a symmetric information matrix is safely invertible (condition < 1e10)."""
+    eig = np.linalg.eigvalsh(info)
+    return bool(np.all(np.isfinite(eig)) and eig[0] > 1e-10 * max(eig[-1], 1e-300))
 
 
 def _spread(xj: np.ndarray, avail: np.ndarray) -> float:
@@ -162,8 +169,11 @@ class Covariance:
 def two_way_covariance(
     fit: ClogitFit, participant: np.ndarray, stimulus: np.ndarray, weights: np.ndarray
 ) -> Covariance:
-    """Cameron–Gelbach–Miller two-way covariance of ``fit`` (module docstring); ``weights``
-    (k,) a contrast whose variance must be positive (else the larger one-way covariance)."""
+    """Cameron–Gelbach–Miller two-way covariance of ``fit`` (module docstring). ``weights``
+    (m, k): the directions whose variances are used (each slope, the contrast); when any of
+    them is not positive in the two-way covariance (possible: M_PS is subtracted), the one-way
+    covariance with the larger variance of the last direction (the contrast) is used instead,
+    and ``note`` says so."""
     bread = np.linalg.inv(fit.info)
     pairs = np.array([f"{p}\x1f{s}" for p, s in zip(participant, stimulus, strict=True)])
     parts = {}
@@ -174,12 +184,13 @@ def two_way_covariance(
     g_p, g_s = parts["participant"][1], parts["stimulus"][1]
     cov = bread @ meat @ bread
     note = ""
-    if not weights @ cov @ weights > 0:
+    w = np.atleast_2d(weights)
+    if not np.all(np.einsum("mk,kj,mj->m", w, cov, w) > 0):
         one_way = [bread @ parts[n][0] @ bread for n in ("participant", "stimulus")]
-        cov = max(one_way, key=lambda c: float(weights @ c @ weights))
+        cov = max(one_way, key=lambda c: float(w[-1] @ c @ w[-1]))
         note = (
-            "the two-way variance of the contrast was not positive; the larger of the "
-            "participant- and stimulus-clustered variances is used"
+            "the two-way variance of a slope or of the contrast was not positive; the larger "
+            "of the participant- and stimulus-clustered covariances is used"
         )
     return Covariance(cov, g_p, g_s, max(min(g_p, g_s) - 1, 1), note)
 
@@ -242,13 +253,14 @@ def clogit_contrast(table: pd.DataFrame, confidence: float = 0.95) -> dict[str, 
     out.update(converged=fit.converged, iterations=fit.iterations)
     if not fit.converged:
         return _no_estimate(out, fit.reason)
-    weights = np.zeros(len(fit.beta))
-    weights[:2] = (1.0, -1.0)
+    directions = np.zeros((3, len(fit.beta)))
+    directions[0, 0], directions[1, 1], directions[2, :2] = 1.0, 1.0, (1.0, -1.0)
+    weights = directions[2]
     cov = two_way_covariance(
         fit,
         first["participant_id"].astype(str).to_numpy(),
         first["stimulus"].astype(str).to_numpy(),
-        weights,
+        directions,
     )
     if cov.note:
         out["warnings"].append(cov.note)

@@ -37,6 +37,7 @@ def methods_record(
         "choice_noise": opts.choice_noise,
         "model": None if model is None else {"name": model.name, "hash": model.model_hash},
         "exclusion_rule": None if opts.exclusions is None else opts.exclusions.describe(),
+        "primary_tests": list(opts.primary),
     }
     if study is not None and len(study):
         record["study"] = sorted(set(study["study"].astype(str))) if "study" in study else []
@@ -74,4 +75,10 @@ def methods_text(record: dict[str, Any]) -> str:
         )
     rule = record["exclusion_rule"]
     parts.append("exclusion rule: " + ("; ".join(rule) if rule else "none (--no-exclusions)"))
+    primary = record.get("primary_tests", [])
+    parts.append(
+        "primary test(s): "
+        + (", ".join(f"`{p}`" for p in primary) or "none")
+        + "; every other test is exploratory (the multiplicity plan at the end)"
+    )
     return "**Methods.** " + "; ".join(parts) + "."

@@ -36,6 +36,15 @@ ProgressOpt = Annotated[
         help="Show each stage on stderr (default: when stderr is a terminal).",
     ),
 ]
+PrimaryOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--primary",
+        help="A primary test, named before the analysis (repeatable; default "
+        "categorisation.own_distance.primary); every other test is marked exploratory. "
+        "The names: docs/analysis.md, 'Multiplicity plan'.",
+    ),
+]
 ChoiceNoiseOpt = Annotated[
     float | None,
     typer.Option(
@@ -132,6 +141,7 @@ def analyse_command(
     as_json: JsonOpt = False,
     progress: ProgressOpt = None,
     figure_format: FigureFormatOpt = None,
+    primary: PrimaryOpt = None,
 ) -> None:
     """Analyse a study export or simulation output: error distributions, KL per generation,
     bias and repeatability bins, PCA + GMM separability, GA-noise test, prototypes, renders.
@@ -146,8 +156,10 @@ def analyse_command(
     plots.check_formats(figure_format or ["png", "svg"])  # a bad --format before any work
 
     from emogen.analysis.exclusions import rule_from_options
+    from emogen.analysis.plan import DEFAULT_PRIMARY, check_primary
 
     rule = rule_from_options(exclusion or []) if exclusions else None
+    planned = check_primary(tuple(primary) if primary else DEFAULT_PRIMARY)
     dataset = load_dataset(data)  # fails fast on a folder that is not data
     if participants is not None:  # a wrong participant table before any work
         from emogen.analysis.analyse_people import check_participants
@@ -171,6 +183,7 @@ def analyse_command(
         participants=participants,
         group_column=group_column,
         exclusions=rule,
+        primary=planned,
         command=(
             shlex.join(["emogen", *sys.argv[1:]])
             if sys.argv[1:2] == ["analyse"]
