@@ -53,6 +53,14 @@ def serve_command(
             help="Seconds a request's headers may take to arrive (408 beyond; default 15).",
         ),
     ] = None,
+    body_timeout: Annotated[
+        float | None,
+        typer.Option(
+            "--body-timeout",
+            help="Seconds a request's body may take to arrive after its headers (408 and the "
+            "connection closed beyond; default 20).",
+        ),
+    ] = None,
     workers: Annotated[
         int | None,
         typer.Option(
@@ -91,4 +99,5 @@ def serve_command(
         workers=workers,
         running_sessions=running_sessions,
         header_timeout=header_timeout,
+        body_timeout=body_timeout,
     )
