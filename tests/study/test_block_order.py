@@ -10,6 +10,7 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -17,6 +18,7 @@ from emogen.analysis.block_positions import order_sentence
 from emogen.errors import ConfigError
 from emogen.study.config import study_from_dict
 from emogen.study.dashboard import block_orders
+from emogen.study.design import trial_order
 from emogen.study.export import export_tables
 from emogen.study.replay import replay_session
 from emogen.study.simulate import SimulationPlan, simulate_study
@@ -145,3 +147,14 @@ def test_two_blocks_of_one_name_are_refused() -> None:
     data["blocks"][1] = {**data["blocks"][1], "name": "make_female"}
     with pytest.raises(ConfigError, match="two blocks are named 'make_female'"):
         study_from_dict(data, "design.toml")
+
+
+def test_arrivals_balance_block_order_for_any_number_and_cross_it_with_emotion_rows() -> None:
+    config = study_from_dict(example())
+    rng = np.random.default_rng(0)  # not drawn: a Latin square is no draw
+    seen = [trial_order(config, slot=k, rng=rng) for k in range(30)]
+    for n in range(1, 31):  # every prefix of the arrivals: the two orders within one session
+        firsts = Counter(o.blocks[0] for o in seen[:n])
+        assert abs(firsts[0] - firsts[1]) <= 1, n
+    pairs = [(o.block_row, o.row) for o in seen[:8]]
+    assert sorted(pairs) == [(b, r) for b in range(2) for r in range(4)]  # crossed every 8
