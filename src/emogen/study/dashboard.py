@@ -15,6 +15,7 @@ from typing import Any
 
 from sqlalchemy import func, select
 
+from emogen.study.check import check_launch
 from emogen.study.config import StudyConfig
 from emogen.study.design import balanced_latin_square
 from emogen.study.length import session_length
@@ -144,6 +145,12 @@ def block_orders(
         line["sessions"] += 1
         line["done"] += int(stage[sid] == "done")
     return [counts[k] for k in sorted(counts)]
+
+
+def design_notes(config: StudyConfig) -> list[str]:
+    """What the design lets a launch expect (``emogen study check``'s launch warnings: the
+    expected share of fallback faces), beside what :func:`block_notes` finds so far."""
+    return [f"expected ({f.where}): {f.message}" for f in check_launch(config)]
 
 
 def block_notes(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) -> list[str]:
