@@ -10,12 +10,15 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 import pytest
 
 from emogen.analysis.block_positions import order_sentence
 from emogen.errors import ConfigError
 from emogen.study.config import study_from_dict
+from emogen.study.dashboard import block_orders
+from emogen.study.design import trial_order
 from emogen.study.export import export_tables
 from emogen.study.replay import replay_session
 from emogen.study.simulate import SimulationPlan, simulate_study
@@ -32,7 +35,9 @@ def example(**changes: Any) -> dict[str, Any]:
     return {**data, **changes}
 
 
-def simulated(tmp_path: Path, model: Any, data: dict[str, Any], n: int) -> pd.DataFrame:
+def simulated(
+    tmp_path: Path, model: Any, data: dict[str, Any], n: int
+) -> tuple[dict[str, pd.DataFrame], list[dict[str, Any]]]:
     url = f"sqlite:///{tmp_path / 'bo.sqlite'}"
     plan = SimulationPlan(study_from_dict(data), url, 5, n, SimulatedDesign(), False)
     simulate_study(plan, model=model)
@@ -42,9 +47,10 @@ def simulated(tmp_path: Path, model: Any, data: dict[str, Any], n: int) -> pd.Da
         sid = int(tables["sessions"]["session_id"].iloc[1])
         report = replay_session(store, sid, model.rig, model.model_hash, model=model)
         assert report.ok, report.mismatches
+        orders = block_orders(store, plan.config, (1,))  # the dashboard's counts
     finally:
         store.dispose()
-    return tables
+    return tables, orders
 
 
 def positions(trials: pd.DataFrame) -> Counter[tuple[str, int]]:
@@ -62,7 +68,7 @@ def positions(trials: pd.DataFrame) -> Counter[tuple[str, int]]:
 def test_example_design_balances_identity_over_block_positions(
     tmp_path: Path, ict_model: Any
 ) -> None:
-    tables = simulated(tmp_path, ict_model, example(), n=8)
+    tables, dashboard = simulated(tmp_path, ict_model, example(), n=8)
     counts = positions(tables["trials"])
     assert counts == {
         ("female-medium", 1): 4,
@@ -76,6 +82,10 @@ def test_example_design_balances_identity_over_block_positions(
         "make_female>make_male>recognise": 4,
         "make_male>make_female>recognise": 4,
     }
+    assert dashboard == [
+        {"order": "make_female>make_male>recognise", "sessions": 4, "done": 4},
+        {"order": "make_male>make_female>recognise", "sessions": 4, "done": 4},
+    ]
     evolve = tables["trials"][tables["trials"]["task"] == "evolve"]
     first = evolve.sort_values("trial").groupby("participant_id")["block_name"].first()
     assert all(orders[p].startswith(first[p]) for p in first.index)
@@ -87,7 +97,8 @@ def test_example_design_balances_identity_over_block_positions(
 def test_a_fixed_block_order_is_reported_as_confounded(tmp_path: Path, ict_model: Any) -> None:
     data = example()
     del data["block_order"], data["reordered_blocks"]
-    tables = simulated(tmp_path, ict_model, data, n=3)
+    tables, dashboard = simulated(tmp_path, ict_model, data, n=3)
+    assert dashboard == []  # blocks in config order: no block-order table
     evolve = tables["trials"][tables["trials"]["task"] == "evolve"]
     assert positions(tables["trials"]) == {("female-medium", 1): 3, ("male-medium", 2): 3}
     sentence = order_sentence(evolve)
@@ -136,3 +147,14 @@ def test_two_blocks_of_one_name_are_refused() -> None:
     data["blocks"][1] = {**data["blocks"][1], "name": "make_female"}
     with pytest.raises(ConfigError, match="two blocks are named 'make_female'"):
         study_from_dict(data, "design.toml")
+
+
+def test_arrivals_balance_block_order_for_any_number_and_cross_it_with_emotion_rows() -> None:
+    config = study_from_dict(example())
+    rng = np.random.default_rng(0)  # not drawn: a Latin square is no draw
+    seen = [trial_order(config, slot=k, rng=rng) for k in range(30)]
+    for n in range(1, 31):  # every prefix of the arrivals: the two orders within one session
+        firsts = Counter(o.blocks[0] for o in seen[:n])
+        assert abs(firsts[0] - firsts[1]) <= 1, n
+    pairs = [(o.block_row, o.row) for o in seen[:8]]
+    assert sorted(pairs) == [(b, r) for b in range(2) for r in range(4)]  # crossed every 8

@@ -110,3 +110,28 @@ def test_serve_refuses_what_the_check_finds(tmp_path: Path) -> None:
     assert result.exit_code == 1 and "completion.code is not set" in result.output
     result = CliRunner().invoke(app, ["serve", str(study), "--port", "1"])
     assert result.exit_code == 2 and "completion.code is not set" in result.output
+
+
+def test_the_rating_screen_names_the_emotion_asked_for(tmp_path: Path, ict_model: Any) -> None:
+    from emogen.study.storage import Store
+    from tests.study.drive import run_to_end, service_caller, study_service
+
+    config = {
+        "name": "rate",
+        "emotions": ["sad"],
+        "ga": {"generations": 1, "min_selections": 1, "max_selections": 4},
+        "rating": {"question": "How well does this face show {EMOTION}?"},
+    }
+    store = Store(f"sqlite:///{tmp_path / 'rate.sqlite'}")
+    try:
+        service = study_service(study_from_dict(config), store, ict_model)
+        token, state = service.create_session("P-1")
+        state = run_to_end(
+            state,
+            service_caller(service, token),
+            stop=lambda s: (s["trial"] or {}).get("status") == "rating",
+        )
+        assert state["view"]["rating"]["question"] == "How well does this face show SAD?"
+        assert state["trial"]["prompt"] == "Make the face look SAD"  # the heading, kept above it
+    finally:
+        store.dispose()

@@ -17,7 +17,7 @@ from emogen.cli.app import app
 from emogen.errors import ConfigError
 from emogen.study.check import check_study
 from emogen.study.config import study_from_dict
-from emogen.study.dashboard import block_notes
+from emogen.study.dashboard import block_notes, design_notes
 from emogen.study.export import export_tables, write_export
 from emogen.study.replay import replay_session
 from emogen.study.simulate import SimulationPlan, simulate_study
@@ -76,7 +76,9 @@ def test_a_concurrent_wave_without_a_pool_gets_only_fallback_faces(
     store.dispose()
     fell = others_of(tables).groupby("participant_id")["fallback"].mean()
     assert fell["sim-0001"] == 1.0 and fell["sim-0004"] == 0.0
-    # the check warns before anyone takes part, with the expected share
+    # the check warns before anyone takes part, with the expected share; so does the dashboard
+    (expected,) = design_notes(study_from_dict(STUDY))
+    assert expected.startswith("expected (blocks[2].others): until a session is complete")
     (warning,) = check_study(study_from_dict(STUDY)).warnings
     assert warning.where == "blocks[2].others"
     assert "expected fallback share 100% of the 4 others' faces (4 of 9 faces)" in warning.message
@@ -90,6 +92,7 @@ def test_a_pool_from_a_pilot_gives_the_first_wave_scored_others_faces(
     write_export(pilot, tmp_path / "pilot", "csv")
     data = with_pool(tmp_path / "pilot")
     assert check_study(study_from_dict(data)).warnings == []
+    assert design_notes(study_from_dict(data)) == []
     tables, store = run(tmp_path, ict_model, "launch", data, n=5, wave=5)
     try:
         others = others_of(tables)

@@ -12,6 +12,22 @@ from emogen.cli.study import DatabaseOpt
 
 __all__ = ["serve_command"]
 
+HeaderTimeoutOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--header-timeout",
+        help="Seconds a request's headers may take to arrive (408 beyond; default 15).",
+    ),
+]
+BodyTimeoutOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--body-timeout",
+        help="Seconds a request's body may take to arrive after its headers (408 and the "
+        "connection closed beyond; default 20).",
+    ),
+]
+
 
 @friendly_errors
 def serve_command(
@@ -46,13 +62,8 @@ def serve_command(
             "(their participants are told the study changed).",
         ),
     ] = "refuse",
-    header_timeout: Annotated[
-        float | None,
-        typer.Option(
-            "--header-timeout",
-            help="Seconds a request's headers may take to arrive (408 beyond; default 15).",
-        ),
-    ] = None,
+    header_timeout: HeaderTimeoutOpt = None,
+    body_timeout: BodyTimeoutOpt = None,
     workers: Annotated[
         int | None,
         typer.Option(
@@ -91,4 +102,5 @@ def serve_command(
         workers=workers,
         running_sessions=running_sessions,
         header_timeout=header_timeout,
+        body_timeout=body_timeout,
     )

@@ -15,6 +15,27 @@ if TYPE_CHECKING:
     from emogen.study.config import StudyConfig
 
 
+ArrivalsOpt = Annotated[
+    tuple[str, int],
+    typer.Option(
+        "--arrivals",
+        help="How participants arrive: 'sequential 1' (one after another) or 'concurrent N' "
+        "(waves of N at once, as a panel's launch: nobody in a wave finishes before the "
+        "others reach a labelling block).",
+    ),
+]
+
+
+def wave_size(arrivals: tuple[str, int]) -> int:
+    """The participants who arrive at once, from ``--arrivals`` (1: one after another)."""
+    how, wave = arrivals
+    if how not in ("sequential", "concurrent") or wave < 1 or (how == "sequential" and wave != 1):
+        raise ConfigError(
+            f"--arrivals must be 'sequential 1' or 'concurrent N' (N >= 1); got '{how} {wave}'"
+        )
+    return wave
+
+
 @friendly_errors
 def simulate_study_command(
     config: Annotated[Path, typer.Argument(help="The study TOML.", exists=False)],
@@ -51,15 +72,7 @@ def simulate_study_command(
     model: Annotated[
         Path | None, typer.Option("--model", help="Face model (default: as in the config).")
     ] = None,
-    arrivals: Annotated[
-        tuple[str, int],
-        typer.Option(
-            "--arrivals",
-            help="How participants arrive: 'sequential 1' (one after another) or 'concurrent N' "
-            "(waves of N at once, as a panel's launch: nobody in a wave finishes before the "
-            "others reach a labelling block).",
-        ),
-    ] = ("sequential", 1),
+    arrivals: ArrivalsOpt = ("sequential", 1),
     as_json: JsonOpt = False,
 ) -> None:
     """Simulated participants run the whole study (every block, categorisation included)
@@ -68,11 +81,7 @@ def simulate_study_command(
     from emogen.study.simulate import SimulationPlan, simulate_study
     from emogen.tasks.simulated import SimulatedDesign
 
-    how, wave = arrivals
-    if how not in ("sequential", "concurrent") or wave < 1 or (how == "sequential" and wave != 1):
-        raise ConfigError(
-            f"--arrivals must be 'sequential 1' or 'concurrent N' (N >= 1); got '{how} {wave}'"
-        )
+    wave = wave_size(arrivals)
     study, url = _study_and_database(config, seed, database_url)
     plan = SimulationPlan(
         config=study,

@@ -10,7 +10,8 @@ the positions of that run, the other blocks keep theirs. ``latin_square`` takes 
 Williams' balanced Latin square over the run from the session's assignment slot
 (:func:`emogen.study.design.assignment_slot`: a keyed hash of the participant id, or with
 ``counterbalance = "arrival"`` the arrival number — then the k-th session gets block row
-(k // R) mod B, R the rows of the trials' own Latin square, so the two orders are crossed);
+k mod B, exact within one session for any number of sessions, and the trials' own Latin
+squares take row (k // B) mod R, so that the two orders are crossed);
 ``random`` draws a permutation from the session's order seed. A session's trial rows record
 the order (``trials.block`` by ``position``); the export's ``sessions`` table spells it out
 (``block_order``: block names in the order shown).

@@ -263,8 +263,10 @@ def check_field_traps(config: StudyConfig) -> list[Finding]:
 def check_launch(config: StudyConfig) -> list[Finding]:
     """What each block warns that a launch (many participants at once) would see."""
     conditions = config.conditions()
+    minutes = session_length(conditions, config.ga.generations).words()
+    wave = f"; the first wave is everyone who starts before the first session ends, {minutes} in"
     return [
-        Finding("warning", key, message)
+        Finding("warning", key, message + wave)
         for k, block in enumerate(config.blocks)
         for key, message in block.warnings(k + 1, sum(c.block == k for c in conditions)).items()
     ]

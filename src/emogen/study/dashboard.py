@@ -15,6 +15,7 @@ from typing import Any
 
 from sqlalchemy import func, select
 
+from emogen.study.check import check_launch
 from emogen.study.config import StudyConfig
 from emogen.study.design import balanced_latin_square
 from emogen.study.length import session_length
@@ -115,6 +116,43 @@ def row_counts(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) ->
     return {"order": "latin_square", "counterbalance": config.counterbalance, "rows": counts}
 
 
+def block_orders(
+    store: Store, config: StudyConfig, study_ids: tuple[int, ...]
+) -> list[dict[str, Any]]:
+    """Sessions (and completed ones) per block order shown, by block names (``a>b>c``): read
+    from the trials' positions, as the export's ``sessions.block_order``; empty when the study
+    keeps its blocks in config order."""
+    if config.block_order == "fixed":
+        return []
+    names = [b.name or f"block{k + 1}" for k, b in enumerate(config.study_blocks())]
+    first = func.min(TrialRow.position)
+    with store.read() as db:
+        rows = db.execute(
+            select(TrialRow.session_id, TrialRow.block, first, SessionRow.stage)
+            .join(SessionRow, TrialRow.session_id == SessionRow.id)
+            .where(SessionRow.study_id.in_(study_ids))
+            .group_by(TrialRow.session_id, TrialRow.block, SessionRow.stage)
+        ).all()
+    shown: dict[int, list[tuple[int, int]]] = {}
+    stage: dict[int, str] = {}
+    for sid, block, pos, st in rows:
+        shown.setdefault(int(sid), []).append((int(pos), int(block)))
+        stage[int(sid)] = str(st)
+    counts: dict[str, dict[str, Any]] = {}
+    for sid, blocks in shown.items():
+        order = ">".join(names[b] if b < len(names) else f"block{b + 1}" for _, b in sorted(blocks))
+        line = counts.setdefault(order, {"order": order, "sessions": 0, "done": 0})
+        line["sessions"] += 1
+        line["done"] += int(stage[sid] == "done")
+    return [counts[k] for k in sorted(counts)]
+
+
+def design_notes(config: StudyConfig) -> list[str]:
+    """What the design lets a launch expect (``emogen study check``'s launch warnings: the
+    expected share of fallback faces), beside what :func:`block_notes` finds so far."""
+    return [f"expected ({f.where}): {f.message}" for f in check_launch(config)]
+
+
 def block_notes(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) -> list[str]:
     """What each block's task says needs the researcher's eye (:meth:`Task.notes`)."""
     sessions = select(SessionRow.id).where(SessionRow.study_id.in_(study_ids))
@@ -134,4 +172,5 @@ def overview(store: Store, config: StudyConfig, study_ids: tuple[int, ...]) -> d
         "durations": durations(store, study_ids),
         "conditions": in_config_order(condition_progress(store, study_ids), config),
         "counterbalancing": row_counts(store, config, study_ids),
+        "block_orders": block_orders(store, config, study_ids),
     }

@@ -98,24 +98,28 @@ def _block_order(order: str, n: int, slot: int, rng: np.random.Generator) -> Tri
 
 
 def block_sequence(
-    config: StudyConfig, slot: int, trial_rows: int, rng: np.random.Generator
-) -> tuple[list[int], int]:
-    """The session's blocks in the order shown, and the block order's row (-1: none):
-    :mod:`emogen.study.block_order`. ``trial_rows``: the rows of the trials' own Latin square
-    (1 when none), so that block rows cross trial rows; ``rng`` is drawn only for ``random``."""
+    config: StudyConfig, slot: int, rng: np.random.Generator
+) -> tuple[list[int], int, int]:
+    """The session's blocks in the order shown, the block order's row (-1: none) and the slot
+    the trials' own Latin squares take their rows from (:mod:`emogen.study.block_order`).
+
+    ``latin_square``: block row = ``slot`` mod the block rows B (by arrival: exact for any
+    number of sessions, within one), and the trials' slot ``slot // B``, so that every block
+    order meets every row of the trials' squares (crossed every B × their rows sessions);
+    ``random`` draws the order with ``rng``; a fixed order leaves ``slot`` as it is."""
     n = len(config.study_blocks())
     run = sorted(reordered(config))
     if not run:
-        return list(range(n)), -1
+        return list(range(n)), -1, slot
     if config.block_order == "random":
         local, row = [int(i) for i in rng.permutation(len(run))], -1
     else:
         rows = balanced_latin_square(len(run))
-        row = (slot // max(1, trial_rows)) % len(rows)
+        row, slot = slot % len(rows), slot // len(rows)
         local = rows[row]
     out = list(range(n))
     out[run[0] : run[-1] + 1] = [run[j] for j in local]
-    return out, row
+    return out, row, slot
 
 
 def trial_order(
@@ -132,13 +136,7 @@ def trial_order(
     counterbalanced block (another block's order is ``random`` or ``fixed``)."""
     conditions = config.conditions() if conditions is None else conditions
     blocks = config.study_blocks()
-    sizes = [sum(c.block == k for c in conditions) for k in range(len(blocks))]
-    square = [
-        len(balanced_latin_square(n))
-        for b, n in zip(blocks, sizes, strict=True)
-        if b.counterbalanced and b.order == "latin_square"
-    ]
-    sequence, block_row = block_sequence(config, slot, max(square, default=1), rng)
+    sequence, block_row, slot = block_sequence(config, slot, rng)
     order: list[int] = []
     kind, row = "", -1
     for k in sequence:

@@ -43,6 +43,13 @@ class ParticipantRequired(StudyError):
     """A session asked for without a participant id, in a study that requires one."""
 
 
+#: A creation key already bound to another participant's session (409).
+KEY_TAKEN = (
+    "this creation key already started another participant's session: reload the study's "
+    "link (the page makes a key of its own for each participant id)"
+)
+
+
 def missing_advice(param: str) -> tuple[str, str]:
     """What a participant reads when the link lacks the id (the page and the API say it)."""
     return (
@@ -157,7 +164,10 @@ def _existing(
     """The session this request is a retry or a resumption of (None: make one); a conflict
     when the participant has a session the request does not hold."""
     if source == "generated" and create_key is not None:  # an anonymous create, retried
-        return session_of_create_key(db, ctx.accepted, create_key)
+        found = session_of_create_key(db, ctx.accepted, create_key)
+        if found is not None and found.participant_source != "generated":
+            raise StepConflict(KEY_TAKEN)  # a named participant's key: never theirs to open
+        return found
     existing = session_of_participant(db, ctx.all_versions or ctx.accepted, pid)
     if existing is None:
         return None
@@ -208,6 +218,8 @@ def create_session(
         lock_study(db, ctx.study_id)  # one new session at a time per study (session numbers)
         existing = _existing(db, ctx, pid, given, resume_token, hashed)
         if existing is None:
+            if hashed is not None and session_of_create_key(db, ctx.accepted, hashed):
+                raise StepConflict(KEY_TAKEN)  # a key is bound to the participant it made
             check_retest(db, cfg.retest_of, pid)  # a retest: only the first session's people
             existing = _new_session(db, ctx, pid, source, user_agent, hashed)
         return existing.token, session_state(db, env, existing)

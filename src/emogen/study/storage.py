@@ -30,14 +30,14 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, TypeVar
 
-from sqlalchemy import create_engine, event, text
-from sqlalchemy.engine import Engine, make_url
+from sqlalchemy import text
+from sqlalchemy.engine import Engine
 from sqlalchemy.orm import Session
 
-from emogen.errors import ConfigError, ResourceError
+from emogen.errors import ResourceError
+from emogen.study.engines import DATABASE_ENV, make_engine, normalise_url
 
 T = TypeVar("T")
-DATABASE_ENV = "EMOGEN_DATABASE_URL"
 #: Free bytes under which an SQLite database's disk counts as full (a session writes ~1 MB).
 MIN_FREE_BYTES = 16 * 1024 * 1024
 
@@ -66,64 +66,6 @@ def default_database_url() -> str:
 def resolve_database_url(option: str | None = None, config_url: str | None = None) -> str:
     """--database-url, then $EMOGEN_DATABASE_URL, then the study config, then the default file."""
     return option or os.environ.get(DATABASE_ENV) or config_url or default_database_url()
-
-
-def normalise_url(url: str) -> str:
-    """``postgres://`` and ``postgresql://`` use psycopg 3; a bare path means an SQLite file."""
-    for prefix in ("postgres://", "postgresql://"):
-        if url.startswith(prefix):
-            return "postgresql+psycopg://" + url[len(prefix) :]
-    if "://" not in url:
-        return f"sqlite:///{Path(url).expanduser().resolve()}"
-    return url
-
-
-def _sqlite_pragmas(dbapi_conn: Any, _record: Any) -> None:
-    dbapi_conn.isolation_level = None  # SQLAlchemy's begin event issues BEGIN itself
-    cur = dbapi_conn.cursor()
-    cur.execute("PRAGMA journal_mode=WAL")
-    cur.execute("PRAGMA synchronous=FULL")
-    cur.execute("PRAGMA foreign_keys=ON")
-    cur.execute("PRAGMA busy_timeout=30000")
-    cur.close()
-
-
-def _sqlite_begin(conn: Any) -> None:
-    mode = conn.get_execution_options().get("sqlite_begin", "")
-    conn.exec_driver_sql(f"BEGIN {mode}".strip())
-
-
-def make_engine(url: str, *, create: bool = True) -> Engine:
-    """An engine for ``url``; ``create=False`` (read-only commands) refuses an SQLite file that
-    does not exist instead of creating it (and its folders)."""
-    url = normalise_url(url)
-    try:
-        parsed = make_url(url)
-    except Exception as exc:  # sqlalchemy.exc.ArgumentError
-        raise ConfigError(f"database URL {url!r} is not valid: {exc}") from None
-    if parsed.get_backend_name() == "sqlite":
-        db = parsed.database
-        if not db or db == ":memory:":
-            raise ConfigError("database URL must name an SQLite file (':memory:' is not durable)")
-        path = Path(db).expanduser()
-        if not create and (not path.is_file() or path.stat().st_size == 0):
-            what = "is an empty file, not a" if path.is_file() else "does not exist: no"
-            raise ResourceError(
-                f"{path} {what} study database: check --database-url (or ${DATABASE_ENV}, "
-                "the study config's database_url); `emogen serve` creates it"
-            )
-        Path(db).expanduser().parent.mkdir(parents=True, exist_ok=True)
-        engine = create_engine(
-            parsed, connect_args={"timeout": 30, "check_same_thread": False}, pool_size=8
-        )
-        event.listen(engine, "connect", _sqlite_pragmas)
-        event.listen(engine, "begin", _sqlite_begin)
-        return engine
-    if parsed.get_backend_name() != "postgresql":
-        raise ConfigError(
-            f"database URL must be sqlite:///FILE or postgresql://…; got {parsed.drivername}"
-        )
-    return create_engine(parsed, pool_size=10, max_overflow=20, pool_pre_ping=True)
 
 
 def _is_connection_error(exc: Exception) -> bool:
@@ -247,6 +189,12 @@ class Store:
         self.url = normalise_url(url)
         self.engine = make_engine(self.url, create=create)
         self.is_sqlite = self.engine.dialect.name == "sqlite"
+        #: opened read-only (SQLite, create=False, of the current schema): nothing is written,
+        #: so a read-only copy (an archive) opens; an older schema is opened to be upgraded
+        self.read_only = self.is_sqlite and not create and self._current_schema()
+        if self.is_sqlite and not create and not self.read_only:
+            self.engine.dispose()
+            self.engine = make_engine(self.url)
         self._write_engine = (
             self.engine.execution_options(sqlite_begin="IMMEDIATE")
             if self.is_sqlite
@@ -257,8 +205,19 @@ class Store:
         self._group = _GroupCommit(self) if self.is_sqlite else None
         #: the storage problem the last failed write met (cleared by a write that succeeds)
         self.write_problem: str | None = None
-        if migrate:
+        if migrate and not self.read_only:
             self.migrate()
+
+    def _current_schema(self) -> bool:
+        """Whether the database is of the current schema (read without writing)."""
+        from sqlalchemy.exc import DBAPIError
+
+        from emogen.study.migrations import HEAD, stored_revision
+
+        try:
+            return stored_revision(self.engine) == HEAD
+        except DBAPIError:
+            return False  # opened to be upgraded: its error is named there
 
     def migrate(self) -> None:
         from sqlalchemy.exc import DBAPIError
@@ -272,8 +231,10 @@ class Store:
             Base.metadata.create_all(self._write_engine, tables=task_tables(), checkfirst=True)
         except DBAPIError as exc:
             self.engine.dispose()
-            if storage_problem(exc) is not None:
-                raise self._cannot_save(str(storage_problem(exc))) from None
+            # SQLite says "disk I/O error" when a full disk stops its journal: the disk says why
+            problem = storage_problem(exc) or self._disk_problem()
+            if problem is not None:
+                raise self._cannot_save(problem) from None
             if not _is_connection_error(exc) and "not a database" not in str(exc.orig):
                 raise
             first = str(exc.orig).strip().splitlines()[0] if exc.orig else type(exc).__name__

@@ -32,8 +32,8 @@ from starlette.background import BackgroundTask
 from starlette.responses import FileResponse
 
 from emogen.leftovers import remove_orphans
+from emogen.study.engines import DATABASE_ENV
 from emogen.study.errors import StudyError
-from emogen.study.storage import DATABASE_ENV
 
 #: The child: idle priority (or the lowest nice), then ``python -m emogen`` with the given
 #: arguments.

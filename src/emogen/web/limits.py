@@ -6,7 +6,9 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
+import os
 import time
 
 from fastapi import FastAPI
@@ -14,33 +16,40 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 
 class BodyLimit:
-    """ASGI middleware: a request body over ``max_bytes`` gets 413 ``{"detail": …}``."""
+    """ASGI middleware: a request body over ``max_bytes`` gets 413 ``{"detail": …}``; one not
+    complete ``timeout_s`` seconds after its head gets 408 and the connection is closed (a
+    body trickled a byte at a time holds nothing longer). The body is read whole before the
+    app sees it (at most ``max_bytes``), so a step is never stored from part of one."""
 
-    def __init__(self, app: ASGIApp, max_bytes: int) -> None:
+    def __init__(self, app: ASGIApp, max_bytes: int, timeout_s: float | None = None) -> None:
         self.app = app
         self.max_bytes = max_bytes
+        self.timeout_s = body_timeout() if timeout_s is None else timeout_s
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
         length = dict(scope["headers"]).get(b"content-length")
-        if length is not None:
-            if not length.isdigit() or int(length) > self.max_bytes:
-                await self._too_large(send, length.decode("latin-1"))
-                return
-            await self.app(scope, receive, send)
+        if length is not None and (not length.isdigit() or int(length) > self.max_bytes):
+            await self._refuse(send, 413, self._too_large(length.decode("latin-1")))
             return
         messages: list[Message] = []
         size = 0
-        while True:  # no length given: read (and count) the body before the app sees it
-            message = await receive()
+        deadline = time.monotonic() + self.timeout_s
+        while True:  # read (and count) the body before the app sees it
+            try:
+                message = await asyncio.wait_for(receive(), max(0.0, deadline - time.monotonic()))
+            except TimeoutError:
+                text = f"the request body did not arrive within {self.timeout_s:g} s"
+                await self._refuse(send, 408, text)
+                return
             messages.append(message)
             if message["type"] != "http.request":
                 break
             size += len(message.get("body", b""))
             if size > self.max_bytes:
-                await self._too_large(send, f"more than {size}")
+                await self._refuse(send, 413, self._too_large(f"more than {size}"))
                 return
             if not message.get("more_body", False):
                 break
@@ -50,17 +59,30 @@ class BodyLimit:
 
         await self.app(scope, replay, send)
 
-    async def _too_large(self, send: Send, given: str) -> None:
-        body = json.dumps(
-            {"detail": f"request body must be at most {self.max_bytes} bytes; got {given}"}
-        ).encode()
+    def _too_large(self, given: str) -> str:
+        return f"request body must be at most {self.max_bytes} bytes; got {given}"
+
+    async def _refuse(self, send: Send, status: int, detail: str) -> None:
+        body = json.dumps({"detail": detail}).encode()
         headers = [
             (b"content-type", b"application/json"),
             (b"content-length", str(len(body)).encode()),
+            (b"connection", b"close"),  # the rest of the body is never read
             *((k.lower().encode(), v.encode()) for k, v in SECURITY_HEADERS.items()),
         ]
-        await send({"type": "http.response.start", "status": 413, "headers": headers})
+        await send({"type": "http.response.start", "status": status, "headers": headers})
         await send({"type": "http.response.body", "body": body})
+
+
+#: Seconds a request body may take to arrive after its head (``emogen serve --body-timeout``:
+#: the environment variable the workers read). A step's body is under 2 KiB: it arrives with
+#: its head; nginx's ``client_body_timeout`` is 60 s between reads.
+BODY_TIMEOUT_ENV = "EMOGEN_BODY_TIMEOUT_S"
+BODY_TIMEOUT_S = 20.0
+
+
+def body_timeout() -> float:
+    return float(os.environ.get(BODY_TIMEOUT_ENV, BODY_TIMEOUT_S))
 
 
 #: The pages load only their own scripts and styles (no inline ones, no eval). The three.js

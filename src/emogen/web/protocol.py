@@ -6,7 +6,8 @@ connections for as long as the client liked, until no participant could connect.
 
 * a request head (request line + headers) over :data:`MAX_HEAD_BYTES` is answered
   ``431 Request Header Fields Too Large`` and the connection closed, once that much has
-  arrived (never more than one read of the socket beyond it is held);
+  arrived (never more than one read of the socket beyond it is held) — counted before the
+  parser sees the bytes, whatever the read pattern (a whole 40 KB head in one read too);
 * a head not complete :data:`HEAD_TIMEOUT_S` seconds after its first byte (or after the
   connection opened, for the first request) is answered ``408 Request Timeout`` and closed.
 
@@ -55,6 +56,7 @@ class BoundedHeadProtocol(HttpToolsProtocol):
 
     _in_head = True
     _head_bytes = 0
+    _tail = b""  # the last bytes of the head so far (its end may straddle two reads)
     _head_timer: asyncio.TimerHandle | None = None
 
     def connection_made(self, transport: asyncio.Transport) -> None:  # type: ignore[override]
@@ -68,17 +70,24 @@ class BoundedHeadProtocol(HttpToolsProtocol):
 
     def data_received(self, data: bytes) -> None:
         if self._in_head:
-            self._head_bytes += len(data)
+            # counted before the parser sees it: a whole head in one read completes (and
+            # would reset the count) inside the parser; its end is the first blank line
+            seen = self._tail + data
+            end = seen.find(b"\r\n\r\n")
+            self._head_bytes += len(data) if end < 0 else end + 4 - len(self._tail)
+            self._tail = seen[-3:]
             if self._head_timer is None:
                 self._start_head_timer()
+            if self._head_bytes > self._max_bytes:
+                text = f"request headers over {self._max_bytes} bytes are not accepted"
+                self._refuse(_answer(b"431 Request Header Fields Too Large", text))
+                return
         super().data_received(data)
-        if self._in_head and self._head_bytes > self._max_bytes:
-            text = f"request headers over {self._max_bytes} bytes are not accepted"
-            self._refuse(_answer(b"431 Request Header Fields Too Large", text))
 
     def on_headers_complete(self) -> None:
         self._in_head = False
         self._head_bytes = 0
+        self._tail = b""
         self._stop_head_timer()
         super().on_headers_complete()
 

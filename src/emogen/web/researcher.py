@@ -10,7 +10,7 @@ from fastapi.responses import HTMLResponse, Response
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from pydantic import BaseModel, Field
 
-from emogen.study.dashboard import block_notes, overview
+from emogen.study.dashboard import block_notes, design_notes, overview
 from emogen.study.errors import Forbidden
 from emogen.study.export import TABLES, study_status
 from emogen.study.export_stream import parse_since
@@ -82,6 +82,7 @@ def status(request: Request, _auth: Researcher) -> dict[str, Any]:
         "sessions": progress_as_shown(store, ctx.study_id),
         **overview(store, ctx.config, ctx.accepted),
         "warnings": ([] if warning is None else [warning])
+        + design_notes(ctx.config)
         + block_notes(store, ctx.config, ctx.accepted),
     }
 

@@ -102,6 +102,7 @@ def run_server(
     workers: int | None = None,
     running_sessions: str = "refuse",
     header_timeout: float | None = None,
+    body_timeout: float | None = None,
 ) -> None:
     """Load the study, open (and migrate) the database, serve until interrupted.
 
@@ -110,10 +111,13 @@ def run_server(
     process); ``hsts`` sends HSTS; ``workers``: worker processes (default: the cores);
     ``running_sessions``: ``end`` ends the unfinished sessions of an earlier design of the study
     (default: refuse to start while there are any); ``header_timeout``: seconds a request's
-    headers may take to arrive (408 beyond; :mod:`emogen.web.protocol`, default 15).
+    headers may take to arrive (408 beyond; :mod:`emogen.web.protocol`, default 15);
+    ``body_timeout``: seconds its body may take after them (408 beyond;
+    :class:`emogen.web.limits.BodyLimit`, default 20).
     """
     import uvicorn
 
+    from emogen.web.limits import BODY_TIMEOUT_ENV
     from emogen.web.protocol import HEAD_TIMEOUT_ENV, PROTOCOL
 
     n_workers = default_workers() if workers is None else workers
@@ -124,6 +128,10 @@ def run_server(
         if not 0 < header_timeout <= 600:
             raise ConfigError(f"--header-timeout must be in (0, 600] seconds; got {header_timeout}")
         os.environ[HEAD_TIMEOUT_ENV] = str(header_timeout)  # the workers read it
+    if body_timeout is not None:
+        if not 0 < body_timeout <= 600:
+            raise ConfigError(f"--body-timeout must be in (0, 600] seconds; got {body_timeout}")
+        os.environ[BODY_TIMEOUT_ENV] = str(body_timeout)
     options = {
         "config": str(Path(config_path).resolve()),
         "model": None if model is None else str(Path(model).resolve()),

@@ -32,9 +32,9 @@ test("the progress line: the trial, the task's step (else the part of the study)
   assert.deepEqual(progressOf(done, null), { trial: "Trial 8 of 8", detail: "", done: 1 });
 });
 
-test("the rating screen asks its own question, not the trial's prompt", () => {
+test("the rating screen keeps the trial's prompt as its heading (its question is the scale's legend)", () => {
   const rated = state({}, { status: "rating" }, { rating });
-  assert.equal(prompt(rated), "How sad does this face look?");
+  assert.equal(prompt(rated), "Make the face look SAD");
   assert.equal(prompt(state()), "Make the face look SAD");
   assert.equal(prompt(state({ stage: "done", trial: null, view: null })), "Study");
   const cat = categoriseState({}, {}, { prompt: "Which emotion does this face show?" });

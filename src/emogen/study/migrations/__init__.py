@@ -36,7 +36,7 @@ def upgrade(engine: Engine, revision: str = "head") -> None:
 
     engine : the store's writing engine (``BEGIN IMMEDIATE`` on SQLite).
     """
-    if revision in ("head", HEAD) and _stored_revision(engine) == HEAD:
+    if revision in ("head", HEAD) and stored_revision(engine) == HEAD:
         return
     from alembic import command
 
@@ -61,7 +61,7 @@ def upgrade(engine: Engine, revision: str = "head") -> None:
                 raw.execute("PRAGMA foreign_keys=ON")
 
 
-def _stored_revision(engine: Engine) -> str | None:
+def stored_revision(engine: Engine) -> str | None:
     """The revision in the ``alembic_version`` table, read with plain SQL (None: no table,
     no row, or more than one head)."""
     from sqlalchemy import inspect

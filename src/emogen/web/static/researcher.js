@@ -108,6 +108,13 @@ function showRows(cb) {
   table.querySelector("tbody").replaceChildren(...cb.rows.map((r) => row([r.row, r.sessions, r.done])));
 }
 
+function showBlockOrders(orders) {
+  const table = $("block-orders");
+  table.hidden = !orders || orders.length === 0;
+  if (table.hidden) return;
+  table.querySelector("tbody").replaceChildren(...orders.map((o) => row([o.order.replaceAll(">", " → "), o.sessions, o.done])));
+}
+
 function sessionRow(s) {
   const tr = row([s.session_id, s.session_number, s.participant_id, s.stage, `${s.trial} of ${s.trials}`,
     shownGeneration(s), s.attempt ?? "", s.order_row ?? "", minutes(s.duration_s), shortTime(s.created_at), shortTime(s.updated_at)]);
@@ -133,6 +140,7 @@ async function refresh() {
     showDurations(status);
     showConditions(status.conditions);
     showRows(status.counterbalancing);
+    showBlockOrders(status.block_orders);
     $("sessions").querySelector("tbody").replaceChildren(...status.sessions.map(sessionRow));
     for (const id of ["details", "sessions", "downloads"]) $(id).hidden = false;
   } catch (err) {
