@@ -257,6 +257,24 @@ test("simulate data-only: an observer near its target, no server, repeatable", a
   assert.notDeepEqual((await run(4)).final_weights, data.final_weights);
 });
 
+test("simulate data-only without a seed: trials differ, and jsPsych's seed repeats them", async () => {
+  const run = async () => {
+    const trial = { type: EmogenPlugin, server: SERVER, simulation_options: { target: [0.9, 0.1, 0.6], generations: 2 } };
+    const { getData } = await simulateTimeline([trial, trial], "data-only");
+    await until(() => getData().count() === 2, "the simulated data");
+    return rows(getData()).map((r) => r.final_weights);
+  };
+  const { initJsPsych } = await import("jspsych");
+  const seeded = async (seed) => {
+    initJsPsych().randomization.setSeed(seed);
+    return run();
+  };
+  const [first, second] = await seeded("forty");
+  assert.notDeepEqual(first, second); // each trial its own data
+  assert.deepEqual(await seeded("forty"), [first, second]);
+  assert.notDeepEqual(await seeded("other"), [first, second]);
+});
+
 test("simulate data-only categorise: the label of the nearest prototype", async () => {
   const { getData } = await simulateTimeline([{
     type: EmogenPlugin, server: SERVER, task: "categorise",
