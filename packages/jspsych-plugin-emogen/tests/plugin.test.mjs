@@ -3,7 +3,7 @@
 // with their data, one session for both; each wrong use (a study without the block, the server
 // gone mid-trial, an origin the server does not allow) ends the trial as data with its reason,
 // said in the page; simulate() in data-only mode.
-import "./dom.mjs";
+import { window } from "./dom.mjs";
 import assert from "node:assert/strict";
 import { beforeEach, test } from "node:test";
 import { clickTarget, simulateTimeline, startTimeline } from "@jspsych/test-utils";
@@ -211,6 +211,23 @@ test("an origin the server does not allow: the reason names the origin and the s
   assert.match(data.reason, /does not allow pages of https:\/\/experiments\.example\.org .*embed_origins/);
   assert.match(shown, NOT_YOUR_FAULT);
   assert.ok(!shown.includes("embed_origins")); // researcher's words stay in the data
+});
+
+test("faces never drawn: the trial ends at load_timeout_ms, not for ever", async () => {
+  const proto = window.HTMLImageElement.prototype;
+  const loads = Object.getOwnPropertyDescriptor(proto, "src");
+  Object.defineProperty(proto, "src", { set(v) { this.setAttribute("src", v); }, get() { return this.getAttribute("src"); }, configurable: true });
+  try {
+    const started = Date.now();
+    const { data, shown } = await failedTrial({ load_timeout_ms: 300 }, "the failure");
+    assert.equal(data.failure, "timeout");
+    assert.match(data.reason, /faces were not drawn within 0\.3 s of its start \(load_timeout_ms\)/);
+    assert.match(shown, CONNECTION_LOST);
+    assert.ok(Date.now() - started < 3000);
+    assert.equal(data.session_id, 7);
+  } finally {
+    Object.defineProperty(proto, "src", loads);
+  }
 });
 
 test("failure_wait_ms ends a failed trial by itself", async () => {
