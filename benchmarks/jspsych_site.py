@@ -19,13 +19,14 @@ REPO = Path(__file__).resolve().parents[1]
 PLUGIN = REPO / "packages" / "jspsych-plugin-emogen"
 BUNDLE = PLUGIN / "dist" / "index.browser.min.js"
 NODE_MODULES = REPO / "node_modules"
-#: The README example's CDN addresses → this site's copies.
+#: The README example's addresses (jsPsych's CDN; the plugin's copy on the lab's own site, as
+#: its README says to put it) → this site's copies.
 VENDOR = {
     "https://unpkg.com/jspsych@8.3.0/": NODE_MODULES / "jspsych",
     "https://unpkg.com/@jspsych/plugin-survey-text@2.1.1/": NODE_MODULES
     / "@jspsych"
     / "plugin-survey-text",
-    "https://unpkg.com/jspsych-plugin-emogen@0.1.0/": PLUGIN,
+    "/lib/jspsych-plugin-emogen/": PLUGIN,
 }
 
 
@@ -78,9 +79,9 @@ def one_trial_page(server: str, trials: list[dict[str, object]], setup: str = ""
     return f"""<!doctype html><html><head><meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <script src="/vendor/jspsych@8.3.0/dist/index.browser.min.js"></script>
-<script src="/vendor/jspsych-plugin-emogen@0.1.0/dist/index.browser.min.js"></script>
+<script src="/vendor/jspsych-plugin-emogen/dist/index.browser.min.js"></script>
 <link rel="stylesheet" href="/vendor/jspsych@8.3.0/css/jspsych.css">
-<link rel="stylesheet" href="/vendor/jspsych-plugin-emogen@0.1.0/dist/emogen.css">
+<link rel="stylesheet" href="/vendor/jspsych-plugin-emogen/dist/emogen.css">
 </head><body></body><script>
 new MutationObserver((_, observer) => {{
   const ready = document.querySelector(".emogen-trial[data-emogen-ready='true']");

@@ -46,7 +46,9 @@ const common = {
   logLevel: "warning",
 };
 
-/** study.css under .emogen-trial: its :root and body rules become the trial's own. */
+/** study.css under .emogen-trial: its :root and body rules become the trial's own. The trial
+ * has a fixed width (jsPsych sizes its content to fit): it never jumps wider when a click
+ * changes what it shows, and a categorise face has its labels beside it on a desktop. */
 async function scopedCss() {
   const css = await readFile(join(web, "static", "study.css"), "utf8");
   const nested = css
@@ -54,7 +56,7 @@ async function scopedCss() {
     .replace(/^body(?=[\s[{])/gm, "&")
     .replace(/^(\s*)body\[/gm, "$1&[");
   const own = `
-  & { min-height: 0; text-align: left; width: 100%; }
+  & { min-height: 0; text-align: left; width: min(1280px, 96vw); }
   & .bar:has(#gen-progress:empty) { grid-template-columns: minmax(0, 1fr); }
   & .bar:has(#gen-progress:empty) .progress { display: none; }
   & .emogen-main { position: relative; }

@@ -204,7 +204,7 @@ def test_resume_by_participant_id_continues_the_session_from_any_browser(
 ) -> None:
     """``resume = "participant_id"`` (#40, embedded studies): a reopened link — no token, a new
     creation key — continues the same session where it stood; a generated (anonymous) id never
-    resumes anyone's session, and the default (``link``) still refuses."""
+    resumes anyone's session (the default, ``link``, refuses: the test above)."""
     store = Store(db_url)
     svc = study_service(
         small_study.model_copy(update={"resume": "participant_id"}), store, ict_model

@@ -52,6 +52,8 @@ def test_an_allowed_origin_gets_cors_headers_for_exactly_itself(embedded: TestCl
     made = embedded.post("/api/sessions", json={"participant_id": "p1"}, headers={"Origin": SITE})
     assert made.status_code == 201
     assert made.headers["access-control-allow-origin"] == SITE
+    # the page may read a compressed download's encoding (its loading bar's total, #40)
+    assert made.headers["access-control-expose-headers"] == "Content-Encoding"
     # the pages stay unframeable and script-strict, CORS or not
     assert made.headers["content-security-policy"] == CONTENT_SECURITY_POLICY
     assert "frame-ancestors 'none'" in made.headers["content-security-policy"]
@@ -171,3 +173,15 @@ def test_study_info_says_the_framing(tmp_path: Path, ict_model: Any) -> None:
     app = make_app(tmp_path, ict_model, study={**SMALL_STUDY, "framing": "oval"})
     with TestClient(app) as client:
         assert client.get("/api/study").json()["framing"] == "oval"
+
+
+def test_a_simulated_session_is_marked_so_in_the_database(embedded: TestClient) -> None:
+    """The plugin's visual simulate() makes its sessions with ``simulated: true`` (#40): they
+    are ``participant_source = "simulated"``; a participant's stays ``url``."""
+    for pid, simulated in (("pilot-1", True), ("real-1", False)):
+        made = embedded.post("/api/sessions", json={"participant_id": pid, "simulated": simulated})
+        assert made.status_code == 201
+    store = embedded.app.state.service.store  # type: ignore[attr-defined]
+    with store.read() as db:
+        rows = db.execute(select(SessionRow.participant_id, SessionRow.participant_source)).all()
+    assert sorted(rows) == [("pilot-1", "simulated"), ("real-1", "url")]

@@ -117,6 +117,10 @@ def run_readme_page(page: Any, size: tuple[int, int]) -> list[dict[str, Any]]:
         assert cells.count() == 10
         if g == 0:
             no_horizontal_overflow(page)
+            width = page.locator(".emogen-trial").bounding_box()["width"]
+            cells.nth(0).click()  # the first click changes the help text: the trial keeps its width
+            assert page.locator(".emogen-trial").bounding_box()["width"] == width
+            cells.nth(0).click()
             shot(page, f"jspsych_evolve_{size[0]}x{size[1]}.png")
             page.click("#restart")  # a new attempt at generation 0
             wait_stage(page, "trial")
@@ -130,6 +134,11 @@ def run_readme_page(page: Any, size: tuple[int, int]) -> list[dict[str, Any]]:
     no_horizontal_overflow(page)
     shot(page, f"jspsych_categorise_{size[0]}x{size[1]}.png")
     assert page.locator("#label-buttons button").count() == 4
+    if size[0] > 700:  # a desktop: the labels beside the face, all in view without a scroll
+        face = page.locator(".categorise-face").bounding_box()
+        last = page.locator("#label-buttons button").nth(3).bounding_box()
+        assert last["x"] >= face["x"] + face["width"]
+        assert last["y"] + last["height"] <= size[1]
     page.click("#label-buttons button:nth-child(2)")
     page.wait_for_selector("#jspsych-data-display", timeout=30_000)  # on_finish: displayData
     return jspsych_data(page)

@@ -112,7 +112,10 @@ class EmogenPlugin {
     load();
     const data = { ...emptyData(trial.task, String(trial.server)), simulated: true };
     delete data.token;
-    Object.assign(data, taskOf(trial.task).simulate({ ...options, target: options.target ?? SMILE, seed: options.seed ?? 1 }));
+    // no seed given: one drawn from Math.random, which jsPsych.randomization.setSeed(…) seeds —
+    // each trial's data differ, and the whole simulation repeats under jsPsych's seed
+    const seed = options.seed ?? Math.floor(Math.random() * 2 ** 31);
+    Object.assign(data, taskOf(trial.task).simulate({ ...options, target: options.target ?? SMILE, seed }));
     return this.jsPsych.pluginAPI.mergeSimulationData(namespaced(data), options);
   }
 }

@@ -94,8 +94,10 @@ export async function runTrial({ element, params, onLoad = () => {}, driver, sim
     ui.stage = view;
     root.dataset.emogenStage = view;
   };
+  let answerable = false; // a screen has been ready for an answer (faces drawn or not)
   const setReady = (ready) => {
     ui.ready = ready;
+    answerable ||= ready;
     root.dataset.emogenReady = ready ? "true" : "false";
     if (ready && driver && VIEWS.includes(ui.stage) && ui.state) driver(ui.stage, ui.state, root);
   };
@@ -183,8 +185,8 @@ export async function runTrial({ element, params, onLoad = () => {}, driver, sim
   const takenOver = () =>
     finish({ ok: false, error: new TrialFailure("the participant's session was opened in another tab or window of this browser, which carries it on; this tab gave way", "other-tab") });
   const loadDeadline = setTimeout(() => {
-    if (loaded) return;
-    const seconds = Math.round(params.load_timeout_ms / 1000);
+    if (loaded || answerable) return;
+    const seconds = params.load_timeout_ms / 1000;
     finish({ ok: false, error: new TrialFailure(`the trial's faces were not drawn within ${seconds} s of its start (load_timeout_ms)`, "timeout") });
   }, params.load_timeout_ms);
   const outcome = await (async () => {

@@ -3,7 +3,7 @@
 // with their data, one session for both; each wrong use (a study without the block, the server
 // gone mid-trial, an origin the server does not allow) ends the trial as data with its reason,
 // said in the page; simulate() in data-only mode.
-import "./dom.mjs";
+import { window } from "./dom.mjs";
 import assert from "node:assert/strict";
 import { beforeEach, test } from "node:test";
 import { clickTarget, simulateTimeline, startTimeline } from "@jspsych/test-utils";
@@ -213,6 +213,23 @@ test("an origin the server does not allow: the reason names the origin and the s
   assert.ok(!shown.includes("embed_origins")); // researcher's words stay in the data
 });
 
+test("faces never drawn: the trial ends at load_timeout_ms, not for ever", async () => {
+  const proto = window.HTMLImageElement.prototype;
+  const loads = Object.getOwnPropertyDescriptor(proto, "src");
+  Object.defineProperty(proto, "src", { set(v) { this.setAttribute("src", v); }, get() { return this.getAttribute("src"); }, configurable: true });
+  try {
+    const started = Date.now();
+    const { data, shown } = await failedTrial({ load_timeout_ms: 300 }, "the failure");
+    assert.equal(data.failure, "timeout");
+    assert.match(data.reason, /faces were not drawn within 0\.3 s of its start \(load_timeout_ms\)/);
+    assert.match(shown, CONNECTION_LOST);
+    assert.ok(Date.now() - started < 3000);
+    assert.equal(data.session_id, 7);
+  } finally {
+    Object.defineProperty(proto, "src", loads);
+  }
+});
+
 test("failure_wait_ms ends a failed trial by itself", async () => {
   fake.down = true;
   const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, patience_ms: 500, failure_wait_ms: 20 }]);
@@ -255,6 +272,24 @@ test("simulate data-only: an observer near its target, no server, repeatable", a
   assert.ok(distance(data.final_weights, target) < typical[100], "the final face is nearer than 95% of random faces");
   assert.deepEqual(await run(3), data);
   assert.notDeepEqual((await run(4)).final_weights, data.final_weights);
+});
+
+test("simulate data-only without a seed: trials differ, and jsPsych's seed repeats them", async () => {
+  const run = async () => {
+    const trial = { type: EmogenPlugin, server: SERVER, simulation_options: { target: [0.9, 0.1, 0.6], generations: 2 } };
+    const { getData } = await simulateTimeline([trial, trial], "data-only");
+    await until(() => getData().count() === 2, "the simulated data");
+    return rows(getData()).map((r) => r.final_weights);
+  };
+  const { initJsPsych } = await import("jspsych");
+  const seeded = async (seed) => {
+    initJsPsych().randomization.setSeed(seed);
+    return run();
+  };
+  const [first, second] = await seeded("forty");
+  assert.notDeepEqual(first, second); // each trial its own data
+  assert.deepEqual(await seeded("forty"), [first, second]);
+  assert.notDeepEqual(await seeded("other"), [first, second]);
 });
 
 test("simulate data-only categorise: the label of the nearest prototype", async () => {

@@ -51,6 +51,8 @@ def add_cors(app: FastAPI, origins: tuple[str, ...]) -> None:
             allow_origins=list(origins),
             allow_methods=["GET", "POST"],
             allow_headers=["Content-Type"],
+            # the page tells a compressed face model's length from its size (the loading bar)
+            expose_headers=["Content-Encoding"],
             allow_credentials=False,
             max_age=600,
         )

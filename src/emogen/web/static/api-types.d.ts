@@ -513,6 +513,11 @@ export interface components {
             participant_id?: string | null;
             /** Resume Token */
             resume_token?: string | null;
+            /**
+             * Simulated
+             * @default false
+             */
+            simulated: boolean;
         };
         /**
          * PopulationView

@@ -32,7 +32,8 @@ async function fetchGlb(url, onProgress) {
     if (done) break;
     chunks.push(value);
     loaded += value.length;
-    onProgress(loaded, Math.max(total, total ? loaded : 0), "bytes");
+    // more bytes than declared: the length was a compressed one after all (unknown total)
+    onProgress(loaded, loaded <= total ? total : 0, "bytes");
   }
   return new Blob(chunks, { type: "model/gltf-binary" });
 }
