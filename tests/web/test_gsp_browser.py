@@ -99,7 +99,10 @@ def recorded(url: str, pid: str, model: Any) -> Any:
     ("size", "keyboard"), [((1366, 768), True), ((390, 844), False)], ids=["desktop", "phone"]
 )
 def test_a_participant_moves_the_slider_and_the_face_follows(
-    browser: Any, site: tuple[ServerProcess, str], ict_model: Any, size: tuple[int, int],
+    browser: Any,
+    site: tuple[ServerProcess, str],
+    ict_model: Any,
+    size: tuple[int, int],
     keyboard: bool,
 ) -> None:
     srv, url = site
