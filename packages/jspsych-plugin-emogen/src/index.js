@@ -31,7 +31,7 @@ const info = /** @type {const} */ ({
     /** The study server's address (``https://study.example.org``); its study config must list
      * this page's origin in ``embed_origins``. */
     server: { type: ParameterType.STRING, default: undefined },
-    /** The task of the trial (the registry's: ``evolve`` or ``categorise``): the study's next
+    /** The task of the trial (a task of the registry, static/tasks/index.js): the study's next
      * trial must be of this task. */
     task: { type: ParameterType.SELECT, options: TASK_NAMES, default: TASK_NAMES[0] },
     /** The participant id; null: from the URL (the study's participant_param, e.g.
