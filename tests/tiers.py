@@ -157,6 +157,7 @@ BOTH_DATABASES: dict[str, str] = {
     "tests/study/test_tidy_export.py::test_csv_export_keeps_seeds_exact_for_r_and_times_with_their_zone": _TYPES,
     "tests/study/test_export_stream.py::test_incremental_exports_appended_hold_each_completed_session_once": "chunked reads and `since` on each backend's timestamps",
     "tests/web/test_fault.py": "SIGKILL and retries against each backend, 1 and 2 workers",
+    "tests/web/test_gsp_fault.py": "SIGKILL and retries against each backend, 1 and 2 workers",
     "tests/web/test_storage_faults.py": "storage faults of each backend",
     "tests/web/test_schemathesis.py": "the API fuzzed on each backend (issue #38 keeps it on both)",
 }

@@ -137,6 +137,7 @@ def test_the_comparison_interval_covers_a_known_difference() -> None:
 
 def test_a_study_without_complete_nodes_says_so(tmp_path: Path) -> None:
     from emogen.analysis.report import Report
+    from emogen.analysis.task_sections import TaskTools
     from emogen.tasks.gsp.analysis_report import gsp_section
 
     genes = json.dumps([0.0, 0.5])
@@ -160,5 +161,5 @@ def test_a_study_without_complete_nodes_says_so(tmp_path: Path) -> None:
     rows.to_csv(tmp_path / "gsp_iterations.csv", index=False)
     report = Report("t", tmp_path / "out")
     summary: dict[str, Any] = {}
-    gsp_section(tmp_path, report, summary, AnalysisOptions(), None)
+    gsp_section(TaskTools(tmp_path, report, AnalysisOptions(), None), summary)
     assert summary["gsp"]["note"] == "no complete node"

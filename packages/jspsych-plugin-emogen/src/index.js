@@ -31,7 +31,7 @@ const info = /** @type {const} */ ({
     /** The study server's address (``https://study.example.org``); its study config must list
      * this page's origin in ``embed_origins``. */
     server: { type: ParameterType.STRING, default: undefined },
-    /** The task the timeline expects (the registry's: ``evolve`` or ``categorise``). The trial
+    /** The task the timeline expects (a task of the registry, static/tasks/index.js). The trial
      * runs the study's current trial (the server's order wins); where that is of another task,
      * the data and the console say so once. */
     task: { type: ParameterType.SELECT, options: TASK_NAMES, default: TASK_NAMES[0] },

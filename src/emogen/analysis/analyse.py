@@ -53,7 +53,7 @@ from emogen.analysis.plan import plan_section
 from emogen.analysis.repeatability import BIN_LABELS, repeatability_bins
 from emogen.analysis.report import Report
 from emogen.analysis.study_export import read_table
-from emogen.tasks.registry import TASKS
+from emogen.analysis.task_sections import TaskTools, task_sections
 
 if TYPE_CHECKING:
     from emogen.appearance.identities import Identity
@@ -110,11 +110,7 @@ def analyse(
     _ratings(ds, report, summary)
     if prepared is not None:
         people_sections(prepared, report, summary, opts, model, step)
-        for task in TASKS.values():  # a task's own section of its records (tasks.protocol)
-            section = getattr(task, "analysis_section", None)
-            if section is not None:
-                step(f"{task.name} blocks")
-                section(ds.source, report, summary, opts, model)
+        task_sections(TaskTools(ds.source, report, opts, model), summary, step)
     plan_section(report, summary, opts.primary)
     step("writing the report")
     if ds.has_weights:

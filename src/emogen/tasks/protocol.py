@@ -266,11 +266,11 @@ class Task(Protocol):
         """What the researcher's dashboard should say of block ``k`` over ``sessions`` (a
         SELECT of the study's session ids): what went otherwise than the design meant."""
 
-    # Optional: ``analysis_section(source, report, summary, opts, model)`` — ``emogen
-    # analyse``'s section on the task's export tables in the study export folder ``source``
-    # (an :class:`emogen.analysis.report.Report`, the summary dict it fills, the
-    # :class:`~emogen.analysis.analyse_options.AnalysisOptions`, the face model or None); a task
-    # without one is analysed by emogen.analysis itself (evolve, categorise) or not at all.
+    # Optional: ``analysis_section(tools, summary)`` — ``emogen analyse``'s section on the
+    # task's export tables (``tools``: :class:`emogen.analysis.task_sections.TaskTools`, the
+    # export's tables, the report, figures, faces drawn; tasks sit below the analysis and call
+    # back through it); a task without one is analysed by emogen.analysis itself (evolve,
+    # categorise) or not at all.
 
 
 def conditions_of(blocks: Sequence[TaskBlock], study: Any, rows: dict[int, int]) -> list[Condition]:

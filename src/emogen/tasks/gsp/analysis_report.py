@@ -6,7 +6,6 @@ each aggregate against the GA's mean final face of the same emotion."""
 from __future__ import annotations
 
 from itertools import combinations
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -22,15 +21,11 @@ from emogen.tasks.gsp.analysis import (
 )
 
 
-def _read(source: Path, name: str) -> pd.DataFrame | None:
-    from emogen.analysis.study_export import read_table
-
-    return read_table(source, name, required=False)
-
-
-def gsp_section(source: Path, report: Any, summary: dict[str, Any], opts: Any, model: Any) -> None:
-    """The section (nothing where the export has no GSP answers)."""
-    iterations = _read(source, "gsp_iterations")
+def gsp_section(tools: Any, summary: dict[str, Any]) -> None:
+    """The section (nothing where the export has no GSP answers); ``tools``:
+    :class:`emogen.analysis.task_sections.TaskTools`."""
+    report, opts = tools.report, tools.opts
+    iterations = tools.table("gsp_iterations")
     if iterations is None or iterations.empty:
         return
     report.heading("Gibbs sampling with people (GSP)")
@@ -59,26 +54,35 @@ def gsp_section(source: Path, report: Any, summary: dict[str, Any], opts: Any, m
             "between_chains_first": float(first["between_chains"]),
             "between_chains_last": float(last["between_chains"]),
         }
-    _convergence(curves, report)
-    report.table(
-        aggregates.round(4),
-        name="gsp_aggregates",
-        caption="Chain aggregates: per concept and gene, the mean of the chains' last faces.",
+    _convergence(curves, tools)
+    cells = aggregates.assign(
+        cell=[
+            f"{m:.2f} [{lo:.2f}, {hi:.2f}]"
+            for m, lo, hi in aggregates[["mean", "ci_low", "ci_high"]].itertuples(index=False)
+        ]
     )
-    _draw(concepts, source, report, opts, model)
+    moved = aggregates.groupby("gene")["ci_high"].max() > 0  # genes no chain ever moved: left out
+    wide = cells.pivot_table(index="gene", columns="emotion", values="cell", aggfunc="first")
+    report.table(
+        wide.loc[[g for g in wide.index if moved[g]]],
+        name="gsp_aggregates",
+        caption="Chain aggregates: per gene and concept, the mean of the chains' last faces "
+        "[bootstrap interval over chains] (every gene: the CSV).",
+        index=True,
+        data=aggregates,
+    )
+    _draw(concepts, tools)
     out["between_concepts"] = _between(concepts, rng, opts.alpha, report)
-    out["versus_ga"] = _versus_ga(concepts, source, rng, opts.alpha, report)
+    out["versus_ga"] = _versus_ga(concepts, tools.table("final_faces"), rng, opts.alpha, report)
     summary["gsp"] = out
 
 
-def _convergence(curves: pd.DataFrame, report: Any) -> None:
-    from emogen.analysis import plots
-
-    fig = plots.new_figure(7.0, 3.0)
+def _convergence(curves: pd.DataFrame, tools: Any) -> None:
+    fig = tools.new_figure(7.0, 3.0)
     ax_between, ax_target = fig.subplots(1, 2)
     for i, ((block, emotion), rows) in enumerate(curves.groupby(["block_name", "emotion"])):
         label = str(emotion) if curves["block_name"].nunique() == 1 else f"{block}: {emotion}"
-        style = {"marker": plots.marker(i), "ms": 3, "color": plots.colour(i), "label": label}
+        style = {**tools.style(i), "ms": 3, "label": label}
         ax_between.plot(rows["iteration"], rows["between_chains"], "-", **style)
         ax_target.plot(rows["iteration"], rows["to_aggregate"], "-", **style)
     ax_between.set_ylabel("mean ED between chains")
@@ -86,9 +90,13 @@ def _convergence(curves: pd.DataFrame, report: Any) -> None:
     for ax in (ax_between, ax_target):
         ax.set_xlabel("chain node (complete)")
         ax.grid(alpha=0.3)
-    plots.legend_outside(ax_target, curves["emotion"].nunique())
-    path = plots.save_figure(fig, report.figures / "gsp_convergence.png")
-    report.figure(path, "GSP convergence: chains of a concept come together node by node.")
+    tools.legend(ax_target, curves["emotion"].nunique())
+    tools.save_figure(
+        fig,
+        "gsp_convergence.png",
+        "GSP convergence: chains of a concept come together node by node.",
+    )
+    report = tools.report
     first = curves.groupby(["block_name", "emotion"]).head(1)
     last = curves.groupby(["block_name", "emotion"]).tail(1)
     shown = first.merge(last, on=["block_name", "emotion"], suffixes=("_first", "_last"))
@@ -103,43 +111,26 @@ def _convergence(curves: pd.DataFrame, report: Any) -> None:
                 "n_chains_last",
             ]
         ].round(4),
-        caption="Mean ED between a concept's chains at their starts and at their last node.",
+        name="gsp_convergence",
+        caption="Mean ED between a concept's chains at their starts and at their last node "
+        "(every node: the CSV).",
+        data=curves,
     )
-    report.table(curves.round(4), name="gsp_convergence", caption="")
 
 
-def _draw(concepts: list[Chains], source: Path, report: Any, opts: Any, model: Any) -> None:
-    """The aggregates drawn on the identity most chains showed, as participants saw them."""
-    if model is None or not opts.render:
-        return
-    from emogen.analysis.face_sheets import face_sheet
-    from emogen.appearance.identities import resolve_identity
-    from emogen.errors import EmoGenError
-    from emogen.study.export import identities_from_table
-
-    table = _read(source, "identities")
-    known = {} if table is None else {n: i for (_, n), i in identities_from_table(table).items()}
+def _draw(concepts: list[Chains], tools: Any) -> None:
+    """The aggregates drawn on the identity most of their chains showed."""
     genes = np.stack([c.finals.mean(axis=0) for c in concepts])
-    eye = len(concepts[0].genes) == len(model.rig.gene_names(True))
-    try:
-        weights = model.rig.expand(genes, eye)
-        idents = [
-            resolve_identity(max(set(c.identities), key=c.identities.count), known)
-            for c in concepts
-        ]
-        path = face_sheet(
-            model,
-            weights,
-            [c.emotion for c in concepts],
-            report.figures / "gsp_aggregates.png",
-            size=opts.render_size,
-            columns=min(4, len(concepts)),
-            identities=idents,
-        )
-    except EmoGenError as exc:
-        report.paragraph(f"The aggregates are not drawn: {exc}")
-        return
-    report.figure(path, "GSP chain aggregates, drawn on the identity their chains showed.")
+    idents = [max(set(c.identities), key=c.identities.count) for c in concepts]
+    why = tools.face_sheet(
+        genes,
+        [c.emotion for c in concepts],
+        idents,
+        "gsp_aggregates.png",
+        "GSP chain aggregates, drawn on the identity their chains showed (shape weights).",
+    )
+    if why is not None:
+        tools.report.paragraph(f"The aggregates are not drawn: {why}.")
 
 
 def _between(concepts: list[Chains], rng: Any, alpha: float, report: Any) -> list[dict[str, Any]]:
@@ -164,9 +155,8 @@ def _between(concepts: list[Chains], rng: Any, alpha: float, report: Any) -> lis
 
 
 def _versus_ga(
-    concepts: list[Chains], source: Path, rng: Any, alpha: float, report: Any
+    concepts: list[Chains], finals: pd.DataFrame | None, rng: Any, alpha: float, report: Any
 ) -> list[dict[str, Any]]:
-    finals = _read(source, "final_faces")
     rows = []
     for c in concepts:
         ga = participant_means(finals, c.emotion, c.genes) if finals is not None else None

@@ -14,7 +14,6 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 from datetime import datetime
-from pathlib import Path
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -322,14 +321,12 @@ class GspTask:
     def state_facts(self, state: str | None) -> dict[str, Any]:
         return {}
 
-    def analysis_section(
-        self, source: Path, report: Any, summary: dict[str, Any], opts: Any, model: Any
-    ) -> None:
+    def analysis_section(self, tools: Any, summary: dict[str, Any]) -> None:
         """``emogen analyse``'s section on the export's GSP chains
         (:mod:`emogen.tasks.gsp.analysis_report`)."""
         from emogen.tasks.gsp.analysis_report import gsp_section
 
-        gsp_section(source, report, summary, opts, model)
+        gsp_section(tools, summary)
 
     def progress_step(
         self, status: str, generation: int, generations: int

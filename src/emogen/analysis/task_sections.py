@@ -1,0 +1,107 @@
+"""``emogen analyse``'s sections that tasks write themselves (a task's optional
+``analysis_section(tools, summary)``, :mod:`emogen.tasks.protocol`).
+
+Tasks sit below the analysis in the package's layers, so a task's section does not import it:
+it is handed :class:`TaskTools` — the export's tables, the report, new figures saved in the
+report's formats, faces drawn as participants saw them — and fills ``summary`` under its name.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from emogen.analysis import plots
+from emogen.analysis.study_export import read_table
+from emogen.tasks.registry import TASKS
+
+if TYPE_CHECKING:
+    import pandas as pd
+    from matplotlib.figure import Figure
+
+    from emogen.analysis.analyse_options import AnalysisOptions
+    from emogen.analysis.report import Report
+    from emogen.model.face import FaceModel
+
+
+@dataclass(frozen=True)
+class TaskTools:
+    """What a task's analysis section works with."""
+
+    source: Path
+    report: Report
+    opts: AnalysisOptions
+    model: FaceModel | None
+
+    def table(self, name: str) -> pd.DataFrame | None:
+        """The study export's table ``name`` (None where the export has none)."""
+        return read_table(self.source, name, required=False)
+
+    def new_figure(self, width: float, height: float) -> Figure:
+        return plots.new_figure(width, height)
+
+    def style(self, i: int) -> dict[str, Any]:
+        """The line style of the i-th series (the report's colours and markers)."""
+        return {"color": plots.colour(i), "marker": plots.marker(i)}
+
+    def legend(self, ax: Any, n_entries: int) -> None:
+        plots.legend_outside(ax, n_entries)
+
+    def save_figure(self, fig: Figure, name: str, caption: str) -> Path:
+        """The figure saved in the report's formats and shown in the report."""
+        path = plots.save_figure(fig, self.report.figures / name)
+        self.report.figure(path, caption)
+        return path
+
+    def face_sheet(
+        self,
+        genes: np.ndarray,
+        labels: Sequence[str],
+        identities: Sequence[str],
+        name: str,
+        caption: str,
+    ) -> str | None:
+        """Faces given by genes drawn on their identities, as participants saw them (shape
+        weights; the study's own identities from the export's ``identities`` table); None when
+        drawn, else why not (no model, ``--no-render``, an unknown identity)."""
+        if self.model is None or not self.opts.render:
+            return "no face model, or --no-render"
+        from emogen.analysis.face_sheets import face_sheet
+        from emogen.appearance.identities import resolve_identity
+        from emogen.errors import EmoGenError
+        from emogen.study.export import identities_from_table
+
+        table = self.table("identities")
+        known = (
+            {} if table is None else {n: i for (_, n), i in identities_from_table(table).items()}
+        )
+        rig = self.model.rig
+        eye = genes.shape[1] == len(rig.gene_names(True))
+        try:
+            idents = [resolve_identity(i, known) for i in identities]
+            path = face_sheet(
+                self.model,
+                rig.expand(genes, eye),
+                list(labels),
+                self.report.figures / name,
+                size=self.opts.render_size,
+                columns=min(4, len(labels)),
+                identities=idents,
+            )
+        except EmoGenError as exc:
+            return str(exc)
+        self.report.figure(path, caption)
+        return None
+
+
+def task_sections(tools: TaskTools, summary: dict[str, Any], step: Callable[[str], None]) -> None:
+    """Every registered task's own section, where it has one."""
+    for task in TASKS.values():
+        section = getattr(task, "analysis_section", None)
+        if section is not None:
+            step(f"{task.name} blocks")
+            section(tools, summary)
