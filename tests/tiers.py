@@ -24,6 +24,7 @@ _PARALLEL = "takes seconds in the fast tier (s, two xdist workers, load ~6)"
 
 #: Moved from the fast tier to ``slow`` (issue #38: `make check` in ≤ 3 minutes).
 SLOW: dict[str, str] = {
+    "tests/ga/test_motion.py::test_interpenetration_between_keyframes_stays_within_the_measured_bound": f"{_SECONDS}: 39",
     "tests/analysis/test_analyse_people.py::test_one_repetition_says_why_there_is_no_reliability": f"{_SECONDS}: 4.2",
     "tests/analysis/test_analyse_people.py::test_reliability_and_groups_with_the_participant_as_unit": f"{_SECONDS}: 6.8 (+24 s fixture)",
     "tests/analysis/test_analyse_simulation.py::test_analyse_simulations_end_to_end": f"{_SECONDS}: 3.2",

@@ -37,6 +37,7 @@ def test_a_dynamic_run_replays_exactly_and_survives_its_json_state(ict_model, va
         "clip_s": 1.5,
         "hold_s": 0.5,
         "min_segment_s": 0.08,
+        "keyframes": 21,
     }
     restored = Engine.from_json(engine.to_json(), ict_model.rig)
     assert restored.genome == GENOME
@@ -83,3 +84,20 @@ def test_a_state_with_a_bad_genome_is_refused_by_name(ict_model) -> None:
     state["genome"]["clip_s"] = 99
     with pytest.raises(ConfigError, match=r"clip_s must be in \[0.2, 10\] seconds; got 99"):
         Engine.from_json(json.dumps(state), ict_model.rig)
+
+
+def test_a_corrected_dynamic_population_carries_its_keyframe_correctives(ict_model) -> None:
+    from emogen.ga.corrector import correctives_of
+
+    engine = Engine(
+        GAConfig(), ict_model.rig, 4, genome=GENOME, corrector=correctives_of(ict_model)
+    )
+    pop = engine.ask()
+    keyed = pop.keyframe_correctives
+    assert keyed is not None and keyed.shape == (10, GENOME.keyframes, len(pop.corrective_names))
+    assert keyed[:, 0].max() == 0 and keyed[:, -1].max() == 0  # every clip starts and ends at rest
+    restored = Engine.from_json(
+        engine.to_json(), ict_model.rig, corrector=correctives_of(ict_model)
+    )
+    assert restored.ask().keyframe_correctives.tobytes() == keyed.tobytes()
+    assert pop.row(3).keyframe_correctives.shape == (1, GENOME.keyframes, keyed.shape[2])

@@ -102,12 +102,11 @@ def next_generation(
 ) -> Offspring:
     """P_{g+1} of R runs from P_g and their selections [α_elite, p_g] = S(P_g) (Algorithm 1).
 
-    genes : (R, N, K) float, the current populations P_g (generation ``generation`` = g).
-    elite : (R,) int, index of α_{g,elite} in each P_g; others : (R, |p_g|) int, indices of
-    p_g (every run of a batch has the same number of selections). ``random_faces_count`` is the
-    diversity boost (4 of 10), ``mutation_genes`` m (2), ``random_genes`` x (6). Slots are
-    numbered fc = 1..N as in the paper. ``genome``: what a gene is (:mod:`emogen.ga.genome`);
-    a dynamic genome's genes are (R, N, K, 6), and its M, R and A sample a gene's curve too.
+    genes : (R, N, K) float (R, N, K, 6 with a dynamic ``genome``, :mod:`emogen.ga.genome`),
+    the populations P_g (``generation`` = g). elite : (R,) int, index of α_{g,elite} in each P_g;
+    others : (R, |p_g|) int, indices of p_g (the same count in every run). ``random_faces_count``
+    is the diversity boost (4 of 10), ``mutation_genes`` m (2), ``random_genes`` x (6). Slots
+    are numbered fc = 1..N as in the paper.
 
     Our reading of Algorithm 1, line by line (S = |p_g| + 1, the number of selections):
 
@@ -145,8 +144,7 @@ def next_generation(
     selected = np.concatenate([elite[:, None], others], axis=1)
     _check_indices("selection", selected, n)
     _check_distinct("selections", selected)
-    s = selected.shape[1]
-    n_bred = n - random_faces_count
+    s, n_bred = selected.shape[1], n - random_faces_count
     runs = np.arange(r)
     out = np.zeros_like(genes)
     parents = np.full((r, n, 2), -1, dtype=np.int64)

@@ -8,9 +8,14 @@ The engine takes its corrector as an argument (the GA does not import the correc
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
+
+from emogen.ga.genome import DynamicGenome, Genome
+from emogen.ga.motion import correct_keyframes
+from emogen.ga.population import Population, readonly
 
 #: Corrects a batch of full weight vectors before they are shown: returns
 #: (corrective names, (n_faces, C) corrective weights). ``correctives_of(model)`` makes one.
@@ -38,3 +43,23 @@ class ModelCorrector:
 def correctives_of(model: Any, solver: int | None = None) -> Corrector:
     """A :class:`ModelCorrector` of ``model`` (``solver``: default the current one)."""
     return ModelCorrector(model, solver)
+
+
+def corrected(
+    population: Population,
+    corrector: Corrector,
+    genome: Genome,
+    expand: Callable[[np.ndarray], np.ndarray],
+) -> Population:
+    """``population`` with its corrective weights; a dynamic one's also at its keyframes
+    (:func:`emogen.ga.motion.correct_keyframes`; ``expand``: genes to full weight vectors)."""
+    names, values = corrector(population.weights)
+    keyed = None
+    if isinstance(genome, DynamicGenome):
+        keyed = readonly(correct_keyframes(genome, population.genes, expand, corrector)[1])
+    return replace(
+        population,
+        correctives=readonly(np.asarray(values)),
+        corrective_names=tuple(names),
+        keyframe_correctives=keyed,
+    )

@@ -10,7 +10,6 @@ survives a JSON round trip (:meth:`Engine.to_json` / :meth:`Engine.from_json`) b
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +19,7 @@ import orjson
 from emogen.config import GAConfig
 from emogen.errors import ConfigError, SelectionError
 from emogen.ga.algorithm import Offspring, classical_next_generation, next_generation
-from emogen.ga.corrector import Corrector, correctives_of
+from emogen.ga.corrector import Corrector, corrected, correctives_of
 from emogen.ga.draws import CURRENT_STREAM, block_size, check_stream, generation_draws
 from emogen.ga.genome import STATIC, Genome, genome_of
 from emogen.ga.init import first_generation, read_fixed_sets
@@ -267,10 +266,8 @@ class Engine:
         """The population with its corrective weights, when the engine has a corrector."""
         if self.corrector is None:
             return population
-        names, values = self.corrector(population.weights)
-        return replace(
-            population, correctives=readonly(np.asarray(values)), corrective_names=tuple(names)
-        )
+        expand = lambda genes: self.rig.expand(genes, self.config.eye_motion)  # noqa: E731
+        return corrected(population, self.corrector, self.genome, expand)
 
     # ---- records -------------------------------------------------------------------------
     def state(self) -> dict[str, Any]:
@@ -344,16 +341,7 @@ class Engine:
 
     def _population_from(self, d: dict[str, Any]) -> Population:
         tail = () if self.genome.params is None else (len(self.genome.params),)
-        genes = np.array(d["genes"], dtype=np.float64).reshape(-1, len(self.gene_names), *tail)
-        return Population(
-            genes=readonly(genes),
-            weights=readonly(self._expand(genes)),
-            ids=readonly(np.array(d["ids"], dtype=np.int64)),
-            parent_ids=readonly(np.array(d["parent_ids"], dtype=np.int64).reshape(-1, 2)),
-            operators=readonly(np.array(d["operators"], dtype=str)),
-            generation=int(d["generation"]),
-            attempt=int(d["attempt"]),
-        )
+        return Population.from_dict(d, (len(self.gene_names), *tail), self._expand)
 
     def save(self, path: Path) -> None:
         Path(path).write_text(self.to_json())

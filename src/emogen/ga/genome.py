@@ -91,12 +91,15 @@ class DynamicGenome:
     """Genes with a time course over a clip of ``clip_s`` seconds, then ``hold_s`` at rest.
 
     ``min_segment_s``: the shortest rise or fall (also the least time left after the onset), so
-    that no curve jumps. The page loops clip + hold; :func:`frame_times` gives the frames.
+    that no curve jumps. ``keyframes``: the times, evenly over the clip, at which a face's
+    correctives are computed (:mod:`emogen.ga.motion`; between them they are interpolated). The
+    page loops clip + hold; :func:`frame_times` gives the frames.
     """
 
     clip_s: float = 1.25
     hold_s: float = 0.75
     min_segment_s: float = 0.08
+    keyframes: int = 21
 
     params = PARAMS
 
@@ -109,6 +112,14 @@ class DynamicGenome:
             raise ConfigError(f"dynamic clip_s must be in [0.2, 10] seconds; got {self.clip_s}")
         if not 0 <= self.hold_s <= 10:
             raise ConfigError(f"dynamic hold_s must be in [0, 10] seconds; got {self.hold_s}")
+        if (
+            isinstance(self.keyframes, bool)
+            or not isinstance(self.keyframes, int)
+            or not 2 <= self.keyframes <= 200
+        ):
+            raise ConfigError(
+                f"dynamic keyframes must be an integer in [2, 200]; got {self.keyframes!r}"
+            )
         if not 0 < self.min_segment_s <= self.clip_s / 4:
             raise ConfigError(
                 f"dynamic min_segment_s must be in (0, clip_s / 4 = {self.clip_s / 4}]; got "
@@ -206,6 +217,7 @@ class DynamicGenome:
             "clip_s": self.clip_s,
             "hold_s": self.hold_s,
             "min_segment_s": self.min_segment_s,
+            "keyframes": self.keyframes,
         }
 
 
@@ -268,10 +280,15 @@ def genome_of(spec: dict[str, Any] | None) -> Genome:
     if not isinstance(spec, dict) or spec.get("kind") != "dynamic":
         raise ConfigError(f"genome must be null or {{kind = 'dynamic', …}}; got {spec!r}")
     rest = {k: v for k, v in spec.items() if k != "kind"}
-    unknown = sorted(set(rest) - {"clip_s", "hold_s", "min_segment_s"})
+    unknown = sorted(set(rest) - {"clip_s", "hold_s", "min_segment_s", "keyframes"})
     if unknown:
         raise ConfigError(f"dynamic genome: unknown key(s) {unknown}")
     return DynamicGenome(**rest)
+
+
+def keyframe_times(genome: DynamicGenome) -> np.ndarray:
+    """The times (s) at which faces are corrected: ``keyframes`` evenly over [0, clip_s]."""
+    return np.linspace(0.0, genome.clip_s, genome.keyframes)
 
 
 def frame_times(genome: DynamicGenome, fps: float) -> np.ndarray:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,6 +30,9 @@ class Population:
     correctives : (n_faces, C) float or None, corrective weights computed after the core
       weights by the engine's corrector (combinational, then collision); never evolved
     corrective_names : (C,) names of those columns
+    keyframe_correctives : (n_faces, F, C) float or None, a dynamic face's corrective weights at
+      the genome's keyframes (:func:`emogen.ga.motion.correct_keyframes`); ``correctives`` are
+      then those of the peak profile ``weights``
     """
 
     genes: np.ndarray
@@ -40,6 +44,7 @@ class Population:
     attempt: int
     correctives: np.ndarray | None = None
     corrective_names: tuple[str, ...] = ()
+    keyframe_correctives: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.ids)
@@ -57,6 +62,7 @@ class Population:
             self.attempt,
             None if self.correctives is None else readonly(self.correctives[s]),
             self.corrective_names,
+            None if self.keyframe_correctives is None else readonly(self.keyframe_correctives[s]),
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -68,3 +74,23 @@ class Population:
             "operators": self.operators.tolist(),
             "genes": self.genes.tolist(),
         }
+
+    @classmethod
+    def from_dict(
+        cls,
+        d: dict[str, Any],
+        gene_shape: tuple[int, ...],
+        expand: Callable[[np.ndarray], np.ndarray],
+    ) -> Population:
+        """A population stored by :meth:`to_dict` (genes (n, *gene_shape); ``expand`` makes
+        its weights), uncorrected."""
+        genes = np.array(d["genes"], dtype=np.float64).reshape(-1, *gene_shape)
+        return cls(
+            genes=readonly(genes),
+            weights=readonly(expand(genes)),
+            ids=readonly(np.array(d["ids"], dtype=np.int64)),
+            parent_ids=readonly(np.array(d["parent_ids"], dtype=np.int64).reshape(-1, 2)),
+            operators=readonly(np.array(d["operators"], dtype=str)),
+            generation=int(d["generation"]),
+            attempt=int(d["attempt"]),
+        )
