@@ -166,8 +166,8 @@ def test_corrected_prototypes_agree_with_offscreen(chromium: Any, site: Site, ic
     study sends them — shape weights then corrective weights — agree with the offscreen
     renderer's corrected face within the same limit as uncorrected faces.
 
-    Not the fearful prototype: it differs by 0.93/255 (measured), on the sclera under the
-    raised upper lids; rig 1's corrected fear, and rig 2's uncorrected, agree (docs/render.md)."""
+    Not the fearful prototype: it differs by 0.93/255 (measured), a dark crease band on the
+    upper lids' skin; rig 1's corrected fear, and rig 2's uncorrected, agree (docs/render.md)."""
     from emogen.correct import correct_faces
     from emogen.render.gl import downsample
 
