@@ -27,7 +27,9 @@ import emogen
 from emogen.appearance.identities import PRESETS
 from emogen.render.renderer import Renderer
 
-PRESET_NAMES = tuple(f"{s}-{t}" for s in ("female", "male") for t in ("light", "medium", "dark"))
+PRESET_NAMES = tuple(
+    f"{s}-{t}" for s in ("female", "male") for t in ("light", "medium", "dark", "dark-v2")
+)
 SIZE = 512
 RADIUS = 0.015  # of the image size
 
@@ -106,9 +108,10 @@ def main() -> None:
     print("Weber contrast of relative luminance, neutral face, 512², face framing")
     print(text)
     for sex in ("female", "male"):
-        light, dark = rows[f"{sex}-light"], rows[f"{sex}-dark"]
-        for k in ("brow/forehead", "lip/skin", "mouth line/lip"):
-            print(f"{sex}-dark {k}: {dark[k] / light[k]:.2f} × {sex}-light's")
+        for dark_name in (f"{sex}-dark", f"{sex}-dark-v2"):
+            light, dark = rows[f"{sex}-light"], rows[dark_name]
+            for k in ("brow/forehead", "lip/skin", "mouth line/lip"):
+                print(f"{dark_name} {k}: {dark[k] / light[k]:.2f} × {sex}-light's")
 
 
 if __name__ == "__main__":

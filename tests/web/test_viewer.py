@@ -161,20 +161,20 @@ def test_browser_and_offscreen_agree(chromium: Any, site: Site, ict_model) -> No
 
 
 def test_corrected_prototypes_agree_with_offscreen(chromium: Any, site: Site, ict_model) -> None:  # type: ignore[no-untyped-def]
-    """The happy, angry and sad prototypes, corrected (rig 2's reach shapes active: the
-    nasolabial fold, the lid bulge, the knit brows, AU1+4), and surprise, sent to the page as a
-    study sends them — shape weights then corrective weights — agree with the offscreen
-    renderer's corrected face within the same limit as uncorrected faces.
+    """The happy, angry, sad and fearful prototypes, corrected (rig 2's reach shapes active:
+    the nasolabial fold, the lid bulge, the knit brows, AU1+4, the lip stretch), and surprise,
+    sent to the page as a study sends them — shape weights then corrective weights — agree with
+    the offscreen renderer's corrected face within the same limit as uncorrected faces.
 
-    Not the fearful prototype: it differs by 0.93/255 (measured), on the sclera under the
-    raised upper lids; rig 1's corrected fear, and rig 2's uncorrected, agree (docs/render.md)."""
+    Fear was 0.93/255 off (a dark crease band on the upper lids) until the reach shapes' normal
+    deltas made the viewer's linear blend of normals exact at their apex (docs/render.md)."""
     from emogen.correct import correct_faces
     from emogen.render.gl import downsample
 
     rig = ict_model.rig
     w = np.array(
         [rig.weights_from_names({g: 1.0 for g in rig.emotions[e].core}) for e in
-         ("happy", "angry", "sad", "surprised")]
+         ("happy", "angry", "sad", "surprised", "fearful")]
     )  # fmt: skip
     model, _ = vs.identity_model(ict_model, vs.IDENTITY)
     r = correct_faces(model, w)

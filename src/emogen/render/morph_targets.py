@@ -24,6 +24,7 @@ from emogen.model.geometry import vertex_normals
 from emogen.model.io.gltf_asset import CM_TO_M
 
 if TYPE_CHECKING:
+    from emogen.correct.correctives import Correctives
     from emogen.model.face import FaceModel
 
 CORRECTIVE_TOLERANCE_CM = 0.01
@@ -110,8 +111,39 @@ def morph_targets(
             [corrective_normals or n.startswith(REACH_PREFIX) for n in corrective_names]
         )
         cn[~keep] = 0.0
+        _exact_at_apex(model_correctives(model), neutral, triangles, normals0, delta, dn)
         cn[np.abs(cn).max(axis=-1) < corrective_normal_tolerance] = 0.0
     return MorphTargets(neutral, shapes, delta, normals0, dn, model.n_shapes, corrective_names)
+
+
+def _exact_at_apex(
+    c: Correctives,
+    neutral: np.ndarray,
+    triangles: np.ndarray,
+    normals0: np.ndarray,
+    delta: np.ndarray,
+    dn: np.ndarray,
+) -> None:
+    """Give each reach shape the normal delta that makes the viewer's blend of normals exact
+    where its drivers and it are at 1 (in place on ``dn``, the targets' normal deltas).
+
+    The viewer blends normals linearly (the neutral's plus Σ w·Δn); the offscreen renderer
+    recomputes them from the blended mesh. Where several large targets meet on little skin (fear:
+    inner and outer brow raise, brow lowering and the AU1+4 knit on the upper lid) the linear
+    blend tilted the lid fold's normals into a dark crease band, 0.93/255 off the offscreen
+    face; with this, 0.69/255 (docs/render.md). As a combinational corrective fixes its drivers' positions, its
+    normal delta now fixes their normals: Δn_c = n(neutral + Σ drivers' δ + Σ the correctives
+    of those drivers' δ) − n₀ − Σ their Δn.
+    """
+    s = len(c.shape_names)
+    drivers = [frozenset(c.drivers[i][c.driver_mask[i]].tolist()) for i in range(len(c.drivers))]
+    reach = [i for i, n in enumerate(c.combinational_names) if n.startswith(REACH_PREFIX)]
+    for i in sorted(reach, key=lambda i: len(drivers[i])):  # a reach shape's sub-blends first
+        # the driver shapes, and every combinational corrective they switch fully on (itself too)
+        on = [*sorted(drivers[i]), *(s + j for j, d in enumerate(drivers) if d <= drivers[i])]
+        others = [k for k in on if k != s + i]
+        apex = neutral + delta[on].sum(axis=0)
+        dn[s + i] = vertex_normals(apex, triangles) - normals0 - dn[others].sum(axis=0)
 
 
 def quantized(t: MorphTargets, corrective_tolerance_cm: float) -> EncodedTargets:
