@@ -30,3 +30,5 @@ class AnalysisOptions:
     exclusions: ExclusionRule | None = field(default_factory=ExclusionRule)
     # the command line that made the report (the methods block; default: this process's)
     command: str | None = None
+    # a retest study's export (``retest_of``): the between-session reliability section
+    retest: Path | None = None

@@ -99,6 +99,14 @@ ExclusionOpt = Annotated[
     ),
 ]
 
+RetestArg = Annotated[
+    Path | None,
+    typer.Argument(
+        help="A retest study's export (retest_of): adds the between-session reliability "
+        "(ICC across the two sessions, participants matched by id) to the report.",
+    ),
+]
+
 ExclusionsOpt = Annotated[
     bool,
     typer.Option(
@@ -108,6 +116,17 @@ ExclusionsOpt = Annotated[
 ]
 
 
+def check_retest(first: Any, second: Any) -> None:
+    """``emogen analyse FIRST RETEST``: both must be study exports (participants to match)."""
+    from emogen.errors import ConfigError
+
+    if (first.kind, second.kind) != ("study", "study"):
+        raise ConfigError(
+            f"a retest analysis needs two study exports; {first.source} is a {first.kind} "
+            f"output and {second.source} a {second.kind} output"
+        )
+
+
 @friendly_errors
 def analyse_command(
     data: Annotated[
@@ -115,6 +134,7 @@ def analyse_command(
         typer.Argument(help="A study export folder (emogen study export) or simulation output."),
     ],
     out: Annotated[Path, typer.Option("--out", "-o", help="Report folder.")],
+    retest: RetestArg = None,
     config: ConfigOpt = None,
     noise_runs: NoiseRunsOpt = 500,
     gmm_dims: GmmDimsOpt = 2,
@@ -149,6 +169,8 @@ def analyse_command(
 
     rule = rule_from_options(exclusion or []) if exclusions else None
     dataset = load_dataset(data)  # fails fast on a folder that is not data
+    if retest is not None:
+        check_retest(dataset, load_dataset(retest))
     if participants is not None:  # a wrong participant table before any work
         from emogen.analysis.analyse_people import check_participants
 
@@ -171,10 +193,14 @@ def analyse_command(
         participants=participants,
         group_column=group_column,
         exclusions=rule,
+        retest=retest,
         command=(
             shlex.join(["emogen", *sys.argv[1:]])
             if sys.argv[1:2] == ["analyse"]
-            else f"emogen analyse {shlex.quote(str(data))} --out {shlex.quote(str(out))} …"
+            else shlex.join(
+                ["emogen", "analyse", *map(str, filter(None, [data, retest])), "--out", str(out)]
+            )
+            + " …"
         ),
     )
     with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
