@@ -155,6 +155,7 @@ def analyse_command(
 ) -> None:
     """Analyse a study export or simulation output: error distributions, KL per generation,
     bias and repeatability bins, PCA + GMM separability, GA-noise test, prototypes, renders.
+    With a second study export (a retest study, retest_of): the between-session reliability.
 
     Writes OUT/index.html and OUT/README.md with figures/ and tables/ (CSV), and analysis.json.
     """
