@@ -127,21 +127,24 @@ def retest_section(
     with the same exclusion rule as the first (nothing where no retest export is given)."""
     if opts.retest is None:
         return
-    from emogen.analysis.analyse_people import prepare_people
+    from emogen.analysis.exclusions import apply_exclusions
+    from emogen.analysis.people import load_people
+    from emogen.errors import EmoGenError
 
     report.heading("Between-session reliability (retest)")
-    second = prepare_people(opts.retest, opts)
-    if second.kept is None:
-        report.paragraph(f"No between-session reliability from {opts.retest}: {second.problem}")
-        return
     try:
-        table = retest_table(people, second.kept)
-    except DataError as exc:
-        report.paragraph(f"No between-session reliability: {exc}.")
+        second = load_people(opts.retest)
+        everyone = second.n_participants
+        if opts.exclusions is not None and not second.faces.empty:
+            second, _ = apply_exclusions(second, opts.exclusions)
+        table = retest_table(people, second)
+    except EmoGenError as exc:
+        report.paragraph(f"No between-session reliability from {opts.retest}: {exc}.")
         return
     report.paragraph(
-        f"The retest export {opts.retest.name}: {second.kept.n_participants} participants "
-        f"analysed ({len(second.excluded)} excluded by the same rule).\n\n{retest_text(table)}"
+        f"The retest export {opts.retest.name}: {second.n_participants} participants "
+        f"analysed ({everyone - second.n_participants} excluded by the same rule).\n\n"
+        f"{retest_text(table)}"
     )
     report.table(table, "retest", "Between-session ICC per emotion × identity (genes)")
     summary["retest"] = {

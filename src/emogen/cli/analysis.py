@@ -116,6 +116,14 @@ ExclusionsOpt = Annotated[
 ]
 
 
+def command_line(data: Path, retest: Path | None, out: Path) -> str:
+    """The command that made the report (this process's, or the arguments given)."""
+    if sys.argv[1:2] == ["analyse"]:
+        return shlex.join(["emogen", *sys.argv[1:]])
+    given = [str(p) for p in (data, retest) if p is not None]
+    return shlex.join(["emogen", "analyse", *given, "--out", str(out)]) + " …"
+
+
 def check_retest(first: Any, second: Any) -> None:
     """``emogen analyse FIRST RETEST``: both must be study exports (participants to match)."""
     from emogen.errors import ConfigError
@@ -195,14 +203,7 @@ def analyse_command(
         group_column=group_column,
         exclusions=rule,
         retest=retest,
-        command=(
-            shlex.join(["emogen", *sys.argv[1:]])
-            if sys.argv[1:2] == ["analyse"]
-            else shlex.join(
-                ["emogen", "analyse", *map(str, filter(None, [data, retest])), "--out", str(out)]
-            )
-            + " …"
-        ),
+        command=command_line(data, retest, out),
     )
     with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         analyse(dataset, tmp, model=model, options=options, progress=stage_printer(progress))
