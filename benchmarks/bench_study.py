@@ -114,7 +114,7 @@ class ServerProcess:
     def url(self) -> str:
         return f"http://127.0.0.1:{self.port}"
 
-    def start(self, timeout: float = 120.0) -> ServerProcess:
+    def start(self, timeout: float = 300.0) -> ServerProcess:
         env = {**os.environ, "EMOGEN_RESEARCHER_TOKEN": BENCH_TOKEN, **self.env}
         with open(self.log, "ab") as log:
             self.proc = subprocess.Popen(

@@ -69,7 +69,7 @@ SLOW: dict[str, str] = {
     "tests/study/test_first_wave.py::test_a_concurrent_wave_without_a_pool_gets_only_fallback_faces": f"{_SECONDS}: 6.6",
     "tests/study/test_first_wave.py::test_a_pool_from_a_pilot_gives_the_first_wave_scored_others_faces": f"{_SECONDS}: 6.8",
     "tests/study/test_retest.py::test_between_and_within_session_icc_recover_planted_values": f"{_SECONDS}: 2.6",
-    "tests/study/test_retest.py::test_simulated_retest_of_20_participants": f"{_SECONDS}: 19.6",
+    "tests/study/test_retest.py::test_simulated_retest_of_20_participants": f"{_SECONDS}: 41.2",
     "tests/study/test_tidy_export.py::test_csv_export_keeps_seeds_exact_for_r_and_times_with_their_zone": f"{_SECONDS}: 3.3 (R)",
     "tests/tasks/test_gsp_analysis.py::test_each_aggregate_lands_on_the_planted_prototype": f"{_SECONDS}: 13.8 (40 simulated participants)",
     "tests/tasks/test_gsp_analysis.py::test_chains_converge_and_the_concepts_separate": f"{_SECONDS}: 13.8 (its fixture, shared)",

@@ -112,7 +112,7 @@ def test_a_retest_study_cannot_be_its_own_retest() -> None:
         study_from_dict({**FIRST, "retest_of": "first"})
 
 
-def test_simulated_retest_of_20_participants(tmp_path: Path, ict_model: Any) -> None:
+def test_simulated_retest_of_20_participants(tmp_path: Path, ict_model: Any, ict_dir: Path) -> None:
     url = f"sqlite:///{tmp_path / 'sim.sqlite'}"
     design = SimulatedDesign(spread=1.0)
     for data in (FIRST, RETEST):  # the same seed: the same simulated people, stable prototypes
@@ -151,3 +151,24 @@ def test_simulated_retest_of_20_participants(tmp_path: Path, ict_model: Any) -> 
     second.faces["participant_id"] = second.faces["participant_id"].map(moved)
     null = retest_table(load_people(tmp_path / "first"), second)
     assert ((null["ci_low"] < 0) & (null["ci_high"] > 0)).all(), null
+    # emogen analyse FIRST RETEST: the same figures in the report, which says what it reports
+    args = ["analyse", str(tmp_path / "first"), str(tmp_path / "first-retest")]
+    quick = ["--model", str(ict_dir), "--no-render", "--noise-runs", "20"]
+    result = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "a"), *quick])
+    assert result.exit_code == 0, result.output
+    readme = (tmp_path / "a" / "README.md").read_text()
+    assert "## Between-session reliability (retest)" in readme
+    assert "This report's reliability is the between-session one" in readme
+    assert "20 participants analysed (0 excluded by the same rule)" in readme
+    first_row = table.iloc[0]
+    assert (
+        f"between-session ICC {first_row['icc_between_sessions']:.2f} "
+        f"[{first_row['ci_low']:.2f}, {first_row['ci_high']:.2f}]"
+    ) in readme
+    reported = pd.read_csv(tmp_path / "a" / "tables" / "retest.csv")
+    assert len(reported) == 2
+
+    missing = tmp_path / "no-such-export"
+    bad = CliRunner().invoke(app, [*args[:2], str(missing), "--out", str(tmp_path / "b"), *quick])
+    assert bad.exit_code != 0 and str(missing) in bad.output, bad.output
+    assert not (tmp_path / "b").exists()

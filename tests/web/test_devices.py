@@ -36,6 +36,8 @@ SCREENSHOTS = (
     else Path("/tmp/emogen-device-screenshots")
 )
 _ = (browser, viewer_bundle)  # fixtures, requested by name
+#: The rating question names the emotion asked for (as the example design's does).
+RATING = {"question": "How well does this face show {EMOTION}?"}
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +46,7 @@ def site(
 ) -> Iterator[ServerProcess]:  # type: ignore[no-untyped-def]
     """One server (SQLite) for the module; each test starts its own participant."""
     tmp = tmp_path_factory.mktemp("devices")
-    config = write_study_toml(BROWSER_STUDY, tmp / "devices.toml")
+    config = write_study_toml({**BROWSER_STUDY, "rating": RATING}, tmp / "devices.toml")
     srv = ServerProcess(config, f"sqlite:///{tmp / 'study.sqlite'}", ict_dir, tmp / "server.log")
     yield srv.start()
     srv.stop()
@@ -168,7 +170,9 @@ def test_every_view_fits_the_screen(
     inside_viewport(page, "#prompt")  # the prompt stays above the rating ("Make the face …")
     assert page.inner_text("#prompt").startswith("Make the face look")
     inside_viewport(page, "#rating-question")
-    assert page.inner_text("#rating-question").startswith("How well does this face show")
+    asked = page.inner_text("#prompt").removeprefix("Make the face look ")
+    assert page.inner_text("#rating-question") == f"How well does this face show {asked}?"
+    assert asked in ("HAPPY", "SAD")
     page.get_by_label("4", exact=True).check()
     inside_viewport(page, "#rate")
     if (width, height) == (390, 844):

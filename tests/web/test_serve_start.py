@@ -21,8 +21,12 @@ def fake_app() -> Any:
     config = study_from_dict(SMALL_STUDY)
     store = SimpleNamespace(describe=lambda: "sqlite:///x.sqlite", dispose=lambda: None)
     service = SimpleNamespace(n_trials=config.n_trials)  # the banner says how many trials
+    made: list[float] = []  # when every identity's GLB was made (before listening)
+    glbs = SimpleNamespace(made=made, make_all=lambda: made.append(time.monotonic()))
     return SimpleNamespace(
-        state=SimpleNamespace(config=config, store=store, service=service, researcher_token=None)
+        state=SimpleNamespace(
+            config=config, store=store, service=service, researcher_token=None, glbs=glbs
+        )
     )
 
 
@@ -67,12 +71,17 @@ def test_the_loading_line_then_the_banner_once_the_address_accepts_connections(
 ) -> None:
     printed_before: list[str] = []
 
+    apps: list[Any] = []
+
     def make(*args: Any, **kwargs: Any) -> Any:
         printed_before.append(capsys.readouterr().out)
-        return fake_app()
+        apps.append(fake_app())
+        return apps[-1]
 
     before_listening: list[str] = []
     run(monkeypatch, make, listening_server(capsys, before_listening), free_port())
+    # every identity's 3D model made while loading, not at a participant's first request
+    assert len(apps[0].state.glbs.made) == 1
     after = capsys.readouterr().out
     assert printed_before[0].startswith("Loading the study and the face model")
     assert "compile the face correction" in printed_before[0]

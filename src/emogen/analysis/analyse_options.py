@@ -33,3 +33,5 @@ class AnalysisOptions:
     command: str | None = None
     # the primary tests (emogen.analysis.plan.PLANNABLE); every other test is exploratory
     primary: tuple[str, ...] = DEFAULT_PRIMARY
+    # a retest study's export (``retest_of``): the between-session reliability section
+    retest: Path | None = None

@@ -23,6 +23,7 @@ from emogen.analysis.identity import identity_section
 from emogen.analysis.people import load_people, read_participant_table
 from emogen.analysis.quality_report import quality_section
 from emogen.analysis.reliability_report import reliability_section
+from emogen.analysis.retest import retest_section
 from emogen.errors import ConfigError, EmoGenError
 
 if TYPE_CHECKING:
@@ -126,6 +127,7 @@ def people_sections(
         ("conditions (emotion × identity)", conditions_section),
         ("perceptive fields", fields_section),
         ("identity effects", identity_section),
+        ("between-session reliability", retest_section),
     ):
         step(name)
         section(people, report, summary, opts, model)

@@ -108,6 +108,14 @@ ExclusionOpt = Annotated[
     ),
 ]
 
+RetestArg = Annotated[
+    Path | None,
+    typer.Argument(
+        help="A retest study's export (retest_of): adds the between-session reliability "
+        "(ICC across the two sessions, participants matched by id) to the report.",
+    ),
+]
+
 ExclusionsOpt = Annotated[
     bool,
     typer.Option(
@@ -117,6 +125,25 @@ ExclusionsOpt = Annotated[
 ]
 
 
+def command_line(data: Path, retest: Path | None, out: Path) -> str:
+    """The command that made the report (this process's, or the arguments given)."""
+    if sys.argv[1:2] == ["analyse"]:
+        return shlex.join(["emogen", *sys.argv[1:]])
+    given = [str(p) for p in (data, retest) if p is not None]
+    return shlex.join(["emogen", "analyse", *given, "--out", str(out)]) + " …"
+
+
+def check_retest(first: Any, second: Any) -> None:
+    """``emogen analyse FIRST RETEST``: both must be study exports (participants to match)."""
+    from emogen.errors import ConfigError
+
+    if (first.kind, second.kind) != ("study", "study"):
+        raise ConfigError(
+            f"a retest analysis needs two study exports; {first.source} is a {first.kind} "
+            f"output and {second.source} a {second.kind} output"
+        )
+
+
 @friendly_errors
 def analyse_command(
     data: Annotated[
@@ -124,6 +151,7 @@ def analyse_command(
         typer.Argument(help="A study export folder (emogen study export) or simulation output."),
     ],
     out: Annotated[Path, typer.Option("--out", "-o", help="Report folder.")],
+    retest: RetestArg = None,
     config: ConfigOpt = None,
     noise_runs: NoiseRunsOpt = 500,
     gmm_dims: GmmDimsOpt = 2,
@@ -145,6 +173,7 @@ def analyse_command(
 ) -> None:
     """Analyse a study export or simulation output: error distributions, KL per generation,
     bias and repeatability bins, PCA + GMM separability, GA-noise test, prototypes, renders.
+    With a second study export (a retest study, retest_of): the between-session reliability.
 
     Writes OUT/index.html and OUT/README.md with figures/ and tables/ (CSV), and analysis.json.
     """
@@ -161,6 +190,8 @@ def analyse_command(
     rule = rule_from_options(exclusion or []) if exclusions else None
     planned = check_primary(tuple(primary) if primary else DEFAULT_PRIMARY)
     dataset = load_dataset(data)  # fails fast on a folder that is not data
+    if retest is not None:
+        check_retest(dataset, load_dataset(retest))
     if participants is not None:  # a wrong participant table before any work
         from emogen.analysis.analyse_people import check_participants
 
@@ -184,11 +215,8 @@ def analyse_command(
         group_column=group_column,
         exclusions=rule,
         primary=planned,
-        command=(
-            shlex.join(["emogen", *sys.argv[1:]])
-            if sys.argv[1:2] == ["analyse"]
-            else f"emogen analyse {shlex.quote(str(data))} --out {shlex.quote(str(out))} …"
-        ),
+        retest=retest,
+        command=command_line(data, retest, out),
     )
     with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         analyse(dataset, tmp, model=model, options=options, progress=stage_printer(progress))

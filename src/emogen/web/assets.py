@@ -51,6 +51,12 @@ class ModelGLBs:
         self._lock = threading.Lock()
         self._paths: dict[str, Path] = {}
 
+    def make_all(self) -> None:
+        """Every study identity's GLB made now (at the server's start), not when the first
+        participant reaches that identity."""
+        for identity in self.identities:
+            self.path(identity)
+
     def path(self, identity: str) -> Path:
         """The GLB of ``identity`` (made on first use); unknown identities are not found."""
         try:

@@ -60,13 +60,18 @@ def _app(options: dict[str, Any]) -> FastAPI:
         limit = SESSION_LIMIT if text is None else RateLimit.parse(text)
     except ValueError as exc:
         raise ConfigError(f"--session-limit: {exc}") from None
-    return create_app(
+    app = create_app(
         config,
         options.get("database_url"),
         session_limit=limit,
         hsts=bool(options.get("hsts")),
         running_sessions=options.get("running_sessions") or "refuse",
     )
+    # every identity's face model (GLB) on disk before anyone arrives: made on first request,
+    # the page would wait for it at the switch to a new identity (20–30 s on a loaded
+    # machine: benchmarks/bench_design_walk.py); workers then read the parent's files
+    app.state.glbs.make_all()
+    return app
 
 
 def _die_with_parent(parent: int) -> None:
@@ -177,7 +182,7 @@ def _loaded_app(options: dict[str, Any], announce: bool) -> FastAPI:
         return _app(options)
     sys.stdout.write(
         "Loading the study and the face model (the first start after an install may also compile "
-        "the face correction: up to a minute) ... "
+        "the face correction and make each identity's 3D model: up to a minute or two) ... "
     )
     sys.stdout.flush()
     start = time.perf_counter()
