@@ -184,6 +184,9 @@ def test_cli_check_refuses_a_gene_the_rig_lacks(tmp_path: Path, ict_dir: Path) -
     assert result.exit_code == 1, result.output
     assert "blocks[1]: dimensions: ['smileWide'] are not genes of rig" in result.output
     assert "1 error, 0 warnings: not ready" in result.output
+    db = f"sqlite:///{tmp_path / 'pilot.sqlite'}"  # the simulated pilot refuses it the same way
+    result = CliRunner().invoke(app, ["study", "simulate", str(study), "--database-url", db])
+    assert result.exit_code == 2 and "blocks[1].dimensions: ['smileWide']" in result.output
     study.write_text(body.replace("{}", '"jawOpen", "mouthSmile"'))
     result = CliRunner().invoke(app, ["study", "check", str(study)])
     assert result.exit_code == 0, result.output
