@@ -61,7 +61,8 @@ def check_study_command(
     as_json: JsonOpt = False,
 ) -> None:
     """Check a study before it goes live: placeholders in every text, emotion words, identities,
-    the participant link, and how long a session takes (exit 1 when there are errors)."""
+    the genes blocks name (against the model's rig, where the model is found), the participant
+    link, and how long a session takes (exit 1 when there are errors)."""
     report = checked_study(config, with_rig=True)
     data = {
         "errors": [asdict(f) for f in report.errors],
