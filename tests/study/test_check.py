@@ -171,3 +171,24 @@ def test_serve_refuses_a_study_with_errors_before_it_loads(tmp_path: Path) -> No
     assert result.exit_code == 2, result.output
     assert "has 1 error" in result.output and "{EMOTIONS}" in result.output
     assert f"emogen study check {study}" in result.output
+
+
+def test_cli_check_refuses_a_gene_the_rig_lacks(tmp_path: Path, ict_dir: Path) -> None:
+    """A block naming a gene the model's rig has not (gsp's ``dimensions``) is an error of the
+    check, as serve and simulate refuse it; the genes the ICT rig has pass."""
+    study = tmp_path / "study.toml"
+    body = (
+        f'name = "field"\nemotions = ["happy"]\nmodel = "{ict_dir}"\n'
+        '[[blocks]]\ntask = "gsp"\ndimensions = [{}]\n'
+    )
+    study.write_text(body.replace("{}", '"jawOpen", "smileWide"'))
+    result = CliRunner().invoke(app, ["study", "check", str(study)])
+    assert result.exit_code == 1, result.output
+    assert "blocks[1]: dimensions: ['smileWide'] are not genes of rig" in result.output
+    assert "1 error, 0 warnings: not ready" in result.output
+    db = f"sqlite:///{tmp_path / 'pilot.sqlite'}"  # the simulated pilot refuses it the same way
+    result = CliRunner().invoke(app, ["study", "simulate", str(study), "--database-url", db])
+    assert result.exit_code == 2 and "blocks[1].dimensions: ['smileWide']" in result.output
+    study.write_text(body.replace("{}", '"jawOpen", "mouthSmile"'))
+    result = CliRunner().invoke(app, ["study", "check", str(study)])
+    assert result.exit_code == 0, result.output

@@ -176,6 +176,10 @@ def test_without_webgl_a_strip_of_nine_pictures_stands_in(
         view = state_of(page, srv)["view"]
         assert page.evaluate("window.emogenStudy.display") == "png"
         assert page.is_hidden("#gsp-slider") and page.is_hidden("#gsp-face")
+        # the block's prompt speaks of a slider: the heading asks for a picture instead
+        heading = f"Choose the picture where the face looks most {view['emotion'].upper()}"
+        assert page.inner_text("#prompt") == heading
+        assert page.inner_text("#gsp-status") == "Choose the picture that fits the word best."
         pictures = page.locator("#gsp-strip button")
         assert pictures.count() == 9
         loaded = page.eval_on_selector_all(

@@ -16,12 +16,23 @@ if TYPE_CHECKING:
     from emogen.study.check import CheckReport
 
 
-def checked_study(path: Path) -> CheckReport:
-    """The check of the study at ``path`` (a config that does not load is a ConfigError)."""
+def checked_study(path: Path, with_rig: bool = False) -> CheckReport:
+    """The check of the study at ``path`` (a config that does not load is a ConfigError);
+    ``with_rig``: against its model's rig too (identities, the genes blocks name), where the
+    model is found (else by names alone, as ``serve``'s check before it loads the model)."""
+    from emogen.errors import ModelNotFoundError
+    from emogen.model import load_model
     from emogen.study.check import check_study
     from emogen.study.config import load_study_config
 
-    return check_study(load_study_config(path))
+    config = load_study_config(path)
+    rig = None
+    if with_rig:
+        try:
+            rig = load_model(config.model, rig=config.rig).rig
+        except ModelNotFoundError:
+            rig = None
+    return check_study(config, rig)
 
 
 def refuse_errors(report: CheckReport, path: Path) -> None:
@@ -50,8 +61,9 @@ def check_study_command(
     as_json: JsonOpt = False,
 ) -> None:
     """Check a study before it goes live: placeholders in every text, emotion words, identities,
-    the participant link, and how long a session takes (exit 1 when there are errors)."""
-    report = checked_study(config)
+    the genes blocks name (against the model's rig, where the model is found), the participant
+    link, and how long a session takes (exit 1 when there are errors)."""
+    report = checked_study(config, with_rig=True)
     data = {
         "errors": [asdict(f) for f in report.errors],
         "warnings": [asdict(f) for f in report.warnings],

@@ -286,6 +286,11 @@ def check_study(config: StudyConfig, rig: Rig | None = None) -> CheckReport:
             check_identities(config, rig)
         except ConfigError as exc:
             findings.append(Finding("error", "identities", str(exc)))
+        for k, block in enumerate(config.study_blocks()):
+            try:
+                block.check_rig(rig, config.ga.eye_motion)
+            except ValueError as exc:
+                findings.append(Finding("error", f"blocks[{k + 1}]", str(exc)))
     else:
         findings += check_identity_names(config)
     anonymous = (

@@ -98,6 +98,10 @@ class TaskBlock(_Strict):
         """Raise ValueError naming ``blocks[k]`` and the key where the block does not fit the
         study (its ``emotions``, the blocks before it)."""
 
+    def check_rig(self, rig: Any, eye_motion: bool) -> None:
+        """Raise ValueError naming the key where the block asks for what ``rig`` lacks (genes
+        it moves); ``emogen study check`` and the server's start both ask."""
+
     def trials(
         self, k: int, study: Any, earlier: list[Condition], rows: int | None
     ) -> list[Condition]:

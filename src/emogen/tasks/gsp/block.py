@@ -106,6 +106,9 @@ class GspBlock(TaskBlock):
             for j in range(self.iterations)
         ]
 
+    def check_rig(self, rig: Any, eye_motion: bool) -> None:
+        self.dimension_names(rig, eye_motion)
+
     def dimension_names(self, rig: Any, eye_motion: bool) -> tuple[str, ...]:
         """The genes the slider moves, in chain order; a ValueError names an unknown one."""
         eye = {g.name for g in rig.genes if g.eye}

@@ -97,7 +97,7 @@ class GspTask:
     def prepare(self, ctx: Any, k: int, block: GspBlock) -> None:
         """Check the block's dimensions against the rig before anyone starts."""
         try:
-            block.dimension_names(ctx.rig, ctx.config.ga.eye_motion)
+            block.check_rig(ctx.rig, ctx.config.ga.eye_motion)
         except ValueError as exc:
             raise ConfigError(f"blocks[{k + 1}].{exc}") from None
 

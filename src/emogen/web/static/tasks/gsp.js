@@ -12,6 +12,10 @@ import { responseTime, uniform } from "../observer.js";
 /** Seconds between two requests for a chain while waiting. */
 const POLL_MS = 3000;
 
+/** Whether the page shows the strip of pictures (no WebGL): the heading then asks for a picture
+ * (the block's prompt speaks of the slider). One display per page: set whenever the component asks which it is. */
+let pictures = false;
+
 const markup = `
   <section id="view-gsp" class="view gsp" hidden aria-labelledby="prompt">
     <p id="gsp-wait" class="gsp-wait status" aria-live="polite" hidden>Someone else is working on this face right now. It will be ready for you in a moment…</p>
@@ -53,7 +57,10 @@ function create(page) {
   /** The position chosen (the slider's, or the strip's picture); null until one is. */
   let chosen = /** @type {number | null} */ (null);
   const slider = /** @type {HTMLInputElement} */ ($("gsp-slider"));
-  const fallback = () => ui.display && ui.display.kind === "png";
+  const fallback = () => {
+    pictures = Boolean(ui.display && ui.display.kind === "png");
+    return pictures;
+  };
 
   function stopPolling() {
     if (poll !== null) clearTimeout(poll);
@@ -143,6 +150,7 @@ function create(page) {
     $("gsp-wait").hidden = true;
     ui.key = newKey();
     chosen = fallback() ? null : view.slider.start;
+    if (pictures) $("prompt").textContent = prompt(state); // the shell wrote it before we knew
     page.setReady(false);
     ui.loading = true;
     paint();
@@ -197,7 +205,11 @@ function create(page) {
 // ---- where the participant is: one screen, one answer ------------------------------------------
 const screen = () => "gsp";
 const progress = () => ({ step: null, within: 0 });
-const prompt = () => null;
+/** The heading: the block's prompt, or without WebGL a request for a picture. @param {any} state */
+const prompt = (state) =>
+  pictures && !state.view.waiting
+    ? `Choose the picture where the face looks most ${String(state.view.emotion).toUpperCase()}`
+    : null;
 /** The word the slider is for: "next: HAPPY". @param {any} state */
 const upcoming = (state) => String(state.view.emotion).toUpperCase();
 
