@@ -72,7 +72,8 @@ def test_every_export_table_reads_in_r_with_its_types(
     paths = [tmp_path / "csv" / f"{name}.csv" for name in TABLES]
     guessed, given = read_in_r(paths), read_in_r(paths, types)
     empty = [name for name in TABLES if len(tables[name]) == 0]
-    assert empty == ["categorise_responses"]  # no categorise block: the empty table of this study
+    # no categorise block, no dynamic evolve block: the empty tables of this study
+    assert empty == ["face_curves", "categorise_responses"]
     final = given[TABLES.index("final_faces")]  # a finished trial's final face, typed in R
     assert len(final.frame) == 4 and final.frame["face_id"].notna().all()
     assert {final.classes[c] for c in ("session_id", "trial", "attempt", "face_id")} == {"numeric"}
