@@ -175,3 +175,24 @@ def test_the_curves_read_in_r_with_their_types(piloted, rscript) -> None:
     assert table.classes["gene"] == "character"
     for column in ("face_id", "amplitude", "onset", "peak_s", "offset_s", "clip_s"):
         assert table.classes[column] == "numeric", column
+
+
+def test_a_dynamic_study_replays_from_its_export(piloted, tmp_path) -> None:
+    _, _, out = piloted
+    run = CliRunner().invoke
+    result = run(app, ["replay", "1", "--from-export", str(out), "--json"])
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.output)[0]
+    assert report["ok"] is True and report["populations"] == 12 and report["faces"] == 120
+    copy = tmp_path / "export"
+    copy.mkdir()
+    for f in out.iterdir():
+        (copy / f.name).write_bytes(f.read_bytes())
+    faces = pd.read_csv(copy / "faces.csv")
+    gene = next(c for c in faces.columns if c.startswith("g_"))
+    faces.loc[3, gene] = 1.0 - faces.loc[3, gene]  # a dynamic face's amplitude
+    faces.to_csv(copy / "faces.csv", index=False)
+    result = run(app, ["replay", "1", "--from-export", str(copy), "--json"])
+    report = json.loads(result.output)[0]
+    assert result.exit_code != 0 and report["ok"] is False
+    assert any("position 3: genes" in m for m in report["mismatches"])

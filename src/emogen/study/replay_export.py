@@ -162,6 +162,7 @@ def _replay_trial(
                 str(trial["identity"]), 1 if solver is None or pd.isna(solver) else int(solver)
             ),
             stream=CURRENT_STREAM if pd.isna(stream) else int(stream),
+            genome=config.study_blocks()[int(trial["block"])].genome(),
         )
         for key in keys:
             where = f"session {sid} trial {pos + 1} attempt {key[2] + 1} generation {key[3]}"

@@ -9,7 +9,7 @@ from typing import Annotated, Any, ClassVar, Literal
 from pydantic import Field, SerializerFunctionWrapHandler, model_serializer, model_validator
 
 from emogen.config import _Strict
-from emogen.ga.genome import DynamicGenome
+from emogen.ga.genome import STATIC, DynamicGenome, Genome
 from emogen.tasks.blocks import Condition, Order, TaskBlock, check_words
 
 
@@ -54,6 +54,10 @@ class EvolveBlock(TaskBlock):
         if data.get("dynamic") is None:
             data.pop("dynamic", None)
         return data
+
+    def genome(self) -> Genome:
+        """What its trials' genes are (:mod:`emogen.ga.genome`): static, or dynamic."""
+        return STATIC if self.dynamic is None else self.dynamic.genome()
 
     def resolved(self, study: Any) -> EvolveBlock:
         return self.model_copy(

@@ -41,13 +41,12 @@ class ShownPopulation:
 
 def new_engine(env: TaskEnv, row: TrialRow) -> Engine:
     """A trial's engine at its start, from the trial's seed, with its identity's corrector."""
-    dynamic = env.block(row).dynamic
     return Engine(
         env.config.ga_for(row.identity),
         env.ctx.rig,
         row.seed,
         corrector=env.correctors(row.identity),
-        **({} if dynamic is None else {"genome": dynamic.genome()}),
+        genome=env.block(row).genome(),
     )
 
 
