@@ -1,6 +1,6 @@
 """Server CPU of one study step (a selection of a corrected ten-face generation).
 
-``python benchmarks/bench_step.py [--participants 8] [--no-http] [--against SRC]`` runs
+``python benchmarks/bench_step.py [--participants 8] [--no-http] [--against SRC] [--dynamic]`` runs
 participants one at a time through the bench study (two trials, G = 5, corrected faces, three faces chosen per
 generation) and prints the CPU time of every selection, p50/p95/mean:
 
@@ -164,7 +164,13 @@ def _timed(acc: dict[str, float], phase: dict[str, bool], label: str) -> Callabl
     return wrap
 
 
-def in_process(participants: int) -> tuple[np.ndarray, dict[str, float]]:
+#: The bench study with dynamic faces (docs/ga.md, "Dynamic faces"; its default clip).
+DYNAMIC_STUDY: dict[str, Any] = {**BENCH_STUDY, "blocks": [{"task": "evolve", "dynamic": {}}]}
+
+
+def in_process(
+    participants: int, study: dict[str, Any] = BENCH_STUDY
+) -> tuple[np.ndarray, dict[str, float]]:
     """Process CPU (ms) of each selection of the study service, and the mean ms per part."""
     import emogen.correct.apply as apply
     from emogen.model import load_model
@@ -189,7 +195,7 @@ def in_process(participants: int) -> tuple[np.ndarray, dict[str, float]]:
     try:
         with tempfile.TemporaryDirectory(prefix="emogen-step-") as tmp:
             folder = Path(tmp)
-            config = load_study_config(write_study_toml(BENCH_STUDY, folder / "bench.toml"))
+            config = load_study_config(write_study_toml(study, folder / "bench.toml"))
             model = load_model(model_path(), rig=config.rig)
             store = Store(f"sqlite:///{folder / 'bench.sqlite'}")
             service = StudyService(
@@ -273,6 +279,11 @@ def main() -> None:
     parser.add_argument("--participants", type=int, default=8)
     parser.add_argument("--no-http", action="store_true", help="in process only")
     parser.add_argument(
+        "--dynamic",
+        action="store_true",
+        help="in process: static and dynamic faces, alternating (static, dynamic, twice)",
+    )
+    parser.add_argument(
         "--against",
         type=Path,
         metavar="SRC",
@@ -288,6 +299,14 @@ def main() -> None:
         )
     if args.against is not None and args.no_http:
         parser.error("--against compares servers over HTTP; leave out --no-http")
+    if args.dynamic:
+        for _ in range(2):
+            for label, study in (("static", BENCH_STUDY), ("dynamic", DYNAMIC_STUDY)):
+                ms, parts = in_process(args.participants, study)
+                print(
+                    _line(label, ms) + "  " + ", ".join(f"{k} {v:.1f} ms" for k, v in parts.items())
+                )
+        return
     run(args.participants, http=not args.no_http, against=args.against)
 
 

@@ -101,6 +101,16 @@ def collision_solver_of_state(state: str | dict[str, Any] | None) -> int:
         raise ConfigError(f"engine state: {exc}") from None
 
 
+def genome_of_state(state: str | dict[str, Any] | None) -> Any:
+    """The genome (:mod:`emogen.ga.genome`) a trial's state was recorded with: static unless it
+    records a dynamic one (``None``, nothing recorded yet: static)."""
+    from emogen.ga.genome import genome_of
+
+    if state is None or state == "":
+        return genome_of(None)
+    return genome_of(state_data(state).get("genome"))
+
+
 def read_state_header(data: dict[str, Any]) -> tuple[GAConfig, int, int]:
     """(config, seed, stream) of a state read by :func:`state_data`, checked."""
     stream = check_stream(data.get("stream"))

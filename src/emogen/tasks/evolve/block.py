@@ -6,9 +6,30 @@ from __future__ import annotations
 
 from typing import Annotated, Any, ClassVar, Literal
 
-from pydantic import Field
+from pydantic import Field, SerializerFunctionWrapHandler, model_serializer, model_validator
 
+from emogen.config import _Strict
+from emogen.ga.genome import STATIC, DynamicGenome, Genome
 from emogen.tasks.blocks import Condition, Order, TaskBlock, check_words
+
+
+class Dynamic(_Strict):
+    """``dynamic = {…}`` of an evolve block: faces that move (docs/ga.md, "Dynamic faces"):
+    the clip's length, the hold at rest before it loops, the shortest rise or fall, and the
+    keyframes at which faces are corrected."""
+
+    clip_s: Annotated[float, Field(ge=0.2, le=10)] = 1.25
+    hold_s: Annotated[float, Field(ge=0, le=10)] = 0.75
+    min_segment_s: Annotated[float, Field(gt=0, le=2.5)] = 0.08
+    keyframes: Annotated[int, Field(ge=2, le=200)] = 21
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Dynamic:
+        self.genome()  # min_segment_s at most a quarter of the clip
+        return self
+
+    def genome(self) -> DynamicGenome:
+        return DynamicGenome(**self.model_dump())
 
 
 class EvolveBlock(TaskBlock):
@@ -23,6 +44,20 @@ class EvolveBlock(TaskBlock):
     identities: tuple[str, ...] | None = Field(default=None, min_length=1)
     repetitions: Annotated[int, Field(ge=1, le=100)] | None = None
     order: Order | None = None
+    #: Faces that move: each gene's curve evolves with its amplitude (None: static faces).
+    dynamic: Dynamic | None = None
+
+    @model_serializer(mode="wrap")
+    def _static_as_before(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        """A static block serialises as before dynamic faces (its study keeps its hash)."""
+        data: dict[str, Any] = handler(self)
+        if data.get("dynamic") is None:
+            data.pop("dynamic", None)
+        return data
+
+    def genome(self) -> Genome:
+        """What its trials' genes are (:mod:`emogen.ga.genome`): static, or dynamic."""
+        return STATIC if self.dynamic is None else self.dynamic.genome()
 
     def resolved(self, study: Any) -> EvolveBlock:
         return self.model_copy(

@@ -1,6 +1,7 @@
 """The evolve task's (the GA's) export tables: each one's name, typed columns and rows.
 
-``faces`` (every face shown, per generation), ``selections``, ``restarts``, ``evolve_ratings``
+``faces`` (every face shown, per generation), ``face_curves`` (a dynamic face's genes' time
+courses, one row per face per gene shown), ``selections``, ``restarts``, ``evolve_ratings``
 (the rating of a trial's final face; ``ratings`` before schema 6) and ``final_faces`` (one row
 per finished evolve trial: the face the participant ended with, with its genes and weights).
 Face ids are unique only within a trial (see docs/data.md, "Joining the tables").
@@ -12,7 +13,12 @@ import json
 from collections.abc import Iterator
 from typing import Any
 
+import numpy as np
+
+from emogen.ga.genome import TIMING, DynamicGenome
+from emogen.ga.state import genome_of_state
 from emogen.tasks.evolve.tables import (
+    FaceCurveRow,
     FaceRow,
     PopulationRow,
     RatingRow,
@@ -45,6 +51,41 @@ def face_rows(rec: Records) -> Iterator[Row]:
             **rec.face_values(s, f.genes, f.weights),
             **rec.stamp(s),
         }
+
+
+def face_curve_rows(rec: Records) -> Iterator[Row]:
+    """One row per dynamic face per gene it shows (amplitude > 0): the gene's amplitude, its
+    five timing parameters in [0, 1] and its onset, peak and offset latencies in seconds."""
+    faces = {(f.population_id, f.position): f for f in rec.rows_of(FaceRow)}
+    genomes: dict[int, DynamicGenome] = {}
+    for c in rec.rows_of(FaceCurveRow):
+        p = rec.by_id(PopulationRow)[c.population_id]
+        t = rec.by_trial[p.trial_id]
+        if t.id not in genomes:
+            genomes[t.id] = genome_of_state(t.engine_state)
+        f = faces[(c.population_id, c.position)]
+        amplitude = json.loads(f.genes)
+        timing = json.loads(c.timing)
+        names = [g[2:] for g in rec.face_columns(rec.by_session[t.session_id])[0]]
+        genes = [[a, *tm] for a, tm in zip(amplitude, timing, strict=True)]
+        onset, peak, offset = genomes[t.id].times(np.array(genes))
+        for k, gene in enumerate(names):
+            if amplitude[k] > 0:
+                yield {
+                    **rec.key(t),
+                    "attempt": p.attempt,
+                    "generation": p.generation,
+                    "position": c.position,
+                    "face_id": f.face_id,
+                    "gene": gene,
+                    "amplitude": amplitude[k],
+                    **dict(zip(TIMING, timing[k], strict=True)),
+                    "onset_s": float(onset[k]),
+                    "peak_s": float(peak[k]),
+                    "offset_s": float(offset[k]),
+                    "clip_s": genomes[t.id].clip_s,
+                    **rec.trial_stamp(t),
+                }
 
 
 def selection_rows(rec: Records) -> Iterator[Row]:
@@ -152,6 +193,16 @@ FACES = ExportTable(
     face_rows,
     faces=True,
 )
+FACE_CURVES = ExportTable(
+    "face_curves",
+    TRIAL_KEY
+    + typed_columns(
+        "attempt:int generation:int position:int face_id:int gene:str amplitude:float "
+        + " ".join(f"{name}:float" for name in TIMING)
+        + " onset_s:float peak_s:float offset_s:float clip_s:float"
+    ),
+    face_curve_rows,
+)
 SELECTIONS = ExportTable(
     "selections",
     TRIAL_KEY
@@ -188,4 +239,4 @@ FINAL_FACES = ExportTable(
 )
 
 #: The evolve task's tables, in export order.
-EVOLVE_TABLES = (FACES, SELECTIONS, RESTARTS, EVOLVE_RATINGS, FINAL_FACES)
+EVOLVE_TABLES = (FACES, FACE_CURVES, SELECTIONS, RESTARTS, EVOLVE_RATINGS, FINAL_FACES)

@@ -94,6 +94,7 @@ def _replay_trial(
                 str(trial["identity"]), 1 if solver is None or pd.isna(solver) else int(solver)
             ),
             stream=CURRENT_STREAM if stream is None or pd.isna(stream) else int(stream),
+            genome=study.config.study_blocks()[int(trial.get("block", 0))].genome(),
         )
         for key in keys:
             where = f"session {sid} trial {pos + 1} attempt {key[2] + 1} generation {key[3]}"

@@ -16,7 +16,7 @@ from sqlalchemy.orm import Session, selectinload
 
 from emogen.ga.engine import Engine, Population
 from emogen.ga.state import collision_solver_of_state, state_data
-from emogen.tasks.evolve.tables import FaceRow, PopulationRow, SelectionRow
+from emogen.tasks.evolve.tables import FaceCurveRow, FaceRow, PopulationRow, SelectionRow
 from emogen.tasks.protocol import FaceView, MadeFace, TaskEnv
 from emogen.tasks.records import TrialRow, core_table, numbers_json, utcnow
 from emogen.tasks.weights import full_weights
@@ -24,6 +24,7 @@ from emogen.tasks.weights import full_weights
 _POPULATIONS = core_table(PopulationRow)
 _INSERT_POPULATION = insert(_POPULATIONS).returning(_POPULATIONS.c.id)
 _INSERT_FACES = insert(core_table(FaceRow))
+_INSERT_CURVES = insert(core_table(FaceCurveRow))
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,7 @@ def new_engine(env: TaskEnv, row: TrialRow) -> Engine:
         env.ctx.rig,
         row.seed,
         corrector=env.correctors(row.identity),
+        genome=env.block(row).genome(),
     )
 
 
@@ -74,7 +76,8 @@ def store_population(db: Session, trial: TrialRow, population: Population) -> Sh
     if not (np.isfinite(full).all() and np.isfinite(population.genes).all()):
         raise ValueError("a population to store has non-finite genes or weights")
     weights: list[list[float]] = full.tolist()
-    genes: list[list[float]] = population.genes.tolist()
+    dynamic = population.genes.ndim == 3  # (n, K, 6): amplitudes here, curves beside
+    genes: list[list[float]] = (population.genes[..., 0] if dynamic else population.genes).tolist()
     ids = population.ids.tolist()
     parents = population.parent_ids.tolist()
     operators = population.operators.tolist()
@@ -94,8 +97,27 @@ def store_population(db: Session, trial: TrialRow, population: Population) -> Sh
             for i in range(len(population))
         ],
     )
+    if dynamic:
+        _store_curves(db, pop_id, population)
     faces = [FaceView(id=i, weights=w) for i, w in zip(ids, weights, strict=True)]
     return ShownPopulation(trial.id, population.attempt, population.generation, faces, trial)
+
+
+def _store_curves(db: Session, pop_id: int, population: Population) -> None:
+    """A dynamic population's curves: each face's timing and keyframe correctives."""
+    keyed = population.keyframe_correctives
+    db.execute(
+        _INSERT_CURVES,
+        [
+            {
+                "population_id": pop_id,
+                "position": i,
+                "timing": json.dumps(population.genes[i, :, 1:].tolist()),
+                "keyframe_correctives": json.dumps(None if keyed is None else keyed[i].tolist()),
+            }
+            for i in range(len(population))
+        ],
+    )
 
 
 _POPULATION_AT = select(PopulationRow).where(

@@ -49,6 +49,23 @@ class FaceRow(Base):
     weights: Mapped[str] = mapped_column(Text)
 
 
+class FaceCurveRow(Base):
+    """A dynamic face's curves (docs/ga.md, "Dynamic faces"): its genes' timing and its
+    correctives at the keyframes. The face's row keeps its amplitudes as ``genes`` and its
+    peak profile as ``weights``; static faces have no such row."""
+
+    __tablename__ = "face_curves"
+    __table_args__ = (UniqueConstraint("population_id", "position", name="uq_face_curves"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    population_id: Mapped[int] = mapped_column(ForeignKey("populations.id"), index=True)
+    position: Mapped[int] = mapped_column(Integer)
+    #: JSON (n_genes × 5): onset, acceleration, peak, deceleration, offset, each in [0, 1].
+    timing: Mapped[str] = mapped_column(Text)
+    #: JSON (keyframes × correctives), or null for faces shown uncorrected.
+    keyframe_correctives: Mapped[str] = mapped_column(Text)
+
+
 class SelectionRow(Base):
     """A participant's selection in one population (one per population, ever)."""
 

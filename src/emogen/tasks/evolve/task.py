@@ -39,6 +39,7 @@ from emogen.tasks.evolve.store import (
     store_population,
 )
 from emogen.tasks.evolve.tables import (
+    FaceCurveRow,
     FaceRow,
     PopulationRow,
     RatingRow,
@@ -105,6 +106,7 @@ class EvolveTask:
     tables: ClassVar[tuple[type, ...]] = (
         PopulationRow,
         FaceRow,
+        FaceCurveRow,
         SelectionRow,
         RestartRow,
         RatingRow,
