@@ -196,3 +196,29 @@ def test_a_dynamic_study_replays_from_its_export(piloted, tmp_path) -> None:
     report = json.loads(result.output)[0]
     assert result.exit_code != 0 and report["ok"] is False
     assert any("position 3: genes" in m for m in report["mismatches"])
+
+
+def test_a_dynamic_block_is_checked_and_not_served_until_the_page_plays_it(
+    ict_dir: Path, tmp_path: Path
+) -> None:
+    """The page shows still faces: serving moving ones would show participants something
+    other than the design (a quiet wrong stimulus), so serve refuses and check says why."""
+    from emogen.study.check import check_study
+    from emogen.web import create_app
+
+    config = tmp_path / "dyn.toml"
+    config.write_text(STUDY.format(model=ict_dir))
+    result = CliRunner().invoke(app, ["study", "check", str(config)])
+    assert result.exit_code != 0
+    assert "blocks[1]: dynamic: the participant page does not play moving faces" in result.output
+    moving = study_from_dict(
+        {"name": "d", "emotions": ["happy"], "model": str(ict_dir),
+         "blocks": [{"task": "evolve"}, {"task": "evolve", "dynamic": {}}]}
+    )  # fmt: skip
+    errors = [f for f in check_study(moving).findings if f.level == "error"]
+    assert [f.where for f in errors] == ["blocks[2]"]
+    with pytest.raises(ConfigError, match=r"blocks\[2\]: dynamic: .* not served"):
+        create_app(moving, f"sqlite:///{tmp_path / 'd.sqlite'}")
+    assert not (tmp_path / "d.sqlite").exists()  # refused before a database was made
+    static = moving.model_copy(update={"blocks": moving.blocks[:1]})
+    assert [f for f in check_study(static).findings if f.where.startswith("blocks")] == []

@@ -272,6 +272,15 @@ def check_launch(config: StudyConfig) -> list[Finding]:
     ]
 
 
+def check_servable(config: StudyConfig) -> list[Finding]:
+    """Blocks that participants cannot yet be shown: ``emogen serve`` refuses them."""
+    return [
+        Finding("error", f"blocks[{k + 1}]", why)
+        for k, block in enumerate(config.blocks)
+        if (why := block.unservable()) is not None
+    ]
+
+
 def check_study(config: StudyConfig, rig: Rig | None = None) -> CheckReport:
     """Every finding about ``config`` (with ``rig``: its identities' shapes too)."""
     findings = [
@@ -280,6 +289,7 @@ def check_study(config: StudyConfig, rig: Rig | None = None) -> CheckReport:
         *check_files(config),
         *check_field_traps(config),
         *check_launch(config),
+        *check_servable(config),
     ]
     if rig is not None:
         try:

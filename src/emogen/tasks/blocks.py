@@ -98,6 +98,11 @@ class TaskBlock(_Strict):
         """Raise ValueError naming ``blocks[k]`` and the key where the block does not fit the
         study (its ``emotions``, the blocks before it)."""
 
+    def unservable(self) -> str | None:
+        """Why participants cannot yet be shown this block (``emogen serve`` refuses to start
+        and ``emogen study check`` warns), None when they can."""
+        return None
+
     def check_rig(self, rig: Any, eye_motion: bool) -> None:
         """Raise ValueError naming the key where the block asks for what ``rig`` lacks (genes
         it moves); ``emogen study check`` and the server's start both ask."""

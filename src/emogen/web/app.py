@@ -24,6 +24,7 @@ from fastapi.templating import Jinja2Templates
 from emogen import __version__
 from emogen.errors import ConfigError
 from emogen.model.face import FaceModel
+from emogen.study.check import check_servable
 from emogen.study.config import StudyConfig, load_study_config
 from emogen.study.failures import SharedBuckets
 from emogen.study.sessions import StudyService
@@ -147,6 +148,9 @@ def create_app(
         if isinstance(study_config, StudyConfig)
         else load_study_config(Path(study_config))
     )
+    refused = check_servable(config)
+    if refused:  # before anything loads
+        raise ConfigError("; ".join(f"{f.where}: {f.message}" for f in refused))
     if model is None:
         model = load_model(config.model, rig=config.rig)
     store = Store(resolve_database_url(database_url, config.database_url))
