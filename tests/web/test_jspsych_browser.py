@@ -210,9 +210,14 @@ def test_the_readme_page_runs_and_its_data_agree_with_the_export(
     )
     ratings = tables["evolve_ratings"].query("session_id == @sid")
     assert ratings["value"].tolist() == [evolve["rating"]] == [6]
+    # the categorise row's key (session, trial) finds the shown face's source in the export:
+    # the participant's own final face of trial 0, which the page was never told
     responses = tables["categorise_responses"].query("session_id == @sid")
+    assert responses["trial"].tolist() == [categorise["trial"]] == [1]
     assert responses["label"].tolist() == [categorise["label"]]
     assert responses["source"].tolist() == ["own"] and responses["source_trial"].tolist() == [0]
+    assert responses["source_session_id"].tolist() == [sid]
+    assert responses["source_face_id"].tolist() == [evolve["final_face_id"]]
     np.testing.assert_allclose(
         responses[w_cols].to_numpy(float)[0], categorise["final_weights"], atol=0
     )

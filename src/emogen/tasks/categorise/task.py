@@ -191,6 +191,16 @@ class CategoriseTask:
     def state_facts(self, state: str | None) -> dict[str, Any]:
         return {}
 
+    def shows(self, block: Any, config: Any) -> dict[str, Any]:
+        """The labels offered (each trial in its own order), "none of these", and the points of
+        the intensity and confidence ratings asked (None: not asked) — never the faces' sources."""
+        return {
+            "labels": list(block.labels),
+            "none_option": block.none_option,
+            "intensity_points": block.points if block.intensity else None,
+            "confidence_points": block.points if block.confidence else None,
+        }
+
     def progress_step(
         self, status: str, generation: int, generations: int
     ) -> tuple[str, int | None]:

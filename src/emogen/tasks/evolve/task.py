@@ -287,6 +287,19 @@ class EvolveTask:
             "collision_solver": collision_solver_of_state(state),
         }
 
+    def shows(self, block: Any, config: Any) -> dict[str, Any]:
+        """The emotions its trials ask for (in config order; a session's order is its own), the
+        generations after the first, the faces of a generation, the selection's limits and the
+        rating's points: all said on the trial's screens."""
+        return {
+            "emotions": list(block.emotions),
+            "generations": config.ga.generations,
+            "faces": config.ga.population_size,
+            "min_selections": config.ga.min_selections,
+            "max_selections": config.ga.max_selections,
+            "rating_points": config.rating.points,
+        }
+
     def progress_step(
         self, status: str, generation: int, generations: int
     ) -> tuple[str, int | None]:
