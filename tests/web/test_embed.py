@@ -115,10 +115,11 @@ def test_study_info_names_the_blocks(embedded: TestClient) -> None:
     assert info["name"] == "small"
     assert info["participant_param"] == "PROLIFIC_PID"
     assert info["framing"] == "face"
-    # what its trials show (the config's: two emotions, ga.generations, ten faces a generation,
+    # what its trials show (the config's: two emotions, the default identity, ga.generations, ten faces a generation,
     # the selection's limits, the rating's default scale), nothing a participant may not know
     shows = {
         "emotions": ["happy", "sad"],
+        "identities": ["generic"],
         "generations": 2,
         "faces": 10,
         "min_selections": 1,

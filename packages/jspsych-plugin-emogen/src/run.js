@@ -62,6 +62,18 @@ function reportOnce(text) {
 const article = (word) => (/^[aeiou]/i.test(word) ? `an ${word}` : `a ${word}`);
 
 /**
+ * Where the study's trial (``data.task``, ``data.trial``) is of another task than the timeline's
+ * (``timelineTask``), the trial runs the study's: its data and the console say so (once).
+ * @param {Record<string, any>} data @param {string} timelineTask @param {number} trials the study's
+ */
+export function followStudy(data, timelineTask, trials) {
+  if (data.task === timelineTask) return;
+  data.timeline_task = timelineTask;
+  data.warning = `the study's current trial (trial ${data.trial + 1} of ${trials}) is ${article(data.task)} trial, where the timeline has ${article(timelineTask)} trial: it runs the study's trial (the study's order wins; order the timeline's emogen trials as the study's blocks)`;
+  reportOnce(data.warning);
+}
+
+/**
  * Runs one trial; resolves with its data, namespaced (never rejects).
  * @param {{ element: HTMLElement, params: any, onLoad?: () => void,
  *   driver?: (view: string, state: any, root: HTMLElement) => void, simulated?: boolean }} options
@@ -229,11 +241,7 @@ export async function runTrial({ element, params, onLoad = () => {}, driver, sim
     }
     data.trial = state.trial.position;
     data.task = state.trial.task;
-    if (state.trial.task !== params.task) {
-      data.timeline_task = params.task;
-      data.warning = `the study's current trial (trial ${state.trial.position + 1} of ${state.progress.trials}) is ${article(state.trial.task)} trial, where the timeline has ${article(params.task)} trial: it runs the study's trial (the study's order wins; order the timeline's emogen trials as the study's blocks)`;
-      reportOnce(data.warning);
-    }
+    followStudy(data, params.task, state.progress.trials);
     const png = params.render === "png";
     const display = await createFaceDisplay({
       token: held.token,

@@ -192,10 +192,12 @@ class CategoriseTask:
         return {}
 
     def shows(self, block: Any, config: Any) -> dict[str, Any]:
-        """The labels offered (each trial in its own order), "none of these", and the points of
-        the intensity and confidence ratings asked (None: not asked) — never the faces' sources."""
+        """The labels offered (each trial in its own order), "none of these", the points of the
+        intensity and confidence ratings asked (None: not asked) and the identities of the faces
+        (as each trial's record says its own) — never whose faces they are, nor what for."""
         return {
             "labels": list(block.labels),
+            "identities": list(block.identities),
             "none_option": block.none_option,
             "intensity_points": block.points if block.intensity else None,
             "confidence_points": block.points if block.confidence else None,
