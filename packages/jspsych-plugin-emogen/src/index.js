@@ -84,9 +84,24 @@ class EmogenPlugin {
     return this.run(display_element, trial, on_load);
   }
 
-  /** @param {HTMLElement} element @param {any} trial @param {() => void} onLoad @param {any} [driver] */
-  run(element, trial, onLoad, driver) {
-    return runTrial({ element, params: trial, onLoad, driver, simulated: driver !== undefined });
+  /**
+   * The trial, run again while the participant presses "Try again" after a lost connection (it
+   * then carries on where the server's session is; jsPsych gets one row: the runs' records of
+   * the trial together, ``emogen_tries`` counting the runs).
+   * @param {HTMLElement} element @param {any} trial @param {() => void} onLoad @param {any} [driver]
+   */
+  async run(element, trial, onLoad, driver) {
+    let loaded = false;
+    const loadOnce = () => {
+      if (!loaded) onLoad();
+      loaded = true;
+    };
+    let earlier = null;
+    for (let tries = 1; ; tries++) {
+      const run = await runTrial({ element, params: trial, onLoad: loadOnce, driver, simulated: driver !== undefined, tries, earlier });
+      if (!run.again) return namespaced(run.data);
+      earlier = run.data;
+    }
   }
 
   /**

@@ -204,6 +204,53 @@ test("the server gone mid-trial: the trial ends as failed, what was done kept", 
   assert.equal(data.session_id, 7); // a failed row carries its session
 });
 
+test("a connection lost longer than patience_ms: Try again carries on the same trial, nothing lost", async () => {
+  const { getData, expectFinished } = await startTimeline([
+    { type: EmogenPlugin, server: SERVER, patience_ms: 500 },
+    { type: EmogenPlugin, server: SERVER, task: "categorise" },
+  ]);
+  await chooseAndNext(1, 2);
+  await until(() => document.querySelector("#gen-progress").textContent === "Round 2 of 2", "generation 2");
+  await until(ready("trial"), "the faces");
+  fake.down = true;
+  await chooseAndNext(3, 4);
+  await until(() => root().dataset.emogenStage === "failed", "the failure");
+  const retry = document.querySelector("#failed-retry");
+  assert.equal(retry.hidden, false);
+  assert.match(document.querySelector("#failed-next").textContent, /Try again once you are back online/);
+  fake.down = false; // the connection is back
+  await clickTarget(retry);
+  await until(ready("trial"), "the same trial again, where the session is");
+  assert.equal(document.querySelector("#gen-progress").textContent, "Round 2 of 2");
+  // the choice made before the outage (faces 3 and 4) is still chosen: Next sends it
+  await clickTarget(document.querySelector("#next"));
+  await until(ready("rating"), "the rating");
+  const five = document.querySelector('#rating-scale input[value="5"]');
+  five.checked = true;
+  five.dispatchEvent(new Event("change", { bubbles: true }));
+  await clickTarget(document.querySelector("#rate"));
+  await until(ready("categorise"), "the next trial: the timeline is not one trial short");
+  await clickTarget(document.querySelector('#label-buttons button[data-label="happy"]'));
+  await until(() => getData().count() === 2, "both trials' data");
+  await expectFinishedOk(expectFinished);
+  const [evolve, categorise] = rows(getData());
+  assert.deepEqual([evolve.success, evolve.tries, evolve.failure], [true, 2, null]);
+  // both runs' steps: generation 0 (first run) and generation 1 (after Try again)
+  assert.deepEqual(evolve.generations.map((g) => [g.generation, g.elite, g.others]), [[0, 1, [2]], [1, 13, [14]]]);
+  assert.equal(evolve.rating, 5);
+  assert.deepEqual([categorise.success, categorise.tries, categorise.label], [true, 1, "happy"]);
+});
+
+test("a failure that is not the connection's offers no Try again", async () => {
+  fake.refuseOrigin = true;
+  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, patience_ms: 500 }]);
+  await until(() => root() && root().dataset.emogenStage === "failed", "the failure");
+  assert.equal(document.querySelector("#failed-retry").hidden, true);
+  await clickTarget(document.querySelector("#failed-continue"));
+  await until(() => getData().count() === 1, "the failed trial's data");
+  assert.deepEqual([rows(getData())[0].failure, rows(getData())[0].tries], ["origin", 1]);
+});
+
 test("an origin the server does not allow: the reason names the origin and the setting", async () => {
   fake.refuseOrigin = true;
   const { data, shown } = await failedTrial({}, "the failure");
