@@ -184,14 +184,20 @@ test("the study's current trial of another task: it runs, the mismatch said once
   }
 });
 
-test("the server gone mid-trial: the trial ends as failed, what was done kept", async () => {
-  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, patience_ms: 500 }]);
+/** The fake's evolve trial: faces 1 and 2 chosen, then the server gone as 3 and 4 are sent
+ * (past patience_ms: the failure screen). */
+async function lostAtGeneration2() {
   await chooseAndNext(1, 2);
   await until(() => document.querySelector("#gen-progress").textContent === "Round 2 of 2", "generation 2");
   await until(ready("trial"), "the faces");
   fake.down = true;
   await chooseAndNext(3, 4);
   await until(() => root().dataset.emogenStage === "failed", "the failure");
+}
+
+test("the server gone mid-trial: the trial ends as failed, what was done kept", async () => {
+  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, patience_ms: 500 }]);
+  await lostAtGeneration2();
   assert.match(document.querySelector("#failed-reason").textContent, CONNECTION_LOST);
   await clickTarget(document.querySelector("#failed-continue"));
   await until(() => getData().count() === 1, "the data");
@@ -209,12 +215,7 @@ test("a connection lost longer than patience_ms: Try again carries on the same t
     { type: EmogenPlugin, server: SERVER, patience_ms: 500 },
     { type: EmogenPlugin, server: SERVER, task: "categorise" },
   ]);
-  await chooseAndNext(1, 2);
-  await until(() => document.querySelector("#gen-progress").textContent === "Round 2 of 2", "generation 2");
-  await until(ready("trial"), "the faces");
-  fake.down = true;
-  await chooseAndNext(3, 4);
-  await until(() => root().dataset.emogenStage === "failed", "the failure");
+  await lostAtGeneration2();
   const retry = document.querySelector("#failed-retry");
   assert.equal(retry.hidden, false);
   assert.match(document.querySelector("#failed-next").textContent, /Try again once you are back online/);
