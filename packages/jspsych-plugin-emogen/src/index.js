@@ -99,6 +99,7 @@ class EmogenPlugin {
     let earlier = null;
     for (let tries = 1; ; tries++) {
       const run = await runTrial({ element, params: trial, onLoad: loadOnce, driver, simulated: driver !== undefined, tries, earlier });
+      run.data.duration_ms += earlier ? earlier.duration_ms : 0; // the whole trial, every run
       if (!run.again) return namespaced(run.data);
       earlier = run.data;
     }

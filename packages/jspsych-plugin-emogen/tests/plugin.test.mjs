@@ -220,6 +220,7 @@ test("a connection lost longer than patience_ms: Try again carries on the same t
   assert.equal(retry.hidden, false);
   assert.match(document.querySelector("#failed-next").textContent, /Try again once you are back online/);
   fake.down = false; // the connection is back
+  const retried = performance.now();
   await clickTarget(retry);
   await until(ready("trial"), "the same trial again, where the session is");
   assert.equal(document.querySelector("#gen-progress").textContent, "Round 2 of 2");
@@ -230,12 +231,16 @@ test("a connection lost longer than patience_ms: Try again carries on the same t
   five.checked = true;
   five.dispatchEvent(new Event("change", { bubbles: true }));
   await clickTarget(document.querySelector("#rate"));
+  await until(() => getData().count() === 1, "the evolve trial's row");
+  const retriedFor = performance.now() - retried; // the second run's length, at most
   await until(ready("categorise"), "the next trial: the timeline is not one trial short");
   await clickTarget(document.querySelector('#label-buttons button[data-label="happy"]'));
   await until(() => getData().count() === 2, "both trials' data");
   await expectFinishedOk(expectFinished);
   const [evolve, categorise] = rows(getData());
   assert.deepEqual([evolve.success, evolve.tries, evolve.failure], [true, 2, null]);
+  // the whole trial's duration, both runs: more than the time since Try again
+  assert.ok(evolve.duration_ms > retriedFor, `${evolve.duration_ms} ms, ${retriedFor} ms since Try again`);
   // both runs' steps: generation 0 (first run) and generation 1 (after Try again)
   assert.deepEqual(evolve.generations.map((g) => [g.generation, g.elite, g.others]), [[0, 1, [2]], [1, 13, [14]]]);
   assert.equal(evolve.rating, 5);
