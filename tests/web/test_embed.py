@@ -115,7 +115,20 @@ def test_study_info_names_the_blocks(embedded: TestClient) -> None:
     assert info["name"] == "small"
     assert info["participant_param"] == "PROLIFIC_PID"
     assert info["framing"] == "face"
-    assert info["blocks"] == [{"block": 0, "name": "block1", "task": "evolve", "trials": 2}]
+    # what its trials show (the config's: two emotions, the default identity, ga.generations, ten faces a generation,
+    # the selection's limits, the rating's default scale), nothing a participant may not know
+    shows = {
+        "emotions": ["happy", "sad"],
+        "identities": ["generic"],
+        "generations": 2,
+        "faces": 10,
+        "min_selections": 1,
+        "max_selections": 4,
+        "rating_points": 7,
+    }
+    assert info["blocks"] == [
+        {"block": 0, "name": "block1", "task": "evolve", "trials": 2, "shows": shows}
+    ]
     assert len(info["weight_names"]) > 50 and info["weight_names"][0] != ""
 
 

@@ -210,9 +210,14 @@ def test_the_readme_page_runs_and_its_data_agree_with_the_export(
     )
     ratings = tables["evolve_ratings"].query("session_id == @sid")
     assert ratings["value"].tolist() == [evolve["rating"]] == [6]
+    # the categorise row's key (session, trial) finds the shown face's source in the export:
+    # the participant's own final face of trial 0, which the page was never told
     responses = tables["categorise_responses"].query("session_id == @sid")
+    assert responses["trial"].tolist() == [categorise["trial"]] == [1]
     assert responses["label"].tolist() == [categorise["label"]]
     assert responses["source"].tolist() == ["own"] and responses["source_trial"].tolist() == [0]
+    assert responses["source_session_id"].tolist() == [sid]
+    assert responses["source_face_id"].tolist() == [evolve["final_face_id"]]
     np.testing.assert_allclose(
         responses[w_cols].to_numpy(float)[0], categorise["final_weights"], atol=0
     )
@@ -221,6 +226,70 @@ def test_the_readme_page_runs_and_its_data_agree_with_the_export(
     )  # own face
     report = replay_session(store, sid, ict_model.rig, ict_model.model_hash, model=ict_model)
     assert report.ok, report.mismatches
+    store.dispose()
+
+
+def kinds(value: Any) -> Any:
+    """A value's shape: its JSON type, a list's length and its items' shapes, a dict's keys and
+    their values' shapes (a number is a number, whole or not: JSON does not tell them apart)."""
+    if isinstance(value, list):
+        return ("list", len(value), sorted({repr(kinds(v)) for v in value}))
+    if isinstance(value, dict):
+        return {k: kinds(v) for k, v in value.items()}
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return type(value).__name__
+    return "number"
+
+
+def simulated_readme_page(server: str) -> str:
+    """The README's page run by jsPsych's data-only simulation; its observer chooses two faces a
+    generation, as run_readme_page's participant does."""
+    page = local_page(readme_page(), server).replace("jsPsych.run([", "jsPsych.simulate([")
+    page = page.replace('task: "evolve" }', 'task: "evolve", simulation_options: { chosen: 2 } }')
+    head, tail = page.rsplit("  ]);", 1)
+    return f'{head}  ], "data-only");{tail}'
+
+
+def test_data_only_simulation_rows_have_the_real_rows_shape(
+    browser: Any, site: ExperimentSite, server: tuple[ServerProcess, str]
+) -> None:
+    srv, url = server
+    real = run_readme_page(
+        open_page(browser, site.add("real.html", local_page(readme_page(), srv.url)), (1366, 768)),
+        (1366, 768),
+    )
+    page = open_page(
+        browser, site.add("simulated.html", simulated_readme_page(srv.url)), (1366, 768)
+    )
+    page.wait_for_selector("#jspsych-data-display", timeout=30_000)
+    simulated = jspsych_data(page)
+    page.context.close()
+    assert [r["trial_type"] for r in simulated] == [r["trial_type"] for r in real]
+    for got, want in zip(simulated[1:], real[1:], strict=True):  # the two emogen rows
+        assert want["success"] and got["success"], got["reason"]
+        assert (got["simulated"], want["simulated"]) == (True, False)
+        # the restarts a participant makes are theirs: their number is no shape of the study
+        assert set(got) == set(want)
+        got_shape = {k: kinds(v) for k, v in got.items() if k != "restarts"}
+        want_shape = {k: kinds(v) for k, v in want.items() if k != "restarts"}
+        assert got_shape == want_shape, {
+            k: (got_shape[k], want_shape[k]) for k in got_shape if got_shape[k] != want_shape[k]
+        }
+    evolve, categorise = simulated[1:]
+    # what the study says (STUDY above), not what the plugin's options default to
+    assert (evolve["study"], evolve["block_name"], evolve["emotion"]) == (
+        "embedded",
+        "make",
+        "happy",
+    )
+    assert evolve["identity"] == "female-medium"
+    assert len(evolve["generations"]) == STUDY["ga"]["generations"] + 1
+    assert len(evolve["final_weights"]) == len(real[1]["final_weights"]) > 100
+    assert (categorise["trial"], categorise["block_name"]) == (1, "recognise")
+    assert sorted(categorise["labels"]) == sorted(STUDY["emotions"])
+    # no session was made: the export has only the real page's participants
+    store = Store(url)
+    assert "simulated" not in set(export_tables(store)["sessions"]["participant_id"])
     store.dispose()
 
 

@@ -157,6 +157,43 @@ def test_an_outage_mid_evolve_and_the_prolific_recipe(
     assert data[2]["rt"] == data[2]["emogen_response_rt"]
 
 
+def test_an_outage_longer_than_patience_and_try_again(
+    browser: Any, site: ExperimentSite, served: tuple[ServerProcess, FaultProxy, str]
+) -> None:
+    _srv, proxy, url = served
+    timeline = [{**t, "patience_ms": 2500} for t in TIMELINE]
+    page_url = site.add("longer.html", one_trial_page(proxy.url, timeline)) + "?PROLIFIC_PID=long-1"
+    page = open_page(browser, page_url, (1366, 768))
+    assert step_once(page) == "trial"  # generation 0 of the happy trial
+    page.wait_for_selector(ANY_READY + "[data-emogen-stage='trial']", timeout=60_000)
+    proxy.down()  # past patience_ms: the trial fails
+    assert step_once(page) == "trial"
+    page.wait_for_selector(".emogen-trial[data-emogen-stage='failed']", timeout=30_000)
+    assert page.locator("#failed-retry").is_visible()
+    assert "Try again once you are back online" in page.inner_text("#failed-next")
+    shot(page, "jspsych_try_again_1366x768.png")
+    proxy.up()
+    page.click("#failed-retry")
+    # the same trial, where the session is: generation 1 (the 3D viewer is reused)
+    page.wait_for_selector(ANY_READY + "[data-emogen-stage='trial']", timeout=60_000)
+    run_to_end(page)
+    data = rows(page)
+    page.context.close()
+    assert [r["emogen_success"] for r in data] == [True] * 5, [r["emogen_reason"] for r in data]
+    assert [r["emogen_trial"] for r in data] == [0, 1, 2, 3, 4]  # no emogen slot lost
+    assert [r["emogen_tries"] for r in data] == [2, 1, 1, 1, 1]
+    first = data[0]["emogen_generations"]
+    assert [g["generation"] for g in first] == [0, 1]  # both runs' steps in the one row
+    sessions, _trials = joined(url)
+    (sid,) = sessions.query("participant_id == 'long-1'")["session_id"]
+    assert sessions.set_index("session_id").loc[sid, "stage"] == "done"
+    store = Store(url)
+    chosen = export_tables(store)["selections"].query("session_id == @sid and trial == 0")
+    store.dispose()
+    elites = chosen.query("role == 'elite'").sort_values("generation")["face_id"].tolist()
+    assert elites == [g["elite"] for g in first]
+
+
 def failed_row(page: Any) -> tuple[dict[str, Any], str]:
     page.wait_for_selector(".emogen-trial[data-emogen-stage='failed']", timeout=60_000)
     said = page.inner_text("#failed-reason")

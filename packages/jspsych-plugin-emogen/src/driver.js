@@ -12,7 +12,10 @@ import { taskOf } from "../../../src/emogen/web/static/tasks/index.js";
  * @param {string[]} names
  */
 export function targetVector(target, names) {
-  if (Array.isArray(target)) return target;
+  if (Array.isArray(target)) {
+    if (target.length === names.length) return target;
+    throw new Error(`simulation target has ${target.length} weights; the study's faces have ${names.length} (GET /api/study: weight_names)`);
+  }
   const unknown = Object.keys(target).filter((k) => !names.includes(k));
   if (unknown.length) throw new Error(`simulation target names weights the study does not have: ${unknown.join(", ")}`);
   return names.map((n) => target[n] ?? 0);

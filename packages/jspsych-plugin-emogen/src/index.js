@@ -4,11 +4,12 @@
 // one face, one label) — run by the study server, shown by the study page's own components.
 // See README.md and docs/jspsych.md.
 import { ParameterType } from "jspsych";
-import { TASK_NAMES, taskOf } from "../../../src/emogen/web/static/tasks/index.js";
+import { TASK_NAMES } from "../../../src/emogen/web/static/tasks/index.js";
 import { serverBase, studyInfo } from "./connect.js";
 import { observerDriver, targetVector } from "./driver.js";
-import { DATA_FIELDS, emptyData, fieldName, namespaced } from "./record.js";
+import { DATA_FIELDS, fieldName, namespaced } from "./record.js";
 import { runTrial } from "./run.js";
+import { SMILE, simulatedData } from "./simulate.js";
 
 const VERSION = "0.1.0";
 
@@ -66,9 +67,6 @@ const info = /** @type {const} */ ({
   },
 });
 
-/** The default target of simulate(): a smile (ICT-FaceKit's shape names). */
-const SMILE = { mouthSmile_L: 0.8, mouthSmile_R: 0.8, cheekSquint_L: 0.4, cheekSquint_R: 0.4 };
-
 class EmogenPlugin {
   static info = info;
 
@@ -86,16 +84,34 @@ class EmogenPlugin {
     return this.run(display_element, trial, on_load);
   }
 
-  /** @param {HTMLElement} element @param {any} trial @param {() => void} onLoad @param {any} [driver] */
-  run(element, trial, onLoad, driver) {
-    return runTrial({ element, params: trial, onLoad, driver, simulated: driver !== undefined });
+  /**
+   * The trial, run again while the participant presses "Try again" after a lost connection (it
+   * then carries on where the server's session is; jsPsych gets one row: the runs' records of
+   * the trial together, ``emogen_tries`` counting the runs).
+   * @param {HTMLElement} element @param {any} trial @param {() => void} onLoad @param {any} [driver]
+   */
+  async run(element, trial, onLoad, driver) {
+    let loaded = false;
+    const loadOnce = () => {
+      if (!loaded) onLoad();
+      loaded = true;
+    };
+    let earlier = null;
+    for (let tries = 1; ; tries++) {
+      const run = await runTrial({ element, params: trial, onLoad: loadOnce, driver, simulated: driver !== undefined, tries, earlier });
+      run.data.duration_ms += earlier ? earlier.duration_ms : 0; // the whole trial, every run
+      if (!run.again) return namespaced(run.data);
+      earlier = run.data;
+    }
   }
 
   /**
-   * ``data-only``: the simulated observer without a server, as the trial's task simulates it
-   * (tasks/<task>.js: ``simulate``; evolve: a stand-in GA — options target, an array or weights
-   * by name, generations, chosen, noise, seed; categorise: labels, prototypes, face). ``visual``:
-   * the observer at the real trial, against the server.
+   * ``data-only``: a simulated participant without a session (simulate.js): the study's trial at
+   * this place in the timeline, from GET /api/study (or options ``study``: that answer, saved),
+   * its data as the trial's task simulates it (tasks/<task>.js: ``simulate``; evolve: a stand-in
+   * GA — options target, an array or weights by name, chosen, noise, rating; categorise: label,
+   * prototypes, face), the session's ``seed`` (none: from jsPsych's seeded Math.random).
+   * ``visual``: the observer at the real trial, against the server.
    * @param {any} trial
    * @param {"data-only" | "visual"} mode
    * @param {any} options
@@ -110,12 +126,7 @@ class EmogenPlugin {
       return this.run(this.jsPsych.getDisplayElement(), trial, load, driver);
     }
     load();
-    const data = { ...emptyData(trial.task, String(trial.server)), simulated: true };
-    delete data.token;
-    // no seed given: one drawn from Math.random, which jsPsych.randomization.setSeed(…) seeds —
-    // each trial's data differ, and the whole simulation repeats under jsPsych's seed
-    const seed = options.seed ?? Math.floor(Math.random() * 2 ** 31);
-    Object.assign(data, taskOf(trial.task).simulate({ ...options, target: options.target ?? SMILE, seed }));
+    const data = await simulatedData(this.jsPsych, trial, options);
     return this.jsPsych.pluginAPI.mergeSimulationData(namespaced(data), options);
   }
 }

@@ -27,6 +27,9 @@ const HEAD = {
   reason: { type: "STRING", value: null },
   failure: { type: "STRING", value: null },
   simulated: { type: "BOOL", value: false },
+  /** The trial's runs: more than 1 where the participant pressed "Try again" after a lost
+   * connection (the row has every run's steps of the trial; its outcome is the last run's). */
+  tries: { type: "INT", value: 1 },
   server: { type: "STRING", value: null },
   study: { type: "STRING", value: null },
   /** The researcher's session id: ``session_id`` in every table of ``emogen study export``. */
@@ -123,4 +126,16 @@ export function withRecord(data, record) {
   });
   if (record.result) Object.assign(data, taskOf(record.result.task).result(record.result));
   return data;
+}
+
+/**
+ * A run after "Try again" of the same trial keeps what the earlier runs recorded (its task's
+ * fields, the response time so far); a run that finds the session at another trial starts afresh.
+ * @param {Record<string, any>} data the run's, its trial and task known
+ * @param {Record<string, any> | null} earlier the earlier run's data (plain names)
+ */
+export function carryOver(data, earlier) {
+  if (!earlier || earlier.trial !== data.trial || earlier.task !== data.task) return;
+  for (const name of Object.keys(taskOf(data.task).data)) data[name] = earlier[name];
+  data.rt = earlier.rt;
 }

@@ -18,7 +18,7 @@ import { STATUS_LINES } from "../../../src/emogen/web/static/tasks/markup.js";
 import { createDrawFaces, fillScale } from "../../../src/emogen/web/static/tasks/shell.js";
 import { createViewerDisplay } from "../../../src/emogen/web/static/viewer-adapter.js";
 import { TrialFailure, participantFromUrl, request, serverBase, session, studyInfo } from "./connect.js";
-import { emptyData, namespaced, recordStep, withRecord } from "./record.js";
+import { carryOver, emptyData, recordStep, withRecord } from "./record.js";
 
 const SHELL = `
 <div class="emogen-trial" data-emogen-stage="loading">
@@ -33,7 +33,10 @@ const SHELL = `
       <h2 id="failed-heading">This part of the experiment could not go on</h2>
       <p id="failed-reason"></p>
       <p id="failed-next" class="muted">Press Continue to go on with the experiment.</p>
-      <div class="actions-row"><button id="failed-continue" class="primary" type="button">Continue</button></div>
+      <div class="actions-row">
+        <button id="failed-retry" class="secondary" type="button" hidden>Try again</button>
+        <button id="failed-continue" class="primary" type="button">Continue</button>
+      </div>
     </section>
     ${STATUS_LINES}
   </div>
@@ -50,6 +53,10 @@ const PARTICIPANT_WORDS = {
   other: "This part of the experiment could not be shown. This is not your fault: the researcher will see what happened.",
 };
 
+/** The failures a participant may try again (the connection back): the server keeps the
+ * session, and the next run carries on where it is. */
+const RETRIABLE = new Set(["unreachable", "timeout"]);
+
 /** Said once per page in the browser's console (a study whose blocks differ from the timeline). */
 const reported = new Set();
 function reportOnce(text) {
@@ -62,11 +69,26 @@ function reportOnce(text) {
 const article = (word) => (/^[aeiou]/i.test(word) ? `an ${word}` : `a ${word}`);
 
 /**
- * Runs one trial; resolves with its data, namespaced (never rejects).
- * @param {{ element: HTMLElement, params: any, onLoad?: () => void,
- *   driver?: (view: string, state: any, root: HTMLElement) => void, simulated?: boolean }} options
+ * Where the study's trial (``data.task``, ``data.trial``) is of another task than the timeline's
+ * (``timelineTask``), the trial runs the study's: its data and the console say so (once).
+ * @param {Record<string, any>} data @param {string} timelineTask @param {number} trials the study's
  */
-export async function runTrial({ element, params, onLoad = () => {}, driver, simulated = false }) {
+export function followStudy(data, timelineTask, trials) {
+  if (data.task === timelineTask) return;
+  data.timeline_task = timelineTask;
+  data.warning = `the study's current trial (trial ${data.trial + 1} of ${trials}) is ${article(data.task)} trial, where the timeline has ${article(timelineTask)} trial: it runs the study's trial (the study's order wins; order the timeline's emogen trials as the study's blocks)`;
+  reportOnce(data.warning);
+}
+
+/**
+ * Runs one trial; resolves with its data (plain names) and ``again``: the participant pressed
+ * "Try again" after a lost connection (the caller runs it once more, ``tries`` + 1, ``earlier``
+ * this run's data); never rejects.
+ * @param {{ element: HTMLElement, params: any, onLoad?: () => void, tries?: number, earlier?: any,
+ *   driver?: (view: string, state: any, root: HTMLElement) => void, simulated?: boolean }} options
+ * @returns {Promise<{ data: Record<string, any>, again: boolean }>}
+ */
+export async function runTrial({ element, params, onLoad = () => {}, driver, simulated = false, tries = 1, earlier = null }) {
   element.innerHTML = SHELL;
   const root = /** @type {HTMLElement} */ (element.querySelector(".emogen-trial"));
   const $ = (id) => /** @type {any} */ (root.querySelector(`#${id}`));
@@ -75,6 +97,7 @@ export async function runTrial({ element, params, onLoad = () => {}, driver, sim
   const timing = { timeoutMs: params.timeout_ms, patienceMs: params.patience_ms };
   const data = emptyData(params.task, String(params.server));
   data.simulated = simulated;
+  data.tries = tries;
   let base = "";
   const ui = {
     state: /** @type {any} */ (null), display: /** @type {any} */ (null), shownAt: 0,
@@ -82,6 +105,7 @@ export async function runTrial({ element, params, onLoad = () => {}, driver, sim
     link: /** @type {any} */ ({ kind: "online" }), linkTimer: 0, said: "", ready: false, stage: "loading",
   };
   let ended = false;
+  let again = false;
   let finish = (/** @type {any} */ _outcome) => {};
   const finished = new Promise((resolve) => (finish = (outcome) => {
     ended = true;
@@ -229,11 +253,8 @@ export async function runTrial({ element, params, onLoad = () => {}, driver, sim
     }
     data.trial = state.trial.position;
     data.task = state.trial.task;
-    if (state.trial.task !== params.task) {
-      data.timeline_task = params.task;
-      data.warning = `the study's current trial (trial ${state.trial.position + 1} of ${state.progress.trials}) is ${article(state.trial.task)} trial, where the timeline has ${article(params.task)} trial: it runs the study's trial (the study's order wins; order the timeline's emogen trials as the study's blocks)`;
-      reportOnce(data.warning);
-    }
+    followStudy(data, params.task, state.progress.trials);
+    carryOver(data, earlier);
     const png = params.render === "png";
     const display = await createFaceDisplay({
       token: held.token,
@@ -259,7 +280,7 @@ export async function runTrial({ element, params, onLoad = () => {}, driver, sim
     data.reason = err instanceof Error ? err.message : String(err);
     console.error(`emogen: the trial could not go on: ${data.reason}`);
     // a session with no trial left ends the trial quietly: nothing went wrong for the participant
-    if (data.failure !== "finished") await showFailure(data.failure);
+    if (data.failure !== "finished") again = (await showFailure(data.failure)) === "retry";
     else if (!loaded) onLoad();
   }
   abort.abort();
@@ -267,9 +288,10 @@ export async function runTrial({ element, params, onLoad = () => {}, driver, sim
   if (ui.display) ui.display.dispose();
   data.duration_ms = Math.round(performance.now() - started);
   delete data.token; // the session's secret stays out of the experiment's data
-  return namespaced(data);
+  return { data, again };
 
-  /** The participant's words for a failure of ``kind``, until Continue (or ``failure_wait_ms``). */
+  /** The participant's words for a failure of ``kind``, until Continue (or ``failure_wait_ms``),
+   * or "Try again" where the connection was lost: resolves with "retry" or "continue". */
   function showFailure(kind) {
     $("failed-reason").textContent = PARTICIPANT_WORDS[kind] ?? PARTICIPANT_WORDS.other;
     if (kind === "other-tab") {
@@ -286,8 +308,13 @@ export async function runTrial({ element, params, onLoad = () => {}, driver, sim
     ui.state = null;
     if (!loaded) onLoad();
     return new Promise((resolve) => {
-      $("failed-continue").addEventListener("click", () => resolve(undefined), { once: true });
-      if (params.failure_wait_ms !== null) setTimeout(resolve, params.failure_wait_ms);
+      $("failed-continue").addEventListener("click", () => resolve("continue"), { once: true });
+      if (RETRIABLE.has(kind)) {
+        $("failed-retry").hidden = false;
+        $("failed-next").textContent = "Press Try again once you are back online, or Continue to go on with the experiment.";
+        $("failed-retry").addEventListener("click", () => resolve("retry"), { once: true });
+      }
+      if (params.failure_wait_ms !== null) setTimeout(() => resolve("continue"), params.failure_wait_ms);
       if (driver) driver("failed", null, root);
     });
   }

@@ -28,6 +28,12 @@ export function fakeServer({ blocks = ["evolve", "categorise"], generations = 1 
   const s = { stage: "instructions", position: 0, generation: 0, status: "active", labels: {} };
   const tasks = blocks;
 
+  /** What GET /api/study says each block shows (as the views below show it). */
+  const shows = {
+    evolve: { emotions: ["happy"], identities: ["generic"], generations, faces: 10, min_selections: 2, max_selections: 3, rating_points: 7 },
+    categorise: { labels: ["sad", "happy"], identities: ["generic"], none_option: false, intensity_points: null, confidence_points: null },
+  };
+
   function view(task) {
     if (task === "evolve") {
       return {
@@ -99,7 +105,7 @@ export function fakeServer({ blocks = ["evolve", "categorise"], generations = 1 
   function answer(method, path, body) {
     if (path === "/api/study") {
       return [200, { name: "fake", title: "Fake", participant_param: "PROLIFIC_PID", weight_names: ["a", "b", "c"],
-        blocks: tasks.map((task, k) => ({ block: k, name: `block${k + 1}`, task, trials: 1 })) }];
+        blocks: tasks.map((task, k) => ({ block: k, name: `block${k + 1}`, task, trials: 1, shows: shows[task] })) }];
     }
     if (path === "/api/sessions") {
       fake.sessions += 1;

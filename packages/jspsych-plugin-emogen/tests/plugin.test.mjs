@@ -186,14 +186,20 @@ test("the study's current trial of another task: it runs, the mismatch said once
   }
 });
 
-test("the server gone mid-trial: the trial ends as failed, what was done kept", async () => {
-  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, patience_ms: 500 }]);
+/** The fake's evolve trial: faces 1 and 2 chosen, then the server gone as 3 and 4 are sent
+ * (past patience_ms: the failure screen). */
+async function lostAtGeneration2() {
   await chooseAndNext(1, 2);
   await until(() => document.querySelector("#gen-progress").textContent === "Round 2 of 2", "generation 2");
   await until(ready("trial"), "the faces");
   fake.down = true;
   await chooseAndNext(3, 4);
   await until(() => root().dataset.emogenStage === "failed", "the failure");
+}
+
+test("the server gone mid-trial: the trial ends as failed, what was done kept", async () => {
+  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, patience_ms: 500 }]);
+  await lostAtGeneration2();
   assert.match(document.querySelector("#failed-reason").textContent, CONNECTION_LOST);
   await clickTarget(document.querySelector("#failed-continue"));
   await until(() => getData().count() === 1, "the data");
@@ -204,6 +210,53 @@ test("the server gone mid-trial: the trial ends as failed, what was done kept", 
   assert.equal(data.generations.length, 1); // the first generation was recorded by the server
   assert.equal(data.generations[0].elite, 1);
   assert.equal(data.session_id, 7); // a failed row carries its session
+});
+
+test("a connection lost longer than patience_ms: Try again carries on the same trial, nothing lost", async () => {
+  const { getData, expectFinished } = await startTimeline([
+    { type: EmogenPlugin, server: SERVER, patience_ms: 500 },
+    { type: EmogenPlugin, server: SERVER, task: "categorise" },
+  ]);
+  await lostAtGeneration2();
+  const retry = document.querySelector("#failed-retry");
+  assert.equal(retry.hidden, false);
+  assert.match(document.querySelector("#failed-next").textContent, /Try again once you are back online/);
+  fake.down = false; // the connection is back
+  const retried = performance.now();
+  await clickTarget(retry);
+  await until(ready("trial"), "the same trial again, where the session is");
+  assert.equal(document.querySelector("#gen-progress").textContent, "Round 2 of 2");
+  // the choice made before the outage (faces 3 and 4) is still chosen: Next sends it
+  await clickTarget(document.querySelector("#next"));
+  await until(ready("rating"), "the rating");
+  const five = document.querySelector('#rating-scale input[value="5"]');
+  five.checked = true;
+  five.dispatchEvent(new Event("change", { bubbles: true }));
+  await clickTarget(document.querySelector("#rate"));
+  await until(() => getData().count() === 1, "the evolve trial's row");
+  const retriedFor = performance.now() - retried; // the second run's length, at most
+  await until(ready("categorise"), "the next trial: the timeline is not one trial short");
+  await clickTarget(document.querySelector('#label-buttons button[data-label="happy"]'));
+  await until(() => getData().count() === 2, "both trials' data");
+  await expectFinishedOk(expectFinished);
+  const [evolve, categorise] = rows(getData());
+  assert.deepEqual([evolve.success, evolve.tries, evolve.failure], [true, 2, null]);
+  // the whole trial's duration, both runs: more than the time since Try again
+  assert.ok(evolve.duration_ms > retriedFor, `${evolve.duration_ms} ms, ${retriedFor} ms since Try again`);
+  // both runs' steps: generation 0 (first run) and generation 1 (after Try again)
+  assert.deepEqual(evolve.generations.map((g) => [g.generation, g.elite, g.others]), [[0, 1, [2]], [1, 13, [14]]]);
+  assert.equal(evolve.rating, 5);
+  assert.deepEqual([categorise.success, categorise.tries, categorise.label], [true, 1, "happy"]);
+});
+
+test("a failure that is not the connection's offers no Try again", async () => {
+  fake.refuseOrigin = true;
+  const { getData } = await startTimeline([{ type: EmogenPlugin, server: SERVER, patience_ms: 500 }]);
+  await until(() => root() && root().dataset.emogenStage === "failed", "the failure");
+  assert.equal(document.querySelector("#failed-retry").hidden, true);
+  await clickTarget(document.querySelector("#failed-continue"));
+  await until(() => getData().count() === 1, "the failed trial's data");
+  assert.deepEqual([rows(getData())[0].failure, rows(getData())[0].tries], ["origin", 1]);
 });
 
 test("an origin the server does not allow: the reason names the origin and the setting", async () => {
@@ -247,25 +300,45 @@ test("a server address that is not one: the failure screen, no request", async (
   assert.equal(fake.log.length, 0);
 });
 
-test("simulate data-only: an observer near its target, no server, repeatable", async () => {
+/** A study as GET /api/study answers (given to simulate(): no server asked). */
+function studyOf({ weights = 5, generations = 8, evolve = 1, categorise = 0, labels = ["happy", "sad"] } = {}) {
+  const blocks = [];
+  if (evolve) {
+    blocks.push({ task: "evolve", trials: evolve, shows: { emotions: ["happy", "sad"], identities: ["a", "b"],
+      generations, faces: 6, min_selections: 1, max_selections: 2, rating_points: 9 } });
+  }
+  if (categorise) {
+    blocks.push({ task: "categorise", trials: categorise, shows: { labels, identities: ["a"], none_option: true,
+      intensity_points: 5, confidence_points: null } });
+  }
+  return { name: "given", weight_names: Array.from({ length: weights }, (_, k) => `w${k}`),
+    blocks: blocks.map((b, k) => ({ ...b, block: k, name: `block${k + 1}` })) };
+}
+
+/** The data-only simulation of ``timeline`` (its rows, jsPsych's clock aside). */
+async function simulated(timeline) {
+  const { getData } = await simulateTimeline(timeline, "data-only");
+  await until(() => getData().count() === timeline.length, "the simulated data");
+  return rows(getData()).map(({ time_elapsed: _clock, ...row }) => row);
+}
+
+test("simulate data-only: the study's trial, an observer near its target, repeatable", async () => {
   const target = [0.9, 0.1, 0.6, 0.0, 0.3];
-  const run = async (seed) => {
-    const options = { simulation_options: { target, seed, generations: 8, chosen: 3 } };
-    const { getData } = await simulateTimeline([{ type: EmogenPlugin, server: SERVER, ...options }], "data-only");
-    await until(() => getData().count() === 1, "the simulated data");
-    const data = { ...rows(getData())[0] };
-    delete data.time_elapsed; // jsPsych's clock aside
-    return data;
-  };
+  const study = studyOf();
+  const run = async (seed) => (await simulated([{ type: EmogenPlugin, server: SERVER, simulation_options: { study, target, seed, chosen: 3 } }]))[0];
   const data = await run(3);
-  assert.equal(fake.log.length, 0);
+  assert.equal(fake.log.length, 0); // the study given: no server asked
   assert.equal(data.simulated, true);
   assert.equal(data.success, true);
-  assert.equal(data.generations.length, 9);
+  assert.deepEqual([data.study, data.trial, data.block, data.block_name, data.emotion, data.identity], ["given", 0, 0, "block1", "happy", "a"]);
+  assert.equal(data.generations.length, 9); // generations 8 after the first
   for (const g of data.generations) {
-    assert.equal(g.shown.length, 10);
+    assert.equal(g.shown.length, 6); // the study's faces a generation
+    assert.equal(g.others.length, 1); // 3 chosen asked, the study's limit 2
     assert.ok(g.shown.includes(g.elite) && g.others.every((o) => g.shown.includes(o)));
   }
+  assert.equal(data.rating, 7); // 70% of the study's 9 points, rounded up
+  assert.equal(data.final_weights.length, 5);
   // independent reference: faces drawn as the stand-in GA draws its first ones, 2000 of them
   const random = uniform(99);
   const typical = Array.from({ length: 2000 }, () =>
@@ -276,12 +349,40 @@ test("simulate data-only: an observer near its target, no server, repeatable", a
   assert.notDeepEqual((await run(4)).final_weights, data.final_weights);
 });
 
+test("simulate data-only reads GET /api/study: its blocks in order, a warning where the timeline differs", async () => {
+  const options = { simulation_options: { target: [0.9, 0.1, 0.6], seed: 5 } };
+  const trial = { type: EmogenPlugin, server: SERVER, ...options };
+  const [evolve, categorise, past] = await simulated([trial, trial, trial]); // the fake: evolve, categorise
+  assert.deepEqual(fake.log.map((r) => r.path), ["/api/study"]); // read once
+  assert.equal(evolve.task, "evolve");
+  assert.equal(evolve.generations.length, 2); // the fake's generations: 1
+  assert.equal(categorise.task, "categorise");
+  assert.equal(categorise.timeline_task, "evolve");
+  assert.match(categorise.warning, /the study's current trial \(trial 2 of 2\) is a categorise trial, where the timeline has an evolve trial/);
+  assert.deepEqual([...categorise.labels].sort(), ["happy", "sad"]);
+  assert.equal(categorise.final_weights.length, 3);
+  assert.equal(categorise.session_seed, evolve.session_seed); // one session
+  assert.notEqual(categorise.seed, evolve.seed);
+  assert.deepEqual([past.success, past.failure], [false, "finished"]);
+  assert.match(past.reason, /no trial left \(the study has 2\)/);
+});
+
+test("simulate data-only: a target or face of the wrong length, a server that is not one: failed rows that say so", async () => {
+  const [wrong] = await simulated([{ type: EmogenPlugin, server: SERVER, simulation_options: { study: studyOf(), target: [1, 0] } }]);
+  assert.equal(wrong.success, false);
+  assert.match(wrong.reason, /simulation target has 2 weights; the study's faces have 5/);
+  const [bad] = await simulated([{ type: EmogenPlugin, server: "study.example.org", simulation_options: {} }]);
+  assert.deepEqual([bad.success, bad.failure], [false, "server"]);
+  const face = [0.2, 0.9];
+  const [categorise] = await simulated([{ type: EmogenPlugin, server: SERVER, task: "categorise",
+    simulation_options: { study: studyOf({ evolve: 0, categorise: 1 }), face } }]);
+  assert.match(categorise.reason, /simulation face has 2 weights; the study's faces have 5/);
+});
+
 test("simulate data-only without a seed: trials differ, and jsPsych's seed repeats them", async () => {
   const run = async () => {
-    const trial = { type: EmogenPlugin, server: SERVER, simulation_options: { target: [0.9, 0.1, 0.6], generations: 2 } };
-    const { getData } = await simulateTimeline([trial, trial], "data-only");
-    await until(() => getData().count() === 2, "the simulated data");
-    return rows(getData()).map((r) => r.final_weights);
+    const trial = { type: EmogenPlugin, server: SERVER, simulation_options: { study: studyOf({ weights: 3, generations: 2, evolve: 2 }), target: [0.9, 0.1, 0.6] } };
+    return (await simulated([trial, trial])).map((r) => r.final_weights);
   };
   const { initJsPsych } = await import("jspsych");
   const seeded = async (seed) => {
@@ -294,15 +395,17 @@ test("simulate data-only without a seed: trials differ, and jsPsych's seed repea
   assert.notDeepEqual(await seeded("other"), [first, second]);
 });
 
-test("simulate data-only categorise: the label of the nearest prototype", async () => {
-  const { getData } = await simulateTimeline([{
-    type: EmogenPlugin, server: SERVER, task: "categorise",
-    simulation_options: { labels: ["happy", "sad"], prototypes: { happy: [1, 0], sad: [0, 1] }, face: [0.2, 0.9] },
-  }], "data-only");
-  await until(() => getData().count() === 1, "the data");
-  const data = rows(getData())[0];
+test("simulate data-only categorise: the study's labels, none of these, the label of the nearest prototype", async () => {
+  const study = studyOf({ weights: 2, evolve: 0, categorise: 1, labels: ["happy", "sad", "angry"] });
+  const [data] = await simulated([{ type: EmogenPlugin, server: SERVER, task: "categorise",
+    simulation_options: { study, prototypes: { happy: [1, 0], sad: [0, 1] }, face: [0.2, 0.9] } }]);
   assert.equal(data.label, "sad");
   assert.deepEqual(data.final_weights, [0.2, 0.9]);
+  assert.equal(data.final_face_id, null);
+  assert.equal(data.labels.at(-1), "none"); // "none of these" last, as on the screen
+  assert.deepEqual(data.labels.slice(0, 3).sort(), ["angry", "happy", "sad"]);
+  assert.equal(data.intensity, 3); // the middle of the study's 5 points
+  assert.equal(data.confidence, null); // not asked
 });
 
 test("simulate visual: the tasks' observers drive the real screens through the step route", async () => {

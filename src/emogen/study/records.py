@@ -23,12 +23,14 @@ from emogen.tasks.registry import task_named
 
 
 class BlockInfo(TypedDict):
-    """A block of the study: its position (0-based), name, task and number of trials."""
+    """A block of the study: its position (0-based), name, task, number of trials and what its
+    trials show (:meth:`emogen.tasks.protocol.Task.shows`)."""
 
     block: int
     name: str
     task: str
     trials: int
+    shows: dict[str, Any]
 
 
 class StudyInfo(TypedDict):
@@ -69,9 +71,15 @@ def study_info(ctx: StudyContext) -> StudyInfo:
     counts: dict[int, int] = {}
     for c in ctx.conditions:
         counts[c.block] = counts.get(c.block, 0) + 1
-    tasks = [b.task for b in config.study_blocks()]
+    resolved = config.study_blocks()
     blocks: list[BlockInfo] = [
-        {"block": k, "name": name, "task": tasks[k], "trials": counts.get(k, 0)}
+        {
+            "block": k,
+            "name": name,
+            "task": resolved[k].task,
+            "trials": counts.get(k, 0),
+            "shows": task_named(resolved[k].task).shows(resolved[k], config),
+        }
         for k, name in enumerate(block_names(ctx))
     ]
     return {

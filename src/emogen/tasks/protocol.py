@@ -255,6 +255,11 @@ class Task(Protocol):
         """Facts of a trial's stored state the trials export table shows (the GA's stream and
         collision solver), by column."""
 
+    def shows(self, block: Any, config: Any) -> dict[str, Any]:
+        """What every trial of ``block`` (resolved) shows its participant, told before the
+        session (GET /api/study: a page that simulates the study's data without a server reads
+        it): only what a participant sees anyway, never what they may not know."""
+
     def progress_step(
         self, status: str, generation: int, generations: int
     ) -> tuple[str, int | None]:
@@ -285,7 +290,8 @@ class TaskDefaults:
     """What a task that has no more to say answers (subclass it and write the rest): nothing
     to prepare, no face table, no face served as PNG, no result for an embedding page, no
     faces made, a replay that checks nothing (from the database or from an export), rows too
-    few to size an export by, and its name on the dashboard."""
+    few to size an export by, nothing told of its blocks before the session, and its name on
+    the dashboard."""
 
     name: ClassVar[str]
     replay_tables: ClassVar[tuple[str, ...]] = ()
@@ -317,6 +323,9 @@ class TaskDefaults:
         return {}
 
     def state_facts(self, state: str | None) -> dict[str, Any]:
+        return {}
+
+    def shows(self, block: Any, config: Any) -> dict[str, Any]:
         return {}
 
     def progress_step(

@@ -232,6 +232,18 @@ class CategoriseTask:
             "comparison. A pool of others' faces (others_pool = a pilot's export) prevents it"
         ]
 
+    def shows(self, block: Any, config: Any) -> dict[str, Any]:
+        """The labels offered (each trial in its own order), "none of these", the points of the
+        intensity and confidence ratings asked (None: not asked) and the identities of the faces
+        (as each trial's record says its own) — never whose faces they are, nor what for."""
+        return {
+            "labels": list(block.labels),
+            "identities": list(block.identities),
+            "none_option": block.none_option,
+            "intensity_points": block.points if block.intensity else None,
+            "confidence_points": block.points if block.confidence else None,
+        }
+
     def progress_step(
         self, status: str, generation: int, generations: int
     ) -> tuple[str, int | None]:

@@ -300,6 +300,21 @@ class EvolveTask:
             "collision_solver": collision_solver_of_state(state),
         }
 
+    def shows(self, block: Any, config: Any) -> dict[str, Any]:
+        """The emotions its trials ask for and the identities of their faces (in config order;
+        a session's order is its own), the generations after the first, the faces of a
+        generation, the selection's limits and the rating's points: all said on the trial's
+        screens or in its record (GET /api/s/{token}/trials/{n})."""
+        return {
+            "emotions": list(block.emotions),
+            "identities": list(block.identities),
+            "generations": config.ga.generations,
+            "faces": config.ga.population_size,
+            "min_selections": config.ga.min_selections,
+            "max_selections": config.ga.max_selections,
+            "rating_points": config.rating.points,
+        }
+
     def progress_step(
         self, status: str, generation: int, generations: int
     ) -> tuple[str, int | None]:

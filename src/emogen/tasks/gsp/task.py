@@ -354,6 +354,15 @@ class GspTask:
     def notes(self, db: Session, sessions: Any, k: int, block: Any) -> list[str]:
         return []
 
+    def shows(self, block: Any, config: Any) -> dict[str, Any]:
+        """The concepts its trials name, the slider's positions and range: what the page shows
+        (never the chain's state, which another participant's answer may change)."""
+        return {
+            "emotions": list(block.emotions or config.emotions),
+            "steps": block.steps,
+            "slider": list(block.slider),
+        }
+
 
 def _iteration(db: Session, row: TrialRow) -> GspIterationRow | None:
     return db.scalar(select(GspIterationRow).where(GspIterationRow.trial_id == row.id))

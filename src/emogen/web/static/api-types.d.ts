@@ -301,13 +301,18 @@ export interface components {
         };
         /**
          * BlockInfo
-         * @description A block of the study: its position (0-based), name, task and number of trials.
+         * @description A block of the study: its position (0-based), name, task, number of trials and what its
+         *     trials show (:meth:`emogen.tasks.protocol.Task.shows`).
          */
         BlockInfo: {
             /** Block */
             block: number;
             /** Name */
             name: string;
+            /** Shows */
+            shows: {
+                [key: string]: unknown;
+            };
             /** Task */
             task: string;
             /** Trials */

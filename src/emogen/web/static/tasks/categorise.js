@@ -275,22 +275,41 @@ function drive(_shown, state, act, { label }) {
 }
 
 /**
- * A trial's data without a server (the plugin's data-only simulate): the label nearest the
- * face by ``prototypes`` (label → weights) where given, else a label drawn at random.
- * @param {{ labels?: string[], prototypes?: Record<string, number[]>, face?: number[], seed?: number,
- *   median_rt?: number }} options
+ * A trial's data without a server (the plugin's data-only simulate): ``shows``' labels (GET
+ * /api/study: the block's) offered in an order drawn for the trial, the face (``face`` as given,
+ * else a random one of the study's ``weight_names``), its label — the nearest of ``prototypes``
+ * (label → weights) where given, else ``label`` where offered, else one drawn at random — and
+ * the middle of each rating scale the block asks.
+ * @param {{ shows: any, weight_names: string[], index?: number, prototypes?: Record<string, number[]>,
+ *   face?: number[], label?: string, seed?: number, median_rt?: number }} options
  */
-export function simulate({ labels = ["happy", "sad", "angry", "fearful"], prototypes, face, seed = 1, median_rt = 2500 }) {
+export function simulate({ shows, weight_names, index = 0, prototypes, face, label, seed = 1, median_rt = 2500 }) {
   const random = uniform(seed);
-  const weights = face ?? randomFace(random, prototypes ? Object.values(prototypes)[0].length : 20);
-  let label = labels[Math.floor(random() * labels.length)];
+  const offered = [...shows.labels];
+  for (let i = offered.length - 1; i > 0; i--) {
+    const k = Math.floor(random() * (i + 1));
+    [offered[i], offered[k]] = [offered[k], offered[i]];
+  }
+  const labels = answers.options({ labels: offered, none_option: shows.none_option }).map((o) => o.label);
+  if (face && face.length !== weight_names.length) {
+    throw new Error(`simulation face has ${face.length} weights; the study's faces have ${weight_names.length} (GET /api/study: weight_names)`);
+  }
+  const weights = face ?? randomFace(random, weight_names.length);
+  let chosen = label !== undefined && labels.includes(label) ? label : labels[Math.floor(random() * labels.length)];
   if (prototypes) {
     const known = labels.filter((l) => l in prototypes);
     known.sort((x, y) => distance(weights, prototypes[x]) - distance(weights, prototypes[y]));
-    label = known[0] ?? label;
+    chosen = known[0] ?? chosen;
   }
+  const middle = (/** @type {number | null} */ points) => (points ? Math.ceil(points / 2) : null);
   const rt = responseTime(random, median_rt);
-  return { labels: [...labels], label, final_face_id: null, final_weights: weights, response_rt: rt, rt };
+  return {
+    identity: shows.identities[index % shows.identities.length],
+    labels, label: chosen,
+    intensity: chosen === answers.NONE ? null : middle(shows.intensity_points),
+    confidence: middle(shows.confidence_points),
+    final_face_id: null, final_weights: weights, response_rt: rt, load_ms: 0, rt,
+  };
 }
 
 export default {

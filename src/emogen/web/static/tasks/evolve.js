@@ -389,19 +389,22 @@ function child(random, a, b) {
  * A trial's data without a server (the plugin's data-only simulate): the observer meets a
  * stand-in for the server's GA — random faces, then children of the chosen faces (uniform
  * crossover, Gaussian mutation) — made only so a lab can dry-run its timeline and its analysis
- * code; the faces it writes are not emogen's GA's. ``generations`` + 1 generations of ``faces``.
- * @param {{ target: number[] | Record<string, number>, generations?: number, faces?: number,
- *   chosen?: number, noise?: number, seed?: number, median_rt?: number, rating?: number }} options
+ * code; the faces it writes are not emogen's GA's. ``shows``: what the study's block shows (GET
+ * /api/study: its emotions and identities, in config order, ``generations`` + 1 generations of
+ * ``faces``, the selection's limits, the rating's points); ``index``: the trial's place in it.
+ * @param {{ target: number[], shows: any, index?: number, chosen?: number, noise?: number,
+ *   seed?: number, median_rt?: number, rating?: number }} options
  */
-export function simulate({ target, generations = 10, faces = 10, chosen = 3, noise = 0, seed = 1, median_rt = 4000, rating }) {
-  const goal = Array.isArray(target) ? target : Object.values(target);
+export function simulate({ target, shows, index = 0, chosen = 3, noise = 0, seed = 1, median_rt = 4000, rating }) {
+  const { generations, faces, min_selections: min, max_selections: max } = shows;
+  const n = Math.min(max, Math.max(min, chosen));
   const random = uniform(seed);
   let nextId = 0;
-  let population = Array.from({ length: faces }, () => ({ id: nextId++, weights: randomFace(random, goal.length) }));
+  let population = Array.from({ length: faces }, () => ({ id: nextId++, weights: randomFace(random, target.length) }));
   const rows = [];
   let best = population[0];
   for (let g = 0; g <= generations; g++) {
-    const { elite, others } = choose(population, goal, chosen, { noise, random });
+    const { elite, others } = choose(population, target, n, { noise, random });
     rows.push({
       attempt: 0, generation: g, shown: population.map((f) => f.id), elite, others: [...others],
       rt: responseTime(random, median_rt), load_ms: 0,
@@ -415,9 +418,13 @@ export function simulate({ target, generations = 10, faces = 10, chosen = 3, noi
     });
     population = [best, ...children];
   }
+  const ratingRt = responseTime(random, median_rt / 2);
   return {
-    generations: rows, final_face_id: best.id, final_weights: best.weights, rating: rating ?? null,
-    rt: rows.reduce((t, row) => t + row.rt, 0),
+    emotion: shows.emotions[index % shows.emotions.length],
+    identity: shows.identities[index % shows.identities.length],
+    generations: rows, final_face_id: best.id, final_weights: best.weights,
+    rating: rating ?? Math.ceil(0.7 * shows.rating_points), rating_rt: ratingRt,
+    rt: rows.reduce((t, row) => t + row.rt, ratingRt),
   };
 }
 

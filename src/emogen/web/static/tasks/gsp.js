@@ -275,17 +275,21 @@ function drive(_shown, state, act, { position }) {
 
 /**
  * A trial's data without a server (the plugin's data-only simulate): a slider of ``steps``
- * positions starting at random; the observer picks the position nearest ``target`` (0 … 1;
- * ``value`` on a slider over [0, 1]). No face: the chain's face is the server's.
- * @param {{ steps?: number, target?: number, seed?: number, median_rt?: number }} options
+ * positions (the block's, from ``shows``) starting at random; the observer picks the position
+ * nearest ``target`` (a number 0 … 1 along the slider; weights given for the other tasks are
+ * no slider position: the middle then); ``value`` on the block's slider range. No face: the
+ * chain's face is the server's.
+ * @param {{ shows?: any, steps?: number, target?: unknown, seed?: number, median_rt?: number }} options
  */
-export function simulate({ steps = 41, target = 0.5, seed = 1, median_rt = 3000 }) {
+export function simulate({ shows, steps = shows?.steps ?? 41, target, seed = 1, median_rt = 3000 }) {
   const random = uniform(seed);
   const start = Math.floor(random() * steps);
-  const position = Math.round(Math.min(1, Math.max(0, target)) * (steps - 1));
+  const along = typeof target === "number" ? Math.min(1, Math.max(0, target)) : 0.5;
+  const position = Math.round(along * (steps - 1));
+  const [low, high] = shows?.slider ?? [0, 1];
   const rt = responseTime(random, median_rt);
   return {
-    slider_start: start, position, value: position / (steps - 1), fallback: false,
+    slider_start: start, position, value: low + (position / (steps - 1)) * (high - low), fallback: false,
     final_face_id: null, final_weights: null, response_rt: rt, rt,
   };
 }
