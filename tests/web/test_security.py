@@ -10,6 +10,7 @@ import logging
 from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import pandas as pd
@@ -295,7 +296,9 @@ def test_the_researcher_token_is_never_logged(
 
 
 class _FakeApp:
-    pass
+    """An app whose face models are made at once (the server asks for them before it listens)."""
+
+    state = SimpleNamespace(glbs=SimpleNamespace(make_all=lambda: None))
 
 
 def test_researcher_page_says_when_the_api_is_disabled(tmp_path: Path, ict_model: Any) -> None:

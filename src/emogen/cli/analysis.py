@@ -125,6 +125,13 @@ ExclusionsOpt = Annotated[
 ]
 
 
+def study_ga(config: Path) -> Any:
+    """``--config``: the GA settings of the study the export came from."""
+    from emogen.study.config import load_study_config
+
+    return load_study_config(config).ga
+
+
 def command_line(data: Path, retest: Path | None, out: Path) -> str:
     """The command that made the report (this process's, or the arguments given)."""
     if sys.argv[1:2] == ["analyse"]:
@@ -197,11 +204,7 @@ def analyse_command(
 
         check_participants(dataset, participants, group_column)
     check_out_folder(out, force=force)
-    ga = None
-    if config is not None:
-        from emogen.study.config import load_study_config
-
-        ga = load_study_config(config).ga
+    ga = None if config is None else study_ga(config)
     model = load_model(model_path, rig=rig)
     options = AnalysisOptions(
         render=render,

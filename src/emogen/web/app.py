@@ -110,6 +110,13 @@ def _routes(app: FastAPI, store: Store, config: StudyConfig) -> None:
     app.mount("/static", StaticFiles(directory=str(HERE / "static")), name="static")
 
 
+def refuse_unservable(config: StudyConfig) -> None:
+    """Blocks participants cannot yet be shown (``TaskBlock.unservable``): refused by name."""
+    refused = check_servable(config)
+    if refused:
+        raise ConfigError("; ".join(f"{f.where}: {f.message}" for f in refused))
+
+
 def create_app(
     study_config: StudyConfig | str | Path,
     database_url: str | None = None,
@@ -148,9 +155,7 @@ def create_app(
         if isinstance(study_config, StudyConfig)
         else load_study_config(Path(study_config))
     )
-    refused = check_servable(config)
-    if refused:  # before anything loads
-        raise ConfigError("; ".join(f"{f.where}: {f.message}" for f in refused))
+    refuse_unservable(config)  # before anything loads
     if model is None:
         model = load_model(config.model, rig=config.rig)
     store = Store(resolve_database_url(database_url, config.database_url))
