@@ -111,8 +111,6 @@ class Rig:
     correctives: tuple[Corrective, ...] = ()
     derive_min_overlap: float | None = None
     companions: dict[str, str] = field(default_factory=dict)
-    #: version of the derived reach shapes (:mod:`emogen.correct.reach`); None: none (rig 1)
-    reach_version: int | None = None
 
     # ---- gene space -------------------------------------------------------------------
     def gene_names(self, eye_motion: bool = True) -> tuple[str, ...]:
@@ -228,7 +226,6 @@ class Rig:
             ],
             "derive_correctives": self.derive_min_overlap,
             "companions": dict(self.companions),
-            "reach": self.reach_version,
         }
 
     def corrective_settings(self) -> dict[str, object]:
@@ -240,5 +237,4 @@ class Rig:
             ],
             "derive_min_overlap": self.derive_min_overlap,
             "companions": dict(sorted(self.companions.items())),
-            "reach": self.reach_version,
         }
