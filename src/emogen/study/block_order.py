@@ -16,7 +16,7 @@ squares take row (k // B) mod R, so that the two orders are crossed);
 the order (``trials.block`` by ``position``); the export's ``sessions`` table spells it out
 (``block_order``: block names in the order shown).
 
-A block whose trials or check depend on the blocks before it (a categorise block showing the
+A block whose trials or check depend on the blocks before it (a block showing the
 participant's own faces) cannot trade places with those blocks: the check refuses it.
 """
 

@@ -2,8 +2,8 @@
 
 The export's ``study`` table carries each study's resolved config (``config_json``) and its
 gene and weight column names; ``trials`` the trials' seeds. Each registered task replays its
-own trials from the tables it names (:attr:`emogen.tasks.protocol.Task.replay_tables`; the
-GA's: :mod:`emogen.tasks.evolve.replay_export`), and each session's report gathers them.
+own trials from the tables it names (:attr:`emogen.tasks.protocol.Task.replay_tables`, in
+each task's own module), and each session's report gathers them.
 """
 
 from __future__ import annotations

@@ -57,7 +57,7 @@ __all__ = [
 #: every Parquet file's metadata (:mod:`emogen.columns`). Exports of schema 2 still analyse
 #: and replay.
 #: 5: blocks and tasks: ``trials.block`` and ``trials.task``, the ``responses`` table (a
-#: categorise trial's face and answer). Exports of schema 4 still analyse and replay.
+#: labelling trial's face and answer). Exports of schema 4 still analyse and replay.
 #: 6 (exports only): tables named by their task (``responses`` → ``categorise_responses``,
 #: ``ratings`` → ``evolve_ratings``), the ``final_faces`` table, ``trials.emotion`` and
 #: ``final_face_id`` NA for trials that make no face. Exports of schema 5 still analyse and replay.
