@@ -2,6 +2,8 @@
 and the rig's six EMFACS core blocks at full weight) on the six identity presets.
 
     python scripts/stimulus_sheets.py [OUT_FOLDER]     # default docs/images
+    python scripts/stimulus_sheets.py docs/images --rigs   # rig 1 and rig 2 (the reach shapes)
+    python scripts/stimulus_sheets.py docs/images --dark   # the dark presets and their -v2
 
 "before": the flat look of EmoGen ≤ 0.2 (no textures, head-and-shoulders framing);
 "after": each preset's appearance and the face framing. 512² and the participant tile (256²).
@@ -32,10 +34,16 @@ def prototypes(model: emogen.FaceModel) -> tuple[list[str], np.ndarray]:
     return names, np.asarray(rows)
 
 
-def sheet(model: emogen.FaceModel, size: int, after: bool, framing: str = "face") -> np.ndarray:
+def sheet(
+    model: emogen.FaceModel,
+    size: int,
+    after: bool,
+    framing: str = "face",
+    presets: tuple[str, ...] = PRESET_NAMES,
+) -> np.ndarray:
     names, w = prototypes(model)
     images, labels = [], []
-    for preset in PRESET_NAMES:
+    for preset in presets:
         ident = PRESETS[preset]
         m = model.with_identity(ident.shape)
         options = (
@@ -58,8 +66,40 @@ def textured_sheets(out: Path, tag: str) -> None:
             print(path)
 
 
+def rig_sheets(out: Path) -> None:
+    """Rig 1 (before the reach shapes) and rig 2, textured, face framing, 512² and tile size:
+    stimuli_rig1_face_SIZE.jpg and stimuli_rig2_face_SIZE.jpg."""
+    from importlib import resources
+
+    with resources.as_file(resources.files("emogen.data").joinpath("ict_rig_1.toml")) as p:
+        models = {"rig1": emogen.load_model(rig=p), "rig2": emogen.load_model()}
+    for tag, model in models.items():
+        for size, name in ((512, "512"), (256, "tile")):
+            path = out / f"stimuli_{tag}_face_{name}.jpg"
+            Image.fromarray(sheet(model, size, True)).save(path, quality=88, optimize=True)
+            print(path)
+
+
+def dark_sheets(out: Path) -> None:
+    """The dark presets beside their -v2 (deeper lips), rig 2, face framing, 512² and tile size:
+    stimuli_dark_v2_face_SIZE.jpg."""
+    model = emogen.load_model()
+    presets = ("female-dark", "female-dark-v2", "male-dark", "male-dark-v2")
+    for size, name in ((512, "512"), (256, "tile")):
+        path = out / f"stimuli_dark_v2_face_{name}.jpg"
+        image = sheet(model, size, True, presets=presets)
+        Image.fromarray(image).save(path, quality=88, optimize=True)
+        print(path)
+
+
 def main() -> None:
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/images")
+    if "--rigs" in sys.argv:
+        rig_sheets(out)
+        return
+    if "--dark" in sys.argv:
+        dark_sheets(out)
+        return
     if "--tag" in sys.argv:
         textured_sheets(out, sys.argv[sys.argv.index("--tag") + 1])
         return

@@ -49,6 +49,7 @@ SLOW: dict[str, str] = {
     "tests/appearance/test_study_identities.py::test_face_pngs_draw_each_identity_with_its_appearance": f"{_SECONDS}: 7.4",
     "tests/correct/test_collision.py::test_compiled_detection_equals_the_array_reference_on_ga_faces": f"{_SECONDS}: 5.3",
     "tests/correct/test_correct.py::test_interpenetration_before_and_after_on_ga_faces": f"{_SECONDS}: 11.3",
+    "tests/correct/test_reach.py::test_no_interpenetration_or_lid_crossing_added_on_ga_faces": f"{_SECONDS}: 9.5",
     "tests/model/test_gltf.py::test_model_glb_without_correctives_has_shape_targets_only": f"{_SECONDS}: 3.4",
     "tests/model/test_ict.py::test_every_one_hot_reproduces_its_obj": f"{_SECONDS}: 12.4",
     "tests/model/test_model_hash.py::test_a_cut_neutral_mesh_is_named_against_the_pinned_manifest": f"{_SECONDS}: 3.8",

@@ -111,3 +111,24 @@ def test_monk_tones_are_the_published_swatches() -> None:
     mid = monk_linear(5.5)
     assert np.all(mid <= np.maximum(monk_linear(5), monk_linear(6)) + 1e-12)
     assert np.all(mid >= np.minimum(monk_linear(5), monk_linear(6)) - 1e-12)
+
+
+def test_lip_depth_darkens_the_vermilion_and_nothing_else(ict_model) -> None:  # type: ignore[no-untyped-def]
+    """0.2 makes the lip texels 0.8 × as bright where the vermilion fully covers (lip colour 1:
+    the texel is the vermilion's colour), and leaves every
+    texel outside the lip outline as it was."""
+    from emogen.appearance.paint import paint_albedo
+
+    _, _, feats, t, _, _, _ = _prepared(ict_model, "male")
+    px = texel_size_cm(t)
+    look = PRESETS["male-dark"].appearance.model_copy(update={"lip_colour": 1.0})
+    before = paint_albedo(t, feats, look, 1.0, px)
+    deep = paint_albedo(t, feats, look.model_copy(update={"lip_depth": 0.2}), 1.0, px)
+    cover, _ = lip_mask(t, feats, px)
+    outside = cover == 0
+    assert outside.sum() > 0.9 * len(cover)
+    assert np.array_equal(deep[outside], before[outside])
+    # full coverage, unclipped: the texel's colour is the vermilion's × 0.8
+    full = (cover >= 1.0) & (before.max(axis=1) < 0.99)
+    assert full.sum() > 1000
+    np.testing.assert_allclose(deep[full], before[full] * 0.8, rtol=1e-6, atol=1e-9)

@@ -97,8 +97,13 @@ def service_caller(service: Any, token: str) -> Callable[[str, dict[str, Any]], 
 
 
 def study_service(config: Any, store: Any, model: Any) -> Any:
-    """The study service for ``config`` on ``store``, with the model's correctives (as serve)."""
+    """The study service for ``config`` on ``store``, with the model's correctives (as serve:
+    a study recorded with an older packaged rig continues with it)."""
+    from emogen.model.load import model_for_recorded_hash
+    from emogen.study.context import recorded_model_hash
     from emogen.study.sessions import StudyService
 
+    recorded = recorded_model_hash(store, config)
+    model = model if recorded is None else model_for_recorded_hash(model, recorded)
     return StudyService(config, store, model.rig, model_name=model.name,
                         model_hash=model.model_hash, model=model)  # fmt: skip

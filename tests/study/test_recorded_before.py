@@ -13,6 +13,7 @@ from sqlalchemy import select
 from emogen.config import GAConfig
 from emogen.ga.engine import Engine, stream_of_state
 from emogen.ga.state import collision_solver_of_state
+from emogen.model.load import model_for_recorded_hash
 from emogen.study.config import StudyConfig
 from emogen.study.export import export_tables
 from emogen.study.replay import replay_session
@@ -111,14 +112,18 @@ def test_recorded_selections_replay_with_the_old_key(tmp_path: Path, ict_model) 
     store = _open(tmp_path)
     try:
         old = json.loads(_state(store, _sessions(store)["OLD-1"]))
+        with store.read() as db:
+            recorded = db.scalars(select(StudyRow.model_hash)).one()
     finally:
         store.dispose()
+    rig = model_for_recorded_hash(ict_model, recorded).rig  # rig 1: recorded before rig 2
+    assert rig.reach_version is None
     assert old["schema"] == "emogen.ga.engine/1"
     assert all("trial" in s and "attempt" not in s for s in old["selections"])
     assert {s["trial"] for s in old["selections"]} == {0, 1}  # a restart: two attempts
     config = GAConfig.model_validate(old["config"])
-    replayed = Engine.replay(config, ict_model.rig, old["seed"], old["selections"], stream=1)
-    restored = Engine.from_json(old, ict_model.rig)
+    replayed = Engine.replay(config, rig, old["seed"], old["selections"], stream=1)
+    restored = Engine.from_json(old, rig)
     assert replayed.attempt == restored.attempt == old["trial"] == 1
     assert replayed.done and restored.done
     assert replayed.result.ids.tolist() == old["result"]["ids"]

@@ -360,7 +360,7 @@ def paint_albedo(
     cover, line = lip_mask(t, f, px_cm)
     tint = (1 - tone) * np.array([0.98, 0.52, 0.55]) + tone * np.array([0.80, 0.62, 0.72])
     strength = np.clip(cover * look.lip_colour, 0, 1.5)
-    lip = col * tint * (1 - 0.06 * m2[:, None])
+    lip = col * tint * (1 - 0.06 * m2[:, None]) * (1 - look.lip_depth)
     col = col + (lip - col) * np.minimum(strength, 1.0)[:, None]
     col *= (1 - 0.22 * line * min(look.lip_colour, 1.0))[:, None]
     # scalp hair, then brows on top

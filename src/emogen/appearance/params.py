@@ -75,6 +75,9 @@ class Appearance(BaseModel):
     beard_shadow: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0
     #: lip colour strength: 0 lips the skin's colour … 1.5 strongly coloured
     lip_colour: Annotated[float, Field(ge=0.0, le=1.5)] = 1.0
+    #: how much darker the vermilion is than its colour alone gives, 0 … 0.6: on dark skin the
+    #: colour alone leaves the lips close to the skin's luminance (docs/appearance.md, Contrast)
+    lip_depth: Annotated[float, Field(ge=0.0, le=0.6)] = 0.0
     #: seed of the procedural detail (mottling, hair strokes)
     seed: Annotated[int, Field(ge=0, lt=2**32)] = 0
 

@@ -19,8 +19,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from emogen.correct import collision
+from emogen.correct import reach as reach_module
 from emogen.correct.combinational import DerivedPair, derive_pairs, double_counted, overlap_score
 from emogen.correct.lips import LIP_MESH_REGIONS, UPPER_FRONT_TEETH, mouth_geometry
+from emogen.correct.reach import reach_shapes
 from emogen.errors import ModelFileError
 from emogen.model.io.digest import file_sha256
 
@@ -28,7 +30,7 @@ if TYPE_CHECKING:
     from emogen.model.face import FaceModel
 
 log = logging.getLogger(__name__)
-FORMAT = 2
+FORMAT = 3  # 3: reach shapes (rig 2)
 _MEMORY: dict[str, Correctives] = {}
 
 
@@ -37,7 +39,8 @@ class Correctives:
     """Corrective shapes of a model (arrays read-only).
 
     combinational_names : (C,) names; drivers : (C, K) int shape indices, driver_mask (C, K)
-    combinational_deltas : (C, V, 3) float32; scores : (C,) overlap score (NaN: artist-made)
+    combinational_deltas : (C, V, 3) float32; scores : (C,) overlap score (NaN: artist-made or
+    a reach shape, :mod:`emogen.correct.reach`)
     companions : (F, 2) int, [follower, lead] shape indices
     collision_names : 8 names (or none); collision_deltas : (8, V, 3) float32
     layout : the collision anchors and lower lip (None without collision correctives)
@@ -185,6 +188,8 @@ def cache_key(model: FaceModel) -> str:
             "rig": settings,
             "files": files,
             "design": _design(),
+            # the reach shapes are code: a change to it must rebuild them
+            "reach_code": file_sha256(reach_module.__file__) if model.rig.reach_version else None,
         },
         sort_keys=True,
         default=str,
@@ -246,6 +251,12 @@ def build_correctives(model: FaceModel) -> Correctives:
             drivers.append(pair.drivers)
             deltas.append(delta)
             scores.append(pair.score)
+    if rig.reach_version is not None:
+        for shape in reach_shapes(model, rig.reach_version):
+            names.append(shape.name)
+            drivers.append(shape.drivers)
+            deltas.append(shape.delta)
+            scores.append(math.nan)
     k = max((len(d) for d in drivers), default=1)
     drv = np.zeros((len(names), k), dtype=np.int64)
     mask = np.zeros((len(names), k), dtype=bool)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from emogen.model.face import FaceModel, IdentityLike, from_arrays
 
-__all__ = ["load_model"]
+__all__ = ["PACKAGED_RIGS", "load_model", "model_for_recorded_hash", "records_of"]
 
 
 def load_model(
@@ -42,3 +42,35 @@ def load_model(
                 cache.store(where, arrays)
         model = from_arrays(arrays, load_rig(arrays.shape_names, rig_path), source=str(where))
     return model if identity is None else model.with_identity(identity)
+
+
+#: the packaged ICT rigs, newest first (docs/model.md, "Rig versions"): rig 2 adds the reach
+#: shapes and the revised anger block; rig 1 is kept so that studies recorded with it replay
+#: and continue exactly as they were recorded.
+PACKAGED_RIGS = (("ict-rig-2", "ict_rig.toml"), ("ict-rig-1", "ict_rig_1.toml"))
+
+
+def records_of(model: FaceModel, recorded_hash: str) -> bool:
+    """Whether a record with ``recorded_hash`` was made with ``model``: its hash, or its
+    version-1 hash (records made before hash version 2) when its rig has no reach shapes — the
+    rigs of that time had none (:mod:`emogen.model.model_hash`)."""
+    if recorded_hash == model.model_hash:
+        return True
+    return recorded_hash == model.legacy_model_hash and model.rig.reach_version is None
+
+
+def model_for_recorded_hash(model: FaceModel, recorded_hash: str) -> FaceModel:
+    """``model`` with the packaged rig a record was made with: the model itself when it made
+    the record (:func:`records_of`), else the same model files with the packaged rig
+    (:data:`PACKAGED_RIGS`) that did; ``model`` itself when none did (the caller then reports
+    the mismatch). Identity: the generic one, as studies load it."""
+    if records_of(model, recorded_hash) or not model.source:
+        return model
+    from importlib import resources
+
+    for _name, file in PACKAGED_RIGS:
+        with resources.as_file(resources.files("emogen.data").joinpath(file)) as rig_path:
+            other = load_model(model.source, rig=rig_path)
+        if records_of(other, recorded_hash):
+            return other
+    return model

@@ -44,9 +44,13 @@ def _file_digest(path: str) -> str:
 
 
 def rig_description(rig: Rig) -> dict[str, object]:
-    """Everything of a rig that changes a face or the GA's genes (JSON-ready, canonical)."""
+    """Everything of a rig that changes a face or the GA's genes (JSON-ready, canonical).
+
+    The reach version is described only when the rig declares one, so a rig without it (rig 1,
+    ``ict_rig_1.toml``) keeps the hash its studies recorded."""
     gaze = rig.gaze
-    return {
+    reach = {} if rig.reach_version is None else {"reach": rig.reach_version}
+    return reach | {
         "name": rig.name,
         "shapes": list(rig.shape_names),
         "genes": [[g.name, list(g.shapes), g.eye] for g in rig.genes],

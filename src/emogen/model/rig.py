@@ -111,6 +111,8 @@ class Rig:
     correctives: tuple[Corrective, ...] = ()
     derive_min_overlap: float | None = None
     companions: dict[str, str] = field(default_factory=dict)
+    #: version of the derived reach shapes (:mod:`emogen.correct.reach`); None: none (rig 1)
+    reach_version: int | None = None
 
     # ---- gene space -------------------------------------------------------------------
     def gene_names(self, eye_motion: bool = True) -> tuple[str, ...]:
@@ -226,6 +228,7 @@ class Rig:
             ],
             "derive_correctives": self.derive_min_overlap,
             "companions": dict(self.companions),
+            "reach": self.reach_version,
         }
 
     def corrective_settings(self) -> dict[str, object]:
@@ -237,4 +240,5 @@ class Rig:
             ],
             "derive_min_overlap": self.derive_min_overlap,
             "companions": dict(sorted(self.companions.items())),
+            "reach": self.reach_version,
         }

@@ -37,6 +37,7 @@ def build_rig(spec: RigSpec, shape_names: tuple[str, ...], source: str = "") -> 
             spec.derive_correctives.min_overlap if spec.derive_correctives else None
         ),
         companions=dict(spec.companions),
+        reach_version=spec.reach.version if spec.reach else None,
     )
 
 

@@ -68,6 +68,13 @@ class DeriveSpec(_Strict):
     description: str = ""
 
 
+class ReachSpec(_Strict):
+    """Derived shapes that extend the rig's reach (:mod:`emogen.correct.reach`), by version."""
+
+    version: Annotated[int, Field(ge=1, le=1)]
+    description: str = ""
+
+
 class RigSpec(_Strict):
     name: str
     description: str = ""
@@ -80,6 +87,7 @@ class RigSpec(_Strict):
     correctives: list[CorrectiveSpec] = []
     derive_correctives: DeriveSpec | None = None
     companions: dict[str, str] = {}
+    reach: ReachSpec | None = None
 
 
 def _format_validation(exc: ValidationError, source: str) -> str:

@@ -6,6 +6,8 @@ and translation undo it), normals int8; without quantization float32 in metres. 
 targets leave out vertices moved less than a tolerance and round their deltas to about that
 step; by default they carry no normal deltas (zero): with their own normals the ICT GLB grows
 past 3 MB gzipped (3.03 MB even with a 4.5/127 normal tolerance), without them it is 2.85 MB.
+The reach shapes (:mod:`emogen.correct.reach`: folds, bulges, furrows, seen by their shading)
+keep their normal deltas, thinned by that tolerance.
 A corrected face is then within this tolerance per unit corrective weight.
 """
 
@@ -17,10 +19,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from emogen.correct.faces import model_correctives
+from emogen.correct.reach import REACH_PREFIX
 from emogen.model.geometry import vertex_normals
 from emogen.model.io.gltf_asset import CM_TO_M
 
 if TYPE_CHECKING:
+    from emogen.correct.correctives import Correctives
     from emogen.model.face import FaceModel
 
 CORRECTIVE_TOLERANCE_CM = 0.01
@@ -101,11 +105,45 @@ def morph_targets(
         # vertices a corrective moves less than the tolerance are left out of its target.
         cd, cn = delta[model.n_shapes :], dn[model.n_shapes :]
         cd[np.linalg.norm(cd, axis=-1) < corrective_tolerance_cm] = 0.0
-        if corrective_normals:
-            cn[np.abs(cn).max(axis=-1) < corrective_normal_tolerance] = 0.0
-        else:
-            cn[:] = 0.0
+        # the reach shapes are relief (a fold, a bulge, furrows), seen by their shading: they
+        # keep their normal deltas, thinned like the others' (+0.01 MB on the wire)
+        keep = np.array(
+            [corrective_normals or n.startswith(REACH_PREFIX) for n in corrective_names]
+        )
+        cn[~keep] = 0.0
+        _exact_at_apex(model_correctives(model), neutral, triangles, normals0, delta, dn)
+        cn[np.abs(cn).max(axis=-1) < corrective_normal_tolerance] = 0.0
     return MorphTargets(neutral, shapes, delta, normals0, dn, model.n_shapes, corrective_names)
+
+
+def _exact_at_apex(
+    c: Correctives,
+    neutral: np.ndarray,
+    triangles: np.ndarray,
+    normals0: np.ndarray,
+    delta: np.ndarray,
+    dn: np.ndarray,
+) -> None:
+    """Give each reach shape the normal delta that makes the viewer's blend of normals exact
+    where its drivers and it are at 1 (in place on ``dn``, the targets' normal deltas).
+
+    The viewer blends normals linearly (the neutral's plus Σ w·Δn); the offscreen renderer
+    recomputes them from the blended mesh. Where several large targets meet on little skin (fear:
+    inner and outer brow raise, brow lowering and the AU1+4 knit on the upper lid) the linear
+    blend tilted the lid fold's normals into a dark crease band, 0.93/255 off the offscreen
+    face; with this, 0.69/255 (docs/render.md). As a combinational corrective fixes its drivers' positions, its
+    normal delta now fixes their normals: Δn_c = n(neutral + Σ drivers' δ + Σ the correctives
+    of those drivers' δ) − n₀ − Σ their Δn.
+    """
+    s = len(c.shape_names)
+    drivers = [frozenset(c.drivers[i][c.driver_mask[i]].tolist()) for i in range(len(c.drivers))]
+    reach = [i for i, n in enumerate(c.combinational_names) if n.startswith(REACH_PREFIX)]
+    for i in sorted(reach, key=lambda i: len(drivers[i])):  # a reach shape's sub-blends first
+        # the driver shapes, and every combinational corrective they switch fully on (itself too)
+        on = [*sorted(drivers[i]), *(s + j for j, d in enumerate(drivers) if d <= drivers[i])]
+        others = [k for k in on if k != s + i]
+        apex = neutral + delta[on].sum(axis=0)
+        dn[s + i] = vertex_normals(apex, triangles) - normals0 - dn[others].sum(axis=0)
 
 
 def quantized(t: MorphTargets, corrective_tolerance_cm: float) -> EncodedTargets:

@@ -51,8 +51,21 @@ def accepted_hashes(model_hash: str, model: FaceModel | None) -> frozenset[str]:
     version-1 hash of studies recorded before version 2 (:mod:`emogen.model.model_hash`;
     needed by tests/study/test_recorded_before.py::test_recorded_study_replays_exactly)."""
     if model is not None and model.model_hash == model_hash and model.legacy_model_hash:
-        return frozenset({model_hash, model.legacy_model_hash})
+        from emogen.model.load import records_of
+
+        if records_of(model, model.legacy_model_hash):  # not for a rig with reach shapes
+            return frozenset({model_hash, model.legacy_model_hash})
     return frozenset({model_hash})
+
+
+def recorded_model_hash(store: Store, config: StudyConfig) -> str | None:
+    """The model hash the study row of this config recorded (None: not registered yet)."""
+    with store.read() as db:
+        return db.scalar(
+            select(StudyRow.model_hash).where(
+                StudyRow.name == config.name, StudyRow.config_hash == config.config_hash()
+            )
+        )
 
 
 def register_study(

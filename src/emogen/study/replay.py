@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from sqlalchemy import select
 
+from emogen.model.load import model_for_recorded_hash
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
 from emogen.study.context import accepted_hashes
@@ -91,7 +92,8 @@ def replay_session(
 
     model : the face model; needed for a study that corrects faces (``correct = true``), whose
     replayed populations are corrected as they were when shown (and their corrective weights
-    compared too).
+    compared too). A study recorded with an older packaged rig replays with that rig
+    (:func:`~emogen.model.load.model_for_recorded_hash`).
     """
     with store.read() as db:
         sess = db.get(SessionRow, session_id)
@@ -101,6 +103,9 @@ def replay_session(
         if study is None:  # pragma: no cover - foreign key
             raise SessionNotFound(f"session {session_id} has no study")
         config = StudyConfig.model_validate(json.loads(study.config_json))
+        if model is not None and model.model_hash == model_hash:  # an older packaged rig?
+            model = model_for_recorded_hash(model, study.model_hash)
+            rig, model_hash = model.rig, model.model_hash
         report = ReplayReport(
             session_id, model_hash_matches=study.model_hash in accepted_hashes(model_hash, model)
         )

@@ -17,6 +17,7 @@ import pandas as pd
 
 from emogen import columns as tidy
 from emogen.errors import ConfigError
+from emogen.model.load import model_for_recorded_hash
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
 from emogen.study.context import accepted_hashes
@@ -91,18 +92,22 @@ def replay_exported(
         sessions = sorted(int(s) for s in mine["sessions"]["session_id"])
         if session_ids is not None:
             sessions = [s for s in sessions if s in session_ids]
+        s_model, s_rig, s_hash = model, rig, model_hash
+        if model is not None and model.model_hash == model_hash:  # an older packaged rig?
+            s_model = model_for_recorded_hash(model, study["model_hash"])
+            s_rig, s_hash = s_model.rig, s_model.model_hash
         exported = ExportedStudy(
             config=config,
             genes=json.loads(study["gene_names"]),
             weights=json.loads(study["weight_names"]),
             tables=mine,
             sessions=frozenset(sessions),
-            rig=rig,
+            rig=s_rig,
         )
-        ctx = SimpleNamespace(config=config, rig=rig, conditions=(), accepted=())
-        env = TaskEnv(ctx=ctx, correctors=StudyCorrectors(config, model))
+        ctx = SimpleNamespace(config=config, rig=s_rig, conditions=(), accepted=())
+        env = TaskEnv(ctx=ctx, correctors=StudyCorrectors(config, s_model))
         replayed = [task.replay_exported(env, exported) for task in TASKS.values()]
-        matches = study["model_hash"] in accepted_hashes(model_hash, model)
+        matches = study["model_hash"] in accepted_hashes(s_hash, s_model)
         for sid in sessions:
             report = ReplayReport(sid, model_hash_matches=matches)
             for done in (d for by_session in replayed for d in by_session.get(sid, [])):

@@ -142,6 +142,8 @@ def create_app(
       (default: refuse to start while there are any; :mod:`emogen.study.versions`).
     """
     from emogen.model import load_model
+    from emogen.model.load import model_for_recorded_hash
+    from emogen.study.context import recorded_model_hash
 
     token = (
         researcher_token if researcher_token is not None else os.environ.get(RESEARCHER_TOKEN_ENV)
@@ -158,6 +160,9 @@ def create_app(
         model = load_model(config.model, rig=config.rig)
     store = Store(resolve_database_url(database_url, config.database_url))
     store.check_writable()  # a full disk or read-only database: one clear line, at start
+    recorded = recorded_model_hash(store, config)
+    if recorded is not None:  # a study recorded with an older packaged rig continues with it
+        model = model_for_recorded_hash(model, recorded)
     service = StudyService(
         config,
         store,
