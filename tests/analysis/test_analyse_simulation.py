@@ -66,8 +66,10 @@ def test_analyse_simulations_end_to_end(sims: Path, ict_model, tmp_path: Path) -
     for fig in ("error_distributions", "kl", "separability", "mean_faces", "mean_face_heatmaps"):
         assert (out / "figures" / f"{fig}.png").is_file(), fig
     summary = json.loads((out / "analysis.json").read_text())
-    # two very different targets are perfectly separable
-    assert summary["separability"]["accuracy"] > 0.95
+    # two very different targets separate far above chance (0.5) after 4 generations: over seeds
+    # 3-6 of this setting the accuracy was 0.90-0.975 (rig 2) and 0.94-1.0 (rig 1), so a bound
+    # of 0.95 fails on good data by chance; 0.85 does not, and a mixed-up clustering (≈0.5) fails
+    assert summary["separability"]["accuracy"] > 0.85
     # runs toward one target do not spread beyond GA noise. The report flags p < 0.05, which a
     # consistent group reaches 1 time in 20 by design (measured: 1 of 16 groups over seeds 1-8
     # of this setting); what must not happen is a clear rejection of runs made to be consistent.

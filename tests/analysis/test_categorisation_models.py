@@ -117,19 +117,25 @@ def test_the_own_distance_effect_is_found_when_present(study) -> None:  # type: 
 
 
 def test_the_contrast_holds_alpha_when_prototypes_are_shuffled(rig) -> None:  # type: ignore[no-untyped-def]
-    """20 null studies of 20 participants: each test rejects at α = 0.05 in at most 2 (the
-    bound α + 2·SE = 0.147 over 20 studies); distance to one's own faces alone — the naive test
-    — is 'significant' in most of them (what the contrast with a reference guards against)."""
+    """40 null studies of 20 participants: no test rejects at α = 0.05 in more than the binomial
+    99.9% quantile (7 of 40: a test at α passes this with probability 0.999, one at 0.2 fails
+    it with 0.56); distance to one's own faces alone — the naive test — is 'significant' in most
+    of them (what the contrast with a reference guards against). The rates themselves, over 600
+    fresh seeds (20000-20599): primary 0.050, GEE 0.065 (the sandwich estimator is slightly
+    liberal at 20 clusters: why it is not the primary), two-stage 0.035, control 0.033."""
+    from scipy.stats import binom
+
     design = PeopleDesign(**SMALL, shuffle_prototypes=True)  # type: ignore[arg-type]
+    k = 40
     p, naive = [], []
-    for seed in range(20):
+    for seed in range(k):
         people = as_people(simulate_people(design, rig, seed=500 + seed))
         res = cm.own_distance(people, rng=np.random.default_rng(seed), n_shuffles=49)
         assert isinstance(res, cm.OwnDistance)
         p.append([res.primary["p"], res.gee["p"], res.two_stage["p_t"], res.control["p"]])
         naive.append(res.primary["ci_high_own"] < 0)
     rejected = (np.array(p) <= 0.05).sum(axis=0)
-    assert (rejected <= 2).all(), rejected
+    assert (rejected <= binom.ppf(0.999, k, 0.05)).all(), rejected
     assert np.mean(naive) > 0.8
 
 

@@ -66,8 +66,13 @@ def test_planted_identity_shift_is_found(rig) -> None:  # type: ignore[no-untype
 
 
 def test_false_positive_rate_without_identity_effect(rig) -> None:  # type: ignore[no-untyped-def]
-    """30 null studies in CI (100 in benchmarks/calibrate_fields.py): rejections ≤ α + 2 SE."""
-    k = 30
+    """100 null studies: rejections at most the binomial 99.9% quantile (13 of 100), which a test
+    at α passes with probability 0.999 and one at 0.2 fails with 0.95 (a bound of α + 2 SE over 30 studies failed good data 1
+    time in 16). Over 2000 fresh seeds (10000-11999) the rate was 0.0525 on rig 2 and 0.0485 on
+    rig 1; benchmarks/calibrate_fields.py has its own run."""
+    from scipy.stats import binom
+
+    k = 100
     rejected = 0
     for s in range(k):
         people = as_people(simulate_people(_design(16, False), rig, seed=1000 + s))
@@ -75,8 +80,7 @@ def test_false_positive_rate_without_identity_effect(rig) -> None:  # type: igno
             identity_distances(people), rng=np.random.default_rng(s), n_perm=999
         )
         rejected += r["p"] < ALPHA
-    bound = ALPHA + 2 * np.sqrt(ALPHA * (1 - ALPHA) / k)
-    assert rejected / k <= bound
+    assert rejected <= binom.ppf(0.999, k, ALPHA), rejected
 
 
 def test_emotion_decodes_across_identities(rig) -> None:  # type: ignore[no-untyped-def]

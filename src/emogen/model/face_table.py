@@ -281,11 +281,11 @@ BOOKKEEPING = frozenset(
 
 def derived_column(name: str) -> bool:
     """EmoGen's own columns beside weights (:data:`BOOKKEEPING`) and the corrective weights it
-    writes (``w_corr_…``, ``w_collision_…``: derived from the shapes, recomputed by every command
-    that corrects):
+    writes (``w_corr_…``, ``w_collision_…``, rig 2's ``w_reach_…``: derived from the shapes,
+    recomputed by every command that corrects):
     read past, never weights and never errors, in every face table."""
     return name in BOOKKEEPING or name.startswith(
-        ("w_corr_", "corr_", "w_collision_", "collision_")
+        ("w_corr_", "corr_", "w_collision_", "collision_", "w_reach_", "reach_")
     )
 
 
