@@ -125,7 +125,9 @@ def test_half_sent_requests_are_408_after_the_header_timeout(server: ServerProce
 
 
 def test_wrong_researcher_tokens_are_counted_across_workers(server: ServerProcess) -> None:
-    deadline = time.monotonic() + 30  # both workers idle in their event loop (not mid-request)
+    # both workers idle in their event loop (not mid-request); a worker still starting on a loaded
+    # machine took over 30 s once (load 11), so the wait is generous: it ends as soon as both are
+    deadline = time.monotonic() + 120
     while server.ready_workers() < 2 and time.monotonic() < deadline:
         time.sleep(0.2)
     assert server.ready_workers() == 2
