@@ -30,6 +30,9 @@ CRITERIA = {
     "one_tile": "generation-0 elite on one tile",
     "keeps_tile0": "elite kept on tile 0",
     "incomplete": "too few GA trials finished",
+    "one_label": "one categorise answer throughout",
+    "at_chance": "categorise accuracy at or below chance",
+    "fast_labels": "categorise answers below the time floor",
 }
 
 
