@@ -18,6 +18,7 @@ import pytest
 from emogen.analysis.exclusions import REASONS, ExclusionRule, apply_exclusions, rule_from_options
 from emogen.analysis.flow import CRITERIA
 from emogen.analysis.people import load_people
+from tests.analysis.test_analyse_people import _export as simulated_export
 
 STUDY: dict[str, Any] = {
     "name": "labels",
@@ -34,35 +35,14 @@ CAT_FLAGS = ["one_label", "at_chance", "fast_labels"]
 
 @pytest.fixture(scope="module")
 def export(ict_model, tmp_path_factory: pytest.TempPathFactory) -> Path:  # type: ignore[no-untyped-def]
-    from emogen.study.config import study_from_dict
-    from emogen.study.export import export_tables, write_export
-    from emogen.study.simulate import SimulationPlan, simulate_study
-    from emogen.study.storage import Store
-    from emogen.tasks.simulated import SimulatedDesign
-
-    root = tmp_path_factory.mktemp("labels")
-    url = f"sqlite:///{root / 'l.sqlite'}"
-    plan = SimulationPlan(
-        study_from_dict(STUDY),
-        url,
-        seed=2,
-        participants=6,
-        design=SimulatedDesign(),
-        shuffle_prototypes=False,
-    )
-    simulate_study(plan, model=ict_model)
-    store = Store(url)
-    try:
-        write_export(export_tables(store), root / "export", "parquet")
-    finally:
-        store.dispose()
+    root = simulated_export(tmp_path_factory.mktemp("labels"), ict_model, 6, STUDY)
     # browser response times as people take them (log-normal around 2 s), not simulated ones
-    path = root / "export" / "categorise_responses.parquet"
+    path = root / "categorise_responses.parquet"
     r = pd.read_parquet(path)
     rng = np.random.default_rng(5)
     r["client_response_ms"] = np.exp(rng.normal(np.log(2000), 0.4, len(r)))
     r.to_parquet(path)
-    return root / "export"
+    return root
 
 
 def plant(export: Path, out: Path, who: dict[str, str]) -> None:
