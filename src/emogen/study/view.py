@@ -40,8 +40,9 @@ class Progress(TypedDict):
 class TrialView(TypedDict):
     """The current trial: its task and block, its instruction line, its identity (the face
     shown), its attempt (restarts) and status; ``next_identity``: the identity of the session's
-    next trial (None at the last), so that the page can make that face model ready while the
-    participant is on this trial."""
+    next trial, so that the page can make that face model ready while the participant is on
+    this trial (None at the last trial, and before a block that chooses its faces when it
+    starts: a categorise block's)."""
 
     position: int
     block: int
@@ -88,8 +89,8 @@ def completion(config: StudyConfig, participant_id: str) -> Completion:
     return {"message": c.message, "code": c.code, "redirect_url": url}
 
 
-#: The identity of a session's trial at a position (a block of faces drawn at its start: the
-#: identity stored then; before, its condition's).
+#: The identity of a session's trial at a position ('' for a categorise trial before its block
+#: has drawn its faces).
 _NEXT_IDENTITY = select(TrialRow.identity).where(
     TrialRow.session_id == bindparam("session_id"), TrialRow.position == bindparam("position")
 )
@@ -144,7 +145,8 @@ def session_state(
         "identity": row.identity,
         "next_identity": db.scalar(
             _NEXT_IDENTITY, {"session_id": sess.id, "position": row.position + 1}
-        ),
+        )
+        or None,
         "attempt": row.attempt,
         "status": status,
     }
