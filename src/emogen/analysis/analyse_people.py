@@ -17,6 +17,7 @@ from emogen.analysis.categorisation import categorisation_section
 from emogen.analysis.conditions import conditions_section
 from emogen.analysis.exclusions import apply_exclusions
 from emogen.analysis.fields_report import fields_section
+from emogen.analysis.flow import flow_section
 from emogen.analysis.genes_report import genes_section
 from emogen.analysis.groups import groups_section
 from emogen.analysis.identity import identity_section
@@ -29,6 +30,8 @@ from emogen.errors import ConfigError, EmoGenError
 if TYPE_CHECKING:
     from collections.abc import Callable
     from pathlib import Path
+
+    import pandas as pd
 
     from emogen.analysis.analyse_options import AnalysisOptions
     from emogen.analysis.data import Dataset
@@ -47,6 +50,7 @@ class Prepared:
     kept: People | None
     excluded: frozenset[str]
     problem: str = ""
+    source: Path | None = None  # the export (its sessions and trials: the participant flow)
 
 
 def people_for(source: Path, opts: AnalysisOptions) -> People:
@@ -62,12 +66,12 @@ def prepare_people(source: Path, opts: AnalysisOptions) -> Prepared:
     try:
         everyone = people_for(source, opts)
     except EmoGenError as exc:
-        return Prepared(None, None, frozenset(), str(exc))
+        return Prepared(None, None, frozenset(), str(exc), source)
     if opts.exclusions is None or everyone.faces.empty:
-        return Prepared(everyone, everyone, frozenset())
+        return Prepared(everyone, everyone, frozenset(), source=source)
     kept, table = apply_exclusions(everyone, opts.exclusions)
     out = frozenset(table.loc[table["excluded"], "participant_id"].astype(str))
-    return Prepared(everyone, kept, out)
+    return Prepared(everyone, kept, out, source=source)
 
 
 def check_participants(ds: Dataset, table: Path, group_column: str) -> None:
@@ -90,12 +94,33 @@ def quality_first(
     """Quality and exclusions: reported before the analyses they apply to."""
     if prepared.everyone is None or prepared.everyone.faces.empty:
         return
-    quality_section(prepared.everyone, report, summary, opts, None, rule=opts.exclusions)
+    table = quality_section(prepared.everyone, report, summary, opts, None, rule=opts.exclusions)
+    if prepared.source is not None:
+        kept = prepared.kept
+        analysed = set() if kept is None else set(kept.faces["participant_id"].astype(str))
+        flow_section(
+            prepared.source,
+            table if opts.exclusions is not None else None,
+            analysed,
+            report,
+            summary,
+            _groups(opts),
+        )
     if prepared.excluded:
         report.paragraph(
             f"**{len(prepared.excluded)} participant(s) excluded by the rule above** "
             f"({', '.join(sorted(prepared.excluded))}): every section below is without them."
         )
+
+
+def _groups(opts: AnalysisOptions) -> pd.Series | None:
+    """Each participant's group from the participant table (None without one or its column)."""
+    if opts.participants is None:
+        return None
+    frame = read_participant_table(opts.participants)
+    if opts.group_column not in frame.columns:
+        return None
+    return frame.set_index(frame["participant_id"].astype(str))[opts.group_column]
 
 
 def people_sections(

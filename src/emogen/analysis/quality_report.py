@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import pandas as pd
 
 from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.exclusions import ExclusionRule, apply_exclusions
@@ -27,10 +28,11 @@ def quality_section(
     model: FaceModel | None,
     *,
     rule: ExclusionRule | None = None,
-) -> None:
+) -> pd.DataFrame:
     """Quality per participant and session, the position-bias test and the exclusion rule
     applied (``rule``; default :class:`ExclusionRule`) into ``report``; ``people`` are **all**
-    participants, before exclusions. Headline numbers into ``summary["quality"]``."""
+    participants, before exclusions. Headline numbers into ``summary["quality"]``; returns the
+    exclusion table (:func:`apply_exclusions`)."""
     del model
     rule = ExclusionRule() if rule is None else rule
     report.heading("Data quality and exclusions")
@@ -68,6 +70,7 @@ def quality_section(
     out["excluded"] = int(table["excluded"].sum())
     out["excluded_ids"] = sorted(excluded["participant_id"].astype(str))
     summary["quality"] = out
+    return table
 
 
 def _position(people: People, report: Report, opts: AnalysisOptions, out: dict) -> None:

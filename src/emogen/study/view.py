@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import Any, Literal, NotRequired
 from urllib.parse import quote
 
+from sqlalchemy import bindparam, select
 from sqlalchemy.orm import Session
 from typing_extensions import TypedDict
 
@@ -38,13 +39,17 @@ class Progress(TypedDict):
 
 class TrialView(TypedDict):
     """The current trial: its task and block, its instruction line, its identity (the face
-    shown), its attempt (restarts) and status."""
+    shown), its attempt (restarts) and status; ``next_identity``: the identity of the session's
+    next trial, so that the page can make that face model ready while the participant is on
+    this trial (None at the last trial, and before a block that chooses its faces when it
+    starts: a categorise block's)."""
 
     position: int
     block: int
     task: str
     prompt: str
     identity: str
+    next_identity: str | None
     attempt: int
     status: TrialStatus
 
@@ -82,6 +87,13 @@ def completion(config: StudyConfig, participant_id: str) -> Completion:
         for name in ("participant", "participant_id", config.participant_param):
             url = url.replace("{" + name + "}", pid)
     return {"message": c.message, "code": c.code, "redirect_url": url}
+
+
+#: The identity of a session's trial at a position ('' for a categorise trial before its block
+#: has drawn its faces).
+_NEXT_IDENTITY = select(TrialRow.identity).where(
+    TrialRow.session_id == bindparam("session_id"), TrialRow.position == bindparam("position")
+)
 
 
 def _current_trial(db: Session, sess: SessionRow, shown: Outcome | None) -> TrialRow | None:
@@ -131,6 +143,10 @@ def session_state(
         "task": row.task,
         "prompt": task.prompt(env, row),
         "identity": row.identity,
+        "next_identity": db.scalar(
+            _NEXT_IDENTITY, {"session_id": sess.id, "position": row.position + 1}
+        )
+        or None,
         "attempt": row.attempt,
         "status": status,
     }

@@ -789,7 +789,10 @@ export interface components {
         /**
          * TrialView
          * @description The current trial: its task and block, its instruction line, its identity (the face
-         *     shown), its attempt (restarts) and status.
+         *     shown), its attempt (restarts) and status; ``next_identity``: the identity of the session's
+         *     next trial, so that the page can make that face model ready while the participant is on
+         *     this trial (None at the last trial, and before a block that chooses its faces when it
+         *     starts: a categorise block's).
          */
         TrialView: {
             /** Attempt */
@@ -798,6 +801,8 @@ export interface components {
             block: number;
             /** Identity */
             identity: string;
+            /** Next Identity */
+            next_identity: string | null;
             /** Position */
             position: number;
             /** Prompt */

@@ -33,8 +33,9 @@ const ui = {
   linkTimer: 0,
   said: "", // the last message that was not about the connection
 };
-// Tests and the researcher's tools read this.
-window.emogenStudy = { ready: false, stage: null, display: null };
+// Tests and the researcher's tools read this (loads: the face models the 3D display built, each
+// with its timings; loadMs: the current screen's from its answer to its faces drawn).
+window.emogenStudy = { ready: false, stage: null, display: null, loads: [], loadMs: 0 };
 
 function setReady(ready) {
   window.emogenStudy.ready = ready;
@@ -77,9 +78,23 @@ function onLink(link) {
 const call = (path, options = {}) => api(path, { retries: Infinity, onLink, ...options });
 
 // ---- loading progress ------------------------------------------------------------------------
-const drawFaces = createDrawFaces($, ui, (done, total, unit) => {
+const draw = createDrawFaces($, ui, (done, total, unit) => {
   document.body.dataset.loaded = `${done}/${total} ${unit}`;
 });
+
+/**
+ * The faces drawn; then, when the browser is idle, the next trial's face model made ahead
+ * (display.prefetch: the 3D viewer's; it fails soft), so a new identity's first trial does not
+ * wait for it.
+ * @param {HTMLElement[]} slots @param {any[]} faces @param {string} identity
+ */
+async function drawFaces(slots, faces, identity) {
+  await draw(slots, faces, identity);
+  const next = ui.state?.trial?.next_identity;
+  if (!next || !ui.display.prefetch) return;
+  const later = window.requestIdleCallback ?? ((f) => setTimeout(f, 50));
+  later(() => ui.display.prefetch(next), { timeout: 1000 });
+}
 
 // ---- progress -------------------------------------------------------------------------------
 function renderProgress(state) {
@@ -96,6 +111,7 @@ function renderProgress(state) {
 function facesShown() {
   ui.shownAt = performance.now();
   ui.loadMs = Math.max(0, Math.round(ui.shownAt - (ui.receivedAt ?? 0)));
+  window.emogenStudy.loadMs = ui.loadMs;
 }
 
 function elapsed() {
@@ -265,6 +281,7 @@ async function main() {
     guardHistory();
     ui.display = await createFaceDisplay({ token });
     window.emogenStudy.display = ui.display.kind;
+    window.emogenStudy.loads = ui.display.loads ?? []; // face models built (benchmarks)
     await render(await call(`/api/s/${token}/state`));
   } catch (err) {
     say(err.message);

@@ -62,6 +62,9 @@ function release(grid) {
 
 const nextFrame = () => new Promise((resolve) => requestAnimationFrame(() => resolve()));
 
+/** The face models a container keeps built: the one shown and the next trial's (made ahead). */
+const KEEP = 2;
+
 class ViewerDisplay {
   /**
    * @param {string} base the study server's origin ("" on its own pages)
@@ -71,36 +74,96 @@ class ViewerDisplay {
     this.kind = "webgl";
     this.base = base;
     this.framing = framing;
-    this.grids = new Map(); // container -> {url, count, ready: Promise<FaceGrid>}
+    // container -> Map(url -> {count, ahead, grid, ready: Promise<FaceGrid>}), least recently
+    // shown first; the container's other grids' canvases are hidden
+    this.grids = new Map();
+    /** Each face model built: its URL, whether ahead of its trial, its timings (benchmarks). */
+    this.loads = [];
   }
 
-  gridFor(container, slots, url, onProgress) {
-    const entry = this.grids.get(container);
-    if (entry && entry.url === url && entry.count === slots.length) return entry.ready;
-    if (entry) entry.ready.then(release, () => {});
+  urlOf(identity) {
+    return `${this.base}/api/model/${encodeURIComponent(identity)}.glb`;
+  }
+
+  heldBy(container) {
+    let held = this.grids.get(container);
+    if (!held) this.grids.set(container, (held = new Map()));
+    return held;
+  }
+
+  build(container, slots, url, onProgress, ahead) {
     const grid = new FaceGrid(container, slots);
+    grid.canvas.style.visibility = "hidden"; // until its show
+    const began = performance.now();
     const ready = glbOnce(url, onProgress).then(async (blob) => {
+      const fetched = performance.now() - began;
       const local = URL.createObjectURL(blob);
       try {
         await grid.load(local);
       } finally {
         URL.revokeObjectURL(local);
       }
+      this.loads.push({ url, ahead, fetch_ms: fetched, ...grid.timings, total_ms: performance.now() - began });
       return grid;
     });
-    const entry2 = { url, count: slots.length, ready };
-    this.grids.set(container, entry2);
+    const entry = { count: slots.length, ahead, grid, ready };
+    const held = this.heldBy(container);
+    held.set(url, entry);
     // a failed load (a lost connection) is tried afresh next time
     ready.catch(() => {
-      if (this.grids.get(container) === entry2) this.grids.delete(container);
+      if (held.get(url) === entry) held.delete(url);
       release(grid);
     });
-    return ready;
+    return entry;
+  }
+
+  /** The container's grids beyond KEEP given back, least recently shown first, never ``keep``. */
+  trim(container, keep) {
+    const held = this.heldBy(container);
+    for (const [url, entry] of held) {
+      if (held.size <= KEEP) break;
+      if (url === keep) continue;
+      held.delete(url);
+      entry.ready.then(release, () => {});
+    }
+  }
+
+  gridFor(container, slots, url, onProgress) {
+    const held = this.heldBy(container);
+    let entry = held.get(url);
+    if (entry && entry.count !== slots.length) {
+      held.delete(url);
+      entry.ready.then(release, () => {});
+      entry = undefined;
+    }
+    if (!entry) entry = this.build(container, slots, url, onProgress, false);
+    held.delete(url); // the most recently shown last
+    held.set(url, entry);
+    this.trim(container, url);
+    return entry.ready;
+  }
+
+  /**
+   * The face model of ``identity`` built ahead, unseen, in every container that shows faces,
+   * so that the first trial of that identity does not wait for it (its download, parsing and
+   * upload to the GPU: seconds in a software-rendered browser). It fails soft: a failed build
+   * is forgotten (show loads it as ever) and nothing is said to the participant.
+   * @param {string} identity
+   */
+  prefetch(identity) {
+    const url = this.urlOf(identity);
+    for (const [container, held] of this.grids) {
+      if (held.has(url) || held.size === 0) continue;
+      const shown = [...held.values()].at(-1);
+      const entry = this.build(container, shown.grid.slots, url, () => {}, true);
+      entry.ready.catch((err) => console.info(`face model ${url} not made ahead (${err}); it loads when shown`));
+      this.trim(container, [...held.keys()].at(-2));
+    }
   }
 
   /** Every grid's WebGL context given back (the page's screens are gone: a plugin trial ended). */
   dispose() {
-    for (const entry of this.grids.values()) entry.ready.then(release, () => {});
+    for (const held of this.grids.values()) for (const entry of held.values()) entry.ready.then(release, () => {});
     this.grids.clear();
   }
 
@@ -113,8 +176,18 @@ class ViewerDisplay {
   async show(slots, faces, identity = "generic", onProgress = () => {}) {
     for (const slot of slots) ovalLayer(slot, this.framing);
     const container = slots[0].closest("[data-viewer-container]");
-    const url = `${this.base}/api/model/${encodeURIComponent(identity)}.glb`;
-    const grid = await this.gridFor(container, slots, url, onProgress);
+    const url = this.urlOf(identity);
+    const ahead = this.heldBy(container).get(url)?.ahead;
+    let grid;
+    try {
+      grid = await this.gridFor(container, slots, url, onProgress);
+    } catch (err) {
+      if (!ahead) throw err;
+      grid = await this.gridFor(container, slots, url, onProgress); // made ahead and failed: load it now
+    }
+    for (const entry of this.heldBy(container).values()) {
+      entry.grid.canvas.style.visibility = entry.grid === grid ? "" : "hidden";
+    }
     const n = grid.shapeNames.length;
     grid.setFaces(faces.map((f) => f.weights.slice(0, n)));
     await nextFrame();

@@ -173,6 +173,12 @@ export class FaceGrid {
       scene.add(root);
       this.faces.push({ scene, meshes: copies });
     }
+    // The shaders compiled without holding up the page (KHR_parallel_shader_compile where the
+    // browser has it): a face model made ahead while the participant answers (see the study
+    // page's viewer-adapter.js) must not delay their clicks. Every face shares the programs.
+    const t4 = performance.now();
+    await this.renderer.compileAsync(this.faces[0].scene, this.camera);
+    this.timings.compile_ms = performance.now() - t4;
     const t2 = performance.now();
     this.render();
     this.timings.first_render_ms = performance.now() - t2; // commands issued, not yet drawn
