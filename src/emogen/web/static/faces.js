@@ -60,6 +60,15 @@ class PngDisplay {
     return Promise.all(loads);
   }
 
+  // Server images stand still: nothing to replay or step through.
+  replay() {}
+
+  scrub() {}
+
+  clipTime() {
+    return null;
+  }
+
   dispose() {}
 }
 

@@ -34,7 +34,7 @@ const ui = {
   said: "", // the last message that was not about the connection
 };
 // Tests and the researcher's tools read this.
-window.emogenStudy = { ready: false, stage: null, display: null };
+window.emogenStudy = { ready: false, stage: null, display: null, clipTimes: () => [] };
 
 function setReady(ready) {
   window.emogenStudy.ready = ready;
@@ -265,6 +265,9 @@ async function main() {
     guardHistory();
     ui.display = await createFaceDisplay({ token });
     window.emogenStudy.display = ui.display.kind;
+    // the clip time (s) each face shown plays now (null: a face that does not move)
+    window.emogenStudy.clipTimes = () =>
+      Array.from(document.querySelectorAll("[data-viewer-container] .slot"), (s) => ui.display.clipTime(s));
     await render(await call(`/api/s/${token}/state`));
   } catch (err) {
     say(err.message);

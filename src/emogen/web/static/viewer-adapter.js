@@ -55,6 +55,7 @@ function glbOnce(url, onProgress) {
 }
 
 function release(grid) {
+  grid.play(null);
   grid.renderer.dispose();
   grid.renderer.forceContextLoss(); // the browser's WebGL contexts are few: give this one back
   grid.canvas.remove();
@@ -72,6 +73,7 @@ class ViewerDisplay {
     this.base = base;
     this.framing = framing;
     this.grids = new Map(); // container -> {url, count, ready: Promise<FaceGrid>}
+    this.playing = new Map(); // container -> {grid, slots} last shown
   }
 
   gridFor(container, slots, url, onProgress) {
@@ -102,6 +104,7 @@ class ViewerDisplay {
   dispose() {
     for (const entry of this.grids.values()) entry.ready.then(release, () => {});
     this.grids.clear();
+    this.playing.clear();
   }
 
   /**
@@ -117,8 +120,34 @@ class ViewerDisplay {
     const grid = await this.gridFor(container, slots, url, onProgress);
     const n = grid.shapeNames.length;
     grid.setFaces(faces.map((f) => f.weights.slice(0, n)));
+    grid.play(faces); // faces that move play their clips (the others stay as set)
+    this.playing.set(container, { grid, slots });
     await nextFrame();
     return faces.map(() => true);
+  }
+
+  /** The grid drawing ``slot`` and the slot's place in it (null: none shown there). */
+  tileOf(slot) {
+    const shown = this.playing.get(slot.closest("[data-viewer-container]"));
+    const i = shown ? shown.slots.indexOf(slot) : -1;
+    return i < 0 ? null : { grid: shown.grid, i };
+  }
+
+  /** Faces that move in ``slot``'s container play from their start again. */
+  replay(slot) {
+    this.tileOf(slot)?.grid.replay();
+  }
+
+  /** ``slot``'s face held at clip time ``t`` seconds (null: it plays along again). */
+  scrub(slot, t) {
+    const tile = this.tileOf(slot);
+    tile?.grid.scrub(tile.i, t);
+  }
+
+  /** The clip time (s) ``slot`` shows now (null: a face that does not move). */
+  clipTime(slot) {
+    const tile = this.tileOf(slot);
+    return tile ? tile.grid.clipTime(tile.i) : null;
   }
 }
 
