@@ -82,3 +82,13 @@ def shape_curves(genome: DynamicGenome, timing: np.ndarray, expansion: np.ndarra
     moved = expansion.sum(axis=0) > 0
     out: np.ndarray = np.where(moved[:, None], rows[..., np.argmax(expansion, axis=0), :], 0.0)
     return out
+
+
+#: Frames of a strip (the server's image of a face that moves, for browsers without WebGL).
+STRIP_FRAMES = 11
+
+
+def strip_times(genome: DynamicGenome) -> np.ndarray:
+    """The times (s) of a strip's frames: :data:`STRIP_FRAMES` evenly over the clip (every
+    125 ms of the default 1.25 s; the last at rest)."""
+    return np.linspace(0.0, genome.clip_s, STRIP_FRAMES)

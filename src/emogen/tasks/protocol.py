@@ -242,7 +242,9 @@ class Task(Protocol):
     def face(
         self, env: TaskEnv, db: Session, row: TrialRow, face_id: int
     ) -> tuple[str, str] | None:
-        """(weights JSON, identity) of a face the trial shows now, else None."""
+        """(weights JSON, identity) of a face the trial shows now, else None. The weights are
+        one face's, or for a face that moves a list of frames' (the server's image is then the
+        strip of those frames, left to right)."""
 
     def result(self, env: TaskEnv, db: Session, row: TrialRow) -> dict[str, Any] | None:
         """The trial's outcome as the participant's page may record it (None before there is

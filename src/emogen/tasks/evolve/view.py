@@ -12,10 +12,10 @@ from sqlalchemy.orm import Session
 from typing_extensions import TypedDict
 
 from emogen.ga.genome import DynamicGenome
-from emogen.ga.motion import shape_curves
+from emogen.ga.motion import core_at, shape_curves, strip_times
 from emogen.tasks.blocks import fill_emotion
 from emogen.tasks.evolve.store import ShownPopulation, final_face, population_at
-from emogen.tasks.evolve.tables import FaceCurveRow
+from emogen.tasks.evolve.tables import FaceCurveRow, FaceRow
 from emogen.tasks.protocol import FaceView, TaskEnv
 from emogen.tasks.records import TrialRow
 
@@ -100,6 +100,29 @@ def _moving(
         }
         out.append({**face, "motion": motion})  # type: ignore[typeddict-item]
     return out
+
+
+def face_strip(env: TaskEnv, db: Session, row: TrialRow, face: FaceRow) -> str | None:
+    """A face that moves as the server's images show it (browsers without WebGL): JSON of its
+    core weights at :func:`emogen.ga.motion.strip_times`, one row a frame (the image is the
+    strip of those frames, each corrected on its own); None for a still face."""
+    genome = env.block(row).genome()
+    if not isinstance(genome, DynamicGenome):
+        return None
+    curve = db.scalar(
+        select(FaceCurveRow).where(
+            FaceCurveRow.population_id == face.population_id,
+            FaceCurveRow.position == face.position,
+        )
+    )
+    if curve is None:
+        return None
+    amplitudes = np.asarray(json.loads(face.genes))[:, None]
+    genes = np.concatenate([amplitudes, np.asarray(json.loads(curve.timing))], axis=1)
+    eye_motion = env.config.ga_for(row.identity).eye_motion
+    expand = lambda g: env.ctx.rig.expand(g, eye_motion)  # noqa: E731
+    frames = core_at(genome, genes[None], strip_times(genome), expand)[0]
+    return json.dumps(frames.tolist())
 
 
 def _population(env: TaskEnv, db: Session, row: TrialRow, shown: Any) -> PopulationView | None:
