@@ -51,15 +51,28 @@ def site(
 
 
 def tiles(page: Any) -> list[np.ndarray]:
-    shots = []
-    for k in range(10):
-        png = page.locator(f"#grid > .cell:nth-child({k + 1}) .slot").screenshot()
-        shots.append(np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=int))
-    return shots
+    """The ten tiles' pixels at one instant (one screenshot of the page, cut by the tiles'
+    boxes: an element screenshot waits for a still frame, which playing tiles never give)."""
+    shot = np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("RGB"), dtype=int)
+    boxes = page.eval_on_selector_all(
+        "#grid > .cell .slot",
+        "ss => ss.map((s) => { const r = s.getBoundingClientRect();"
+        " return [r.left, r.top, r.right, r.bottom].map(Math.round); })",
+    )
+    return [shot[top + 4 : bottom - 4, left + 4 : right - 4] for left, top, right, bottom in boxes]
 
 
 def clip_times(page: Any) -> list[float]:
     times: list[float | None] = page.evaluate("window.emogenStudy.clipTimes()")
+    return [t for t in times if t is not None]
+
+
+def replay_now(page: Any) -> list[float]:
+    """Press "Play all again" and read the clip times in the same task of the page."""
+    times: list[float | None] = page.evaluate(
+        "() => { document.getElementById('replay').click();"
+        " return window.emogenStudy.clipTimes(); }"
+    )
     return [t for t in times if t is not None]
 
 
@@ -97,10 +110,10 @@ def test_a_participant_evolves_a_moving_face(
         max(np.abs(series[j][k] - series[0][k]).mean() for j in range(1, len(series)))
         for k in range(10)
     ]
-    assert min(moved) > 0.05, moved
+    assert sum(m > 0.05 for m in moved) >= 8, moved  # a blank face (no gene on) stands still
     # …in sync: every tile at the same clip time
     times = clip_times(page)
-    assert len(times) == 10 and max(times) - min(times) < 1e-3, times
+    assert len(times) == 10 and max(times) - min(times) < 0.02, times  # asked one by one
     folder = screenshot_folder("dynamic")
     folder.mkdir(exist_ok=True, parents=True)
     page.screenshot(path=str(folder / "dynamic-trial-1366x768.png"))
@@ -112,7 +125,7 @@ def test_a_participant_evolves_a_moving_face(
     assert page.inner_text("#scrub-face") == "3"
     scrub(page, 0.9)
     first = clip_times(page)
-    page.wait_for_timeout(300)
+    page.wait_for_timeout(800)  # longer than the hold, when a clip's time stands still
     later = clip_times(page)
     assert first[2] == later[2] == 0.9
     assert any(
@@ -124,9 +137,12 @@ def test_a_participant_evolves_a_moving_face(
     assert np.abs(tiles(page)[2] - held).mean() > 0.05  # another time, another frame
 
     # ---- "Play all again": every tile from the clip's start, face 3 playing along again ----
-    page.click("#replay")
+    # pressed and read in one task of the page: every tile at the clip's start
+    times = replay_now(page)
+    assert len(times) == 10 and max(times) < 0.05, times
+    page.wait_for_timeout(300)
     times = clip_times(page)
-    assert max(times) < 0.6 and max(times) - min(times) < 1e-3, times
+    assert max(times) - min(times) < 0.02, times  # face 3 plays along again
     assert page.input_value("#scrub") == "0"
 
     # ---- choosing works as for still faces, through every generation, then the rating ----
@@ -140,7 +156,7 @@ def test_a_participant_evolves_a_moving_face(
         page.click("#next")
         wait_ready(page, "rating" if generation == 1 else "trial")
         if generation == 0:
-            assert clip_times(page) and max(clip_times(page)) < 1.25  # the new faces play too
+            assert len(clip_times(page)) == 10  # the new faces play too
     # the rated face moves too
     assert page.evaluate("window.emogenStudy.clipTimes().filter((t) => t !== null).length") == 1
     page.get_by_label("5", exact=True).check()
@@ -164,9 +180,61 @@ def test_a_participant_evolves_a_moving_face(
         assert rows.face_id.tolist() == [elite, *others]
         assert (rows.load_ms > 0).all() and (rows.client_response_ms > 0).all()
     assert tables["evolve_ratings"].value.tolist() == [5]
+    first = faces[faces.generation == 0].sort_values("position")
+    genes = first[[c for c in first.columns if c.startswith("g_")]].to_numpy()
+    assert [m > 0.05 for m in moved] == (genes.max(axis=1) > 0).tolist(), moved
     curves = tables["face_curves"]
-    assert set(zip(curves.generation, curves.face_id, strict=True)) == {
-        (g, f) for g, ids in enumerate(shown) for f in ids
-    }
+    g_columns = [c for c in faces.columns if c.startswith("g_")]
+    moving = faces[faces[g_columns].to_numpy().max(axis=1) > 0]  # a blank face has no curve
+    assert set(zip(curves.generation, curves.face_id, strict=True)) == set(
+        zip(moving.generation, moving.face_id, strict=True)
+    )
     assert replay_session(store, 1, ict_model.rig, ict_model.model_hash, model=ict_model).ok
     store.dispose()
+
+
+def test_without_webgl_the_tiles_flip_through_strips_of_frames(
+    site: tuple[ServerProcess, str], browser: Any
+) -> None:
+    """``?render=png`` (as a browser without WebGL 2): each moving face is the server's strip of
+    11 frames, shown a frame at a time, in sync; the slider holds one; the page says "png"."""
+    server, _ = site
+    context = browser.new_context(viewport={"width": 1366, "height": 768})
+    context.add_init_script(CSP_PROBE)
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(f"{server.url}/?PROLIFIC_PID=mover-png")
+    page.get_by_role("button", name="I agree").click()
+    wait_ready(page, "instructions")
+    page.goto(page.url.split("?")[0] + "?render=png")  # the session page without WebGL
+    wait_ready(page, "instructions")
+    page.get_by_role("button", name="Begin").click()
+    wait_ready(page, "trial")
+    assert page.evaluate("window.emogenStudy.display") == "png"
+    sizes = page.eval_on_selector_all(
+        "#grid > .cell .slot img", "is => is.map((i) => [i.naturalWidth, i.naturalHeight])"
+    )
+    assert len(sizes) == 10 and all(w == 11 * h for w, h in sizes), sizes
+    assert page.eval_on_selector_all("#grid > .cell .slot.strip", "ss => ss.length") == 10
+    series = []
+    for _ in range(5):
+        series.append(tiles(page))
+        page.wait_for_timeout(250)
+    moved = [max(np.abs(s[k] - series[0][k]).mean() for s in series[1:]) for k in range(10)]
+    assert sum(m > 0.05 for m in moved) >= 8, moved
+    times = clip_times(page)
+    assert len(times) == 10 and max(times) - min(times) < 0.02, times  # asked one by one
+    page.focus("#grid > .cell:nth-child(1) .face")
+    page.keyboard.press("ArrowRight")  # face 2
+    scrub(page, 0.5)
+    page.wait_for_timeout(300)
+    assert clip_times(page)[1] == 0.5
+    times = replay_now(page)
+    assert len(times) == 10 and max(times) < 0.05, times
+    page.click("#grid > .cell:nth-child(2) .face")
+    page.click("#next")
+    wait_ready(page, "trial")
+    assert page.evaluate("window.emogenStudy.display") == "png"
+    assert errors == [] and page.evaluate("window.__cspViolations") == []
+    context.close()

@@ -120,6 +120,9 @@ class ViewerDisplay {
     const grid = await this.gridFor(container, slots, url, onProgress);
     const n = grid.shapeNames.length;
     grid.setFaces(faces.map((f) => f.weights.slice(0, n)));
+    // a screen shows one container's faces: the others (hidden now) stop playing
+    for (const [other, shown] of this.playing) if (other !== container) shown.grid.play(null);
+    this.playing.clear();
     grid.play(faces); // faces that move play their clips (the others stay as set)
     this.playing.set(container, { grid, slots });
     await nextFrame();
