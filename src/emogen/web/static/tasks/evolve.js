@@ -13,12 +13,12 @@ const markup = `
   <section id="view-trial" class="view" hidden aria-labelledby="prompt">
     <p id="grid-help" class="sr-only">Faces. Tab or the arrow keys move between faces; Enter or Space selects a face or removes it; B makes the focused face the best one.</p>
     <div id="grid" class="grid" data-viewer-container role="group" aria-describedby="grid-help"></div>
-    <div id="motion" class="motion" hidden>
-      <button id="replay" type="button" class="secondary">↻ Play all again</button>
-      <label for="scrub" class="scrub">Step through face <span id="scrub-face">1</span>:</label>
-      <input id="scrub" type="range" min="0" max="1" step="0.01" value="0">
-    </div>
     <div class="actions">
+      <div id="motion" class="motion" hidden>
+        <button id="replay" type="button" class="secondary">↻ Play all again</button>
+        <label for="scrub" class="scrub">Step through face <span id="scrub-face">1</span>:</label>
+        <input id="scrub" type="range" min="0" max="1" step="0.01" value="0">
+      </div>
       <p id="star-help" class="legend"><span class="legend-best">★ best</span> · <span class="legend-ok">✓ also acceptable</span> · the ★ on a face makes it the best</p>
       <p id="selection-status" class="status" aria-live="polite">&nbsp;</p>
       <div class="buttons">
