@@ -130,6 +130,8 @@ SLOW: dict[str, str] = {
     "tests/web/test_hardening.py::test_faces_of_earlier_generations_are_not_served[sqlite]": f"{_PARALLEL}: 7.7",
     "tests/web/test_lab_room.py::test_a_room_of_60_behind_one_address_starts_and_a_flood_is_still_refused": f"{_PARALLEL}: 3.1",
     "tests/web/test_security.py::test_the_researcher_token_is_never_logged": f"{_PARALLEL}: 30.4",
+    "tests/web/test_dynamic_view.py::test_the_page_is_sent_what_the_records_play": f"{_SECONDS}: 23.8",
+    "tests/tasks/test_dynamic_evolve.py::test_a_dynamic_block_is_checked_and_served": f"{_SECONDS}: 7.7",
 }
 
 _KEYS = "idempotency keys: a repeated key is one step, on each backend's transactions"

@@ -198,27 +198,34 @@ def test_a_dynamic_study_replays_from_its_export(piloted, tmp_path) -> None:
     assert any("position 3: genes" in m for m in report["mismatches"])
 
 
-def test_a_dynamic_block_is_checked_and_not_served_until_the_page_plays_it(
-    ict_dir: Path, tmp_path: Path
+def test_a_dynamic_block_is_checked_and_served(
+    ict_dir: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """The page shows still faces: serving moving ones would show participants something
-    other than the design (a quiet wrong stimulus), so serve refuses and check says why."""
+    """The page plays moving faces (tests/web/test_dynamic_browser.py): a dynamic block passes
+    ``study check`` and the server starts. A block a task says participants cannot be shown
+    (``TaskBlock.unservable``) is still an error there and refused by the server, by name."""
     from emogen.study.check import check_study
+    from emogen.tasks.evolve.block import EvolveBlock
     from emogen.web import create_app
 
     config = tmp_path / "dyn.toml"
     config.write_text(STUDY.format(model=ict_dir))
     result = CliRunner().invoke(app, ["study", "check", str(config)])
-    assert result.exit_code != 0
-    assert "blocks[1]: dynamic: the participant page does not play moving faces" in result.output
+    assert result.exit_code == 0 and "0 errors, 0 warnings: ready" in result.output, result.output
     moving = study_from_dict(
         {"name": "d", "emotions": ["happy"], "model": str(ict_dir),
          "blocks": [{"task": "evolve"}, {"task": "evolve", "dynamic": {}}]}
     )  # fmt: skip
+    assert [f for f in check_study(moving).findings if f.level == "error"] == []
+    served = create_app(moving, f"sqlite:///{tmp_path / 'd.sqlite'}")
+    served.state.store.dispose()
+
+    def unservable(self: EvolveBlock) -> str | None:
+        return None if self.dynamic is None else "dynamic: not yet shown to participants"
+
+    monkeypatch.setattr(EvolveBlock, "unservable", unservable)
     errors = [f for f in check_study(moving).findings if f.level == "error"]
     assert [f.where for f in errors] == ["blocks[2]"]
-    with pytest.raises(ConfigError, match=r"blocks\[2\]: dynamic: .* not served"):
-        create_app(moving, f"sqlite:///{tmp_path / 'd.sqlite'}")
-    assert not (tmp_path / "d.sqlite").exists()  # refused before a database was made
-    static = moving.model_copy(update={"blocks": moving.blocks[:1]})
-    assert [f for f in check_study(static).findings if f.where.startswith("blocks")] == []
+    with pytest.raises(ConfigError, match=r"blocks\[2\]: dynamic: not yet shown"):
+        create_app(moving, f"sqlite:///{tmp_path / 'e.sqlite'}")
+    assert not (tmp_path / "e.sqlite").exists()  # refused before a database was made

@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from emogen.ga.genome import DynamicGenome, keyframe_times
+from emogen.ga.genome import DynamicGenome, keyframe_times, latencies
 
 #: (n, K) genes → (n, S) full weight vectors: the rig's expansion of amplitudes at one time.
 Expand = Callable[[np.ndarray], np.ndarray]
@@ -69,3 +69,26 @@ def frames(
     if keyframe_correctives is None:
         return core
     return np.concatenate([core, interpolate(genome, keyframe_correctives, t)], axis=-1)
+
+
+def shape_curves(genome: DynamicGenome, timing: np.ndarray, expansion: np.ndarray) -> np.ndarray:
+    """Each shape's curve as the page evaluates it: genes' timing (…, K, 5) and the rig's 0/1
+    expansion (K, S) → (…, S, 5) rows ``[t_on, t_peak, t_off, 3·acceleration,
+    3·deceleration]`` (seconds, then the Hermite slopes of :func:`emogen.ga.genome.curve`);
+    a shape no gene moves gets zeros (its weight is 0 at every time)."""
+    timing = np.asarray(timing, dtype=np.float64)
+    t_on, t_peak, t_off = latencies(timing, genome.clip_s, genome.min_segment_s)
+    rows = np.stack([t_on, t_peak, t_off, 3 * timing[..., 1], 3 * timing[..., 3]], axis=-1)
+    moved = expansion.sum(axis=0) > 0
+    out: np.ndarray = np.where(moved[:, None], rows[..., np.argmax(expansion, axis=0), :], 0.0)
+    return out
+
+
+#: Frames of a strip (the server's image of a face that moves, for browsers without WebGL).
+STRIP_FRAMES = 11
+
+
+def strip_times(genome: DynamicGenome) -> np.ndarray:
+    """The times (s) of a strip's frames: :data:`STRIP_FRAMES` evenly over the clip (every
+    125 ms of the default 1.25 s; the last at rest)."""
+    return np.linspace(0.0, genome.clip_s, STRIP_FRAMES)

@@ -168,7 +168,8 @@ class StudyService:
         self, token: str, face_id: int, trial: int | None = None, attempt: int | None = None
     ) -> tuple[Floats, str]:
         """(full weights (n_columns,), identity) of a face of the caller's current trial (and,
-        where given, only if that is trial position ``trial`` in its attempt ``attempt``)."""
+        where given, only if that is trial position ``trial`` in its attempt ``attempt``); a
+        face that moves as its frames' weights (frames, n_shapes) (``Task.face``)."""
         with self.store.read() as db:
             sess = session_by_token(db, token, self.ctx.accepted)
             if sess.stage != "trial":

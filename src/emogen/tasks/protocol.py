@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Annotated, Any, ClassVar, Literal, Protocol
+from typing import Annotated, Any, ClassVar, Literal, NotRequired, Protocol
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 from sqlalchemy.orm import Session
@@ -30,12 +30,27 @@ from emogen.tasks.blocks import Condition, TaskBlock
 from emogen.tasks.records import TrialRow
 
 
+class Motion(TypedDict):
+    """How a face that moves moves (docs/ga.md, "Dynamic faces"), as the page plays it: a clip
+    of ``clip_s`` seconds, then ``hold_s`` at rest, looped. At time t of the clip a shape's
+    weight is its peak weight (the face's ``weights``) times the curve of its row of
+    ``curves`` — ``[t_on, t_peak, t_off, rise_slope, fall_slope]`` (seconds; the Hermite
+    slopes), every shape in GLB target order — and the corrective weights are ``keyframes``
+    (rows evenly over the clip, empty for faces shown uncorrected) interpolated linearly."""
+
+    clip_s: float
+    hold_s: float
+    curves: list[list[float]]
+    keyframes: list[list[float]]
+
+
 class FaceView(TypedDict):
     """A face: its id in the trial and its full weights (shapes, then correctives) in GLB
-    target order."""
+    target order; a face that moves also its ``motion`` (its weights are then its peak)."""
 
     id: int
     weights: list[float]
+    motion: NotRequired[Motion]
 
 
 # ---- commands ----------------------------------------------------------------------------
@@ -227,7 +242,9 @@ class Task(Protocol):
     def face(
         self, env: TaskEnv, db: Session, row: TrialRow, face_id: int
     ) -> tuple[str, str] | None:
-        """(weights JSON, identity) of a face the trial shows now, else None."""
+        """(weights JSON, identity) of a face the trial shows now, else None. The weights are
+        one face's, or for a face that moves a list of frames' (the server's image is then the
+        strip of those frames, left to right)."""
 
     def result(self, env: TaskEnv, db: Session, row: TrialRow) -> dict[str, Any] | None:
         """The trial's outcome as the participant's page may record it (None before there is

@@ -6,7 +6,8 @@ lips, hair), as in the browser viewer. Recent images are cached by (identity, we
 ``correct`` (the study's ``correct = true``) the faces are corrected as in the GA and the
 browser viewer (``Renderer.render(weights, correct=True)``) from their shape weights. Each image
 has the study's framing (``oval``: seen through look.json's oval on the background, as the
-viewer's tiles are).
+viewer's tiles are). A face that moves comes as frames (one row of weights each: the task's
+``face``); its image is the strip of those frames left to right, each corrected on its own.
 """
 
 from __future__ import annotations
@@ -53,8 +54,9 @@ class FacePNGs:
         self._cache: OrderedDict[str, bytes] = OrderedDict()
 
     async def render(self, weights: np.ndarray, identity: str) -> bytes:
-        w = np.asarray(weights, dtype=np.float64)[: self.model.n_shapes]
-        key = identity + ":" + hashlib.sha256(w.tobytes()).hexdigest()
+        """The PNG of one face (weights (n,)) or a strip of frames (weights (frames, n))."""
+        w = np.asarray(weights, dtype=np.float64)[..., : self.model.n_shapes]
+        key = f"{identity}:{w.shape}:" + hashlib.sha256(w.tobytes()).hexdigest()
         if key in self._cache:
             self._cache.move_to_end(key)
             return self._cache[key]
@@ -75,8 +77,8 @@ class FacePNGs:
             self._renderers[identity] = Renderer(
                 model, size=self.size, appearance=ident.appearance, framing=self.framing
             )
-        image = self._renderers[identity].render(weights[None, :], correct=self.correct)[0]
-        return png_bytes(image)
+        frames = self._renderers[identity].render(np.atleast_2d(weights), correct=self.correct)
+        return png_bytes(np.concatenate(list(frames), axis=1))  # a strip when there are frames
 
     def close(self) -> None:
         def release() -> None:

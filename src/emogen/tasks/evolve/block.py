@@ -59,17 +59,6 @@ class EvolveBlock(TaskBlock):
         """What its trials' genes are (:mod:`emogen.ga.genome`): static, or dynamic."""
         return STATIC if self.dynamic is None else self.dynamic.genome()
 
-    def unservable(self) -> str | None:
-        """Moving faces are evolved, recorded, exported and replayed, but the participant page
-        does not play them yet: serving them would show still peak faces in their place."""
-        if self.dynamic is None:
-            return None
-        return (
-            "dynamic: the participant page does not play moving faces yet (it would show each "
-            "face still, at its peak); a dynamic block can be simulated, exported, replayed "
-            "and analysed, not served"
-        )
-
     def resolved(self, study: Any) -> EvolveBlock:
         return self.model_copy(
             update={

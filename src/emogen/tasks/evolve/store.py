@@ -160,17 +160,17 @@ def last_selection_time(db: Session, trial_id: int) -> datetime | None:
     )
 
 
-def shown_face(db: Session, row: TrialRow, face_id: int) -> str | None:
-    """The weights (JSON) of a face the trial shows now: the generation shown, or while the
-    trial waits for its rating its final face (an earlier generation's faces are not served)."""
+def shown_face(db: Session, row: TrialRow, face_id: int) -> FaceRow | None:
+    """The row of a face the trial shows now: the generation shown, or while the trial waits
+    for its rating its final face (an earlier generation's faces are not served)."""
     if row.status == "rating":
         if face_id != row.final_face_id:
             return None
         shown = PopulationRow.generation <= row.generation
     else:
         shown = PopulationRow.generation == row.generation
-    found = db.execute(
-        select(FaceRow.weights)
+    return db.scalar(
+        select(FaceRow)
         .join(PopulationRow, FaceRow.population_id == PopulationRow.id)
         .where(
             PopulationRow.trial_id == row.id,
@@ -180,8 +180,7 @@ def shown_face(db: Session, row: TrialRow, face_id: int) -> str | None:
         )
         .order_by(PopulationRow.generation.desc())
         .limit(1)
-    ).first()
-    return None if found is None else str(found[0])
+    )
 
 
 def final_faces(db: Session, task: str, where: Sequence[Any]) -> list[MadeFace]:

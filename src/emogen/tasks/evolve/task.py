@@ -46,7 +46,7 @@ from emogen.tasks.evolve.tables import (
     RestartRow,
     SelectionRow,
 )
-from emogen.tasks.evolve.view import EvolveResult, EvolveView, evolve_view
+from emogen.tasks.evolve.view import EvolveResult, EvolveView, evolve_view, face_strip
 from emogen.tasks.protocol import (
     ExportedStudy,
     FaceId,
@@ -247,8 +247,11 @@ class EvolveTask:
     def face(
         self, env: TaskEnv, db: Session, row: TrialRow, face_id: int
     ) -> tuple[str, str] | None:
-        weights = shown_face(db, row, face_id)
-        return None if weights is None else (weights, row.identity)
+        """A face shown now; a face that moves as the frames of its strip (``face_strip``)."""
+        face = shown_face(db, row, face_id)
+        if face is None:
+            return None
+        return face_strip(env, db, row, face) or face.weights, row.identity
 
     def result(self, env: TaskEnv, db: Session, row: TrialRow) -> dict[str, Any] | None:
         """The emotion made and, once the trial is done, its final face."""

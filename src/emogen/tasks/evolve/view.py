@@ -6,11 +6,16 @@ from __future__ import annotations
 import json
 from typing import Any, Literal
 
+import numpy as np
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 from typing_extensions import TypedDict
 
+from emogen.ga.genome import DynamicGenome
+from emogen.ga.motion import core_at, shape_curves, strip_times
 from emogen.tasks.blocks import fill_emotion
 from emogen.tasks.evolve.store import ShownPopulation, final_face, population_at
+from emogen.tasks.evolve.tables import FaceCurveRow, FaceRow
 from emogen.tasks.protocol import FaceView, TaskEnv
 from emogen.tasks.records import TrialRow
 
@@ -69,29 +74,89 @@ def _face(face_id: int, weights_json: str) -> FaceView:
     return {"id": face_id, "weights": json.loads(weights_json)}
 
 
-def _population(db: Session, row: TrialRow, shown: Any) -> PopulationView | None:
+def _moving(
+    env: TaskEnv, db: Session, row: TrialRow, population_id: int, faces: list[FaceView], at: int
+) -> list[FaceView]:
+    """Faces of a dynamic block with their ``motion`` (its stored curves: the faces' timing and
+    keyframe correctives), the page's clip of each; ``at``: the first face's position."""
+    genome = env.block(row).genome()
+    if not isinstance(genome, DynamicGenome):
+        return faces
+    stored = db.scalars(
+        select(FaceCurveRow).where(FaceCurveRow.population_id == population_id)
+    ).all()
+    by_position = {c.position: c for c in stored}
+    expansion = env.ctx.rig.expansion_matrix(env.config.ga_for(row.identity).eye_motion)
+    out: list[FaceView] = []
+    for k, face in enumerate(faces):
+        curve = by_position[at + k]
+        curves = shape_curves(genome, np.asarray(json.loads(curve.timing)), expansion)
+        keyframes = json.loads(curve.keyframe_correctives)
+        motion = {
+            "clip_s": genome.clip_s,
+            "hold_s": genome.hold_s,
+            "curves": curves.tolist(),
+            "keyframes": [] if keyframes is None else keyframes,
+        }
+        out.append({**face, "motion": motion})  # type: ignore[typeddict-item]
+    return out
+
+
+def face_strip(env: TaskEnv, db: Session, row: TrialRow, face: FaceRow) -> str | None:
+    """A face that moves as the server's images show it (browsers without WebGL): JSON of its
+    core weights at :func:`emogen.ga.motion.strip_times`, one row a frame (the image is the
+    strip of those frames, each corrected on its own); None for a still face."""
+    genome = env.block(row).genome()
+    if not isinstance(genome, DynamicGenome):
+        return None
+    curve = db.scalar(
+        select(FaceCurveRow).where(
+            FaceCurveRow.population_id == face.population_id,
+            FaceCurveRow.position == face.position,
+        )
+    )
+    if curve is None:
+        return None
+    amplitudes = np.asarray(json.loads(face.genes))[:, None]
+    genes = np.concatenate([amplitudes, np.asarray(json.loads(curve.timing))], axis=1)
+    eye_motion = env.config.ga_for(row.identity).eye_motion
+    expand = lambda g: env.ctx.rig.expand(g, eye_motion)  # noqa: E731
+    frames = core_at(genome, genes[None], strip_times(genome), expand)[0]
+    return json.dumps(frames.tolist())
+
+
+def _population(env: TaskEnv, db: Session, row: TrialRow, shown: Any) -> PopulationView | None:
     if isinstance(shown, ShownPopulation) and (shown.trial_id, shown.attempt, shown.generation) == (
         row.id,
         row.attempt,
         row.generation,
     ):
-        return {"attempt": shown.attempt, "generation": shown.generation, "faces": shown.faces}
-    pop = population_at(db, row.id, row.attempt, row.generation, with_faces=True)
-    if pop is None:
-        return None
-    faces = [_face(f.face_id, f.weights) for f in pop.faces]
-    return {"attempt": pop.attempt, "generation": pop.generation, "faces": faces}
+        faces, pop_id = shown.faces, None
+    else:
+        pop = population_at(db, row.id, row.attempt, row.generation, with_faces=True)
+        if pop is None:
+            return None
+        faces, pop_id = [_face(f.face_id, f.weights) for f in pop.faces], pop.id
+    if isinstance(env.block(row).genome(), DynamicGenome):
+        if pop_id is None:
+            pop_id = population_at(db, row.id, row.attempt, row.generation).id  # type: ignore[union-attr]
+        faces = _moving(env, db, row, pop_id, faces, 0)
+    return {"attempt": row.attempt, "generation": row.generation, "faces": faces}
 
 
-def _rating(db: Session, config: Any, row: TrialRow) -> RatingView:
+def _rating(env: TaskEnv, db: Session, row: TrialRow) -> RatingView:
     face = final_face(db, row)
-    r = config.rating
+    r = env.config.rating
+    shown = None
+    if face is not None:
+        shown = _moving(env, db, row, face.population_id, [_face(face.face_id, face.weights)],
+                        face.position)[0]  # fmt: skip
     return {
         "question": fill_emotion(r.question, row.emotion),
         "low_label": r.low_label,
         "high_label": r.high_label,
         "points": r.points,
-        "face": None if face is None else _face(face.face_id, face.weights),
+        "face": shown,
     }
 
 
@@ -111,7 +176,7 @@ def evolve_view(env: TaskEnv, db: Session, row: TrialRow, shown: Any) -> EvolveV
         "rating": None,
     }
     if row.status == "active":
-        view["population"] = _population(db, row, shown)
+        view["population"] = _population(env, db, row, shown)
     elif row.status == "rating":
-        view["rating"] = _rating(db, config, row)
+        view["rating"] = _rating(env, db, row)
     return view

@@ -422,11 +422,12 @@ export interface components {
         /**
          * FaceView
          * @description A face: its id in the trial and its full weights (shapes, then correctives) in GLB
-         *     target order.
+         *     target order; a face that moves also its ``motion`` (its weights are then its peak).
          */
         FaceView: {
             /** Id */
             id: number;
+            motion?: components["schemas"]["Motion"];
             /** Weights */
             weights: number[];
         };
@@ -509,6 +510,25 @@ export interface components {
             max_selections: number;
             /** Min Selections */
             min_selections: number;
+        };
+        /**
+         * Motion
+         * @description How a face that moves moves (docs/ga.md, "Dynamic faces"), as the page plays it: a clip
+         *     of ``clip_s`` seconds, then ``hold_s`` at rest, looped. At time t of the clip a shape's
+         *     weight is its peak weight (the face's ``weights``) times the curve of its row of
+         *     ``curves`` — ``[t_on, t_peak, t_off, rise_slope, fall_slope]`` (seconds; the Hermite
+         *     slopes), every shape in GLB target order — and the corrective weights are ``keyframes``
+         *     (rows evenly over the clip, empty for faces shown uncorrected) interpolated linearly.
+         */
+        Motion: {
+            /** Clip S */
+            clip_s: number;
+            /** Curves */
+            curves: number[][];
+            /** Hold S */
+            hold_s: number;
+            /** Keyframes */
+            keyframes: number[][];
         };
         /** NewSession */
         NewSession: {

@@ -19,11 +19,58 @@ function webglAvailable() {
   }
 }
 
+// A face that moves comes from the server as a strip of its frames (the clip at evenly spaced
+// times, left to right, each frame as tall as wide): shown a frame at a time, every strip of a
+// screen in sync, looped with the clip's hold at rest, as the 3D viewer plays its clips.
+class Strips {
+  constructor() {
+    /** @type {Map<HTMLElement, {img: HTMLImageElement, motion: any}>} */
+    this.shown = new Map();
+    /** @type {Map<HTMLElement, number>} */
+    this.held = new Map();
+    this.start = performance.now();
+    this.raf = 0;
+  }
+
+  play(slot, img, motion) {
+    if (!motion) {
+      this.shown.delete(slot);
+      slot.classList.remove("strip");
+      img.removeAttribute("style");
+      return;
+    }
+    slot.classList.add("strip");
+    this.shown.set(slot, { img, motion });
+    this.held.delete(slot);
+    this.start = performance.now();
+    if (!this.raf) this.raf = requestAnimationFrame((now) => this.tick(now));
+  }
+
+  time(slot, now = performance.now()) {
+    const entry = this.shown.get(slot);
+    if (!entry) return null;
+    if (this.held.has(slot)) return this.held.get(slot) ?? null;
+    const { clip_s: clip, hold_s: hold } = entry.motion;
+    return Math.min(((now - this.start) / 1000) % (clip + hold), clip);
+  }
+
+  tick(now) {
+    for (const [slot, { img, motion }] of this.shown) {
+      const frames = img.naturalHeight ? Math.round(img.naturalWidth / img.naturalHeight) : 1;
+      const k = Math.round(((this.time(slot, now) ?? 0) / motion.clip_s) * (frames - 1));
+      img.style.width = `${frames * 100}%`;
+      img.style.transform = `translateX(${(-100 * k) / frames}%)`;
+    }
+    this.raf = this.shown.size ? requestAnimationFrame((t) => this.tick(t)) : 0;
+  }
+}
+
 class PngDisplay {
   constructor(token, base = "") {
     this.token = token;
     this.base = base;
     this.kind = "png";
+    this.strips = new Strips();
   }
 
   show(slots, faces, _identity, onProgress = () => {}, where = { trial: 0, attempt: 0 }) {
@@ -55,9 +102,27 @@ class PngDisplay {
           resolve(false);
         };
         img.src = `${this.base}/api/s/${this.token}/faces/${face.id}.png${query}`;
+        this.strips.play(slot, img, face.motion);
       }).then(loaded);
     });
     return Promise.all(loads);
+  }
+
+  /** Every strip from its first frame again (a held one plays along again). */
+  replay() {
+    this.strips.held.clear();
+    this.strips.start = performance.now();
+  }
+
+  /** ``slot``'s strip held at the frame nearest clip time ``t`` (s); null: it plays again. */
+  scrub(slot, t) {
+    if (t === null) this.strips.held.delete(slot);
+    else if (this.strips.shown.has(slot)) this.strips.held.set(slot, t);
+  }
+
+  /** The clip time (s) ``slot`` shows now (null: a still face). */
+  clipTime(slot) {
+    return this.strips.time(slot);
   }
 
   dispose() {}

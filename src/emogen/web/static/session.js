@@ -34,8 +34,9 @@ const ui = {
   said: "", // the last message that was not about the connection
 };
 // Tests and the researcher's tools read this (loads: the face models the 3D display built, each
-// with its timings; loadMs: the current screen's from its answer to its faces drawn).
-window.emogenStudy = { ready: false, stage: null, display: null, loads: [], loadMs: 0 };
+// with its timings; loadMs: the current screen's from its answer to its faces drawn; clipTimes:
+// the clip time each face shown plays now).
+window.emogenStudy = { ready: false, stage: null, display: null, loads: [], loadMs: 0, clipTimes: () => [] };
 
 function setReady(ready) {
   window.emogenStudy.ready = ready;
@@ -282,6 +283,9 @@ async function main() {
     ui.display = await createFaceDisplay({ token });
     window.emogenStudy.display = ui.display.kind;
     window.emogenStudy.loads = ui.display.loads ?? []; // face models built (benchmarks)
+    // the clip time (s) each face shown plays now (null: a face that does not move)
+    window.emogenStudy.clipTimes = () =>
+      Array.from(document.querySelectorAll("[data-viewer-container] .slot"), (s) => ui.display.clipTime(s));
     await render(await call(`/api/s/${token}/state`));
   } catch (err) {
     say(err.message);

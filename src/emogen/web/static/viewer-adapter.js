@@ -55,6 +55,7 @@ function glbOnce(url, onProgress) {
 }
 
 function release(grid) {
+  grid.play(null);
   grid.renderer.dispose();
   grid.renderer.forceContextLoss(); // the browser's WebGL contexts are few: give this one back
   grid.canvas.remove();
@@ -79,6 +80,7 @@ class ViewerDisplay {
     this.grids = new Map();
     /** Each face model built: its URL, whether ahead of its trial, its timings (benchmarks). */
     this.loads = [];
+    this.playing = new Map(); // container -> {grid, slots} last shown
   }
 
   urlOf(identity) {
@@ -165,6 +167,7 @@ class ViewerDisplay {
   dispose() {
     for (const held of this.grids.values()) for (const entry of held.values()) entry.ready.then(release, () => {});
     this.grids.clear();
+    this.playing.clear();
   }
 
   /**
@@ -190,8 +193,37 @@ class ViewerDisplay {
     }
     const n = grid.shapeNames.length;
     grid.setFaces(faces.map((f) => f.weights.slice(0, n)));
+    // a screen shows one grid's faces: the others (hidden now, or another identity's) stop playing
+    for (const shown of this.playing.values()) if (shown.grid !== grid) shown.grid.play(null);
+    this.playing.clear();
+    grid.play(faces); // faces that move play their clips (the others stay as set)
+    this.playing.set(container, { grid, slots });
     await nextFrame();
     return faces.map(() => true);
+  }
+
+  /** The grid drawing ``slot`` and the slot's place in it (null: none shown there). */
+  tileOf(slot) {
+    const shown = this.playing.get(slot.closest("[data-viewer-container]"));
+    const i = shown ? shown.slots.indexOf(slot) : -1;
+    return i < 0 ? null : { grid: shown.grid, i };
+  }
+
+  /** Faces that move in ``slot``'s container play from their start again. */
+  replay(slot) {
+    this.tileOf(slot)?.grid.replay();
+  }
+
+  /** ``slot``'s face held at clip time ``t`` seconds (null: it plays along again). */
+  scrub(slot, t) {
+    const tile = this.tileOf(slot);
+    tile?.grid.scrub(tile.i, t);
+  }
+
+  /** The clip time (s) ``slot`` shows now (null: a face that does not move). */
+  clipTime(slot) {
+    const tile = this.tileOf(slot);
+    return tile ? tile.grid.clipTime(tile.i) : null;
   }
 }
 

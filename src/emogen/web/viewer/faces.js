@@ -22,6 +22,7 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { look } from './look.js';
 import { faceMaterial, gazeMatrix } from './material.js';
 import { addShadingAttributes } from './mesh.js';
+import { Clip } from './motion.js';
 import { StrainField } from './strain.js';
 
 ColorManagement.enabled = false; // shade.glsl writes sRGB itself: no conversions anywhere
@@ -218,6 +219,55 @@ export class FaceGrid {
       gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotLeft.value);
       gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotRight.value);
     }
+  }
+
+  /**
+   * Faces that move (motion.js): per face {weights, motion} (a face without motion stays as
+   * setFaces left it). The clips play in sync from now, looped (clip, then the hold at rest),
+   * one requestAnimationFrame a frame; null stops the playing.
+   */
+  play(faces) {
+    cancelAnimationFrame(this.raf ?? 0);
+    this.raf = null;
+    const n = this.shapeNames.length;
+    this.clips = (faces ?? []).map((f) => (f?.motion ? new Clip(f.weights, f.motion, n) : null));
+    if (!this.clips.some(Boolean)) return;
+    this.frame = new Float32Array(n);
+    this.held = new Map(); // face → clip time it is scrubbed to
+    this.frames = 0; // frames drawn since play (the benchmark's count)
+    this.start = performance.now();
+    const tick = (now) => {
+      this.draw(now);
+      this.raf = requestAnimationFrame(tick);
+    };
+    this.raf = requestAnimationFrame(tick);
+  }
+
+  /** Every clip from its start again (scrubbed faces play along again). */
+  replay() {
+    this.held?.clear();
+    this.start = performance.now();
+  }
+
+  /** Face ``i`` held at clip time ``t`` (s) while the others play; null lets it play again. */
+  scrub(i, t) {
+    if (t === null) this.held?.delete(i);
+    else this.held?.set(i, t);
+  }
+
+  /** The clip time (s) face ``i`` shows now (null: it does not move). */
+  clipTime(i, now = performance.now()) {
+    const clip = this.clips?.[i];
+    if (!clip) return null;
+    return this.held.has(i) ? this.held.get(i) : clip.time((now - this.start) / 1000);
+  }
+
+  draw(now) {
+    this.clips.forEach((clip, i) => {
+      if (clip) this.setFace(i, clip.at(this.clipTime(i, now), this.frame));
+    });
+    this.render();
+    this.frames++;
   }
 
   gazeAngles(vector) {

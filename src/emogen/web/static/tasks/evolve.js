@@ -14,6 +14,11 @@ const markup = `
     <p id="grid-help" class="sr-only">Faces. Tab or the arrow keys move between faces; Enter or Space selects a face or removes it; B makes the focused face the best one.</p>
     <div id="grid" class="grid" data-viewer-container role="group" aria-describedby="grid-help"></div>
     <div class="actions">
+      <div id="motion" class="motion" hidden>
+        <button id="replay" type="button" class="secondary">↻ Play all again</button>
+        <label for="scrub" class="scrub">Step through face <span id="scrub-face">1</span>:</label>
+        <input id="scrub" type="range" min="0" max="1" step="0.01" value="0">
+      </div>
       <p id="star-help" class="legend"><span class="legend-best">★ best</span> · <span class="legend-ok">✓ also acceptable</span> · the ★ on a face makes it the best</p>
       <p id="selection-status" class="status" aria-live="polite">&nbsp;</p>
       <div class="buttons">
@@ -166,6 +171,18 @@ function create(page) {
     // Every face is in the Tab order (as the instructions say); the arrows move by rows too.
     cells[pos].querySelector(".face").focus({ preventScroll: false });
     sel.focus = pos;
+    $("scrub-face").textContent = String(pos + 1);
+  }
+
+  // ---- faces that move: every tile plays its clip in sync; one tile can be stepped through ----
+  function showMotion(faces) {
+    const moving = faces.find((f) => f.motion);
+    $("motion").hidden = !moving;
+    if (!moving) return;
+    const scrub = $("scrub");
+    scrub.max = String(moving.motion.clip_s);
+    scrub.value = "0";
+    $("scrub-face").textContent = String(sel.focus + 1);
   }
 
   function onGridKey(event) {
@@ -210,6 +227,7 @@ function create(page) {
       state.trial.identity,
     );
     $("grid").setAttribute("aria-busy", "false");
+    showMotion(pop.faces);
     page.facesShown();
     page.setReady(true);
     paint();
@@ -249,6 +267,19 @@ function create(page) {
   $("next").addEventListener("click", () => {
     if (sel.elite === null || ui.busy) return;
     page.step(selection.selectionBody(ui.state, sel, ui.key, page.elapsed(), ui.loadMs));
+  });
+
+  const slotAt = (pos) => cellsOf()[pos]?.querySelector(".slot");
+
+  $("replay").addEventListener("click", () => {
+    const slot = slotAt(0);
+    if (slot) ui.display.replay(slot);
+    $("scrub").value = "0";
+  });
+
+  $("scrub").addEventListener("input", () => {
+    const slot = slotAt(sel.focus);
+    if (slot) ui.display.scrub(slot, Number($("scrub").value));
   });
 
   $("restart").addEventListener("click", () => {
