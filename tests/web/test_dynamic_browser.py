@@ -102,8 +102,8 @@ def test_a_participant_evolves_a_moving_face(
     assert page.is_visible("#motion") and page.is_visible("#replay")
 
     # ---- the ten tiles play: each tile's pixels change over the 2 s loop ----
-    series = []
-    for _ in range(5):
+    series = []  # over a whole loop and more (2.5 s): a tile whose clip ends early rests a while
+    for _ in range(11):
         series.append(tiles(page))
         page.wait_for_timeout(250)
     moved = [
@@ -217,8 +217,8 @@ def test_without_webgl_the_tiles_flip_through_strips_of_frames(
     )
     assert len(sizes) == 10 and all(w == 11 * h for w, h in sizes), sizes
     assert page.eval_on_selector_all("#grid > .cell .slot.strip", "ss => ss.length") == 10
-    series = []
-    for _ in range(5):
+    series = []  # over a whole loop and more (2.5 s): a tile whose clip ends early rests a while
+    for _ in range(11):
         series.append(tiles(page))
         page.wait_for_timeout(250)
     moved = [max(np.abs(s[k] - series[0][k]).mean() for s in series[1:]) for k in range(10)]
