@@ -183,7 +183,11 @@ def _product_integrals(a: list[np.ndarray], b: list[np.ndarray], h: float) -> np
     k = xa.shape[1]
     d2 = _sq_distances(xa, xb)
     dens = np.exp(-0.25 * d2 / h**2) / (4 * np.pi * h**2) ** (k / 2)
-    return _block_means(a, len(xa)) @ dens @ _block_means(b, len(xb)).T
+    # block sums by reduceat, not a dense (fields × faces) averaging matrix: the clustering
+    # null calls this 400 times per analysis (benchmarks/bench_analyse.py; docs/analysis.md)
+    na, nb = np.array([len(x) for x in a]), np.array([len(x) for x in b])
+    sums = np.add.reduceat(np.add.reduceat(dens, _starts(na), axis=0), _starts(nb), axis=1)
+    return sums / np.outer(na, nb)
 
 
 def _sq_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -192,14 +196,9 @@ def _sq_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.clip(d2, 0.0, None)
 
 
-def _block_means(fields: list[np.ndarray], total: int) -> np.ndarray:
-    """(n_fields, total) rows averaging each field's faces out of the stacked faces."""
-    out = np.zeros((len(fields), total))
-    start = 0
-    for i, x in enumerate(fields):
-        out[i, start : start + len(x)] = 1.0 / len(x)
-        start += len(x)
-    return out
+def _starts(sizes: np.ndarray) -> np.ndarray:
+    """First row of each field's faces in the stacked faces."""
+    return np.concatenate([[0], np.cumsum(sizes)[:-1]])
 
 
 def overlap_matrix(a: list[np.ndarray], b: list[np.ndarray], h: float) -> np.ndarray:
