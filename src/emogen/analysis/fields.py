@@ -183,7 +183,11 @@ def _product_integrals(a: list[np.ndarray], b: list[np.ndarray], h: float) -> np
     k = xa.shape[1]
     d2 = _sq_distances(xa, xb)
     dens = np.exp(-0.25 * d2 / h**2) / (4 * np.pi * h**2) ** (k / 2)
-    return _block_means(a, len(xa)) @ dens @ _block_means(b, len(xb)).T
+    # block sums by reduceat, not a dense (fields × faces) averaging matrix: the clustering
+    # null calls this 400 times per analysis (benchmarks/bench_analyse.py; docs/analysis.md)
+    na, nb = np.array([len(x) for x in a]), np.array([len(x) for x in b])
+    sums = np.add.reduceat(np.add.reduceat(dens, _starts(na), axis=0), _starts(nb), axis=1)
+    return sums / np.outer(na, nb)
 
 
 def _sq_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -192,14 +196,9 @@ def _sq_distances(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.clip(d2, 0.0, None)
 
 
-def _block_means(fields: list[np.ndarray], total: int) -> np.ndarray:
-    """(n_fields, total) rows averaging each field's faces out of the stacked faces."""
-    out = np.zeros((len(fields), total))
-    start = 0
-    for i, x in enumerate(fields):
-        out[i, start : start + len(x)] = 1.0 / len(x)
-        start += len(x)
-    return out
+def _starts(sizes: np.ndarray) -> np.ndarray:
+    """First row of each field's faces in the stacked faces."""
+    return np.concatenate([[0], np.cumsum(sizes)[:-1]])
 
 
 def overlap_matrix(a: list[np.ndarray], b: list[np.ndarray], h: float) -> np.ndarray:
@@ -219,13 +218,6 @@ def overlaps(fields: Fields, emotion: str) -> pd.DataFrame:
     return pd.DataFrame(m, index=pd.Index(who, name="participant_id"), columns=who)
 
 
-def _kde_logpdf(centres: np.ndarray, x: np.ndarray, h: float) -> np.ndarray:
-    k = centres.shape[1]
-    d2 = _sq_distances(x, centres)
-    logk = -0.5 * d2 / h**2 - 0.5 * k * np.log(2 * np.pi * h**2)
-    return np.asarray(logsumexp(logk, axis=1) - np.log(len(centres)))
-
-
 def bhattacharyya(
     fields: list[np.ndarray], h: float, *, rng: np.random.Generator, samples: int = 256
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -239,16 +231,30 @@ def bhattacharyya(
         c = x[rng.integers(0, len(x), samples)]
         draws.append(c + rng.normal(0.0, h, c.shape))
     allx = np.vstack(draws)
-    logp = np.stack([_kde_logpdf(x, allx, h) for x in fields]).reshape(n, n, samples)
+    logp = _kde_logpdfs(fields, allx, h).reshape(n, n, samples)
+    own = logp[np.arange(n), np.arange(n)]  # (n, samples): each field at its own draws
     bc, mn = np.eye(n), np.eye(n)
-    for i in range(n):
-        for j in range(i + 1, n):
-            la = np.concatenate([logp[i, i], logp[i, j]])
-            lb = np.concatenate([logp[j, i], logp[j, j]])
-            mix = np.logaddexp(la, lb) - np.log(2.0)
-            bc[i, j] = bc[j, i] = float(np.exp(0.5 * (la + lb) - mix).mean())
-            mn[i, j] = mn[j, i] = float(np.exp(np.minimum(la, lb) - mix).mean())
+    for i in range(n - 1):  # every pair (i, j > i) at once: O(n²) pairs, quadratic in people
+        la = np.concatenate([np.broadcast_to(own[i], (n - i - 1, samples)), logp[i, i + 1 :]], 1)
+        lb = np.concatenate([logp[i + 1 :, i], own[i + 1 :]], axis=1)
+        mix = np.logaddexp(la, lb) - np.log(2.0)
+        bc[i, i + 1 :] = bc[i + 1 :, i] = np.exp(0.5 * (la + lb) - mix).mean(axis=1)
+        mn[i, i + 1 :] = mn[i + 1 :, i] = np.exp(np.minimum(la, lb) - mix).mean(axis=1)
     return bc, mn
+
+
+def _kde_logpdfs(fields: list[np.ndarray], x: np.ndarray, h: float) -> np.ndarray:
+    """(len(fields), len(x)) log densities of each field's Gaussian KDE (kernel SD h) at ``x``,
+    the squared norms of ``x`` computed once (the Bhattacharyya matrix evaluates n fields at
+    256·n draws: half its cost at 336 participants, benchmarks/bench_analyse.py)."""
+    k = x.shape[1]
+    xx = (x**2).sum(axis=1)[:, None]
+    out = np.empty((len(fields), len(x)))
+    for i, c in enumerate(fields):
+        logk = -0.5 * np.clip(xx + (c**2).sum(axis=1) - 2.0 * x @ c.T, 0.0, None) / h**2
+        top = logk.max(axis=1)
+        out[i] = top + np.log(np.exp(logk - top[:, None]).sum(axis=1))
+    return out - 0.5 * k * np.log(2 * np.pi * h**2) - np.log([[len(c)] for c in fields])
 
 
 def split_halves(faces: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
