@@ -124,9 +124,14 @@ def test_a_participant_evolves_a_moving_face(
     page.keyboard.press("ArrowRight")  # face 3
     assert page.inner_text("#scrub-face") == "3"
     scrub(page, 0.9)
-    first = clip_times(page)
-    page.wait_for_timeout(800)  # longer than the hold, when a clip's time stands still
-    later = clip_times(page)
+    # both reads in one task of the page, 0.8 s apart by its own clock: longer than the hold (when
+    # a clip's time stands still) and shorter than the loop (two reads a whole loop apart, as a
+    # loaded machine's delays between separate calls made them once, show the same times)
+    first, later = page.evaluate(
+        "() => { const times = () => window.emogenStudy.clipTimes().filter((t) => t !== null);"
+        " const first = times(); const t0 = performance.now();"
+        " while (performance.now() - t0 < 800) {} return [first, times()]; }"
+    )
     assert first[2] == later[2] == 0.9
     assert any(
         abs(a - b) > 0.05 for k, (a, b) in enumerate(zip(first, later, strict=True)) if k != 2
