@@ -176,8 +176,10 @@ def test_a_failed_or_slow_model_made_ahead_still_ends_in_a_working_trial(
     assert identity(page, site) == SECOND
     built = [m for m in loads(page) if m["url"].endswith(f"/{SECOND}.glb")]
     if fault == "500":
-        assert len(asked) == tried + 1  # asked again when shown, as without a model made ahead
-        assert [m["ahead"] for m in built] == [False]
+        # asked again when shown, as without a model made ahead (a retry ahead, for another
+        # container, may also land once the fault has cleared: it is then built, and fine)
+        assert len(asked) >= tried + 1
+        assert False in [m["ahead"] for m in built]  # the shown one was built when shown
     else:
         assert len(asked) == 1 and [m["ahead"] for m in built] == [True, True]
     assert page.inner_text("#message") == ""  # nothing said to the participant
