@@ -36,11 +36,11 @@ MIXED: dict[str, Any] = {
 RENAMED = {"categorise_responses": "responses", "evolve_ratings": "ratings"}
 
 
-def _read(path: Path) -> pd.DataFrame:
+def read_export_table(path: Path) -> pd.DataFrame:
     return pd.read_parquet(path) if path.suffix == ".parquet" else tidy.read_csv(path)
 
 
-def _write(df: pd.DataFrame, path: Path) -> None:
+def write_export_table(df: pd.DataFrame, path: Path) -> None:
     if path.suffix == ".parquet":
         df.to_parquet(path, index=False)
     else:
@@ -61,15 +61,18 @@ def as_schema5(new: Path, old: Path) -> Path:
             text = text.replace(f"\n{now},", f"\n{before},")
         lines = [line for line in text.splitlines() if not line.startswith("final_faces,")]
         types.write_text("".join(line + "\n" for line in lines))
-    trials, responses = _read(old / f"trials.{fmt}"), _read(old / f"responses.{fmt}")
+    trials, responses = (
+        read_export_table(old / f"trials.{fmt}"),
+        read_export_table(old / f"responses.{fmt}"),
+    )
     intended = responses.set_index(["session_id", "trial"])["intended"]
     categorise = trials["task"] == "categorise"
     at = pd.MultiIndex.from_frame(trials.loc[categorise, ["session_id", "trial"]])
     trials.loc[categorise, "emotion"] = intended.reindex(at).to_numpy()
     for name in [p.stem for p in old.glob(f"*.{fmt}") if p.name != tidy.COL_TYPES]:
-        table = trials if name == "trials" else _read(old / f"{name}.{fmt}")
+        table = trials if name == "trials" else read_export_table(old / f"{name}.{fmt}")
         table["schema_version"] = "emogen.study/5"
-        _write(table, old / f"{name}.{fmt}")
+        write_export_table(table, old / f"{name}.{fmt}")
     return old
 
 

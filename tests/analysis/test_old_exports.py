@@ -5,16 +5,27 @@ equal the table, and every reader finds the renamed tables."""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 import pytest
+from typer.testing import CliRunner
 
+from emogen import columns as tidy
 from emogen.analysis.data import load_dataset
 from emogen.analysis.people import load_people
-from emogen.study.export import write_export
-from tests.export_helpers import MIXED, as_schema5, simulated_tables
+from emogen.appearance.params import Appearance
+from emogen.cli.app import app
+from emogen.study.export import identities_from_table, write_export
+from tests.export_helpers import (
+    MIXED,
+    as_schema5,
+    read_export_table,
+    simulated_tables,
+    write_export_table,
+)
 
 
 @pytest.fixture(scope="module")
@@ -65,3 +76,44 @@ def test_the_final_faces_of_the_dataset_are_the_table(exports: Path) -> None:
             assert got[w] == row[f"w_{w}"]
         last = ds.elites[(ds.elites["sample"] == got.name)].sort_values("generation").iloc[-1]
         assert last[list(ds.columns)].tolist() == got[list(ds.columns)].tolist()
+
+
+def _before_lip_depth(new: Path, old: Path) -> Path:
+    """A copy of ``new`` as exports were written before the ``lip_depth`` appearance parameter
+    existed (rig 2): the ``identities`` table without that column, and its letter gone from the column types."""
+    shutil.copytree(new, old)
+    fmt = "parquet" if (old / "trials.parquet").is_file() else "csv"
+    path = old / f"identities.{fmt}"
+    table = read_export_table(path)
+    at = list(table.columns).index("lip_depth")
+    write_export_table(table.drop(columns="lip_depth"), path)
+    types = old / tidy.COL_TYPES
+    if types.is_file():  # readr's compact spec: one letter per column, in order
+        lines = types.read_text().splitlines()
+        k = len("identities,") + at
+        lines = [f"{ln[:k]}{ln[k + 1 :]}" if ln.startswith("identities,") else ln for ln in lines]
+        types.write_text("".join(line + "\n" for line in lines))
+    return old
+
+
+@pytest.mark.parametrize("fmt", ["parquet", "csv"])
+def test_an_export_without_a_later_appearance_parameter_analyses(
+    exports: Path, fmt: str, ict_dir: Path, tmp_path: Path
+) -> None:
+    """An export from before an appearance parameter existed reads its identities with that
+    parameter at its default (the look those studies had), and ``emogen analyse`` (faces drawn)
+    finishes on it."""
+    old = _before_lip_depth(exports / fmt, tmp_path / "old")
+    new_ids = identities_from_table(read_export_table(exports / fmt / f"identities.{fmt}"))
+    old_ids = identities_from_table(read_export_table(old / f"identities.{fmt}"))
+    assert old_ids.keys() == new_ids.keys() and old_ids
+    for key, ident in old_ids.items():
+        assert ident.appearance.lip_depth == Appearance().lip_depth == 0.0
+        assert ident == new_ids[key].model_copy(
+            update={"appearance": new_ids[key].appearance.model_copy(update={"lip_depth": 0.0})}
+        )
+    out = tmp_path / "report"
+    args = ["analyse", str(old), "--out", str(out), "--noise-runs", "20", "--model", str(ict_dir)]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert (out / "index.html").is_file() and (out / "figures" / "mean_faces.png").is_file()

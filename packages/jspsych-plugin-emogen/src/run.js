@@ -15,7 +15,7 @@ import { createFaceDisplay } from "../../../src/emogen/web/static/faces.js";
 import { screenPrompt } from "../../../src/emogen/web/static/progress.js";
 import { SCREENS, TASK_VIEWS, taskOf } from "../../../src/emogen/web/static/tasks/index.js";
 import { STATUS_LINES } from "../../../src/emogen/web/static/tasks/markup.js";
-import { createDrawFaces, fillScale } from "../../../src/emogen/web/static/tasks/shell.js";
+import { createDrawFaces, fillScale, responseClock } from "../../../src/emogen/web/static/tasks/shell.js";
 import { createViewerDisplay } from "../../../src/emogen/web/static/viewer-adapter.js";
 import { TrialFailure, participantFromUrl, request, serverBase, session, studyInfo } from "./connect.js";
 import { carryOver, emptyData, recordStep, withRecord } from "./record.js";
@@ -141,6 +141,7 @@ export async function runTrial({ element, params, onLoad = () => {}, driver, sim
   const call = (path, options = {}) =>
     request(base, `/api/s/${data.token}${path}`, { retries: Infinity, ...timing, onLink, ...options });
 
+  const responseMs = responseClock(document, abort.signal);
   const page = {
     $, ui, token: "", show, say, setReady, signal: abort.signal,
     ready: () => ui.ready,
@@ -156,7 +157,7 @@ export async function runTrial({ element, params, onLoad = () => {}, driver, sim
         onLoad();
       }
     },
-    elapsed: () => Math.max(0, Math.round(performance.now() - ui.shownAt)),
+    elapsed: () => responseMs(ui.shownAt),
     step: (body) => step(body),
   };
 

@@ -212,7 +212,8 @@ def identity_rows(study: StudyRow) -> list[dict[str, Any]]:
 
 def identities_from_table(table: pd.DataFrame) -> dict[tuple[str, str], Identity]:
     """The ``identities`` export table (as read back from Parquet or CSV) as identities, by
-    (study, identity name)."""
+    (study, identity name). An appearance parameter added after the export was written (e.g.
+    ``lip_depth``) takes its default, which is the look the parameter's absence gave."""
     out = {}
     for row in table.to_dict("records"):
         coeffs = row.get("shape_coefficients")
@@ -224,6 +225,7 @@ def identities_from_table(table: pd.DataFrame) -> dict[tuple[str, str], Identity
         values: dict[str, Any] = {
             k: tidy.seed_value(row[k]) if tidy.kind(k) == "seed" else row[k]
             for k in Appearance.model_fields
+            if k in row
         }
         appearance = Appearance(**values)
         out[(str(row["study"]), str(row["identity"]))] = Identity(

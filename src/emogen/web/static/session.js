@@ -9,7 +9,7 @@ import { createFaceDisplay } from "./faces.js";
 import { progressOf, screenOf, screenPrompt, startsTrial, TRANSITION_MS, transitionText } from "./progress.js";
 import { SCREENS, TASK_VIEWS, TASKS, taskOfState } from "./tasks/index.js";
 import { STATUS_LINES } from "./tasks/markup.js";
-import { createDrawFaces, fillScale } from "./tasks/shell.js";
+import { createDrawFaces, fillScale, responseClock } from "./tasks/shell.js";
 
 const token = document.body.dataset.token;
 const $ = (id) => document.getElementById(id);
@@ -36,7 +36,7 @@ const ui = {
 // Tests and the researcher's tools read this (loads: the face models the 3D display built, each
 // with its timings; loadMs: the current screen's from its answer to its faces drawn; clipTimes:
 // the clip time each face shown plays now).
-window.emogenStudy = { ready: false, stage: null, display: null, loads: [], loadMs: 0, clipTimes: () => [] };
+window.emogenStudy = { ready: false, stage: null, display: null, loads: [], loadMs: 0, shownAt: 0, clipTimes: () => [] };
 
 function setReady(ready) {
   window.emogenStudy.ready = ready;
@@ -113,10 +113,13 @@ function facesShown() {
   ui.shownAt = performance.now();
   ui.loadMs = Math.max(0, Math.round(ui.shownAt - (ui.receivedAt ?? 0)));
   window.emogenStudy.loadMs = ui.loadMs;
+  window.emogenStudy.shownAt = ui.shownAt;
 }
 
+const responseMs = responseClock(document);
+/** The response time of the input being handled: from the faces drawn to the click or key. */
 function elapsed() {
-  return Math.max(0, Math.round(performance.now() - ui.shownAt));
+  return responseMs(ui.shownAt);
 }
 
 const page = {

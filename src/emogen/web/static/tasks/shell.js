@@ -1,6 +1,6 @@
 // What the shells around the task components share (session.js, the study's own page; the
-// jsPsych plugin's trial in packages/jspsych-plugin-emogen): a rating scale's buttons and the
-// drawing of faces with its loading indicator.
+// jsPsych plugin's trial in packages/jspsych-plugin-emogen): a rating scale's buttons, the
+// drawing of faces with its loading indicator, and the response-time clock.
 
 /**
  * A rating scale's radio buttons 1 … points, named ``name``.
@@ -74,5 +74,37 @@ export function createDrawFaces($, ui, onProgress = () => {}) {
       ui.loading = false;
       $("load-status").hidden = true;
     }
+  };
+}
+
+/**
+ * The shell's response-time clock: ``elapsed(shownAt)`` is the time in ms from ``shownAt`` (the
+ * ``performance.now()`` at which the faces were drawn) to the participant's click, tap or key
+ * press whose handler is running now, read from that input event's own ``timeStamp`` (when the
+ * browser received it), or to now when no input is being handled (a step sent by code). A page
+ * busy with other work (building the next identity's model ahead, a slow draw) can hold a click
+ * for a second or more before its handler runs; timing from the event keeps that wait out of the
+ * response time. Where the browser's event time is not on the page's clock (older browsers gave
+ * epoch milliseconds) or falls before ``shownAt``, the handler's time is used, as before.
+ * @param {EventTarget} root where the inputs are heard (the document)
+ * @param {AbortSignal} [signal] stops listening (a jsPsych trial's end)
+ * @returns {(shownAt: number) => number}
+ */
+export function responseClock(root, signal) {
+  /** @type {number | null} */
+  let inputAt = null;
+  /** @param {Event} event */
+  const heard = (event) => {
+    const at = event.timeStamp;
+    inputAt = at;
+    setTimeout(() => {
+      if (inputAt === at) inputAt = null; // that input's handlers have all run
+    }, 0);
+  };
+  for (const type of ["click", "keydown"]) root.addEventListener(type, heard, { capture: true, signal });
+  return (shownAt) => {
+    const now = performance.now();
+    const at = inputAt !== null && inputAt >= shownAt && inputAt <= now ? inputAt : now;
+    return Math.max(0, Math.round(at - shownAt));
   };
 }
