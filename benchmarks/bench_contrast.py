@@ -28,7 +28,9 @@ from emogen.appearance.identities import PRESETS
 from emogen.render.renderer import Renderer
 
 PRESET_NAMES = tuple(
-    f"{s}-{t}" for s in ("female", "male") for t in ("light", "medium", "dark", "dark-v2")
+    f"{s}-{t}"
+    for s in ("female", "male")
+    for t in ("light", "medium", "dark", "dark-v2", "dark-v3")
 )
 SIZE = 512
 RADIUS = 0.015  # of the image size
@@ -108,7 +110,7 @@ def main() -> None:
     print("Weber contrast of relative luminance, neutral face, 512², face framing")
     print(text)
     for sex in ("female", "male"):
-        for dark_name in (f"{sex}-dark", f"{sex}-dark-v2"):
+        for dark_name in (f"{sex}-dark", f"{sex}-dark-v2", f"{sex}-dark-v3"):
             light, dark = rows[f"{sex}-light"], rows[dark_name]
             for k in ("brow/forehead", "lip/skin", "mouth line/lip"):
                 print(f"{dark_name} {k}: {dark[k] / light[k]:.2f} × {sex}-light's")

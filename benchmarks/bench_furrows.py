@@ -69,7 +69,7 @@ def main() -> None:
         print(f"| {p} | " + " | ".join(f"{r[k]:.3f}" for k in keys) + " |")
     for sex in ("female", "male"):
         light = rows[f"{sex}-light"]
-        for name in (f"{sex}-dark", f"{sex}-dark-v2"):
+        for name in (f"{sex}-dark", f"{sex}-dark-v2", f"{sex}-dark-v3"):
             ratios = [rows[name][f"gain {s}"] / light[f"gain {s}"] for s in SIZES]
             print(
                 f"{name} gain: "

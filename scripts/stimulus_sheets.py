@@ -4,6 +4,7 @@ and the rig's six EMFACS core blocks at full weight) on the six identity presets
     python scripts/stimulus_sheets.py [OUT_FOLDER]     # default docs/images
     python scripts/stimulus_sheets.py docs/images --rigs   # rig 1 and rig 2 (the reach shapes)
     python scripts/stimulus_sheets.py docs/images --dark   # the dark presets and their -v2
+    python scripts/stimulus_sheets.py docs/images --v3     # the presets for new studies (-v3)
 
 "before": the flat look of EmoGen ≤ 0.2 (no textures, head-and-shoulders framing);
 "after": each preset's appearance and the face framing. 512² and the participant tile (256²).
@@ -92,6 +93,21 @@ def dark_sheets(out: Path) -> None:
         print(path)
 
 
+def v3_sheets(out: Path) -> None:
+    """The six presets for new studies (light, medium, dark-v3: deeper wrinkles) and the dark
+    presets' -v2 beside their -v3, rig 2, face framing, 512² and tile size:
+    stimuli_v3_face_SIZE.jpg and stimuli_dark_v3_face_SIZE.jpg."""
+    model = emogen.load_model()
+    new = tuple(f"{s}-{t}" for s in ("female", "male") for t in ("light", "medium", "dark-v3"))
+    dark = ("female-dark-v2", "female-dark-v3", "male-dark-v2", "male-dark-v3")
+    for tag, presets in (("v3", new), ("dark_v3", dark)):
+        for size, name in ((512, "512"), (256, "tile")):
+            path = out / f"stimuli_{tag}_face_{name}.jpg"
+            image = sheet(model, size, True, presets=presets)
+            Image.fromarray(image).save(path, quality=88, optimize=True)
+            print(path)
+
+
 def main() -> None:
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/images")
     if "--rigs" in sys.argv:
@@ -99,6 +115,9 @@ def main() -> None:
         return
     if "--dark" in sys.argv:
         dark_sheets(out)
+        return
+    if "--v3" in sys.argv:
+        v3_sheets(out)
         return
     if "--tag" in sys.argv:
         textured_sheets(out, sys.argv[sys.argv.index("--tag") + 1])

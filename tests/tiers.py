@@ -55,6 +55,7 @@ SLOW: dict[str, str] = {
     "tests/model/test_model_hash.py::test_a_cut_neutral_mesh_is_named_against_the_pinned_manifest": f"{_SECONDS}: 3.8",
     "tests/render/test_cli.py::test_identities_render_with_their_appearance": f"{_SECONDS}: 5.5",
     "tests/render/test_cli.py::test_render_rows_of_a_csv_with_options": f"{_SECONDS}: 3.2",
+    "tests/render/test_wrinkle_strength.py::test_wrinkle_strength_scales_the_furrows_and_leaves_unstrained_skin_alone": f"{_SECONDS}: 14.5 (paints a texture; load 13)",
     "tests/simulate/test_backends.py::test_corrected_simulation_is_the_same_in_a_process_pool_and_on_dask": f"{_SECONDS}: 9.4",
     "tests/simulate/test_backends.py::test_process_pool_gives_the_local_numbers": f"{_SECONDS}: 2.6 (starts a process pool)",
     "tests/simulate/test_tidy_outputs.py::test_analysis_tables_are_long_with_identifier_headers": f"{_SECONDS}: 5.7",

@@ -30,7 +30,7 @@ def test_record_rebuilds_the_same_appearance_and_key() -> None:
 
 
 def test_six_presets_two_sexes_three_tones() -> None:
-    six = [n for n in PRESETS if "-" in n and not n.endswith("-v2")]
+    six = [n for n in PRESETS if "-" in n and not n.endswith(("-v2", "-v3"))]
     assert sorted(six) == sorted(
         f"{s}-{t}" for s in ("female", "male") for t in ("light", "medium", "dark")
     )
@@ -66,6 +66,20 @@ def test_dark_presets_keep_their_look_and_v2_darkens_only_the_lips_and_brows() -
         assert diff == changed
     with pytest.raises(ConfigError, match=r"'lip_depth'.*0.9"):
         appearance_from_dict({"lip_depth": 0.9})
+
+
+def test_v3_dark_presets_are_v2_with_deeper_wrinkles_only() -> None:
+    """``-v3`` changes the wrinkle strength of the ``-v2`` faces and nothing else; every other
+    preset keeps the strength of earlier versions (1)."""
+    for sex, strength in (("female", 2.0), ("male", 1.6)):
+        old, new = PRESETS[f"{sex}-dark-v2"], PRESETS[f"{sex}-dark-v3"]
+        assert new.shape == old.shape
+        diff = {k: v for k, v in new.appearance.record().items() if old.appearance.record()[k] != v}
+        assert diff == {"wrinkle_strength": strength}
+    assert all(p.appearance.wrinkle_strength == 1.0 for n, p in PRESETS.items() if "-v3" not in n)
+    for bad in (3.5, -0.1):
+        with pytest.raises(ConfigError, match=rf"'wrinkle_strength'.*{bad}"):
+            appearance_from_dict({"wrinkle_strength": bad})
 
 
 def test_lab_identity_from_a_table() -> None:

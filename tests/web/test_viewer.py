@@ -197,6 +197,40 @@ def test_corrected_prototypes_agree_with_offscreen(chromium: Any, site: Site, ic
     context.close()
 
 
+def test_wrinkle_strength_reaches_the_viewer(chromium: Any, site: Site, ict_model) -> None:  # type: ignore[no-untyped-def]
+    """female-dark-v3 (wrinkle_strength 2): its GLB records the strength with its appearance,
+    the page's material applies it, and the corrected angry face agrees with the offscreen
+    renderer's within the limits above. Where the strength shows (pixels the offscreen faces at
+    strength 1 and 2 differ by > 4 levels: the furrows), the page is far closer to strength 2
+    than to 1 — a page that ignored the GLB's strength would draw strength 1."""
+    from emogen.correct import correct_faces
+    from emogen.render.gl import downsample
+
+    name = "female-dark-v3"
+    vs.export_site_glb(ict_model, site.folder / f"{name}.glb", name)
+    model, appearance = vs.identity_model(ict_model, name)
+    assert appearance.wrinkle_strength == 2.0
+    rig = model.rig
+    w = np.array([rig.weights_from_names({g: 1.0 for g in rig.emotions["angry"].core})])
+    r = correct_faces(model, w)
+    full = np.concatenate([r.weights, r.correctives], axis=1)
+    context, page, _ = open_viewer(
+        chromium, site, f"?faces=1&size=512&columns=1&model={name}.glb", width=600, scale=2
+    )
+    with vs.offscreen_renderer(ict_model, 512, name=name, supersample=2) as off:
+        strong = off.render(w, correct=True).astype(int)[0]
+        off._gl.set_wrinkle_strength(1.0)  # the same painted skin at the old strength
+        plain = off.render(w, correct=True).astype(int)[0]
+    page.evaluate("w => window.emogen.setFaces([w])", full[0].tolist())
+    shot = downsample(screenshot(page.locator(".face").first), 2).astype(int)
+    assert_agrees(shot, strong, 0)
+    furrows = np.abs(strong - plain).max(-1) > 4
+    assert furrows.sum() > 200, furrows.sum()
+    near, far = (np.abs(shot - x)[furrows].mean() for x in (strong, plain))
+    assert near < 0.5 * far, (near, far)
+    context.close()
+
+
 def test_oval_framing_agrees_with_offscreen(chromium: Any, site: Site, ict_model) -> None:  # type: ignore[no-untyped-def]
     """framing=oval: the page lays look.json's oval over each face (CSS), the offscreen
     renderer masks its images (emogen.render.images.apply_oval); same face, same limits as

@@ -1,7 +1,8 @@
 """Identities: a shape (the rig's identity preset or coefficients) plus an appearance.
 
 Six ready presets cross two sexes with three Monk skin tones (light 2, medium 5, dark 8);
-``female-dark-v2`` and ``male-dark-v2`` are the dark ones with readable lips, for new studies.
+``female-dark-v3`` and ``male-dark-v3`` are the dark ones for new studies: readable lips (as
+``-v2``) and anger's furrows as visible as on the light presets.
 The rig's shape-only names keep working — ``generic``, ``male``, ``female`` — with a default
 appearance of their sex at the medium tone. A lab defines its own in the study TOML::
 
@@ -65,21 +66,24 @@ def _male(tone: float) -> Appearance:
     )
 
 
+# Versioned dark presets for new studies (docs/appearance.md, Contrast): -v2, the lips and brows
+# as readable against the skin as on the light presets (≥ 0.7 × their Weber contrast); -v3, the
+# -v2 faces with deeper wrinkles and folds, so anger's glabellar furrows add ≥ 0.7 × the light
+# preset's contrast (Anger's furrows; benchmarks/bench_furrows.py). The older names keep their
+# look, so studies recorded with them replay unchanged.
+_FEMALE_DARK_V2 = _female(TONES["dark"]).model_copy(update={"lip_depth": 0.15, "brow_density": 1.0})
+_MALE_DARK_V2 = _male(TONES["dark"]).model_copy(update={"lip_colour": 1.0, "lip_depth": 0.2})
+
 PRESETS: dict[str, Identity] = {
     **{f"female-{k}": Identity(shape="female", appearance=_female(v)) for k, v in TONES.items()},
     **{f"male-{k}": Identity(shape="male", appearance=_male(v)) for k, v in TONES.items()},
-    # Versioned dark presets for new studies (docs/appearance.md, Contrast): the lips and brows
-    # as readable against the skin as on the light presets (≥ 0.7 × their Weber contrast). The
-    # unversioned names keep their look, so studies recorded with them replay unchanged.
-    "female-dark-v2": Identity(
-        shape="female",
-        appearance=_female(TONES["dark"]).model_copy(
-            update={"lip_depth": 0.15, "brow_density": 1.0}
-        ),
+    "female-dark-v2": Identity(shape="female", appearance=_FEMALE_DARK_V2),
+    "male-dark-v2": Identity(shape="male", appearance=_MALE_DARK_V2),
+    "female-dark-v3": Identity(
+        shape="female", appearance=_FEMALE_DARK_V2.model_copy(update={"wrinkle_strength": 2.0})
     ),
-    "male-dark-v2": Identity(
-        shape="male",
-        appearance=_male(TONES["dark"]).model_copy(update={"lip_colour": 1.0, "lip_depth": 0.2}),
+    "male-dark-v3": Identity(
+        shape="male", appearance=_MALE_DARK_V2.model_copy(update={"wrinkle_strength": 1.6})
     ),
     "generic": Identity(shape="generic", appearance=Appearance()),
     "female": Identity(shape="female", appearance=_female(TONES["medium"])),

@@ -78,6 +78,10 @@ class Appearance(BaseModel):
     #: how much darker the vermilion is than its colour alone gives, 0 … 0.6: on dark skin the
     #: colour alone leaves the lips close to the skin's luminance (docs/appearance.md, Contrast)
     lip_depth: Annotated[float, Field(ge=0.0, le=0.6)] = 0.0
+    #: the depth and shade of the wrinkles and folds the skin's strain makes (glabellar furrows,
+    #: forehead lines, crow's feet), × this, 0 … 3 (1: the look of every earlier version): the
+    #: same furrow is a smaller luminance step on dark skin (docs/appearance.md, Anger's furrows)
+    wrinkle_strength: Annotated[float, Field(ge=0.0, le=3.0)] = 1.0
     #: seed of the procedural detail (mottling, hair strokes)
     seed: Annotated[int, Field(ge=0, lt=2**32)] = 0
 

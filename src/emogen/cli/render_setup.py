@@ -59,8 +59,8 @@ IdentityOpt = Annotated[
     typer.Option(
         "--identity",
         help="Identity: shape and appearance (skin tone, brows, lips, hair). Presets: "
-        "female-light, female-medium, female-dark-v2, male-light, male-medium, male-dark-v2 "
-        "(female-dark, male-dark: the older dark looks, paler lips); "
+        "female-light, female-medium, female-dark-v3, male-light, male-medium, male-dark-v3 "
+        "(female-dark, male-dark, …-v2: the older dark looks, paler lips, fainter wrinkles); "
         "generic, male, female (medium tone); or a shape preset of the rig. Default: generic.",
     ),
 ]

@@ -165,6 +165,7 @@ class GLRenderer:
             program["u_camera"].value = tuple(cam.position)
         self._albedo_is_default = True
         self.set_textures(None)
+        self.set_wrinkle_strength(1.0)
 
     def set_textures(self, skin: np.ndarray | None, detail: np.ndarray | None = None) -> None:
         """The skin atlas (H, W, 3) and detail tile (D, D, 3) uint8, row 0 at glTF v = 0
@@ -189,6 +190,13 @@ class GLRenderer:
                     if name in program:  # a uniform the compiler dropped is not there
                         program[name].value = value
             self._textured = skin is not None
+
+    def set_wrinkle_strength(self, strength: float) -> None:
+        """The identity's ``wrinkle_strength`` (shade.glsl's ``emogenWrinkleStrength``)."""
+        with self.ctx:
+            for program in self.programs.values():
+                if "emogenWrinkleStrength" in program:
+                    program["emogenWrinkleStrength"].value = float(strength)
 
     def set_albedo(self, albedo: np.ndarray | None) -> None:
         """Per-vertex linear RGB base colours (V, 3) in place of the look's colours and the skin

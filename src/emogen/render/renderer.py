@@ -84,6 +84,7 @@ class Renderer:
                 model, appearance, irradiance=self.look.front_irradiance()
             )
             self._gl.set_textures(self.textures.albedo, self.textures.detail)
+            self._gl.set_wrinkle_strength(appearance.wrinkle_strength)
 
     def _target_delta(self, k: int) -> np.ndarray:
         """Morph target ``k``'s displacement at the drawn vertices: the shapes, then the

@@ -101,8 +101,8 @@ class StudyConfig(_Strict):
     seed: Annotated[int, Field(ge=0, lt=2**63)] | None = None
     emotions: tuple[str, ...] = Field(default=("happy",), min_length=1)
     repetitions: Annotated[int, Field(ge=1, le=100)] = 1
-    #: Identities, each crossed with every emotion: presets (female-light, female-medium,
-    #: female-dark, male-light, male-medium, male-dark; generic, male, female) or the lab's own.
+    #: Identities, each crossed with every emotion: presets (female-light, …, female-dark-v3,
+    #: male-…; older: female-dark, …-v2, generic; docs/study.md) or the lab's own.
     identities: tuple[str, ...] = Field(default=("generic",), min_length=1)
     #: The lab's own identities, ``[identity.NAME]`` tables: ``shape`` (generic, a rig preset or
     #: identity coefficients) plus any :class:`~emogen.appearance.Appearance` key.

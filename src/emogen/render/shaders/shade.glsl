@@ -18,7 +18,9 @@
 // Textures (skin and eye-socket parts, when emogenTextured > 0.5): emogenSkin, the identity's skin atlas
 // (SKIN_TILES tiles side by side, sRGB); emogenDetail, a tileable micro-relief (R height,
 // G roughness) repeated DETAIL_TILES times per tile. Both are sampled unconditionally (mipmap
-// derivatives need uniform control flow) and used only on skin.
+// derivatives need uniform control flow) and used only on skin. emogenWrinkleStrength: the
+// identity's wrinkle_strength (emogen.appearance.Appearance; 1 the look of every earlier
+// version), scaling the depth and shade of the strain wrinkles and folds.
 
 // Which kinds of part a draw holds: the offscreen renderer compiles one program per draw group
 // with the kinds its triangles have (gl.py); the browser's one material keeps both. A software
@@ -34,6 +36,7 @@
 uniform sampler2D emogenSkin;
 uniform sampler2D emogenDetail;
 uniform float emogenTextured;
+uniform float emogenWrinkleStrength;
 
 vec3 emogenToLinear(vec3 c) {
     vec3 lo = c / 12.92;
@@ -189,12 +192,12 @@ vec3 emogenShade(float part, vec3 albedo, vec3 surface, vec3 pos, vec3 n, vec3 v
 #if EMOGEN_SKIN
     vec3 skin = texture(emogenSkin, vec2(uv.x / SKIN_TILES, uv.y)).rgb;
     vec3 detail = texture(emogenDetail, uv * DETAIL_TILES).rgb;
-    vec2 wrinkle = emogenWrinkles(uv, strain);
+    vec2 wrinkle = emogenWrinkleStrength * emogenWrinkles(uv, strain);
     vec3 bumped = emogenBump(pos, n, (detail.r - 0.5) * DETAIL_BUMP_CM - wrinkle.x);
     bool textured = emogenTextured > 0.5
         && (abs(part - PART_SKIN) < 0.5 || abs(part - PART_EYE_SOCKET) < 0.5);
     if (textured) {
-        albedo = emogenToLinear(skin) * (1.0 - wrinkle.y);
+        albedo = emogenToLinear(skin) * max(1.0 - wrinkle.y, 0.0);
         surface.x *= 1.0 + DETAIL_SPECULAR * (2.0 * detail.g - 1.0);
         n = bumped;
     }

@@ -62,8 +62,9 @@ function makeCamera(c = look.framings[look.framing]) {
 // The identity's skin atlas and detail tile from the GLB (asset.extras.emogen.textures), set up
 // as emogen.render.gl.GLRenderer.set_textures: trilinear mipmaps, the atlas clamped, the tile
 // repeated, texels passed as they are (shade.glsl linearises; no colour-space conversion, no
-// flip: row 0 is glTF v = 0). Null when the GLB has none.
-async function skinTextures(gltf, indices) {
+// flip: row 0 is glTF v = 0). Null when the GLB has none. wrinkleStrength: the identity's
+// (asset.extras.emogen.appearance.wrinkle_strength; 1 in GLBs written before it existed).
+async function skinTextures(gltf, indices, appearance) {
   if (!indices) return null;
   const [skin, detail] = await Promise.all(
     [indices.skin, indices.detail].map((i) => gltf.parser.getDependency('texture', i)),
@@ -78,7 +79,7 @@ async function skinTextures(gltf, indices) {
     t.anisotropy = 1;
     t.needsUpdate = true;
   }
-  return { skin, detail };
+  return { skin, detail, wrinkleStrength: appearance?.wrinkle_strength ?? 1 };
 }
 
 export class FaceGrid {
@@ -115,7 +116,7 @@ export class FaceGrid {
     const extras = gltf.asset?.extras?.emogen ?? {};
     this.asset = gltf.asset;
     if (extras.camera) this.camera = makeCamera(extras.camera);
-    const textures = await skinTextures(gltf, extras.textures);
+    const textures = await skinTextures(gltf, extras.textures, extras.appearance);
     this.textured = textures !== null;
     gltf.scene.updateMatrixWorld(true);
     const meshes = [];

@@ -92,9 +92,9 @@ void main() {
 
 /**
  * A material for one primitive whose vertices belong to `part` (a look.json part).
- * textures: {skin, detail} three.js Textures of the identity (see skinTextures in faces.js),
- * or null: every part in its flat look.json colour. strain: the primitive's {texture, vertices}
- * from strainTexture (strain.js), or null: unstrained.
+ * textures: {skin, detail} three.js Textures of the identity and its wrinkleStrength (see
+ * skinTextures in faces.js), or null: every part in its flat look.json colour. strain: the
+ * primitive's {texture, vertices} from strainTexture (strain.js), or null: unstrained.
  */
 export function faceMaterial(part, eyeCentres, nShapes, textures = null, strain = null, codes = null) {
   const blended = part.opacity < 1 || part.fringe_cm > 0;
@@ -120,6 +120,7 @@ export function faceMaterial(part, eyeCentres, nShapes, textures = null, strain 
       emogenSkin: { value: textures?.skin ?? null },
       emogenDetail: { value: textures?.detail ?? null },
       emogenTextured: { value: textures ? 1 : 0 },
+      emogenWrinkleStrength: { value: textures?.wrinkleStrength ?? 1 },
       uStrain: { value: strain?.texture ?? null },
       uStrainVertices: { value: textures && strain ? strain.vertices : 0 },
     },
