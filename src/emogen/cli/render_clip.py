@@ -82,7 +82,7 @@ def read_curves(path: Path, rig: Rig, select: list[str] | None) -> tuple[np.ndar
     faces = table.groupby(keys).ngroups if keys else 1
     if faces > 1:
         raise ConfigError(
-            f"{path.name} holds {faces} faces ({', '.join(keys)} differ); pick one with "
+            f"{path.name} holds {faces} faces (told apart by {', '.join(keys)}); pick one with "
             "--select COLUMN=VALUE, e.g. --select session_id=1 --select generation=3 "
             "--select face_id=2"
         )
