@@ -53,6 +53,7 @@ SLOW: dict[str, str] = {
     "tests/model/test_gltf.py::test_model_glb_without_correctives_has_shape_targets_only": f"{_SECONDS}: 3.4",
     "tests/model/test_ict.py::test_every_one_hot_reproduces_its_obj": f"{_SECONDS}: 12.4",
     "tests/model/test_model_hash.py::test_a_cut_neutral_mesh_is_named_against_the_pinned_manifest": f"{_SECONDS}: 3.8",
+    "tests/render/test_clip.py::test_frames_are_the_curves_faces_and_the_same_every_time": f"{_SECONDS}: 32",
     "tests/render/test_cli.py::test_identities_render_with_their_appearance": f"{_SECONDS}: 5.5",
     "tests/render/test_cli.py::test_render_rows_of_a_csv_with_options": f"{_SECONDS}: 3.2",
     "tests/render/test_wrinkle_strength.py::test_wrinkle_strength_scales_the_furrows_and_leaves_unstrained_skin_alone": f"{_SECONDS}: 14.5 (paints a texture; load 13)",

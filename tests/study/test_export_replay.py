@@ -145,7 +145,7 @@ def test_migrations_are_idempotent_and_match_the_models(db_url: str) -> None:
 
     store = Store(db_url)
     store.migrate()  # a second upgrade does nothing
-    assert current_revision(store.engine) == "0004"
+    assert current_revision(store.engine) == "0005"
     # the migrations make the study's tables and the built-in tasks' (a task of a lab's own, or
     # a test's toy task, brings tables the store creates: they are not the migrations' to make)
     study_tables = {"studies", "sessions", "trials", "steps", "researcher_failures"}

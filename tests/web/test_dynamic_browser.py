@@ -184,7 +184,9 @@ def test_a_participant_evolves_a_moving_face(
         rows = sel[sel.generation == generation].sort_values("rank")
         assert rows.face_id.tolist() == [elite, *others]
         assert (rows.load_ms > 0).all() and (rows.client_response_ms > 0).all()
+        assert rows.fallback.tolist() == [False] * len(rows)  # the 3D viewer showed them
     assert tables["evolve_ratings"].value.tolist() == [5]
+    assert tables["evolve_ratings"].fallback.tolist() == [False]
     first = faces[faces.generation == 0].sort_values("position")
     genes = first[[c for c in first.columns if c.startswith("g_")]].to_numpy()
     assert [m > 0.05 for m in moved] == (genes.max(axis=1) > 0).tolist(), moved
@@ -203,7 +205,7 @@ def test_without_webgl_the_tiles_flip_through_strips_of_frames(
 ) -> None:
     """``?render=png`` (as a browser without WebGL 2): each moving face is the server's strip of
     11 frames, shown a frame at a time, in sync; the slider holds one; the page says "png"."""
-    server, _ = site
+    server, db_url = site
     context = browser.new_context(viewport={"width": 1366, "height": 768})
     context.add_init_script(CSP_PROBE)
     page = context.new_page()
@@ -243,3 +245,7 @@ def test_without_webgl_the_tiles_flip_through_strips_of_frames(
     assert page.evaluate("window.emogenStudy.display") == "png"
     assert errors == [] and page.evaluate("window.__cspViolations") == []
     context.close()
+    store = Store(db_url)  # the selection says the strips showed its faces
+    sel = export_tables(store)["selections"]
+    assert sel[sel.participant_id == "mover-png"].fallback.tolist() == [True]
+    store.dispose()

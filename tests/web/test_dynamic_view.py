@@ -103,6 +103,10 @@ def test_the_page_is_sent_what_the_records_play(db_url: str, ict_model: Any) -> 
                 np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
                 moving += want[:, : ict_model.n_shapes].max() > 0.1
             assert moving >= 8  # generation 0's faces move (a blank one may stand still)
+            # a reload reads the population back from the database: the same faces, the same
+            # motion, number for number, as the step's answer (made from the faces in memory)
+            again = client.get(f"/api/s/{token}/state").json()
+            assert again["view"]["population"]["faces"] == faces
             # the server's image of a moving face: the strip of its frames
             mover = next(f for f in faces if max(f["weights"]) > 0.3)
             png = client.get(f"/api/s/{token}/faces/{mover['id']}.png?trial=0&attempt=0")
@@ -120,6 +124,7 @@ def test_the_page_is_sent_what_the_records_play(db_url: str, ict_model: Any) -> 
                               "attempt": 0, "generation": generation, "elite": ids[0],
                               "others": []})  # fmt: skip
             assert "motion" in state["view"]["rating"]["face"]
+            assert client.get(f"/api/s/{token}/state").json()["view"] == state["view"]
             state = step({"command": "rate", "key": "key-rate-0000000", "trial": 0, "value": 4})
             # the static block's faces stand still, and their image is one face
             faces = state["view"]["population"]["faces"]

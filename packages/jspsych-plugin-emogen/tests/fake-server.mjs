@@ -11,9 +11,9 @@ const POSITION = ["key", "trial", "attempt", "generation"];
 /** Each command's fields (besides "command"), as the API's command union has them. */
 const COMMANDS = {
   begin: ["key"],
-  select: [...POSITION, "elite", "others", ...TIMES],
-  restart: [...POSITION, ...TIMES],
-  rate: ["key", "trial", "value", "response_ms"],
+  select: [...POSITION, "elite", "others", ...TIMES, "fallback"],
+  restart: [...POSITION, ...TIMES, "fallback"],
+  rate: ["key", "trial", "value", "response_ms", "fallback"],
   answer: ["key", "trial", "label", "intensity", "confidence", ...TIMES],
 };
 const ACCEPTS = { evolve: ["select", "restart", "rate"], categorise: ["answer"] };

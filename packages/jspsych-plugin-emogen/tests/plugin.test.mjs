@@ -108,6 +108,8 @@ test("an evolve and a categorise trial run on one session; their data are what w
   assert.equal(evolve.final_face_id, 99);
   assert.equal(evolve.emotion, "happy"); // from the trial record's evolve result
   assert.equal(evolve.display, "png");
+  // every evolve step says the server's images showed its faces (recorded with the step)
+  assert.deepEqual(evolveBodies(steps).map((b) => b.fallback), [true, true, true]);
   assert.ok(evolve.first_faces_ms >= 0 && evolve.duration_ms >= evolve.first_faces_ms);
   // rt: jsPsych's response time — the trial's responses' times summed (loading excluded)
   const evolveSteps = steps.filter((r) => ["select", "rate"].includes(r.body.command));
@@ -427,3 +429,8 @@ test("simulate visual: the tasks' observers drive the real screens through the s
   const commands = fake.log.filter((r) => r.path.endsWith("/step")).map((r) => r.body.command);
   assert.deepEqual(commands, ["begin", "select", "select", "rate", "answer"]);
 });
+
+/** The bodies of the evolve steps sent (select, restart, rate), in order. @param {any[]} steps */
+function evolveBodies(steps) {
+  return steps.map((r) => r.body).filter((b) => ["select", "restart", "rate"].includes(b.command));
+}

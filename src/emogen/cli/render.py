@@ -5,6 +5,7 @@ emogen render --weight jawOpen=1 --identity male-dark --framing head --out b.png
 emogen render --weights faces.csv --out faces/          (one PNG per row)
 emogen render sheet --weights faces.csv --out sheet.png
 emogen render heatmap --weight jawOpen=1 --reference-weight jawOpen=0.5 --out heat.png
+emogen render clip face_curves.csv --select face_id=3 --out clip.webp --sheet keys.png
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from emogen.cli.options import (
     show_result,
 )
 from emogen.cli.outputs import ForceOpt, check_out_folder, output_folder
+from emogen.cli.render_clip import clip
 from emogen.cli.render_setup import (
     BackgroundOpt,
     CorrectOpt,
@@ -56,8 +58,10 @@ if TYPE_CHECKING:
 PngOutOpt = Annotated[Path, typer.Option("--out", "-o", help="PNG file.")]
 
 render_app = typer.Typer(
-    help="Render faces to PNG (offscreen OpenGL): one face, a contact sheet, an error heatmap.",
+    help="Render faces to PNG (offscreen OpenGL): one face, a contact sheet, an error heatmap, "
+    "a face that moves (an animation, its frames, a sheet of key frames).",
 )
+render_app.command("clip")(friendly_errors(clip))
 
 
 @render_app.callback(invoke_without_command=True)

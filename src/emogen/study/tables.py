@@ -61,7 +61,10 @@ __all__ = [
 #: 6 (exports only): tables named by their task (``responses`` → ``categorise_responses``,
 #: ``ratings`` → ``evolve_ratings``), the ``final_faces`` table, ``trials.emotion`` and
 #: ``final_face_id`` NA for trials that make no face. Exports of schema 5 still analyse and replay.
-SCHEMA_VERSION = "emogen.study/6"
+#: 7: ``selections``, ``restarts`` and ``ratings`` (``evolve_ratings``) say which display the
+#: page had (``fallback``: the server's images, not the 3D viewer; NA before). Records and
+#: exports of schema 6 still open, analyse and replay.
+SCHEMA_VERSION = "emogen.study/7"
 
 
 class StudyRow(Base):

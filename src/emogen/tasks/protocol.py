@@ -78,10 +78,12 @@ class Command(BaseModel):
 
     def payload(self) -> dict[str, Any]:
         """What the request held besides its key and name (hashed to tell a replayed key from a
-        reused one); ``load_ms`` only when given, as keys recorded before it was sent."""
+        reused one); the page's facts added later (``load_ms``, ``fallback``) only when given,
+        as keys recorded before they were sent."""
         data = self.model_dump(exclude={"key", "command"})
-        if data.get("load_ms", 0) is None:
-            del data["load_ms"]
+        for later in ("load_ms", "fallback"):
+            if data.get(later, 0) is None:
+                del data[later]
         return data
 
 

@@ -43,8 +43,8 @@ def dumps(value: Any) -> str:
     return json.dumps(value, separators=(",", ":"))
 
 
-def numbers_json(values: list[float]) -> str:
-    """A list of finite numbers as compact JSON (orjson: the same shortest round-trip decimals
+def numbers_json(values: list[Any] | None) -> str:
+    """A list of finite numbers (or nested lists of them, or None) as compact JSON (orjson: the same shortest round-trip decimals
     as Python's ``repr``, several times faster; it would write NaN as null, so callers pass
     finite numbers only)."""
     return orjson.dumps(values).decode()

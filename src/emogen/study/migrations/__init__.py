@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 HERE = Path(__file__).resolve().parent
 #: The newest revision in ``versions/`` (a test checks it against Alembic's own head): a
 #: database already there is opened without importing Alembic (~10 MB, ~0.1 s per process).
-HEAD = "0004"
+HEAD = "0005"
 # Serialises concurrent upgrades on PostgreSQL (two servers starting at once).
 _PG_LOCK_ID = 0x456D6F47656E  # "EmoGen"
 

@@ -108,6 +108,7 @@ def selection_rows(rec: Records) -> Iterator[Row]:
                 "server_response_ms": sel.server_response_ms,
                 "load_ms": sel.load_ms,
                 "client_response_ms": sel.client_response_ms,
+                "fallback": sel.fallback,
                 "step_key": sel.step_key,
                 **rec.trial_stamp(t),
             }
@@ -126,6 +127,7 @@ def restart_rows(rec: Records) -> Iterator[Row]:
             "server_response_ms": r.server_response_ms,
             "load_ms": r.load_ms,
             "client_response_ms": r.client_response_ms,
+            "fallback": r.fallback,
             "step_key": r.step_key,
             **rec.trial_stamp(t),
         }
@@ -144,6 +146,7 @@ def rating_rows(rec: Records) -> Iterator[Row]:
             "submitted_at": iso(rt.submitted_at),
             "server_response_ms": rt.server_response_ms,
             "client_response_ms": rt.client_response_ms,
+            "fallback": rt.fallback,
             "step_key": rt.step_key,
             **rec.trial_stamp(t),
         }
@@ -208,13 +211,16 @@ SELECTIONS = ExportTable(
     TRIAL_KEY
     + typed_columns(
         "attempt:int generation:int face_id:int role:str rank:int n_selected:int shown_at:time "
-        f"{_TIMING} step_key:str"
+        f"{_TIMING} fallback:bool step_key:str"
     ),
     selection_rows,
 )
 RESTARTS = ExportTable(
     "restarts",
-    TRIAL_KEY + typed_columns(f"attempt:int generation:int shown_at:time {_TIMING} step_key:str"),
+    TRIAL_KEY
+    + typed_columns(
+        f"attempt:int generation:int shown_at:time {_TIMING} fallback:bool step_key:str"
+    ),
     restart_rows,
 )
 EVOLVE_RATINGS = ExportTable(
@@ -222,7 +228,7 @@ EVOLVE_RATINGS = ExportTable(
     TRIAL_KEY
     + typed_columns(
         "emotion:str identity:str face_id:int value:int points:int submitted_at:time "
-        "server_response_ms:float client_response_ms:float step_key:str"
+        "server_response_ms:float client_response_ms:float fallback:bool step_key:str"
     ),
     rating_rows,
     formerly="ratings",

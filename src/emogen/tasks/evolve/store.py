@@ -37,6 +37,10 @@ class ShownPopulation:
     faces: list[FaceView]
     #: the trial's row, as the step left it
     trial: TrialRow | None = field(default=None, compare=False)
+    #: its stored row's id, and a dynamic population's curves as stored (each face's timing
+    #: (K, 5) and keyframe correctives (F, C) or None), so the view reads nothing back
+    population_id: int | None = field(default=None, compare=False)
+    curves: list[tuple[np.ndarray, np.ndarray | None]] | None = field(default=None, compare=False)
 
 
 def new_engine(env: TaskEnv, row: TrialRow) -> Engine:
@@ -97,27 +101,38 @@ def store_population(db: Session, trial: TrialRow, population: Population) -> Sh
             for i in range(len(population))
         ],
     )
-    if dynamic:
-        _store_curves(db, pop_id, population)
+    curves = _store_curves(db, pop_id, population) if dynamic else None
     faces = [FaceView(id=i, weights=w) for i, w in zip(ids, weights, strict=True)]
-    return ShownPopulation(trial.id, population.attempt, population.generation, faces, trial)
+    return ShownPopulation(
+        trial.id, population.attempt, population.generation, faces, trial, pop_id, curves
+    )
 
 
-def _store_curves(db: Session, pop_id: int, population: Population) -> None:
-    """A dynamic population's curves: each face's timing and keyframe correctives."""
+def _store_curves(
+    db: Session, pop_id: int, population: Population
+) -> list[tuple[np.ndarray, np.ndarray | None]]:
+    """A dynamic population's curves: each face's timing and keyframe correctives (orjson: the
+    same shortest round-trip decimals as ``json``; ``json.dumps`` of a population's keyframes,
+    ten faces × 21 × 77 numbers, took 3–10 ms of a step, benchmarks/bench_step.py --dynamic).
+    Returns them per face, as stored."""
     keyed = population.keyframe_correctives
+    curves = [
+        (population.genes[i, :, 1:], None if keyed is None else keyed[i])
+        for i in range(len(population))
+    ]
     db.execute(
         _INSERT_CURVES,
         [
             {
                 "population_id": pop_id,
                 "position": i,
-                "timing": json.dumps(population.genes[i, :, 1:].tolist()),
-                "keyframe_correctives": json.dumps(None if keyed is None else keyed[i].tolist()),
+                "timing": numbers_json(timing.tolist()),
+                "keyframe_correctives": numbers_json(None if k is None else k.tolist()),
             }
-            for i in range(len(population))
+            for i, (timing, k) in enumerate(curves)
         ],
     )
+    return curves
 
 
 _POPULATION_AT = select(PopulationRow).where(

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sqlalchemy import Float, ForeignKey, Integer, String, Text, UniqueConstraint
+from sqlalchemy import Boolean, Float, ForeignKey, Integer, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from emogen.tasks.records import Base, Stamp
@@ -82,6 +82,8 @@ class SelectionRow(Base):
     client_response_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
     #: The page's load time of the population (ms), if it reported it (schema 2).
     load_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
+    #: The page showed the server's images, not the 3D viewer (schema 7; None: not reported).
+    fallback: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
     step_key: Mapped[str] = mapped_column(String(64))
 
 
@@ -98,6 +100,8 @@ class RestartRow(Base):
     client_response_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
     #: The page's load time of the population (ms), if it reported it (schema 2).
     load_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
+    #: The page showed the server's images, not the 3D viewer (schema 7; None: not reported).
+    fallback: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
     step_key: Mapped[str] = mapped_column(String(64))
 
 
@@ -114,4 +118,6 @@ class RatingRow(Base):
     submitted_at: Mapped[datetime] = mapped_column(Stamp)
     server_response_ms: Mapped[float] = mapped_column(Float)
     client_response_ms: Mapped[float | None] = mapped_column(Float, nullable=True)
+    #: The page showed the server's images, not the 3D viewer (schema 7; None: not reported).
+    fallback: Mapped[bool | None] = mapped_column(Boolean, nullable=True)
     step_key: Mapped[str] = mapped_column(String(64))

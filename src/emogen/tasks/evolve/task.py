@@ -62,7 +62,16 @@ from emogen.tasks.protocol import (
 from emogen.tasks.records import TrialRow, dumps, elapsed_ms, server_ms, utcnow
 
 
-class _Shown(TrialCommand):
+class _Seen(TrialCommand):
+    """A command about faces the page showed, and how it showed them."""
+
+    #: The page showed the server's images (no WebGL: a still face as a picture, a moving one
+    #: as the strip of its frames played a frame at a time) rather than the 3D viewer; None
+    #: when the page did not say (records made before it was sent).
+    fallback: bool | None = None
+
+
+class _Shown(_Seen):
     """A command about the generation shown: its attempt and generation (a stale page's are
     refused), and the page's time to draw it (``load_ms``)."""
 
@@ -88,7 +97,7 @@ class Restart(_Shown):
     command: Literal["restart"]
 
 
-class Rate(TrialCommand):
+class Rate(_Seen):
     """The satisfaction rating (1 … points) of the trial's final face."""
 
     command: Literal["rate"]
@@ -176,6 +185,7 @@ class EvolveTask:
                 server_response_ms=server_ms(now, pop.shown_at, cmd.load_ms),
                 client_response_ms=cmd.response_ms,
                 load_ms=cmd.load_ms,
+                fallback=cmd.fallback,
                 step_key=cmd.key,
             )
         )
@@ -202,6 +212,7 @@ class EvolveTask:
                 server_response_ms=server_ms(now, pop.shown_at, cmd.load_ms),
                 client_response_ms=cmd.response_ms,
                 load_ms=cmd.load_ms,
+                fallback=cmd.fallback,
                 step_key=cmd.key,
             )
         )
@@ -231,6 +242,7 @@ class EvolveTask:
                 submitted_at=now,
                 server_response_ms=elapsed_ms(now, last_selection_time(db, row.id)),
                 client_response_ms=cmd.response_ms,
+                fallback=cmd.fallback,
                 step_key=cmd.key,
             )
         )

@@ -79,24 +79,41 @@ def _moving(
 ) -> list[FaceView]:
     """Faces of a dynamic block with their ``motion`` (its stored curves: the faces' timing and
     keyframe correctives), the page's clip of each; ``at``: the first face's position."""
-    genome = env.block(row).genome()
-    if not isinstance(genome, DynamicGenome):
+    if not isinstance(env.block(row).genome(), DynamicGenome):
         return faces
     stored = db.scalars(
         select(FaceCurveRow).where(FaceCurveRow.population_id == population_id)
     ).all()
     by_position = {c.position: c for c in stored}
+    curves = []
+    for k in range(len(faces)):
+        curve = by_position[at + k]
+        keyed = json.loads(curve.keyframe_correctives)
+        curves.append(
+            (np.asarray(json.loads(curve.timing)), None if keyed is None else np.asarray(keyed))
+        )
+    return _with_motion(env, row, faces, curves)
+
+
+def _with_motion(
+    env: TaskEnv,
+    row: TrialRow,
+    faces: list[FaceView],
+    curves: list[tuple[np.ndarray, np.ndarray | None]],
+) -> list[FaceView]:
+    """Faces of a dynamic block with their ``motion`` from their curves (timing (K, 5) and
+    keyframe correctives (F, C) or None, as stored)."""
+    genome = env.block(row).genome()
+    if not isinstance(genome, DynamicGenome):
+        return faces
     expansion = env.ctx.rig.expansion_matrix(env.config.ga_for(row.identity).eye_motion)
     out: list[FaceView] = []
-    for k, face in enumerate(faces):
-        curve = by_position[at + k]
-        curves = shape_curves(genome, np.asarray(json.loads(curve.timing)), expansion)
-        keyframes = json.loads(curve.keyframe_correctives)
+    for face, (timing, keyed) in zip(faces, curves, strict=True):
         motion = {
             "clip_s": genome.clip_s,
             "hold_s": genome.hold_s,
-            "curves": curves.tolist(),
-            "keyframes": [] if keyframes is None else keyframes,
+            "curves": shape_curves(genome, timing, expansion).tolist(),
+            "keyframes": [] if keyed is None else keyed.tolist(),
         }
         out.append({**face, "motion": motion})  # type: ignore[typeddict-item]
     return out
@@ -131,16 +148,14 @@ def _population(env: TaskEnv, db: Session, row: TrialRow, shown: Any) -> Populat
         row.attempt,
         row.generation,
     ):
-        faces, pop_id = shown.faces, None
+        faces = shown.faces
+        if shown.curves is not None:  # the step's own population: nothing to read back
+            faces = _with_motion(env, row, faces, shown.curves)
     else:
         pop = population_at(db, row.id, row.attempt, row.generation, with_faces=True)
         if pop is None:
             return None
-        faces, pop_id = [_face(f.face_id, f.weights) for f in pop.faces], pop.id
-    if isinstance(env.block(row).genome(), DynamicGenome):
-        if pop_id is None:
-            pop_id = population_at(db, row.id, row.attempt, row.generation).id  # type: ignore[union-attr]
-        faces = _moving(env, db, row, pop_id, faces, 0)
+        faces = _moving(env, db, row, pop.id, [_face(f.face_id, f.weights) for f in pop.faces], 0)
     return {"attempt": row.attempt, "generation": row.generation, "faces": faces}
 
 

@@ -588,6 +588,8 @@ export interface components {
              * @enum {string}
              */
             command: "rate";
+            /** Fallback */
+            fallback?: boolean | null;
             /** Key */
             key: string;
             /** Response Ms */
@@ -639,6 +641,8 @@ export interface components {
              * @enum {string}
              */
             command: "restart";
+            /** Fallback */
+            fallback?: boolean | null;
             /** Generation */
             generation: number;
             /** Key */
@@ -682,6 +686,8 @@ export interface components {
             command: "select";
             /** Elite */
             elite: number;
+            /** Fallback */
+            fallback?: boolean | null;
             /** Generation */
             generation: number;
             /** Key */

@@ -261,12 +261,16 @@ function create(page) {
     return { trial: s.progress.trial, attempt: s.trial.attempt, generation: s.view.generation };
   }
 
+  // which display showed the faces (recorded with the step): the server's images (no WebGL:
+  // pictures, strips of frames for faces that move) or the 3D viewer
+  const shownBy = () => (ui.display ? { fallback: ui.display.kind === "png" } : {});
+
   $("grid").addEventListener("click", onGridClick);
   $("grid").addEventListener("keydown", onGridKey);
 
   $("next").addEventListener("click", () => {
     if (sel.elite === null || ui.busy) return;
-    page.step(selection.selectionBody(ui.state, sel, ui.key, page.elapsed(), ui.loadMs));
+    page.step({ ...selection.selectionBody(ui.state, sel, ui.key, page.elapsed(), ui.loadMs), ...shownBy() });
   });
 
   const slotAt = (pos) => cellsOf()[pos]?.querySelector(".slot");
@@ -285,7 +289,9 @@ function create(page) {
   $("restart").addEventListener("click", () => {
     if (ui.busy) return;
     if (!confirm("Start this face again from a new set of faces?")) return;
-    page.step({ command: "restart", key: ui.key, ...position(), response_ms: page.elapsed(), load_ms: ui.loadMs });
+    page.step({
+      command: "restart", key: ui.key, ...position(), response_ms: page.elapsed(), load_ms: ui.loadMs, ...shownBy(),
+    });
   });
 
   $("rating-scale").addEventListener("change", () => {
@@ -302,6 +308,7 @@ function create(page) {
       trial: ui.state.progress.trial,
       value: Number(checked.value),
       response_ms: page.elapsed(),
+      ...shownBy(),
     });
   });
 
