@@ -250,9 +250,10 @@ class StudyConfig(_Strict):
         if given:
             return config
         minutes = session_length(config.conditions(), config.ga.generations).words()
-        return config.model_copy(
-            update={"consent": default_consent(minutes, user_agent=config.collect_user_agent)}
-        )
+        consent = default_consent(minutes, user_agent=config.collect_user_agent)
+        # validated again with its consent (not a copy): ``StudyConfig(...)`` fills the instance
+        # it makes, and pydantic refuses a different object from a validator of ``__init__``
+        return handler({**data, "consent": consent})
 
     @model_validator(mode="before")
     @classmethod

@@ -44,7 +44,7 @@ class ReplayReport:
     #: (:func:`emogen.tasks.rounding.weight_deviation`): 0 on the recording machine, rounding
     #: (≤ WEIGHT_TOLERANCE) on another CPU
     weight_deviation: float = 0.0
-    #: what the tasks rebuilt and compared, by what it is (``{"gsp answers": 8}``)
+    #: what the tasks rebuilt and compared, by what it is (each task names its own kinds)
     checked: dict[str, int] = field(default_factory=dict)
     #: what could not be checked, each saying what and why: never counted as matching
     unchecked: list[str] = field(default_factory=list)

@@ -203,7 +203,7 @@ class ExportedStudy:
 class Replayed:
     """A trial's replay: what was checked and what differed (``deviation``: the largest
     weight deviation, :mod:`emogen.tasks.rounding`); ``checked``: what the task rebuilt and
-    compared, counted by what it is ("gsp answers"); ``unchecked``: what it could not check,
+    compared, counted by what it is ("label orders": 16); ``unchecked``: what it could not check,
     each saying what and why (a replay with any is not "ok": nothing unchecked passes)."""
 
     populations: int = 0
