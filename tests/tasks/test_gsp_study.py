@@ -277,6 +277,10 @@ def test_a_tampered_export_names_each_difference(piloted: dict[str, Any], tmp_pa
         ({"chains": 1}, "one chain per concept and 3 iterations per participant"),
         ({"chain_scope": "within", "aggregation": 2}, "aggregation = 2 averages answers"),
         (
+            {"aggregation": 2, "chains": 3, "iterations": 4},
+            "after 3 answers they would wait for other participants",
+        ),
+        (
             {"dimensions": ["jawOpen", "jawOpen"]},
             r"dimensions must not repeat genes; got \['jawOpen'\]",
         ),
