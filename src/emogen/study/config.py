@@ -251,8 +251,7 @@ class StudyConfig(_Strict):
             return config
         minutes = session_length(config.conditions(), config.ga.generations).words()
         consent = default_consent(minutes, user_agent=config.collect_user_agent)
-        # validated again with its consent (not a copy): ``StudyConfig(...)`` fills the instance
-        # it makes, and pydantic refuses a different object from a validator of ``__init__``
+        # validated again, not copied: StudyConfig(...) must get back the instance it fills
         return handler({**data, "consent": consent})
 
     @model_validator(mode="before")

@@ -193,7 +193,7 @@ class ExportedStudy:
         for sid, trials in self.trials_of(task).groupby("session_id", sort=True):
             why = (
                 f"session {sid}: its {len(trials)} {task} trials not checked: the export has "
-                f"no {', '.join(lacking)} table"
+                f"no {' or '.join(lacking)} table"
             )
             out[int(sid)] = [Replayed(unchecked=[why])]
         return out
