@@ -369,3 +369,33 @@ def test_within_scope_chains_are_each_participants_own(db_url: str, ict_model: A
         assert sorted(rows) == [(1, 0, 2), (1, 1, 2), (2, 0, 2), (2, 1, 2)]
     finally:
         store.dispose()
+
+
+def test_aggregated_nodes_replay_from_an_export(tmp_path: Path, ict_dir: Path) -> None:
+    """aggregation = 2: each node's value is the mean of two participants' answers; an export
+    replays, and a changed first answer of a node is named with the node's value it breaks."""
+    config = tmp_path / "agg.toml"
+    config.write_text(
+        STUDY.format(model=ict_dir).replace(
+            "chains = 3\niterations = 4", "chains = 2\niterations = 2\naggregation = 2"
+        )
+    )
+    url = f"sqlite:///{tmp_path / 'agg.sqlite'}"
+    run = CliRunner().invoke
+    args = ["study", "simulate", str(config), "-n", "4", "--seed", "1", "--database-url", url]
+    assert run(app, args).exit_code == 0
+    out = tmp_path / "export"
+    args = ["study", "export", "--database-url", url, "--out", str(out), "--format", "csv"]
+    assert run(app, args).exit_code == 0
+    table = pd.read_csv(out / "gsp_iterations.csv")
+    assert set(table["member"]) == {0, 1} and table["node_value"].notna().sum() == len(table) / 2
+    assert all(r["ok"] for r in _replay_export(out))
+    first = table[(table["member"] == 0) & (table["slider_value"] < 0.7)].iloc[0]
+    table.loc[first.name, "slider_value"] += 0.1
+    table.loc[first.name, "position"] += 1  # the answer itself changed: value and position
+    table.to_csv(out / "gsp_iterations.csv", index=False)
+    said = [m for r in _replay_export(out) for m in r["mismatches"]]
+    node = (table["chain_id"] == first.chain_id) & (table["iteration"] == first.iteration)
+    second = table[node & (table["member"] == 1)].iloc[0]
+    at = f"session {second.session_id} trial {second.trial + 1} "
+    assert any(m.startswith(at) and "node_value recorded" in m for m in said), said
