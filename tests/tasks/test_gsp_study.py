@@ -174,6 +174,99 @@ def test_replay_rebuilds_the_chains_and_names_a_tampered_answer(
     ), report["mismatches"]
 
 
+def _replay_export(folder: Path) -> list[dict[str, Any]]:
+    result = CliRunner().invoke(app, ["replay", "--from-export", str(folder), "--json"])
+    assert result.exit_code in (0, 1), result.output
+    return list(json.loads(result.output))
+
+
+@pytest.mark.parametrize("fmt", ["out", "pq"])
+def test_an_export_replays_every_chain_with_counts(piloted: dict[str, Any], fmt: str) -> None:
+    reports = _replay_export(piloted[fmt])
+    table = pd.read_csv(piloted["out"] / "gsp_iterations.csv")
+    per_session = table.groupby("session_id").size().to_dict()  # counted by pandas
+    assert [r["session_id"] for r in reports] == sorted(per_session)
+    for r in reports:
+        assert r["ok"] is True and r["mismatches"] == [] and r["unchecked"] == [], r
+        assert r["checked"]["gsp answers"] == per_session[r["session_id"]]
+    chains = pd.read_csv(piloted["out"] / "gsp_chains.csv")
+    assert sum(r["checked"].get("gsp chains", 0) for r in reports) == len(chains) == 6
+
+
+def _tampered(piloted: dict[str, Any], to: Path, change: Any) -> Path:
+    """A copy of the CSV export with ``change(iterations, chains)`` applied to two tables."""
+    import shutil
+
+    shutil.copytree(piloted["out"], to)
+    iterations = pd.read_csv(to / "gsp_iterations.csv", dtype={"seed": str})
+    chains = pd.read_csv(to / "gsp_chains.csv", dtype={"seed": str})
+    iterations, chains = change(iterations, chains)
+    iterations.to_csv(to / "gsp_iterations.csv", index=False)
+    chains.to_csv(to / "gsp_chains.csv", index=False)
+    return to
+
+
+def test_rounding_of_another_cpu_passes(piloted: dict[str, Any], tmp_path: Path) -> None:
+    """Every exported face and value a few ULPs off (another CPU's BLAS): still ok."""
+
+    def nudge(it: pd.DataFrame, ch: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+        cols = [c for c in it.columns if c.startswith(("g_", "w_"))]
+        cols += ["slider_value", "node_value", "value_before"]
+        it[cols] = it[cols] * (1 + 4e-16) + 1e-16
+        return it, ch
+
+    reports = _replay_export(_tampered(piloted, tmp_path / "nudged", nudge))
+    assert all(r["ok"] for r in reports), [r["mismatches"] for r in reports]
+    assert max(r["weight_deviation"] for r in reports) > 0
+
+
+def test_a_tampered_export_names_each_difference(piloted: dict[str, Any], tmp_path: Path) -> None:
+    """One chosen value changed, one chain node dropped, one chain's initial face changed:
+    each named by session, trial, chain, node and field, recorded vs rebuilt."""
+    table = pd.read_csv(piloted["out"] / "gsp_iterations.csv")
+    changed = table.iloc[5]
+    sad = table[(table["emotion"] == "sad") & (table["chain"] == 1)]
+    dropped = sad[sad["iteration"] == 1].iloc[0]  # not the chain's last node
+    gene = json.loads(_gene_names(piloted["db"]))[2]
+
+    def tamper(it: pd.DataFrame, ch: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+        it.loc[5, "slider_value"] = 0.123
+        it = it.drop(index=dropped.name)
+        first = (ch["emotion"] == "happy") & (ch["chain"] == 2)
+        genes = json.loads(ch.loc[first, "initial_genes"].iloc[0])
+        genes[2] += 0.25
+        ch.loc[first, "initial_genes"] = json.dumps(genes)
+        return it, ch
+
+    reports = _replay_export(_tampered(piloted, tmp_path / "t", tamper))
+    said = {r["session_id"]: r["mismatches"] for r in reports}
+    at = (
+        f"session {changed.session_id} trial {changed.trial + 1} "
+        f"({changed.emotion} chain {changed.chain}, node {changed.iteration})"
+    )
+    assert (
+        f"{at}: slider_value (position {changed.position}) recorded 0.123, rebuilt "
+        f"{changed.slider_value:.12g}" in said[changed.session_id]
+    ), said[changed.session_id]
+    gone = f"session {dropped.session_id} trial {dropped.trial + 1}"
+    assert (
+        f"{gone}: answered (status done) but its answer is not in gsp_iterations"
+        in (said[dropped.session_id])
+    )
+    after = sad[sad["iteration"] == 2].iloc[0]
+    assert any(
+        m.startswith(f"session {after.session_id} trial {after.trial + 1} (sad chain 1, node 2)")
+        and "node 1 not in the export" in m
+        for m in said[after.session_id]
+    ), said[after.session_id]
+    initial = [m for ms in said.values() for m in ms if m.startswith("happy chain 2: initial")]
+    assert len(initial) == 1 and f"at {gene}: recorded" in initial[0], said
+    chains = pd.read_csv(piloted["out"] / "gsp_chains.csv")
+    maker = chains[(chains["emotion"] == "happy") & (chains["chain"] == 2)]["made_by_session_id"]
+    touched = {changed.session_id, dropped.session_id, after.session_id, int(maker.iloc[0])}
+    assert {r["session_id"] for r in reports if not r["ok"]} == touched  # nothing else
+
+
 @pytest.mark.parametrize(
     ("block", "message"),
     [
@@ -183,6 +276,10 @@ def test_replay_rebuilds_the_chains_and_names_a_tampered_answer(
         ),
         ({"chains": 1}, "one chain per concept and 3 iterations per participant"),
         ({"chain_scope": "within", "aggregation": 2}, "aggregation = 2 averages answers"),
+        (
+            {"aggregation": 2, "chains": 3, "iterations": 4},
+            "after 3 answers they would wait for other participants",
+        ),
         (
             {"dimensions": ["jawOpen", "jawOpen"]},
             r"dimensions must not repeat genes; got \['jawOpen'\]",
@@ -272,3 +369,33 @@ def test_within_scope_chains_are_each_participants_own(db_url: str, ict_model: A
         assert sorted(rows) == [(1, 0, 2), (1, 1, 2), (2, 0, 2), (2, 1, 2)]
     finally:
         store.dispose()
+
+
+def test_aggregated_nodes_replay_from_an_export(tmp_path: Path, ict_dir: Path) -> None:
+    """aggregation = 2: each node's value is the mean of two participants' answers; an export
+    replays, and a changed first answer of a node is named with the node's value it breaks."""
+    config = tmp_path / "agg.toml"
+    config.write_text(
+        STUDY.format(model=ict_dir).replace(
+            "chains = 3\niterations = 4", "chains = 2\niterations = 2\naggregation = 2"
+        )
+    )
+    url = f"sqlite:///{tmp_path / 'agg.sqlite'}"
+    run = CliRunner().invoke
+    args = ["study", "simulate", str(config), "-n", "4", "--seed", "1", "--database-url", url]
+    assert run(app, args).exit_code == 0
+    out = tmp_path / "export"
+    args = ["study", "export", "--database-url", url, "--out", str(out), "--format", "csv"]
+    assert run(app, args).exit_code == 0
+    table = pd.read_csv(out / "gsp_iterations.csv")
+    assert set(table["member"]) == {0, 1} and table["node_value"].notna().sum() == len(table) / 2
+    assert all(r["ok"] for r in _replay_export(out))
+    first = table[(table["member"] == 0) & (table["slider_value"] < 0.7)].iloc[0]
+    table.loc[first.name, "slider_value"] += 0.1
+    table.loc[first.name, "position"] += 1  # the answer itself changed: value and position
+    table.to_csv(out / "gsp_iterations.csv", index=False)
+    said = [m for r in _replay_export(out) for m in r["mismatches"]]
+    node = (table["chain_id"] == first.chain_id) & (table["iteration"] == first.iteration)
+    second = table[node & (table["member"] == 1)].iloc[0]
+    at = f"session {second.session_id} trial {second.trial + 1} "
+    assert any(m.startswith(at) and "node_value recorded" in m for m in said), said

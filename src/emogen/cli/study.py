@@ -276,22 +276,37 @@ def _replay_export(folder: Path, session_id: int | None, model: Path | None) -> 
 
 
 def _echo_report(report: Any) -> None:
-    verdict = "every face matches" if report.ok else "MISMATCH"
-    stimuli = getattr(report, "stimuli", 0)
-    labelled = f", {stimuli} categorised faces checked" if stimuli else ""
-    typer.echo(
-        f"session {report.session_id}: {report.populations} populations, {report.faces} faces "
-        f"replayed{labelled}: {verdict}"
-    )
+    """A session's replay in words: what was rebuilt and checked, the verdict, and each
+    difference and each thing not checked (with why)."""
+    done = [f"{report.populations} populations, {report.faces} faces replayed"]
+    checked = dict(getattr(report, "checked", {}))
+    if checked:
+        done = [] if not report.populations else done
+        done.append(", ".join(f"{n} {what}" for what, n in checked.items()) + " checked")
+    unchecked = list(getattr(report, "unchecked", []))
+    if report.ok:
+        verdict = "every face matches"
+    elif report.mismatches or not report.model_hash_matches:
+        verdict = "MISMATCH"
+    else:
+        verdict = f"NOT ALL CHECKED ({len(unchecked)} not checked, below)"
+    typer.echo(f"session {report.session_id}: {', '.join(done)}: {verdict}")
     deviation = getattr(report, "weight_deviation", 0.0)
-    if report.faces or stimuli:
+    if report.faces or report.stimuli:
         from emogen.tasks.rounding import WEIGHT_TOLERANCE
 
+        exact = "ids, parents, operators and genes" if report.populations else "positions"
         typer.echo(
             f"  largest weight deviation {deviation:.3g} (floating-point rounding up to "
-            f"{WEIGHT_TOLERANCE:g} counts as equal; ids, parents, operators and genes exactly)"
+            f"{WEIGHT_TOLERANCE:g} counts as equal; {exact} exactly)"
         )
     if not report.model_hash_matches:
         typer.echo("  the model differs from the one the session was recorded with")
+    for m in unchecked[:20]:
+        typer.echo(f"  not checked: {m}")
+    if len(unchecked) > 20:
+        typer.echo(f"  … and {len(unchecked) - 20} more not checked (--json lists every one)")
     for m in report.mismatches[:20]:
         typer.echo(f"  {m}")
+    if len(report.mismatches) > 20:
+        typer.echo(f"  … and {len(report.mismatches) - 20} more (--json lists every one)")

@@ -250,9 +250,9 @@ class StudyConfig(_Strict):
         if given:
             return config
         minutes = session_length(config.conditions(), config.ga.generations).words()
-        return config.model_copy(
-            update={"consent": default_consent(minutes, user_agent=config.collect_user_agent)}
-        )
+        consent = default_consent(minutes, user_agent=config.collect_user_agent)
+        # validated again, not copied: StudyConfig(...) must get back the instance it fills
+        return handler({**data, "consent": consent})
 
     @model_validator(mode="before")
     @classmethod

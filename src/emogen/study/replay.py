@@ -23,7 +23,7 @@ from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, StudyRow, TrialRow
 from emogen.study.tasking import made_faces
 from emogen.study.weights import StudyCorrectors
-from emogen.tasks.protocol import TaskEnv
+from emogen.tasks.protocol import Replayed, TaskEnv
 from emogen.tasks.registry import task_named
 from emogen.tasks.rounding import WEIGHT_TOLERANCE
 
@@ -44,15 +44,30 @@ class ReplayReport:
     #: (:func:`emogen.tasks.rounding.weight_deviation`): 0 on the recording machine, rounding
     #: (≤ WEIGHT_TOLERANCE) on another CPU
     weight_deviation: float = 0.0
+    #: what the tasks rebuilt and compared, by what it is (each task names its own kinds)
+    checked: dict[str, int] = field(default_factory=dict)
+    #: what could not be checked, each saying what and why: never counted as matching
+    unchecked: list[str] = field(default_factory=list)
 
     def add(self, problems: list[str], deviation: float) -> None:
         """Record a check's problems and its largest weight deviation."""
         self.mismatches += problems
         self.weight_deviation = max(self.weight_deviation, deviation)
 
+    def take(self, done: Replayed) -> None:
+        """Add a task's replay of a trial (or of a session's trials)."""
+        self.populations += done.populations
+        self.faces += done.faces
+        self.stimuli += done.stimuli
+        self.add(done.problems, done.deviation)
+        for what, n in done.checked.items():
+            self.checked[what] = self.checked.get(what, 0) + n
+        self.unchecked += done.unchecked
+
     @property
     def ok(self) -> bool:
-        return self.model_hash_matches and not self.mismatches
+        """Everything recorded was checked and matches (something unchecked is not ok)."""
+        return self.model_hash_matches and not self.mismatches and not self.unchecked
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -64,7 +79,9 @@ class ReplayReport:
             "stimuli": self.stimuli,
             "weight_deviation": self.weight_deviation,
             "weight_tolerance": WEIGHT_TOLERANCE,
+            "checked": self.checked,
             "mismatches": self.mismatches,
+            "unchecked": self.unchecked,
         }
 
 
@@ -115,9 +132,5 @@ def replay_session(
             select(TrialRow).where(TrialRow.session_id == sess.id).order_by(TrialRow.position)
         ).all()
         for trial in trials:
-            done = task_named(trial.task).replay(env, db, trial, rig)
-            report.populations += done.populations
-            report.faces += done.faces
-            report.stimuli += done.stimuli
-            report.add(done.problems, done.deviation)
+            report.take(task_named(trial.task).replay(env, db, trial, rig))
     return report

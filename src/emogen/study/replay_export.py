@@ -21,7 +21,7 @@ from emogen.model.load import model_for_recorded_hash
 from emogen.model.rig import Rig
 from emogen.study.config import StudyConfig
 from emogen.study.context import accepted_hashes
-from emogen.study.export import FORMULA_STARTS
+from emogen.study.export import FORMULA_STARTS, former_names
 from emogen.study.replay import ReplayReport
 from emogen.study.weights import StudyCorrectors
 from emogen.tasks.protocol import ExportedStudy, TaskEnv
@@ -49,21 +49,34 @@ def _restore_text(v: Any) -> Any:
     return v
 
 
+def _read_table(folder: Path, name: str) -> pd.DataFrame | None:
+    """``<name>.parquet``, else ``<name>.csv`` of an export folder; None when neither is."""
+    pq, csv = folder / f"{name}.parquet", folder / f"{name}.csv"
+    if pq.is_file():
+        return pd.read_parquet(pq)
+    if not csv.is_file():
+        return None
+    df = tidy.read_csv(csv)
+    for col in df.columns:
+        if df[col].dtype == object or pd.api.types.is_string_dtype(df[col].dtype):
+            df[col] = df[col].map(_restore_text)
+    return df
+
+
 def read_exported(folder: Path) -> dict[str, pd.DataFrame]:
-    """The tables replay needs from an export folder (``<table>.parquet``, else ``.csv``)."""
+    """The tables replay needs from an export folder (``<table>.parquet``, else ``.csv``): the
+    study's tables, or a clear error; each task's where the folder has it (under its name, or
+    its name before schema 6) — a task whose table is missing says what it could not check."""
     folder = Path(folder)
     out = {}
+    old = {new: old for old, new in former_names().items()}
     for name in needed():
-        pq, csv = folder / f"{name}.parquet", folder / f"{name}.csv"
-        if pq.is_file():
-            out[name] = pd.read_parquet(pq)
-        elif csv.is_file():
-            df = tidy.read_csv(csv)
-            for col in df.columns:
-                if df[col].dtype == object or pd.api.types.is_string_dtype(df[col].dtype):
-                    df[col] = df[col].map(_restore_text)
+        df = _read_table(folder, name)
+        if df is None and name in old:
+            df = _read_table(folder, old[name])
+        if df is not None:
             out[name] = df
-        else:
+        elif name in STUDY_TABLES:
             raise ConfigError(
                 f"export folder {folder} has no {name}.parquet or {name}.csv "
                 "(write it with `emogen study export`; the study table needs emogen ≥ schema 2)"
@@ -111,10 +124,7 @@ def replay_exported(
         for sid in sessions:
             report = ReplayReport(sid, model_hash_matches=matches)
             for done in (d for by_session in replayed for d in by_session.get(sid, [])):
-                report.populations += done.populations
-                report.faces += done.faces
-                report.stimuli += done.stimuli
-                report.add(done.problems, done.deviation)
+                report.take(done)
             reports.append(report)
     if session_ids is not None and not reports:
         raise ConfigError(f"no session {session_ids} in the export at {folder}")

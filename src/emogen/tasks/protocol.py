@@ -178,17 +178,43 @@ class ExportedStudy:
     sessions: frozenset[int]
     rig: Any
 
+    def trials_of(self, task: str) -> Any:
+        """The exported trials of ``task`` in the sessions to replay, in session and trial
+        order (a DataFrame of the ``trials`` table)."""
+        t = self.tables["trials"]
+        mine = t[(t["task"].astype(str) == task) & t["session_id"].isin(list(self.sessions))]
+        return mine.sort_values(["session_id", "trial"])
+
+    def missing(self, task: str, names: Sequence[str]) -> dict[int, list[Replayed]] | None:
+        """Where the export lacks one of ``names`` (a task's tables): for each session with
+        trials of ``task``, a replay saying they could not be checked and why; else None."""
+        lacking = [n for n in names if n not in self.tables]
+        if not lacking:
+            return None
+        out: dict[int, list[Replayed]] = {}
+        for sid, trials in self.trials_of(task).groupby("session_id", sort=True):
+            why = (
+                f"session {sid}: its {len(trials)} {task} trials not checked: the export has "
+                f"no {' or '.join(lacking)} table"
+            )
+            out[int(sid)] = [Replayed(unchecked=[why])]
+        return out
+
 
 @dataclass
 class Replayed:
     """A trial's replay: what was checked and what differed (``deviation``: the largest
-    weight deviation, :mod:`emogen.tasks.rounding`)."""
+    weight deviation, :mod:`emogen.tasks.rounding`); ``checked``: what the task rebuilt and
+    compared, counted by what it is ("label orders": 16); ``unchecked``: what it could not check,
+    each saying what and why (a replay with any is not "ok": nothing unchecked passes)."""
 
     populations: int = 0
     faces: int = 0
     stimuli: int = 0
     problems: list[str] = field(default_factory=list)
     deviation: float = 0.0
+    checked: dict[str, int] = field(default_factory=dict)
+    unchecked: list[str] = field(default_factory=list)
 
 
 class Task(Protocol):
@@ -308,7 +334,8 @@ def conditions_of(blocks: Sequence[TaskBlock], study: Any, rows: dict[int, int])
 class TaskDefaults:
     """What a task that has no more to say answers (subclass it and write the rest): nothing
     to prepare, no face table, no face served as PNG, no result for an embedding page, no
-    faces made, a replay that checks nothing (from the database or from an export), rows too
+    faces made, a replay that says its trials are not checked (from the database or from an
+    export: never "ok"), rows too
     few to size an export by, nothing told of its blocks before the session, and its name on
     the dashboard."""
 
@@ -333,10 +360,18 @@ class TaskDefaults:
         return []
 
     def replay(self, env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed:
-        return Replayed()
+        why = f"trial {row.position + 1}: not checked: the {self.name} task has no replay"
+        return Replayed(unchecked=[why])
 
     def replay_exported(self, env: TaskEnv, study: ExportedStudy) -> dict[int, list[Replayed]]:
-        return {}
+        out: dict[int, list[Replayed]] = {}
+        for sid, trials in study.trials_of(self.name).groupby("session_id", sort=True):
+            why = (
+                f"session {sid}: its {len(trials)} {self.name} trials not checked: the task "
+                "does not replay from an export"
+            )
+            out[int(sid)] = [Replayed(unchecked=[why])]
+        return out
 
     def export_size(self, db: Session, sessions: Any) -> dict[int, int]:
         return {}

@@ -7,7 +7,7 @@
   correctives within floating-point rounding of those stored, :mod:`emogen.study.rounding`: a
   few ULPs on another CPU pass, a real change — a wrong gene, another correction — does not);
 * a file face: its shape weights are the row of the block's face table, when that file is
-  readable here (else counted as not checked).
+  readable here (else said not checked, with why).
 
 Which faces a block drew (which other sessions, which rows) is recorded, not re-drawn: the pool
 of other participants' faces depends on the sessions completed when the block started.
@@ -34,13 +34,23 @@ from emogen.tasks.records import TrialRow, numbers_json
 from emogen.tasks.rounding import WEIGHT_TOLERANCE, weight_deviation, within_rounding
 
 Checked = tuple[list[str], float]  # problems, largest weight deviation
+#: the start of a "problem" that is something not checked (said apart from the differences)
+NOT_CHECKED = "not checked: "
 
 
 def check_stimulus(env: TaskEnv, db: Session, trial: TrialRow, rig: Rig) -> Replayed:
     """A categorise trial's stored face checked against its source (faces checked, problems,
     largest weight deviation)."""
     n, problems, deviation = _check(env, db, trial, rig)
-    return Replayed(stimuli=n, problems=problems, deviation=deviation)
+    unchecked = [p for p in problems if p.startswith(NOT_CHECKED)]
+    problems = [p for p in problems if not p.startswith(NOT_CHECKED)]
+    return Replayed(
+        stimuli=n,
+        problems=problems,
+        deviation=deviation,
+        checked={"categorised faces": n} if n else {},
+        unchecked=[p[len(NOT_CHECKED) :] for p in unchecked],
+    )
 
 
 def _check(env: TaskEnv, db: Session, trial: TrialRow, rig: Rig) -> tuple[int, list[str], float]:
@@ -101,7 +111,9 @@ def _file_face(
     if stim.source == "other":
         path = block.others_fallback if stim.fallback else block.others_pool
     if path is None or not Path(path).exists():
-        return [], 0.0  # the table is not here: the stored face stands
+        return [
+            f"{NOT_CHECKED}{where}: its weights (row {(stim.source_row or 0) + 1} of {path}) not checked: the table is not here"
+        ], 0.0
     try:
         path = table_of(Path(path))
         table = face_table_at(path, rig, "face table")

@@ -20,6 +20,7 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from emogen.tasks.blocks import Condition, TaskBlock
+from emogen.tasks.categorise import replay_export
 from emogen.tasks.categorise.block import CategoriseBlock
 from emogen.tasks.categorise.draw import BlockDraw
 from emogen.tasks.categorise.export import CATEGORISE_TABLES
@@ -77,8 +78,6 @@ class CategoriseTask:
     tables: ClassVar[tuple[type, ...]] = (StimulusRow, ResponseRow)
     #: categorise_responses: each face shown and its answer (:mod:`.export`)
     export_tables: ClassVar[tuple[Any, ...]] = CATEGORISE_TABLES
-    #: its replay reads the database only
-    replay_tables: ClassVar[tuple[str, ...]] = ()
     #: what the default instructions say of its blocks (after "In this study " or "In another
     #: part of the study ")
     instructions: ClassVar[str] = (
@@ -177,10 +176,13 @@ class CategoriseTask:
     def replay(self, env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed:
         return check_stimulus(env, db, row, rig)
 
+    #: the faces shown and the answers (:mod:`emogen.tasks.categorise.replay_export`)
+    replay_tables: ClassVar[tuple[str, ...]] = replay_export.TABLES
+
     def replay_exported(self, env: TaskEnv, study: ExportedStudy) -> dict[int, list[Replayed]]:
-        """Nothing to rebuild: a stimulus is checked against the record it was drawn from
-        (:meth:`replay`), which an export holds only in part."""
-        return {}
+        """What the export lets us rebuild from the trials' seeds, checked; what it does not,
+        said (:mod:`emogen.tasks.categorise.replay_export`)."""
+        return replay_export.replay_exported(env, study)
 
     def export_size(self, db: Session, sessions: Any) -> dict[int, int]:
         """A response row per trial shown."""

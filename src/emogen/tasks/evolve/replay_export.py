@@ -56,6 +56,9 @@ def _selections(table: pd.DataFrame) -> dict[Key, tuple[int, list[int]]]:
 def replay_exported(env: TaskEnv, study: ExportedStudy) -> dict[int, list[Replayed]]:
     """Every exported evolve trial of ``study.sessions``, replayed: by session id, in trial
     order (a trial with no exported faces is not an evolve trial and is passed over)."""
+    lacking = study.missing("evolve", TABLES)
+    if lacking is not None:
+        return lacking
     t = study.tables
     faces = _populations(t["faces"], study.genes, study.weights)
     sels = _selections(t["selections"])

@@ -70,6 +70,14 @@ class GspBlock(TaskBlock):
                 f"aggregation = {self.aggregation} averages answers of different participants: "
                 'it needs chain_scope = "across"'
             )
+        if self.aggregation > 1 and self.iterations > self.chains:
+            raise ValueError(
+                f"aggregation = {self.aggregation} with {self.chains} chains and "
+                f"{self.iterations} iterations per participant: a participant answers a node "
+                f"once, so after {self.chains} answers they would wait for other participants "
+                "to complete nodes — the last participant of a study forever (set chains >= "
+                "iterations)"
+            )
         if self.chains == 1 and self.iterations > 1 and not self.repeat_chain:
             raise ValueError(
                 f"one chain per concept and {self.iterations} iterations per participant: a "

@@ -140,4 +140,5 @@ def replay_trial(env: TaskEnv, db: Session, row: TrialRow, rig: Any) -> Replayed
             problems, where, "the chosen face's weights", json.loads(it.weights_after), weights
         ),
     )
-    return Replayed(stimuli=1, faces=1, problems=problems, deviation=worst)
+    checked = {"gsp answers": 1}
+    return Replayed(stimuli=1, faces=1, problems=problems, deviation=worst, checked=checked)

@@ -23,6 +23,7 @@ from sqlalchemy.orm import Session
 from emogen.errors import ConfigError
 from emogen.tasks.blocks import Condition, TaskBlock
 from emogen.tasks.errors import StepConflict
+from emogen.tasks.gsp import replay_export
 from emogen.tasks.gsp.block import GspBlock
 from emogen.tasks.gsp.chains import free_chain, lock_concept, locked_chains, make_chains
 from emogen.tasks.gsp.export import GSP_TABLES
@@ -333,13 +334,13 @@ class GspTask:
     ) -> tuple[str, int | None]:
         return self.name, None
 
-    #: its replay reads the database (the chains' seeds and every iteration's record)
-    replay_tables: ClassVar[tuple[str, ...]] = ()
+    #: the chains (seeds, initial faces) and every answer (:mod:`.replay_export`)
+    replay_tables: ClassVar[tuple[str, ...]] = replay_export.TABLES
 
     def replay_exported(self, env: TaskEnv, study: ExportedStudy) -> dict[int, list[Replayed]]:
-        """Nothing from the files alone: a chain passes between sessions, and an export may
-        hold only some of them (``since``); :meth:`replay` rebuilds every chain."""
-        return {}
+        """Every chain rebuilt from its seed and the exported answers; each answer compared
+        (:mod:`emogen.tasks.gsp.replay_export`)."""
+        return replay_export.replay_exported(env, study)
 
     def export_size(self, db: Session, sessions: Any) -> dict[int, int]:
         """An iteration row per trial answered."""
