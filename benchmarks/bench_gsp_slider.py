@@ -20,7 +20,7 @@ from typing import Any
 
 from benchmarks.bench_render import CHROMIUM
 from benchmarks.bench_study import ServerProcess, write_study_toml
-from benchmarks.bench_viewer import ARGS
+from benchmarks.bench_viewer import ARGS, chromium_cpu_s
 
 TARGET_FPS = 30.0
 STUDY: dict[str, Any] = {
@@ -81,11 +81,14 @@ def measure(model: Path, seconds: float, size: tuple[int, int]) -> dict[str, Any
                 while not page.evaluate("() => window.emogenStudy.ready"):
                     page.wait_for_timeout(100)
                 display = page.evaluate("() => window.emogenStudy.display")
+                cpu0 = chromium_cpu_s()
                 out = page.evaluate(SWEEP, seconds * 1000)
+                cpu1 = chromium_cpu_s()
                 browser.close()
         finally:
             srv.stop()
-    return {"display": display, "fps": out["frames"] / out["seconds"], **out}
+    cpu = {f"{k}_cpu_ms": 1000 * (cpu1[k] - cpu0[k]) / max(out["frames"], 1) for k in cpu0}
+    return {"display": display, "fps": out["frames"] / out["seconds"], **out, **cpu}
 
 
 def main() -> None:
@@ -104,7 +107,8 @@ def main() -> None:
             f"GSP slider, {size[0]}x{size[1]}, {r['display']} (SwiftShader), load average "
             f"<= {load:.1f}: {r['fps']:.1f} frames/s over {r['seconds']:.1f} s "
             f"({r['frames']} slider moves); one input event's update: median "
-            f"{r['median_ms']:.2f} ms, p95 {r['p95_ms']:.2f} ms"
+            f"{r['median_ms']:.2f} ms, p95 {r['p95_ms']:.2f} ms; CPU per frame: GPU process "
+            f"{r['gpu_cpu_ms']:.0f} ms, page {r['page_cpu_ms']:.0f} ms"
             + (
                 f"; target >= {TARGET_FPS:.0f} frames/s: "
                 + ("met" if r["fps"] >= TARGET_FPS else "NOT met")

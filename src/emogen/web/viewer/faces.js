@@ -1,6 +1,7 @@
-// Ten (or n) faces in one WebGL context: one renderer and canvas over the grid, one shared
-// geometry per GLB primitive, per-face meshes holding only their morph influences, each face
-// drawn into its slot's rectangle with viewport + scissor.
+// Ten (or n) faces in one WebGL context: one renderer and canvas over the grid, per-face meshes
+// sharing each GLB primitive's index and shading attributes and holding their own morphed
+// positions, normals and strain (morph.js), each face drawn into its slot's rectangle with
+// viewport + scissor.
 import {
   ClampToEdgeWrapping,
   ColorManagement,
@@ -22,6 +23,7 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { look } from './look.js';
 import { faceMaterial, gazeMatrix } from './material.js';
 import { addShadingAttributes } from './mesh.js';
+import { MorphSource } from './morph.js';
 import { Clip } from './motion.js';
 import { StrainField } from './strain.js';
 
@@ -97,7 +99,6 @@ export class FaceGrid {
     this.camera = makeCamera();
     this.background = new Color(...look.background_srgb);
     this.faces = [];
-    this.strains = [];
     this.shapeNames = [];
     this.drawnSize = null;
     new ResizeObserver(() => {
@@ -130,8 +131,8 @@ export class FaceGrid {
     const strains = prims.map((p) =>
       textures && skinCodes.includes(look.parts.indexOf(p.part)) ? StrainField.of(p.mesh.geometry) : null,
     );
-    this.strains = strains.filter((s) => s !== null);
     this.timings.strain_ms = performance.now() - t3;
+    const sources = prims.map((p, k) => new MorphSource(p.mesh.geometry, strains[k]));
     this.shapeNames = meshes[0].geometry.morphAttributes.position
       ? Object.keys(meshes[0].morphTargetDictionary ?? {}).sort(
           (a, b) => meshes[0].morphTargetDictionary[a] - meshes[0].morphTargetDictionary[b],
@@ -163,16 +164,16 @@ export class FaceGrid {
       const copies = [];
       copy.traverse((o) => o.isMesh && copies.push(o));
       copies.forEach((mesh, k) => {
-        mesh.material = faceMaterial(
-          prims[k].part, centres(meshes[k]), this.shapeNames.length, textures, strains[k],
-          prims[k].codes,
-        );
+        mesh.geometry = sources[k].faceGeometry(meshes[k].geometry);
+        mesh.morphTargetInfluences = undefined;
+        mesh.morphTargetDictionary = undefined;
+        mesh.material = faceMaterial(prims[k].part, centres(meshes[k]), textures, prims[k].codes);
         mesh.renderOrder = order(prims[k].part);
         mesh.frustumCulled = false;
       });
       root.add(copy);
       scene.add(root);
-      this.faces.push({ scene, meshes: copies });
+      this.faces.push({ scene, meshes: copies, sources, weights: null });
     }
     // The shaders compiled without holding up the page (KHR_parallel_shader_compile where the
     // browser has it): a face model made ahead while the participant answers (see the study
@@ -195,6 +196,7 @@ export class FaceGrid {
     this.render();
   }
 
+  /** Face ``i`` set to weights ``w``; whether they changed (the face is morphed to them). */
   setFace(i, w) {
     const vector = Array.isArray(w) || ArrayBuffer.isView(w)
       ? Array.from(w, Number)
@@ -204,21 +206,17 @@ export class FaceGrid {
     }
     while (vector.length < this.shapeNames.length) vector.push(0);
     const face = this.faces[i];
-    for (const mesh of face.meshes) {
-      const influences = mesh.morphTargetInfluences;
-      if (influences) for (let k = 0; k < vector.length; k++) influences[k] = vector[k];
-    }
+    if (face.weights && vector.every((x, k) => x === face.weights[k])) return false;
+    face.weights = vector;
     const active = [];
     vector.forEach((x, k) => x !== 0 && active.push(k));
-    for (const field of this.strains) field.ensure(active);
+    face.meshes.forEach((mesh, k) => face.sources[k].morph(mesh.geometry, vector, active));
     const [yaw, pitch] = this.gazeAngles(vector);
     for (const mesh of face.meshes) {
-      const u = mesh.material.uniforms;
-      u.uActiveCount.value = active.length;
-      u.uActive.value.fill(0).set(active);
       gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotLeft.value);
       gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotRight.value);
     }
+    return true;
   }
 
   /**
@@ -234,7 +232,6 @@ export class FaceGrid {
     if (!this.clips.some(Boolean)) return;
     this.frame = new Float32Array(n);
     this.held = new Map(); // face → clip time it is scrubbed to
-    this.frames = 0; // frames drawn since play (the benchmark's count)
     this.start = performance.now();
     const tick = (now) => {
       this.draw(now);
@@ -263,11 +260,13 @@ export class FaceGrid {
   }
 
   draw(now) {
+    let moved = false;
     this.clips.forEach((clip, i) => {
-      if (clip) this.setFace(i, clip.at(this.clipTime(i, now), this.frame));
+      if (clip && this.setFace(i, clip.at(this.clipTime(i, now), this.frame))) moved = true;
     });
-    this.render();
-    this.frames++;
+    // In the hold at rest no face moves: the canvas keeps the frame it shows (bench_dynamic_page
+    // gives the frame rate while the faces move, and over the whole loop).
+    if (moved) this.render();
   }
 
   gazeAngles(vector) {
