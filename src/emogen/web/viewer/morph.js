@@ -7,18 +7,15 @@
 // benchmarks/bench_gsp_slider.py and bench_dynamic_page.py give the figures (docs/render.md).
 import { BufferAttribute, BufferGeometry, DynamicDrawUsage } from 'three';
 
-// (count · 3) float values of a vec3 attribute (plain, normalised integer or interleaved), as
-// the GPU reads them (a normalised int16 c is max(c / 32767, −1)).
-export function floats(attr) {
+// A vec3 attribute's stored values and the divisor that makes them floats as the GPU reads them
+// (1: floats already; 32767 or 127: normalised int16 or int8, read as max(c / divisor, −1)),
+// without a copy where they are a plain array.
+function stored(attr) {
   const a = attr.array;
   if (!attr.isInterleavedBufferAttribute && attr.itemSize === 3 && a.length === attr.count * 3) {
-    if (!attr.normalized) return a;
-    const scale = a instanceof Int16Array ? 32767 : a instanceof Int8Array ? 127 : 0;
-    if (scale) {
-      const out = new Float32Array(a.length);
-      for (let i = 0; i < a.length; i++) out[i] = Math.max(a[i] / scale, -1);
-      return out;
-    }
+    if (!attr.normalized) return [a, 1];
+    if (a instanceof Int16Array) return [a, 32767];
+    if (a instanceof Int8Array) return [a, 127];
   }
   const out = new Float32Array(attr.count * 3);
   for (let i = 0; i < attr.count; i++) {
@@ -26,6 +23,15 @@ export function floats(attr) {
     out[3 * i + 1] = attr.getY(i);
     out[3 * i + 2] = attr.getZ(i);
   }
+  return [out, 1];
+}
+
+/** (count · 3) float values of a vec3 attribute (plain, normalised integer or interleaved). */
+export function floats(attr) {
+  const [a, scale] = stored(attr);
+  if (scale === 1) return a;
+  const out = new Float32Array(a.length);
+  for (let i = 0; i < a.length; i++) out[i] = Math.max(a[i] / scale, -1);
   return out;
 }
 
@@ -51,21 +57,25 @@ export class MorphSource {
   /** Target ``t`` as {index: the vertices it moves, delta: their (dx dy dz dnx dny dnz)}. */
   target(t) {
     if (this.sparse[t]) return this.sparse[t];
-    const p = floats(this.positions[t]);
-    const n = this.normals[t] ? floats(this.normals[t]) : null;
-    const moved = [];
-    for (let i = 0; i < 3 * this.vertices; i += 3) {
-      const move = p[i] !== 0 || p[i + 1] !== 0 || p[i + 2] !== 0;
-      if (move || (n && (n[i] !== 0 || n[i + 1] !== 0 || n[i + 2] !== 0))) moved.push(i / 3);
+    const [p, ps] = stored(this.positions[t]);
+    const [n, ns] = this.normals[t] ? stored(this.normals[t]) : [new Float32Array(p.length), 1];
+    const end = 3 * this.vertices;
+    let count = 0;
+    for (let i = 0; i < end; i += 3) {
+      if (p[i] || p[i + 1] || p[i + 2] || n[i] || n[i + 1] || n[i + 2]) count++;
     }
-    const delta = new Float32Array(6 * moved.length);
-    moved.forEach((v, j) => {
+    const index = new Int32Array(count);
+    const delta = new Float32Array(6 * count);
+    for (let i = 0, j = 0; i < end; i += 3) {
+      if (!(p[i] || p[i + 1] || p[i + 2] || n[i] || n[i + 1] || n[i + 2])) continue;
+      index[j] = i / 3;
       for (let k = 0; k < 3; k++) {
-        delta[6 * j + k] = p[3 * v + k];
-        delta[6 * j + 3 + k] = n ? n[3 * v + k] : 0;
+        delta[6 * j + k] = ps === 1 ? p[i + k] : Math.max(p[i + k] / ps, -1);
+        delta[6 * j + 3 + k] = ns === 1 ? n[i + k] : Math.max(n[i + k] / ns, -1);
       }
-    });
-    this.sparse[t] = { index: Int32Array.from(moved), delta };
+      j++;
+    }
+    this.sparse[t] = { index, delta };
     return this.sparse[t];
   }
 
