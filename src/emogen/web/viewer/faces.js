@@ -265,7 +265,7 @@ export class FaceGrid {
       if (clip && this.setFace(i, clip.at(this.clipTime(i, now), this.frame))) moved = true;
     });
     // In the hold at rest no face moves: the canvas keeps the frame it shows (bench_dynamic_page
-    // gives the frame rate while the faces move, and over the whole loop).
+    // at 683×384, load average 13.7: 3.5 frames/s over the loop, 1.9 while the faces move).
     if (moved) this.render();
   }
 

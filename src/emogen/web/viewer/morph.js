@@ -2,9 +2,10 @@
 // targets' deltas times their weights, summed in one typed-array pass over the vertices each
 // target moves (the targets are sparse: a shape moves a sixth of the vertices, most correctives
 // fewer). The faces are then drawn as plain meshes: the vertex shader reads the morphed values as
-// attributes. Software GL (SwiftShader) ran the blend per vertex per draw, three fetches per
-// active target, and shaded each vertex up to six times (once per triangle it is in):
-// benchmarks/bench_gsp_slider.py and bench_dynamic_page.py give the figures (docs/render.md).
+// attributes. Software GL (SwiftShader) ran the blend for every vertex in every draw, three
+// texture fetches per non-zero target. CPU of Chromium's GPU process a frame, vertex-shader
+// morph → this (docs/render.md): the GSP slider 185 → 80 ms (benchmarks/bench_gsp_slider.py),
+// ten moving tiles 1057 → 534 ms (bench_dynamic_page.py), shared 2-core VM, load average 11–13.
 import { BufferAttribute, BufferGeometry, DynamicDrawUsage } from 'three';
 
 // A vec3 attribute's stored values and the divisor that makes them floats as the GPU reads them
