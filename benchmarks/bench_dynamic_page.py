@@ -3,17 +3,16 @@ SQLite, an evolve block with ``dynamic = {}``, corrected faces) at 1366×768 in 
 Chromium with software GL (SwiftShader, as the browser tests), its ten tiles playing their
 clips. For ``--seconds`` the page counts ``requestAnimationFrame`` callbacks and the viewer's
 drawn frames (each: the ten faces' morph weights from their curves in one typed-array pass,
-then the faces morphed on the CPU and drawn; in the hold at rest nothing is redrawn); the
-figures are the frames per second over the whole loop and while the faces move, the time between
-frames (median, 95th percentile) and the CPU each frame cost Chromium's GPU process (SwiftShader
-draws there) and the page, which the machine's load does not stretch. The load average is
-printed beside them (the machine is shared). Target: ≥ 15 frames/s at 1366×768 on this
-machine's software GL (issue #44).
+then the faces morphed on the CPU and drawn); the figures are the frames per second over the
+whole loop and while the faces move, the time between frames (median, 95th percentile) and the
+CPU each frame cost Chromium's GPU process (SwiftShader draws there) and the page, which the
+machine's load does not stretch. The load average is printed beside them (the machine is
+shared). Target: ≥ 15 frames/s at 1366×768 on this machine's software GL (issue #44).
 
 Measured on the shared 2-core VM, A/B within minutes (docs/ga.md): the viewer morphing in its
 vertex shader, 0.4 frames/s at 1366×768, 1057 ms of GPU-process CPU a frame, load average 11.4;
-morphing on the CPU (viewer/morph.js), 1.5 and 1.6 frames/s while the faces move, 571 and 534
-ms a frame, load average 13.5 and 13.0. Not met: SwiftShader drawing ten faces of 51,000
+morphing on the CPU (viewer/morph.js), 2.0 and 1.6 frames/s while the faces move, 493 ms a
+frame, load average 16.4 and 15.0. Not met: SwiftShader drawing ten faces of 51,000
 triangles is the rest of the frame.
 
     python -m benchmarks.bench_dynamic_page [--seconds 5]
