@@ -1,6 +1,7 @@
-// Ten (or n) faces in one WebGL context: one renderer and canvas over the grid, one shared
-// geometry per GLB primitive, per-face meshes holding only their morph influences, each face
-// drawn into its slot's rectangle with viewport + scissor.
+// Ten (or n) faces in one WebGL context: one renderer and canvas over the grid, per-face meshes
+// sharing each GLB primitive's index and shading attributes and holding their own morphed
+// positions, normals and strain (morph.js), each face drawn into its slot's rectangle with
+// viewport + scissor.
 import {
   ClampToEdgeWrapping,
   ColorManagement,
@@ -22,6 +23,7 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { look } from './look.js';
 import { faceMaterial, gazeMatrix } from './material.js';
 import { addShadingAttributes } from './mesh.js';
+import { MorphSource } from './morph.js';
 import { Clip } from './motion.js';
 import { StrainField } from './strain.js';
 
@@ -98,7 +100,6 @@ export class FaceGrid {
     this.camera = makeCamera();
     this.background = new Color(...look.background_srgb);
     this.faces = [];
-    this.strains = [];
     this.shapeNames = [];
     this.drawnSize = null;
     new ResizeObserver(() => {
@@ -131,8 +132,8 @@ export class FaceGrid {
     const strains = prims.map((p) =>
       textures && skinCodes.includes(look.parts.indexOf(p.part)) ? StrainField.of(p.mesh.geometry) : null,
     );
-    this.strains = strains.filter((s) => s !== null);
     this.timings.strain_ms = performance.now() - t3;
+    const sources = prims.map((p, k) => new MorphSource(p.mesh.geometry, strains[k]));
     this.shapeNames = meshes[0].geometry.morphAttributes.position
       ? Object.keys(meshes[0].morphTargetDictionary ?? {}).sort(
           (a, b) => meshes[0].morphTargetDictionary[a] - meshes[0].morphTargetDictionary[b],
@@ -164,16 +165,16 @@ export class FaceGrid {
       const copies = [];
       copy.traverse((o) => o.isMesh && copies.push(o));
       copies.forEach((mesh, k) => {
-        mesh.material = faceMaterial(
-          prims[k].part, centres(meshes[k]), this.shapeNames.length, textures, strains[k],
-          prims[k].codes,
-        );
+        mesh.geometry = sources[k].faceGeometry(meshes[k].geometry);
+        mesh.morphTargetInfluences = undefined;
+        mesh.morphTargetDictionary = undefined;
+        mesh.material = faceMaterial(prims[k].part, centres(meshes[k]), textures, prims[k].codes);
         mesh.renderOrder = order(prims[k].part);
         mesh.frustumCulled = false;
       });
       root.add(copy);
       scene.add(root);
-      this.faces.push({ scene, meshes: copies });
+      this.faces.push({ scene, meshes: copies, sources, weights: null });
     }
     // The shaders compiled without holding up the page (KHR_parallel_shader_compile where the
     // browser has it): a face model made ahead while the participant answers (see the study
@@ -196,6 +197,7 @@ export class FaceGrid {
     this.render();
   }
 
+  /** Face ``i`` set to weights ``w`` (morphed to them unless it shows them already). */
   setFace(i, w) {
     const vector = Array.isArray(w) || ArrayBuffer.isView(w)
       ? Array.from(w, Number)
@@ -205,18 +207,13 @@ export class FaceGrid {
     }
     while (vector.length < this.shapeNames.length) vector.push(0);
     const face = this.faces[i];
-    for (const mesh of face.meshes) {
-      const influences = mesh.morphTargetInfluences;
-      if (influences) for (let k = 0; k < vector.length; k++) influences[k] = vector[k];
-    }
+    if (face.weights && vector.every((x, k) => x === face.weights[k])) return;
+    face.weights = vector;
     const active = [];
     vector.forEach((x, k) => x !== 0 && active.push(k));
-    for (const field of this.strains) field.ensure(active);
+    face.meshes.forEach((mesh, k) => face.sources[k].morph(mesh.geometry, vector, active));
     const [yaw, pitch] = this.gazeAngles(vector);
     for (const mesh of face.meshes) {
-      const u = mesh.material.uniforms;
-      u.uActiveCount.value = active.length;
-      u.uActive.value.fill(0).set(active);
       gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotLeft.value);
       gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotRight.value);
     }

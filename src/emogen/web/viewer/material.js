@@ -1,14 +1,14 @@
-// The face material: three.js morph targets + rigid eye rotation in the vertex shader, and the
-// fragment shading of shade.glsl (the same text the offscreen renderer compiles). Skin is
-// textured by the identity's atlas and detail tile from the GLB (see faces.js), sampled with
-// glTF's TEXCOORD_0 (three's built-in `uv` attribute).
+// The face material: the face as morph.js morphed it (positions, normals and the skin's strain
+// as attributes) + rigid eye rotation in the vertex shader, and the fragment shading of
+// shade.glsl (the same text the offscreen renderer compiles). Skin is textured by the identity's
+// atlas and detail tile from the GLB (see faces.js), sampled with glTF's TEXCOORD_0 (three's
+// built-in `uv` attribute).
 import { DoubleSide, FrontSide, Matrix3, NormalBlending, ShaderMaterial, Vector3 } from 'three';
 import { glslDefines, look, shadeGlsl } from './look.js';
-import { STRAIN_WIDTH } from './strain.js';
 
 const vertexShader = /* glsl */ `
 #include <common>
-#include <morphtarget_pars_vertex>
+attribute vec3 aStrain;
 attribute float aPart;
 attribute vec3 aAlbedo;
 attribute vec4 aSurface;
@@ -17,12 +17,6 @@ uniform mat3 uEyeRotLeft;
 uniform mat3 uEyeRotRight;
 uniform vec3 uEyeCentreLeft;
 uniform vec3 uEyeCentreRight;
-// Morph only the targets in use (three's own loop visits all 57 per vertex: slow in software GL).
-uniform int uActiveCount;
-uniform int uActive[MAX_ACTIVE];
-// The skin's strain per target (strain.js): texel target · uStrainVertices + vertex.
-uniform highp sampler2D uStrain;
-uniform int uStrainVertices;
 varying vec3 vStrain;
 varying vec3 vWorld;
 varying vec3 vNormal;
@@ -34,23 +28,7 @@ varying vec2 vUv;
 void main() {
     vec3 objectNormal = vec3(normal);
     vec3 transformed = vec3(position);
-    vec3 strain = vec3(0.0);
-#ifdef USE_MORPHTARGETS
-    for (int j = 0; j < MAX_ACTIVE; j++) {
-        if (j >= uActiveCount) break;
-        int i = uActive[j];
-        float w = morphTargetInfluences[i];
-        transformed += getMorph(gl_VertexID, i, 0).xyz * w;
-#ifdef USE_MORPHNORMALS
-        objectNormal += getMorph(gl_VertexID, i, 1).xyz * w;
-#endif
-        if (uStrainVertices > 0) {
-            int k = i * uStrainVertices + gl_VertexID;
-            strain += texelFetch(uStrain, ivec2(k % STRAIN_WIDTH, k / STRAIN_WIDTH), 0).xyz * w;
-        }
-    }
-#endif
-    vStrain = strain;
+    vStrain = aStrain;
     if (aEye.w > 0.5) {
         bool left = aEye.w < 1.5;
         mat3 r = left ? uEyeRotLeft : uEyeRotRight;
@@ -93,10 +71,10 @@ void main() {
 /**
  * A material for one primitive whose vertices belong to `part` (a look.json part).
  * textures: {skin, detail} three.js Textures of the identity and its wrinkleStrength (see
- * skinTextures in faces.js), or null: every part in its flat look.json colour. strain: the
- * primitive's {texture, vertices} from strainTexture (strain.js), or null: unstrained.
+ * skinTextures in faces.js), or null: every part in its flat look.json colour. codes: [lowest,
+ * highest] part code of the primitive's vertices (null: any).
  */
-export function faceMaterial(part, eyeCentres, nShapes, textures = null, strain = null, codes = null) {
+export function faceMaterial(part, eyeCentres, textures = null, codes = null) {
   const blended = part.opacity < 1 || part.fringe_cm > 0;
   // Compile out what no fragment of the primitive runs (as gl.py per draw group): SwiftShader,
   // like llvmpipe, runs both sides of a branch. codes: [lowest, highest] part code it holds.
@@ -105,9 +83,8 @@ export function faceMaterial(part, eyeCentres, nShapes, textures = null, strain 
   const kinds =
     `#define EMOGEN_SKIN ${holds('PART_SKIN', 'PART_EYE_SOCKET') ? 1 : 0}\n` +
     `#define EMOGEN_EYES ${holds('PART_SCLERA', 'PART_IRIS') ? 1 : 0}\n`;
-  const maxActive = Math.max(1, nShapes);
   return new ShaderMaterial({
-    vertexShader: `#define MAX_ACTIVE ${maxActive}\n#define STRAIN_WIDTH ${STRAIN_WIDTH}\n${vertexShader}`,
+    vertexShader,
     fragmentShader:
       (part.cutout ? '#define EMOGEN_DISCARD\n' : '') + kinds + glslDefines() + shadeGlsl + fragmentMain,
     uniforms: {
@@ -115,14 +92,10 @@ export function faceMaterial(part, eyeCentres, nShapes, textures = null, strain 
       uEyeRotRight: { value: new Matrix3() },
       uEyeCentreLeft: { value: eyeCentres?.left?.clone() ?? new Vector3() },
       uEyeCentreRight: { value: eyeCentres?.right?.clone() ?? new Vector3() },
-      uActiveCount: { value: 0 },
-      uActive: { value: new Int32Array(maxActive) },
       emogenSkin: { value: textures?.skin ?? null },
       emogenDetail: { value: textures?.detail ?? null },
       emogenTextured: { value: textures ? 1 : 0 },
       emogenWrinkleStrength: { value: textures?.wrinkleStrength ?? 1 },
-      uStrain: { value: strain?.texture ?? null },
-      uStrainVertices: { value: textures && strain ? strain.vertices : 0 },
     },
     side: part.double_sided ? DoubleSide : FrontSide,
     transparent: blended,

@@ -2,33 +2,10 @@
 // the rotation-free (Biot) strain U − I of the target at full weight, F = R U the polar
 // decomposition of the deformation gradient in the rest triangle's frame (first axis along u),
 // averaged over a vertex's triangles by rest area, twice (two rings). A target that only turns
-// or moves skin has none. The vertex shader blends the targets' strains with the face's morph
-// weights (material.js), as the offscreen renderer does with its weights. Output: a float RGBA
-// texture, texel target · nVertices + vertex at (index mod STRAIN_WIDTH, index div STRAIN_WIDTH).
-import { DataTexture, FloatType, NearestFilter, RGBAFormat } from 'three';
-
-export const STRAIN_WIDTH = 4096;
-
-// (count · 3) float values of a vec3 attribute (plain, normalised integer or interleaved).
-function floats(attr) {
-  const a = attr.array;
-  if (!attr.isInterleavedBufferAttribute && attr.itemSize === 3 && a.length === attr.count * 3) {
-    if (!attr.normalized) return a;
-    const scale = a instanceof Int16Array ? 32767 : a instanceof Int8Array ? 127 : 0;
-    if (scale) {
-      const out = new Float32Array(a.length);
-      for (let i = 0; i < a.length; i++) out[i] = Math.max(a[i] / scale, -1);
-      return out;
-    }
-  }
-  const out = new Float32Array(attr.count * 3);
-  for (let i = 0; i < attr.count; i++) {
-    out[3 * i] = attr.getX(i);
-    out[3 * i + 1] = attr.getY(i);
-    out[3 * i + 2] = attr.getZ(i);
-  }
-  return out;
-}
+// or moves skin has none. A face's strain is its targets' strains blended with its morph weights
+// (``blend``, in morph.js's pass), as the offscreen renderer does with its weights; each target's
+// strain is kept for the vertices it reaches (two rings around those it moves).
+import { floats } from './morph.js';
 
 // Per triangle (typed arrays): corners, A⁻¹ (row-major 2×2), the rest Jacobian F₀ (3×2
 // row-major, cm per UV unit), L⁻¹ of F₀ = Q L (a, b, c of [[a, b], [0, c]]), rest area; and the
@@ -146,9 +123,9 @@ function spread(ch, tris, nTris, val, acc, mark, id, seen) {
   return nSeen;
 }
 
-// One target's vertex strains (two rings of area-weighted means) into data at base, visiting
-// only the triangles near a vertex it moves.
-function targetStrain(ch, d, n, areaSum, work, target, data, base) {
+// One target's vertex strains (two rings of area-weighted means), visiting only the triangles
+// near a vertex it moves: {index: the vertices reached, value: their (uu, vv, uv) strains}.
+function targetStrain(ch, d, n, areaSum, work, target) {
   const { acc, mark, mark2, stamp, stamp2, tris1, tris2, val, seen, seen2 } = work;
   const moved = [];
   for (let i = 0; i < n; i++) {
@@ -182,17 +159,17 @@ function targetStrain(ch, d, n, areaSum, work, target, data, base) {
   }
   const acc2 = work.acc2;
   const s2 = spread(ch, tris2, n2, val, acc2, mark2, target, seen2);
+  const index = seen2.slice(0, s2).sort();
+  const value = new Float32Array(3 * s2);
   for (let j = 0; j < s2; j++) {
-    const i = seen2[j];
-    const o = base + 4 * i;
-    data[o] = acc2[3 * i] / areaSum[i];
-    data[o + 1] = acc2[3 * i + 1] / areaSum[i];
-    data[o + 2] = acc2[3 * i + 2] / areaSum[i];
+    const i = index[j];
+    for (let k = 0; k < 3; k++) value[3 * j + k] = acc2[3 * i + k] / areaSum[i];
   }
+  return { index, value };
 }
 
 /**
- * The strain texture of a primitive's geometry (rest positions, TEXCOORD_0 as `uv`, index,
+ * The per-target strains of a primitive's geometry (rest positions, TEXCOORD_0 as `uv`, index,
  * relative morph positions). A target's strains are computed the first time a face uses it
  * (`ensure`), so loading costs only the charts. Null without UVs or morph targets.
  */
@@ -216,8 +193,6 @@ export class StrainField {
     const ch = this.charts;
     this.areaSum = new Float64Array(n);
     for (let c = 0; c < 3 * ch.m; c++) this.areaSum[ch.corner[c]] += ch.area[(c / 3) | 0];
-    const rows = Math.max(1, Math.ceil((this.morphs.length * n) / STRAIN_WIDTH));
-    this.data = new Float32Array(STRAIN_WIDTH * rows * 4);
     this.work = {
       acc: new Float64Array(n * 3),
       acc2: new Float64Array(n * 3),
@@ -231,25 +206,33 @@ export class StrainField {
       seen: new Int32Array(n),
       seen2: new Int32Array(n),
     };
-    this.done = new Uint8Array(this.morphs.length);
+    /** Per target, once computed: {index: vertices, value: (uu, vv, uv) per vertex}. */
+    this.targets = new Array(this.morphs.length).fill(null);
     this.vertices = n;
-    this.texture = new DataTexture(this.data, STRAIN_WIDTH, rows, RGBAFormat, FloatType);
-    this.texture.minFilter = this.texture.magFilter = NearestFilter;
-    this.texture.generateMipmaps = false;
-    this.texture.needsUpdate = true;
   }
 
-  /** Compute the strains of these target indices if not yet done (then re-upload). */
+  /** Compute the strains of these target indices if not yet done. */
   ensure(targets) {
-    let changed = false;
     for (const t of targets) {
-      if (this.done[t]) continue;
-      const base = t * this.vertices * 4;
-      targetStrain(this.charts, floats(this.morphs[t]), this.vertices, this.areaSum, this.work, t,
-        this.data, base);
-      this.done[t] = 1;
-      changed = true;
+      if (this.targets[t]) continue;
+      this.targets[t] = targetStrain(this.charts, floats(this.morphs[t]), this.vertices,
+        this.areaSum, this.work, t);
     }
-    if (changed) this.texture.needsUpdate = true;
+  }
+
+  /** Σ weights[t] · strain of t over the ``active`` targets, added into ``out`` (n · 3). */
+  blend(weights, active, out) {
+    for (const t of active) {
+      if (t >= this.targets.length) continue;
+      this.ensure([t]);
+      const w = weights[t];
+      const { index, value } = this.targets[t];
+      for (let j = 0; j < index.length; j++) {
+        const v = 3 * index[j];
+        out[v] += w * value[3 * j];
+        out[v + 1] += w * value[3 * j + 1];
+        out[v + 2] += w * value[3 * j + 2];
+      }
+    }
   }
 }
