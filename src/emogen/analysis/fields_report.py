@@ -52,14 +52,20 @@ def fields_section(
             f"participant(s) with at most {counts.max()} face(s) per emotion."
         )
         return
+    from threadpoolctl import threadpool_limits
+
     rng = np.random.default_rng(opts.seed)
     space = face_space(people)
     fields = perceptive_fields(people, space)
     out: dict[str, Any] = {"components": space.k, "variance": float(space.explained.sum())}
     _describe(fields, counts, report, out)
-    matrices = _overlaps(fields, report, rng, out)
-    _individuality(people, fields, report, opts, out)
-    clustering = _clusters(fields, report, opts, rng, out)
+    # BLAS on one thread: the matrices are small and many (100 null studies); on the busy
+    # 2-core machine one null study at 336 took 4.8 s wall, 0.69 s CPU on BLAS's default
+    # threads and 0.28 s, 0.03 s on one (benchmarks/bench_fields.py, load 12)
+    with threadpool_limits(limits=1, user_api="blas"):
+        matrices = _overlaps(fields, report, rng, out)
+        _individuality(people, fields, report, opts, out)
+        clustering = _clusters(fields, report, opts, rng, out)
     order = list(clustering.participants) if clustering else []
     if clustering is not None and clustering.structure:
         order = [p for _, p in sorted(zip(clustering.labels, clustering.participants, strict=True))]
