@@ -239,3 +239,28 @@ def test_dense_spectral_maps_equal_sklearns_spectral_embedding() -> None:
         affinity = np.clip(1 - d**2 / 2, 0, 1)
         ref = spectral_embedding(affinity, n_components=6, random_state=0, drop_first=False)
         assert spectral_maps(affinity, 6) == pytest.approx(ref, abs=1e-10)
+
+
+def test_contact_sheets_show_a_seeded_sample_of_a_large_study(
+    rig, ict_model, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:  # type: ignore[no-untyped-def]
+    """Beyond SHEET_PARTICIPANTS the sheets hold that many participants' faces, drawn with the
+    analysis seed, and the report says so; the sheet's height is that of those faces alone."""
+    from PIL import Image
+
+    from emogen.analysis import fields_report
+    from emogen.analysis.field_maps import mean_faces
+    from emogen.render.images import contact_sheet
+
+    monkeypatch.setattr(fields_report, "SHEET_PARTICIPANTS", 2)
+    people = as_people(simulate_people(_grouped(8, False), rig, seed=6))
+    report = Report("t", tmp_path / "a")
+    opts = AnalysisOptions(render_size=64)
+    fields_section(people, report, {}, opts, ict_model)
+    assert f"2 of the 8 participants, drawn at random (seed {opts.seed})" in report._markdown()
+    means = mean_faces(people)
+    e = str(means["emotion"].iloc[0])
+    n = int((means["emotion"] == e).sum() / 8 * 2)  # two participants' faces of emotion e
+    expected = contact_sheet(np.zeros((n, 64, 64, 3), np.uint8), ["x"] * n, columns=8)
+    with Image.open(tmp_path / "a" / "figures" / f"fields_faces_{e}.png") as sheet:
+        assert sheet.size[1] == expected.shape[0]
