@@ -34,6 +34,7 @@ SLOW: dict[str, str] = {
     "tests/analysis/test_categorisation_models.py::test_the_contrast_holds_alpha_when_prototypes_are_shuffled": f"{_SECONDS}: 3.1",
     "tests/analysis/test_conditions.py::test_identity_tests_hold_alpha_on_null_and_find_a_planted_effect": f"{_SECONDS}: 3.7",
     "tests/analysis/test_fields.py::test_one_population_mostly_reads_as_no_structure": f"{_SECONDS}: 9.0",
+    "tests/analysis/test_fields.py::test_contact_sheets_show_a_seeded_sample_of_a_large_study": f"{_SECONDS}: 8.8",
     "tests/analysis/test_fields_accuracy.py::test_a_planted_relation_is_found": f"{_SECONDS}: 8.6",
     "tests/analysis/test_fields_accuracy.py::test_labels_that_ignore_the_faces_hold_alpha": f"{_SECONDS}: 27.9",
     "tests/analysis/test_figures.py::test_bar_and_curve_figures_hold_for_2_to_12_groups[12]": f"{_SECONDS}: 3.6",

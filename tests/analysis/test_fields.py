@@ -102,6 +102,36 @@ def test_monte_carlo_bhattacharyya_and_min_overlap_match_closed_forms() -> None:
     assert bc[0, 0] == 1.0
 
 
+def test_bhattacharyya_of_many_fields_is_a_plain_loop_over_pairs(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The batched estimate (every pair from one matrix over fields × draw sets, in blocks of
+    two fields' draws here) against a loop over pairs with scipy's normal densities, on the
+    same draws."""
+    from emogen.analysis import fields as module
+
+    rng = np.random.default_rng(5)
+    k, h, samples = 3, 0.6, 40
+    fields = [rng.normal(rng.normal(0, 1, k), 0.5, (int(rng.integers(1, 5)), k)) for _ in range(7)]
+    monkeypatch.setattr(module, "_BLOCK_VALUES", 2 * 7 * samples)
+    bc, mn = bhattacharyya(fields, h, rng=np.random.default_rng(9), samples=samples)
+    again = np.random.default_rng(9)
+    draws = []
+    for x in fields:
+        c = x[again.integers(0, len(x), samples)]
+        draws.append(c + again.normal(0.0, h, c.shape))
+
+    def density(x: np.ndarray, at: np.ndarray) -> np.ndarray:
+        return np.mean([stats.multivariate_normal(c, h**2).pdf(at) for c in x], axis=0)
+
+    for i in range(len(fields)):
+        for j in range(len(fields)):
+            at = np.vstack([draws[i], draws[j]])
+            p, q = density(fields[i], at), density(fields[j], at)
+            assert bc[i, j] == pytest.approx(np.mean(np.sqrt(p * q) / ((p + q) / 2)), abs=1e-12)
+            assert mn[i, j] == pytest.approx(np.mean(np.minimum(p, q) / ((p + q) / 2)), abs=1e-12)
+
+
 def _grouped(participants: int, groups: bool) -> PeopleDesign:
     return PeopleDesign(
         participants=participants,
@@ -193,3 +223,44 @@ def test_one_embedding_clusters_as_sklearn_does_for_every_k() -> None:
                 k, affinity="precomputed", random_state=0, assign_labels="cluster_qr"
             ).fit_predict(affinity)
             assert adjusted_rand_score(ref, cluster_qr(maps[:, :k])) == 1.0
+
+
+def test_dense_spectral_maps_equal_sklearns_spectral_embedding() -> None:
+    """spectral_maps (scipy's dense eigh) against scikit-learn's ARPACK spectral embedding on
+    connected affinities of three planted groups: the same vectors, signs included."""
+    from sklearn.manifold import spectral_embedding
+
+    from emogen.analysis.field_clusters import spectral_maps
+
+    rng = np.random.default_rng(3)
+    for n, gap in ((30, 1.0), (90, 2.0), (150, 0.5)):
+        x = np.concatenate([rng.normal(c, 1.0, (n // 3, 3)) for c in (0.0, gap, -gap)])
+        d = np.clip(np.sqrt(((x[:, None] - x[None]) ** 2).sum(-1)) / 4, 0, np.sqrt(2))
+        affinity = np.clip(1 - d**2 / 2, 0, 1)
+        ref = spectral_embedding(affinity, n_components=6, random_state=0, drop_first=False)
+        assert spectral_maps(affinity, 6) == pytest.approx(ref, abs=1e-10)
+
+
+def test_contact_sheets_show_a_seeded_sample_of_a_large_study(
+    rig, ict_model, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:  # type: ignore[no-untyped-def]
+    """Beyond SHEET_PARTICIPANTS the sheets hold that many participants' faces, drawn with the
+    analysis seed, and the report says so; the sheet's height is that of those faces alone."""
+    from PIL import Image
+
+    from emogen.analysis import fields_report
+    from emogen.analysis.field_maps import mean_faces
+    from emogen.render.images import contact_sheet
+
+    monkeypatch.setattr(fields_report, "SHEET_PARTICIPANTS", 2)
+    people = as_people(simulate_people(_grouped(8, False), rig, seed=6))
+    report = Report("t", tmp_path / "a")
+    opts = AnalysisOptions(render_size=64)
+    fields_section(people, report, {}, opts, ict_model)
+    assert f"2 of the 8 participants, drawn at random (seed {opts.seed})" in report._markdown()
+    means = mean_faces(people)
+    e = str(means["emotion"].iloc[0])
+    n = int((means["emotion"] == e).sum() / 8 * 2)  # two participants' faces of emotion e
+    expected = contact_sheet(np.zeros((n, 64, 64, 3), np.uint8), ["x"] * n, columns=8)
+    with Image.open(tmp_path / "a" / "figures" / f"fields_faces_{e}.png") as sheet:
+        assert sheet.size[1] == expected.shape[0]

@@ -75,19 +75,16 @@ def field_distances(points: dict[str, list[np.ndarray]], bandwidth: dict[str, fl
     return np.sqrt(np.clip(d2, 0.0, None))
 
 
-def best_clusters(
-    dist: np.ndarray, max_k: int, *, seed: int = 0
-) -> tuple[int, np.ndarray, dict[int, float]]:
+def best_clusters(dist: np.ndarray, max_k: int) -> tuple[int, np.ndarray, dict[int, float]]:
     """Spectral clusters of the affinity 1 − d²/2 (the mean overlap) for k = 2…max_k: (best k
     by mean silhouette on ``dist``, its labels 1…k, the silhouette of each k). One spectral
     embedding of ``max_k`` dimensions serves every k (its first k eigenvectors are the
     k-cluster embedding), the labels by :func:`cluster_qr` — the embedding is most of the
     cost, and the GA studies' null repeats it ``n_null`` times (docs/analysis.md, speed)."""
-    from sklearn.manifold import spectral_embedding
     from sklearn.metrics import silhouette_score
 
     affinity = np.clip(1.0 - dist**2 / 2.0, 0.0, 1.0)
-    maps = spectral_embedding(affinity, n_components=max_k, random_state=seed, drop_first=False)
+    maps = spectral_maps(affinity, max_k)
     sil, labels = {}, {}
     for k in range(2, max_k + 1):
         lab = cluster_qr(maps[:, :k]) + 1
@@ -99,6 +96,24 @@ def best_clusters(
         return 1, np.ones(len(dist), dtype=int), {}
     best = max(sil, key=lambda k: sil[k])
     return best, labels[best], sil
+
+
+def spectral_maps(affinity: np.ndarray, k: int) -> np.ndarray:
+    """(n, k) spectral embedding of a dense affinity matrix (Ng, Jordan & Weiss 2002): the
+    eigenvectors of the k smallest eigenvalues of the normalised graph Laplacian, divided by
+    the square roots of the degrees, each signed so that its largest entry is positive — as
+    scikit-learn's ``spectral_embedding(drop_first=False)``, but by a dense symmetric
+    eigensolver: the matrix is participants × participants (336 × 336), where ARPACK's
+    shift-invert (an LU per call) cost more than the whole dense solution."""
+    from scipy.linalg import eigh
+    from scipy.sparse.csgraph import laplacian
+
+    lap, degree_root = laplacian(affinity, normed=True, return_diag=True)
+    np.fill_diagonal(lap, 1.0)  # the self-affinity does not count, as in scikit-learn
+    _values, vectors = eigh(lap, subset_by_index=[0, k - 1])
+    maps = vectors / degree_root[:, None]
+    largest = np.abs(maps).argmax(axis=0)
+    return np.asarray(maps * np.sign(maps[largest, np.arange(k)]))
 
 
 def cluster_qr(maps: np.ndarray) -> np.ndarray:

@@ -133,15 +133,24 @@ def mean_faces(people: People) -> pd.DataFrame:
 
 
 def contact_sheets(
-    people: People, model: FaceModel, folder: Path, *, size: int = 160, columns: int = 8
+    people: People,
+    model: FaceModel,
+    folder: Path,
+    *,
+    size: int = 160,
+    columns: int = 8,
+    participants: set[str] | None = None,
 ) -> tuple[dict[str, Path], list[str]]:
-    """One contact sheet per emotion of every participant's mean face per identity, rendered on
-    that identity (shape and appearance), labelled ``participant · identity (n faces)``.
-    Returns the sheets by emotion and the identities that could not be resolved."""
+    """One contact sheet per emotion of every participant's (or only ``participants``') mean
+    face per identity, rendered on that identity (shape and appearance), labelled
+    ``participant · identity (n faces)``. Returns the sheets by emotion and the identities
+    that could not be resolved."""
     from emogen.analysis.face_sheets import model_weights, render_on_identities
     from emogen.render.images import contact_sheet
 
     means = mean_faces(people)
+    if participants is not None:
+        means = means[means["participant_id"].isin(sorted(participants))].reset_index(drop=True)
     idents = study_identities(people)
     missing = sorted(set(means["identity"]) - set(idents))
     means = means[means["identity"].isin(list(idents))].reset_index(drop=True)

@@ -224,37 +224,53 @@ def bhattacharyya(
     """Monte Carlo Bhattacharyya coefficients ∫√(pq) and overlap integrals ∫min(p, q) of every
     pair of Gaussian-KDE fields (kernel SD h): ``samples`` draws from each field, and a pair
     uses both sets — a sample of (p+q)/2, against which √(pq) and min(p, q) are at most 1 — so
-    each estimate's standard error is below 1/√(2·samples). Returns two (n, n) matrices."""
+    each estimate's standard error is below 1/√(2·samples). Returns two (n, n) matrices.
+
+    At a draw where the two log densities differ by δ, √(pq)/((p+q)/2) = 1/cosh(δ/2) and
+    min(p, q)/((p+q)/2) = 2/(1 + e^δ): both symmetric in p and q, so the sum over field i's
+    draws of the pair (i, j) is one entry of an (n, n) matrix over (field, draw set), and the
+    pair's estimate is that entry plus its transpose's over 2·samples."""
     n = len(fields)
     draws = []
     for x in fields:
         c = x[rng.integers(0, len(x), samples)]
         draws.append(c + rng.normal(0.0, h, c.shape))
     allx = np.vstack(draws)
-    logp = _kde_logpdfs(fields, allx, h).reshape(n, n, samples)
-    own = logp[np.arange(n), np.arange(n)]  # (n, samples): each field at its own draws
-    bc, mn = np.eye(n), np.eye(n)
-    for i in range(n - 1):  # every pair (i, j > i) at once: O(n²) pairs, quadratic in people
-        la = np.concatenate([np.broadcast_to(own[i], (n - i - 1, samples)), logp[i, i + 1 :]], 1)
-        lb = np.concatenate([logp[i + 1 :, i], own[i + 1 :]], axis=1)
-        mix = np.logaddexp(la, lb) - np.log(2.0)
-        bc[i, i + 1 :] = bc[i + 1 :, i] = np.exp(0.5 * (la + lb) - mix).mean(axis=1)
-        mn[i, i + 1 :] = mn[i + 1 :, i] = np.exp(np.minimum(la, lb) - mix).mean(axis=1)
+    sums_bc, sums_mn = np.empty((n, n)), np.empty((n, n))
+    # every field at the draws of a block of fields at once: one numpy pass per block of
+    # n·block·samples log densities (quadratic in people: at 336, 29 million per emotion)
+    block = max(1, _BLOCK_VALUES // (n * samples))
+    for lo in range(0, n, block):
+        hi = min(n, lo + block)
+        logp = _kde_logpdfs(fields, allx[lo * samples : hi * samples], h)
+        logp = logp.reshape(n, hi - lo, samples)
+        own = logp[np.arange(lo, hi), np.arange(hi - lo)]  # each field at its own draws
+        t = np.exp(-0.5 * np.abs(logp - own[None]))  # e^(−δ/2)
+        share = 2.0 / (1.0 + t * t)
+        sums_bc[:, lo:hi] = (t * share).sum(axis=2)
+        sums_mn[:, lo:hi] = (t * t * share).sum(axis=2)
+    bc = (sums_bc + sums_bc.T) / (2 * samples)
+    mn = (sums_mn + sums_mn.T) / (2 * samples)
+    np.fill_diagonal(bc, 1.0)
+    np.fill_diagonal(mn, 1.0)
     return bc, mn
 
 
+#: Log densities per block of :func:`bhattacharyya` (2²¹ floats: 16 MB, a few per block).
+_BLOCK_VALUES = 2**21
+
+
 def _kde_logpdfs(fields: list[np.ndarray], x: np.ndarray, h: float) -> np.ndarray:
-    """(len(fields), len(x)) log densities of each field's Gaussian KDE (kernel SD h) at ``x``,
-    the squared norms of ``x`` computed once (the Bhattacharyya matrix evaluates n fields at
-    256·n draws: half its cost at 336 participants, benchmarks/bench_analyse.py)."""
+    """(len(fields), len(x)) log densities of each field's Gaussian KDE (kernel SD h) at ``x``:
+    every kernel centre at every point in one pass, each field's log-sum-exp by its block of
+    centres (``np.maximum.reduceat`` / ``np.add.reduceat``)."""
     k = x.shape[1]
-    xx = (x**2).sum(axis=1)[:, None]
-    out = np.empty((len(fields), len(x)))
-    for i, c in enumerate(fields):
-        logk = -0.5 * np.clip(xx + (c**2).sum(axis=1) - 2.0 * x @ c.T, 0.0, None) / h**2
-        top = logk.max(axis=1)
-        out[i] = top + np.log(np.exp(logk - top[:, None]).sum(axis=1))
-    return out - 0.5 * k * np.log(2 * np.pi * h**2) - np.log([[len(c)] for c in fields])
+    sizes = np.array([len(c) for c in fields])
+    starts = _starts(sizes)
+    logk = -0.5 * _sq_distances(np.vstack(fields), x) / h**2  # (centres, points)
+    top = np.maximum.reduceat(logk, starts, axis=0)  # (fields, points)
+    dens = np.add.reduceat(np.exp(logk - np.repeat(top, sizes, axis=0)), starts, axis=0)
+    return top + np.log(dens) - 0.5 * k * np.log(2 * np.pi * h**2) - np.log(sizes)[:, None]
 
 
 def split_halves(faces: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:

@@ -33,6 +33,11 @@ log = logging.getLogger(__name__)
 
 #: Fewest participants with fields for the between-participant analyses.
 MIN_PARTICIPANTS = 6
+#: Most participants on the contact sheets (a random sample beyond): every face rendered
+#: costs CPU — at 336 participants the sheets of all 2688 mean faces took 140 s of CPU, more
+#: than the 2-minute goal of the whole analysis (benchmarks/bench_analyse.py, #41) — and a
+#: sheet of 672 faces per emotion is too long to look at.
+SHEET_PARTICIPANTS = 48
 
 
 def fields_section(
@@ -52,14 +57,20 @@ def fields_section(
             f"participant(s) with at most {counts.max()} face(s) per emotion."
         )
         return
+    from threadpoolctl import threadpool_limits
+
     rng = np.random.default_rng(opts.seed)
     space = face_space(people)
     fields = perceptive_fields(people, space)
     out: dict[str, Any] = {"components": space.k, "variance": float(space.explained.sum())}
     _describe(fields, counts, report, out)
-    matrices = _overlaps(fields, report, rng, out)
-    _individuality(people, fields, report, opts, out)
-    clustering = _clusters(fields, report, opts, rng, out)
+    # BLAS on one thread: the matrices are small and many (100 null studies); on the busy
+    # 2-core machine one null study at 336 took 4.8 s wall, 0.69 s CPU on BLAS's default
+    # threads and 0.28 s, 0.03 s on one (benchmarks/bench_fields.py, load 12)
+    with threadpool_limits(limits=1, user_api="blas"):
+        matrices = _overlaps(fields, report, rng, out)
+        _individuality(people, fields, report, opts, out)
+        clustering = _clusters(fields, report, opts, rng, out)
     order = list(clustering.participants) if clustering else []
     if clustering is not None and clustering.structure:
         order = [p for _, p in sorted(zip(clustering.labels, clustering.participants, strict=True))]
@@ -276,9 +287,18 @@ def _sheets(people: People, report: Report, opts: AnalysisOptions, model: FaceMo
             "Contact sheets of the participants' faces skipped (no face model, or --no-render)."
         )
         return
+    who = sorted(people.faces["participant_id"].astype(str).unique())
+    shown = None
+    if len(who) > SHEET_PARTICIPANTS:
+        pick = np.random.default_rng(opts.seed).choice(len(who), SHEET_PARTICIPANTS, replace=False)
+        shown = {who[i] for i in pick}
+        report.paragraph(
+            f"Contact sheets: {SHEET_PARTICIPANTS} of the {len(who)} participants, drawn at "
+            f"random (seed {opts.seed}); every participant's field is in the tables above."
+        )
     try:
         sheets, missing = field_maps.contact_sheets(
-            people, model, report.figures, size=min(opts.render_size, 160)
+            people, model, report.figures, size=min(opts.render_size, 160), participants=shown
         )
     except EmoGenError as exc:
         log.warning("rendering failed: %s", exc)
@@ -291,6 +311,6 @@ def _sheets(people: People, report: Report, opts: AnalysisOptions, model: FaceMo
     for e, path in sheets.items():
         report.figure(
             path,
-            f"{e}: every participant's mean final face per identity, on the "
+            f"{e}: each participant's mean final face per identity, on the "
             "identity (shape and appearance) they made it on; (n) faces averaged.",
         )
