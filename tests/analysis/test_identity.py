@@ -120,3 +120,53 @@ def test_identity_section_skips_one_identity_and_writes_tables(
     for name in ("identity_distances", "identity_distance_test", "identity_decoding"):
         assert (tmp_path / "b" / "tables" / f"{name}.csv").is_file()
     assert {"distance", "decoding"} <= set(summary["identity"])
+
+
+def test_decoding_equals_one_fit_per_ordered_pair(rig) -> None:  # type: ignore[no-untyped-def]
+    """The decoding table (one LDA per fold and training identity, shared by the identities it
+    is tested on) equals a plain loop that fits one LDA per ordered pair and fold, with the
+    same folds and the same shuffles."""
+    from itertools import permutations
+
+    import pandas as pd
+    from sklearn.discriminant_analysis import LinearDiscriminantAnalysis
+
+    people = as_people(simulate_people(_design(10, True), rig, seed=6))
+    n_perm = 5
+    dec = cross_identity_decoding(people, rng=np.random.default_rng(8), n_perm=n_perm)
+
+    f = people.faces.reset_index(drop=True)
+    x, y = people.gene_matrix(f), f["emotion"].astype(str).to_numpy()
+    who = f["participant_id"].astype(str).to_numpy()
+    ident = f["identity"].astype(str).to_numpy()
+    ids = sorted(set(ident))
+    rng = np.random.default_rng(8)  # the same draws, in the same order
+    order = rng.permutation(np.array(sorted(set(who))))
+    folds = [a for a in np.array_split(order, min(5, len(order))) if len(a)]
+    pairs = [*permutations(ids, 2), *((i, i) for i in ids)]
+
+    def accuracy(labels: np.ndarray, a: str, b: str) -> float:
+        shares = []
+        for test in folds:
+            held = np.isin(who, test)
+            train, target = ~held & (ident == a), held & (ident == b)
+            fit = LinearDiscriminantAnalysis(solver="lsqr", shrinkage="auto")
+            fit.fit(x[train], labels[train])
+            for p in np.unique(who[target]):
+                mine = target & (who == p)
+                shares.append(float(np.mean(fit.predict(x[mine]) == labels[mine])))
+        return float(np.mean(shares))
+
+    cells = pd.Series([f"{w}\x00{i}" for w, i in zip(who, ident, strict=True)])
+    null = {pair: [] for pair in pairs}
+    for _ in range(n_perm):
+        shuffled = y.copy()
+        for idx in pd.Series(np.arange(len(y))).groupby(cells.to_numpy()).indices.values():
+            shuffled[idx] = y[rng.permutation(idx)]
+        for a, b in pairs:
+            null[(a, b)].append(accuracy(shuffled, a, b))
+    assert list(zip(dec["train_identity"], dec["test_identity"], strict=True)) == pairs
+    for row in dec.to_dict("records"):
+        pair = (row["train_identity"], row["test_identity"])
+        assert row["accuracy"] == pytest.approx(accuracy(y, *pair), abs=1e-12)
+        assert row["chance"] == pytest.approx(np.mean(null[pair]), abs=1e-12)
