@@ -190,6 +190,12 @@ def test_without_webgl_a_strip_of_nine_pictures_stands_in(
         pictures.nth(6).click()
         assert pictures.nth(6).get_attribute("aria-pressed") == "true"
         if k == 0:
+            # the nine pictures and "Next" fit a 768-pixel-high window without scrolling
+            page.evaluate("scrollTo(0, 0)")
+            bottom = page.evaluate(
+                "document.getElementById('gsp-next').getBoundingClientRect().bottom"
+            )
+            assert bottom <= 768, bottom
             SCREENSHOTS.mkdir(parents=True, exist_ok=True)
             page.screenshot(path=str(SCREENSHOTS / "gsp_png_1366x768.jpg"), quality=80)
         chosen.append(view["strip"][6])

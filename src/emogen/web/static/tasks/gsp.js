@@ -35,7 +35,7 @@ const CSS = `
 .gsp-face { width: min(58vh, 92vw, 560px); aspect-ratio: 1; position: relative; }
 .gsp-slider { width: min(58vh, 92vw, 560px); height: 2.75rem; margin: 0; touch-action: none; }
 .gsp-slider::-webkit-slider-thumb { width: 2.25rem; height: 2.25rem; }
-.gsp-strip { display: grid; grid-template-columns: repeat(3, minmax(0, 1fr)); gap: 0.4rem; width: min(92vw, 70vh, 620px); }
+.gsp-strip { display: grid; grid-template-columns: repeat(3, minmax(0, 1fr)); gap: 0.4rem; width: min(92vw, 60vh, 620px); }
 .gsp-strip button { position: relative; aspect-ratio: 1; padding: 0; border: 3px solid transparent; border-radius: 6px; background: none; cursor: pointer; overflow: hidden; }
 .gsp-strip button[aria-pressed="true"] { border-color: var(--accent, #1a5fb4); }
 .gsp-wait { max-width: 32rem; text-align: center; }
