@@ -212,6 +212,25 @@ class MetricConfig(_Strict):
         return self
 
 
+Unit = Annotated[float, Field(ge=0, le=1)]
+
+
+class DynamicSimulationConfig(_Strict):
+    """A simulation of dynamic faces (docs/ga.md, "Simulated observers of dynamic faces"): the
+    target is a face that moves; the observer selects by CD over its trajectory."""
+
+    clip_s: Annotated[float, Field(ge=0.2, le=10)] = 1.25
+    hold_s: Annotated[float, Field(ge=0, le=10)] = 0.75
+    min_segment_s: Annotated[float, Field(gt=0)] = 0.08
+    #: Times sampled evenly over the clip for the trajectory metric (26: every 50 ms of 1.25 s).
+    samples: Annotated[int, Field(ge=2, le=500)] = 26
+    #: The target's timing per gene with a non-zero target weight: [onset, acceleration, peak,
+    #: deceleration, offset], each in [0, 1] (docs/ga.md, "The curve").
+    timing: dict[str, Annotated[list[Unit], Field(min_length=5, max_length=5)]] = {}
+    #: Evolve the amplitudes only, every gene's timing held at the target's.
+    hold_timing: bool = False
+
+
 class SimulationConfig(_Strict):
     """A simulated study: an observer selects by a metric toward a target (Section IV-A)."""
 
@@ -238,6 +257,8 @@ class SimulationConfig(_Strict):
     noise_temperature: Annotated[float, Field(ge=0)] = 0.0
     #: Apply the model's corrections (correctives, collisions) to every shown face.
     correct: bool = False
+    #: Dynamic faces: the target moves and the GA evolves time courses (None: static faces).
+    dynamic: DynamicSimulationConfig | None = None
 
     @model_validator(mode="after")
     def _consistent(self) -> SimulationConfig:
@@ -249,6 +270,12 @@ class SimulationConfig(_Strict):
             raise ValueError("target must have at least one non-zero weight")
         if self.target_row is not None and self.target_file is None:
             raise ValueError("target_row needs target_file")
+        if self.dynamic is not None and (self.metric.name != "cd" or self.correct):
+            raise ValueError(
+                "a dynamic simulation's observer selects by CD over the trajectory: it needs "
+                f"metric 'cd' and correct = false; got metric '{self.metric.name}', correct = "
+                f"{str(self.correct).lower()}"
+            )
         ga = self.ga
         if ga.variant == "classical":
             if ga.max_selections < ga.population_size:
