@@ -21,6 +21,7 @@ from emogen.simulate.convergence import compare_dynamic, convergence_table, fina
 from emogen.simulate.dynamic import latencies, trajectory
 from emogen.simulate.runner import DYNAMIC_COLUMNS, build_problem, run_simulation
 from emogen.simulate.vectorised import engine_run, simulate_runs
+from tests.r_readers import undocumented
 
 runner = CliRunner()
 TARGET = {"jawOpen": 0.6, "mouthSmile": 0.8, "browInnerUp": 0.5}
@@ -189,6 +190,10 @@ def test_cli_simulate_dynamic(ict_dir: Path, tmp_path: Path) -> None:
     table = pd.read_parquet(out / "simulation.parquet")
     assert set(DYNAMIC_COLUMNS) <= set(table.columns) and len(table) == 6 * 5
     convergence = pd.read_csv(out / "convergence.csv")
+    faces = pd.read_parquet(out / "faces.parquet")
+    assert not undocumented(list(table.columns), "simulate: simulation")
+    assert not undocumented(list(faces.columns), "simulate: faces")
+    assert not undocumented(list(convergence.columns), "simulate: convergence")
     assert set(convergence["run_kind"]) == {"dynamic", "held_timing", "static"}
     assert (out / "convergence.png").stat().st_size > 10_000
     # the printed numbers are the table's last generation
