@@ -14,6 +14,7 @@ from pathlib import Path
 from types import UnionType
 from typing import Annotated, Any, Literal, TypeVar, Union, get_args, get_origin
 
+import pydantic
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 from pydantic.fields import FieldInfo
 from pydantic_core import PydanticCustomError
@@ -216,16 +217,14 @@ Unit = Annotated[float, Field(ge=0, le=1)]
 
 
 class DynamicSimulationConfig(_Strict):
-    """A simulation of dynamic faces (docs/ga.md, "Simulated observers of dynamic faces"): the
-    target is a face that moves; the observer selects by CD over its trajectory."""
+    """Dynamic faces (docs/ga.md, "Simulated observers of dynamic faces"): a moving target."""
 
     clip_s: Annotated[float, Field(ge=0.2, le=10)] = 1.25
     hold_s: Annotated[float, Field(ge=0, le=10)] = 0.75
     min_segment_s: Annotated[float, Field(gt=0)] = 0.08
     #: Times sampled evenly over the clip for the trajectory metric (26: every 50 ms of 1.25 s).
     samples: Annotated[int, Field(ge=2, le=500)] = 26
-    #: The target's timing per gene with a non-zero target weight: [onset, acceleration, peak,
-    #: deceleration, offset], each in [0, 1] (docs/ga.md, "The curve").
+    #: Per gene of the target: [onset, acceleration, peak, deceleration, offset] in [0, 1].
     timing: dict[str, Annotated[list[Unit], Field(min_length=5, max_length=5)]] = {}
     #: Evolve the amplitudes only, every gene's timing held at the target's.
     hold_timing: bool = False
@@ -270,12 +269,6 @@ class SimulationConfig(_Strict):
             raise ValueError("target must have at least one non-zero weight")
         if self.target_row is not None and self.target_file is None:
             raise ValueError("target_row needs target_file")
-        if self.dynamic is not None and (self.metric.name != "cd" or self.correct):
-            raise ValueError(
-                "a dynamic simulation's observer selects by CD over the trajectory: it needs "
-                f"metric 'cd' and correct = false; got metric '{self.metric.name}', correct = "
-                f"{str(self.correct).lower()}"
-            )
         ga = self.ga
         if ga.variant == "classical":
             if ga.max_selections < ga.population_size:
@@ -294,6 +287,14 @@ class SimulationConfig(_Strict):
 
     def selections_at(self, generation: int) -> int:
         return self.selections[min(generation, len(self.selections) - 1)]
+
+    @pydantic.model_serializer(mode="wrap")
+    def _static_as_before(self, handler: pydantic.SerializerFunctionWrapHandler) -> dict[str, Any]:
+        """A static simulation serialises as before dynamic faces: no ``dynamic`` key."""
+        data: dict[str, Any] = handler(self)
+        if self.dynamic is None:
+            data.pop("dynamic", None)
+        return data
 
 
 M = TypeVar("M", bound=BaseModel)

@@ -116,6 +116,12 @@ def test_a_target_moving_as_one_curve_with_held_timing_is_the_static_run(ict_mod
     np.testing.assert_allclose(held["elite_error"], static["elite_error"], atol=1e-9)
     np.testing.assert_allclose(held["elite_peak_error"], static["elite_error"], atol=1e-9)
     assert (held["elite_timing_error"] == 0).all()
+    # a static simulation records its config as before dynamic faces: no 'dynamic' key
+    static_record = run_simulation(
+        cfg.model_copy(update={"dynamic": None, "runs": 1}), ict_model.rig
+    )
+    assert "dynamic" not in static_record.record["config"]
+    assert "dynamic_target" not in static_record.record
 
 
 def test_held_timing_converges_like_the_static_run(ict_model) -> None:

@@ -32,6 +32,7 @@ import pandas as pd
 
 from emogen import columns as tidy
 from emogen.config import SimulationConfig
+from emogen.errors import ConfigError
 from emogen.ga.draws import CURRENT_STREAM
 from emogen.ga.genome import PARAMS
 from emogen.ga.init import read_fixed_sets
@@ -91,6 +92,12 @@ def build_problem(
     that identity's faces. ``training`` (n, n_shapes) overrides ``metric.training``.
     """
     rig, model = _split(source)
+    if config.dynamic is not None and (config.metric.name != "cd" or config.correct):
+        raise ConfigError(
+            "a dynamic simulation's observer selects by CD over the trajectory: it needs "
+            f"metric 'cd' and correct = false; got metric '{config.metric.name}', correct = "
+            f"{str(config.correct).lower()}"
+        )
     if model is not None and config.ga.identity != "generic":
         model = model.with_identity(config.ga.identity)
     target = resolve_target(config, rig)
