@@ -14,6 +14,7 @@ from pathlib import Path
 from types import UnionType
 from typing import Annotated, Any, Literal, TypeVar, Union, get_args, get_origin
 
+import pydantic
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 from pydantic.fields import FieldInfo
 from pydantic_core import PydanticCustomError
@@ -212,6 +213,23 @@ class MetricConfig(_Strict):
         return self
 
 
+Unit = Annotated[float, Field(ge=0, le=1)]
+
+
+class DynamicSimulationConfig(_Strict):
+    """Dynamic faces (docs/ga.md, "Simulated observers of dynamic faces"): a moving target."""
+
+    clip_s: Annotated[float, Field(ge=0.2, le=10)] = 1.25
+    hold_s: Annotated[float, Field(ge=0, le=10)] = 0.75
+    min_segment_s: Annotated[float, Field(gt=0)] = 0.08
+    #: Times sampled evenly over the clip for the trajectory metric (26: every 50 ms of 1.25 s).
+    samples: Annotated[int, Field(ge=2, le=500)] = 26
+    #: Per gene of the target: [onset, acceleration, peak, deceleration, offset] in [0, 1].
+    timing: dict[str, Annotated[list[Unit], Field(min_length=5, max_length=5)]] = {}
+    #: Evolve the amplitudes only, every gene's timing held at the target's.
+    hold_timing: bool = False
+
+
 class SimulationConfig(_Strict):
     """A simulated study: an observer selects by a metric toward a target (Section IV-A)."""
 
@@ -238,6 +256,8 @@ class SimulationConfig(_Strict):
     noise_temperature: Annotated[float, Field(ge=0)] = 0.0
     #: Apply the model's corrections (correctives, collisions) to every shown face.
     correct: bool = False
+    #: Dynamic faces: the target moves and the GA evolves time courses (None: static faces).
+    dynamic: DynamicSimulationConfig | None = None
 
     @model_validator(mode="after")
     def _consistent(self) -> SimulationConfig:
@@ -267,6 +287,14 @@ class SimulationConfig(_Strict):
 
     def selections_at(self, generation: int) -> int:
         return self.selections[min(generation, len(self.selections) - 1)]
+
+    @pydantic.model_serializer(mode="wrap")
+    def _static_as_before(self, handler: pydantic.SerializerFunctionWrapHandler) -> dict[str, Any]:
+        """A static simulation serialises as before dynamic faces: no ``dynamic`` key."""
+        data: dict[str, Any] = handler(self)
+        if self.dynamic is None:
+            data.pop("dynamic", None)
+        return data
 
 
 M = TypeVar("M", bound=BaseModel)

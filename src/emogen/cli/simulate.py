@@ -19,6 +19,7 @@ from emogen.cli.options import (
     show_result,
 )
 from emogen.cli.outputs import ForceOpt, check_out_folder, moved, output_folder
+from emogen.cli.simulate_dynamic import DynamicOpt, HoldTimingOpt, TargetTimingOpt
 
 if TYPE_CHECKING:
     from emogen.simulate.runner import SimulationResult
@@ -227,6 +228,9 @@ def simulate_command(
     training: TrainingOpt = None,
     noise_temperature: NoiseOpt = None,
     correct: CorrectOpt = None,
+    dynamic: DynamicOpt = None,
+    target_timing: TargetTimingOpt = None,
+    hold_timing: HoldTimingOpt = None,
     all_weights: AllWeightsOpt = False,
     dask: DaskOpt = None,
     workers: WorkersOpt = None,
@@ -242,12 +246,13 @@ def simulate_command(
     Writes simulation.parquet and simulation.csv (one row per run and generation: run,
     generation, elite_error, elite_distance, n_selected, run_seed), faces.parquet and faces.csv
     (one row per shown face; weights w_<shape>) and simulation.json (resolved config, seeds,
-    record; also in the Parquet files' metadata). Columns: docs/data.md.
+    record; also in the Parquet files' metadata). Columns: docs/data.md. With --dynamic also
+    convergence.csv and convergence.png: the run beside held timing and static (docs/ga.md).
     """
+    from emogen.cli import simulate_dynamic as dyn
     from emogen.config import SimulationConfig, read_toml, validate_config
     from emogen.model import load_model
     from emogen.simulate.backends import make_backend
-    from emogen.simulate.runner import run_simulation, write_simulation
 
     data = simulation_settings(
         read_toml(config) if config else {},
@@ -269,25 +274,22 @@ def simulate_command(
         target_file=target_file,
         target_row=target_row,
     )
+    data = dyn.dynamic_settings(data, dynamic, target_timing, hold_timing)
     cfg = validate_config(SimulationConfig, data, str(config) if config else "(command line)")
     check_out_folder(out, force=force)  # before the work, not after it
     model = load_model(model_path, rig=rig)
     backend = make_backend(dask, workers or 1)
+    progress = sys.stderr.isatty() if progress is None else progress
     try:
-        result = run_simulation(
-            cfg,
-            model,
-            model_name=model.name,
-            model_hash=model.model_hash,
-            backend=backend,
-            progress=sys.stderr.isatty() if progress is None else progress,
-            all_weights=all_weights,
+        result, table = dyn.simulate(
+            cfg, model, backend, progress=progress, all_weights=all_weights
         )
     finally:
         backend.close()
     with output_folder(out, force=force) as tmp:
-        paths = moved(write_simulation(result, tmp), tmp, out)
-    show_result(as_json, *_summary(result, cfg.runs, cfg.metric.name, paths))
+        paths = moved(dyn.write(result, table, tmp), tmp, out)
+    data, lines = _summary(result, cfg.runs, cfg.metric.name, paths)
+    show_result(as_json, *dyn.with_convergence(table, data, lines))
 
 
 @friendly_errors

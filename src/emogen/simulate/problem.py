@@ -15,7 +15,9 @@ import numpy as np
 from emogen.config import SimulationConfig
 from emogen.correct.faces import correct_faces, model_correctives
 from emogen.errors import ConfigError
+from emogen.ga.genome import STATIC, Genome
 from emogen.model.rig import Rig
+from emogen.simulate.dynamic import DynamicView, HeldTiming
 from emogen.simulate.observer import Metric
 
 if TYPE_CHECKING:
@@ -85,6 +87,18 @@ class Problem:
     correction: Correction | None = None
     all_weights: bool = False
     target_source: dict[str, Any] = field(default_factory=dict)
+    #: Dynamic faces: the target that moves and the three distances (None: static faces).
+    dynamic: DynamicView | None = None
+
+    @property
+    def genome(self) -> Genome:
+        """What a gene is: static, dynamic, or dynamic with the target's timing held."""
+        if self.dynamic is None:
+            return STATIC
+        settings = self.config.dynamic
+        if settings is not None and settings.hold_timing:
+            return HeldTiming(self.dynamic.genome, self.dynamic.target[:, 1:])
+        return self.dynamic.genome
 
     @property
     def n_generations(self) -> int:
@@ -102,7 +116,9 @@ class RunArrays:
     """What R runs showed and chose, generation by generation.
 
     runs, seeds : (R,) int; distance : (R, G+1, N) the selection metric to the target; error :
-    (R, G+1, N) CD to the target (the paper's convergence measure); rank : (R, G+1, N) int,
+    (R, G+1, N) CD to the target (the paper's convergence measure; dynamic faces: over the
+    trajectory); peak_error, timing_error : (R, G+1, N) a dynamic face's peak CD and timing
+    distance (s), None for static faces; rank : (R, G+1, N) int,
     0 for the elite, 1… for the other selections in choice order, −1 unselected; operators :
     (R, G+1, N) str; weights : (R, G+1, N, S) shown full weights, or None; fixed_options : (R,)
     the fixed set used (−1 for protocol initialisation).
@@ -116,6 +132,8 @@ class RunArrays:
     operators: np.ndarray
     weights: np.ndarray | None
     fixed_options: np.ndarray
+    peak_error: np.ndarray | None = None
+    timing_error: np.ndarray | None = None
 
     @staticmethod
     def concatenate(parts: list[RunArrays]) -> RunArrays:
@@ -127,7 +145,10 @@ class RunArrays:
         def cat(name: str) -> np.ndarray:
             return np.concatenate([getattr(p, name) for p in parts])
 
-        weights = [p.weights for p in parts]
+        def maybe(name: str) -> np.ndarray | None:
+            values = [getattr(p, name) for p in parts]
+            return None if any(v is None for v in values) else np.concatenate(values)
+
         return RunArrays(
             runs=cat("runs"),
             seeds=cat("seeds"),
@@ -135,6 +156,8 @@ class RunArrays:
             error=cat("error"),
             rank=cat("rank"),
             operators=cat("operators"),
-            weights=None if any(w is None for w in weights) else cat("weights"),
+            weights=maybe("weights"),
             fixed_options=cat("fixed_options"),
+            peak_error=maybe("peak_error"),
+            timing_error=maybe("timing_error"),
         )

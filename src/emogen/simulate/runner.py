@@ -32,11 +32,14 @@ import pandas as pd
 
 from emogen import columns as tidy
 from emogen.config import SimulationConfig
+from emogen.errors import ConfigError
 from emogen.ga.draws import CURRENT_STREAM
+from emogen.ga.genome import PARAMS
 from emogen.ga.init import read_fixed_sets
 from emogen.model.rig import Rig
 from emogen.rng import fresh_seed, spawn_seeds
 from emogen.simulate.backends import Backend, LocalBackend, Task
+from emogen.simulate.dynamic import DynamicView, dynamic_view
 from emogen.simulate.observer import make_metric, selection_count
 from emogen.simulate.problem import Problem, RunArrays, make_correction
 from emogen.simulate.targets import resolve_target
@@ -50,6 +53,13 @@ if TYPE_CHECKING:
 #: a face not selected, the record in every Parquet file's metadata. ``/3`` outputs still read.
 RECORD_SCHEMA = "emogen.simulate/4"
 COLUMNS = ("run", "generation", "elite_error", "elite_distance", "n_selected", "run_seed")
+#: A dynamic simulation's table also has these (its faces: ``peak_error``, ``timing_error``).
+DYNAMIC_COLUMNS = ("elite_peak_error", "elite_timing_error")
+DYNAMIC_ERROR = (
+    " over the trajectory (every shape at every sampled time); elite_peak_error the CD of the "
+    "peak profiles, elite_timing_error the latencies' weighted RMS difference in seconds "
+    "(emogen.metrics.dynamic)"
+)
 FACE_COLUMNS = ("run", "generation", "slot", "operator", "distance", "error", "rank")
 
 
@@ -82,6 +92,12 @@ def build_problem(
     that identity's faces. ``training`` (n, n_shapes) overrides ``metric.training``.
     """
     rig, model = _split(source)
+    if config.dynamic is not None and (config.metric.name != "cd" or config.correct):
+        raise ConfigError(
+            "a dynamic simulation's observer selects by CD over the trajectory: it needs "
+            f"metric 'cd' and correct = false; got metric '{config.metric.name}', correct = "
+            f"{str(config.correct).lower()}"
+        )
     if model is not None and config.ga.identity != "generic":
         model = model.with_identity(config.ga.identity)
     target = resolve_target(config, rig)
@@ -103,7 +119,12 @@ def build_problem(
             population_size=config.ga.population_size,
         )
     shown_target = target.weights if correction is None else correction(target.weights[None])[0]
-    return Problem(config, rig, shown_target, metric, fixed, correction, all_weights, target.source)
+    view = None
+    if config.dynamic is not None:
+        view = dynamic_view(config.dynamic, rig, target.weights, config.ga.eye_motion)
+    return Problem(
+        config, rig, shown_target, metric, fixed, correction, all_weights, target.source, view
+    )
 
 
 def run_tasks(problem: Problem, seeds: list[int], backend: Backend) -> list[Task]:
@@ -183,7 +204,8 @@ def make_result(
         "target_source": problem.target_source,
         "metric": problem.metric.description,
         "metric_details": problem.metric.details,
-        "error": "elite_error is the CD (eq. 12) of the elite to the target",
+        "error": "elite_error is the CD (eq. 12) of the elite to the target"
+        + ("" if problem.dynamic is None else DYNAMIC_ERROR),
         "corrected": problem.correction is not None,
         "observer": {
             "noise_temperature": config.noise_temperature,
@@ -194,6 +216,8 @@ def make_result(
         },
         **(extra or {}),
     }
+    if problem.dynamic is not None:
+        record["dynamic_target"] = dynamic_record(problem, problem.dynamic)
     if config.ga.init.kind == "fixed":
         record["fixed_options"] = [int(o) for o in arrays.fixed_options]
     return SimulationResult(table, record, faces)
@@ -225,6 +249,11 @@ def tables(problem: Problem, a: RunArrays) -> tuple[pd.DataFrame, pd.DataFrame]:
             "rank": pd.array(a.rank.reshape(-1), dtype="Int64"),
         }
     )
+    if a.peak_error is not None and a.timing_error is not None:
+        table["elite_peak_error"] = a.peak_error[ri, gi, elite].reshape(-1)
+        table["elite_timing_error"] = a.timing_error[ri, gi, elite].reshape(-1)
+        faces["peak_error"] = a.peak_error.reshape(-1)
+        faces["timing_error"] = a.timing_error.reshape(-1)
     faces.loc[faces["rank"] < 0, "rank"] = pd.NA
     faces["operator"] = faces["operator"].astype("string")
     if a.weights is not None:
@@ -232,6 +261,19 @@ def tables(problem: Problem, a: RunArrays) -> tuple[pd.DataFrame, pd.DataFrame]:
         weights = pd.DataFrame(w, columns=[f"w_{c}" for c in problem.columns])
         faces = pd.concat([faces, weights], axis=1)
     return tidy.typed(table), tidy.typed(faces)
+
+
+def dynamic_record(problem: Problem, view: DynamicView) -> dict[str, Any]:
+    """A dynamic target's genes in the record: per gene shown, amplitude and timing."""
+    names = problem.rig.gene_names(problem.config.ga.eye_motion)
+    return {
+        "genes": {
+            names[k]: dict(zip(PARAMS, map(float, view.target[k]), strict=True))
+            for k in np.flatnonzero(view.target[:, 0] > 0)
+        },
+        "sample_times_s": [float(t) for t in view.times],
+        "genome": problem.genome.to_dict(),
+    }
 
 
 def simulate_run(

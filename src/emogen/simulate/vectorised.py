@@ -59,15 +59,20 @@ def simulate_runs(
     ga = cfg.ga
     seeds = np.asarray(seeds, dtype=np.int64)
     r_count, n_gen = len(seeds), problem.n_generations
+    rngs = generation_rngs(seeds, 0, 0)
     genes, operators, options = first_generations(  # generation 0 of each run, as the engine's
-        ga, rig, problem.fixed_sets, rngs=generation_rngs(seeds, 0, 0)
+        ga, rig, problem.fixed_sets, rngs=rngs
     )
+    genome = problem.genome
+    if problem.dynamic is not None:  # the timing after the static draws, as the engine's
+        genes = np.stack([genome.initial(genes[r], rng) for r, rng in enumerate(rngs)])
     n = genes.shape[1]
     expansion = rig.expansion_matrix(ga.eye_motion)
     obs = observer_rngs(seeds, 0) if cfg.noise_temperature > 0 else []
     distance = np.empty((r_count, n_gen, n))
     error = np.empty((r_count, n_gen, n))
     rank = np.full((r_count, n_gen, n), -1, dtype=np.int16)
+    parts = None if problem.dynamic is None else (np.empty_like(error), np.empty_like(error))
     ops = [operators]  # (R, N) for generation 0, then each generation's (N,), the same for all runs
     width = len(problem.columns)
     shown_all = np.empty((r_count, n_gen, n, width)) if problem.all_weights else None
@@ -76,14 +81,21 @@ def simulate_runs(
         "random_faces_count": ga.random_faces,
         "mutation_genes": ga.mutation_genes,
         "random_genes": ga.random_genes,
+        "genome": genome,
     }
-    block = block_size(n, genes.shape[2], ga.mutation_genes, ga.random_genes)
+    k = genes.shape[2]
+    block = block_size(n, k, ga.mutation_genes, ga.random_genes)
+    block += n * genome.extra_draws(k, ga.mutation_genes)
     for g in range(n_gen):
-        shown = genes @ expansion
+        shown = genome.amplitude(genes) @ expansion  # a dynamic face's: its peak profile
         if problem.correction is not None:
             r_count, n, n_shapes = shown.shape
             shown = problem.correction(shown.reshape(-1, n_shapes)).reshape(r_count, n, -1)
-        distance[:, g], error[:, g] = _measure(problem, shown)
+        if problem.dynamic is not None and parts is not None:
+            distance[:, g], parts[0][:, g], parts[1][:, g] = problem.dynamic.measure(genes)
+            error[:, g] = distance[:, g]
+        else:
+            distance[:, g], error[:, g] = _measure(problem, shown)
         if shown_all is not None:
             shown_all[:, g] = shown
         gumbel = np.stack([o.gumbel(size=n) for o in obs]) if obs else None
@@ -111,6 +123,7 @@ def simulate_runs(
         _operators(ops, r_count),
         shown_all,
         options,
+        *(parts or (None, None)),
     )
 
 
@@ -129,11 +142,12 @@ def engine_run(problem: Problem, run: int, seed: int) -> RunArrays:
     """One run through the engine's ``ask()``/``tell()``, as a participant drives it: the
     reference :func:`simulate_runs` reproduces (same seed, same numbers)."""
     cfg = problem.config
-    engine = Engine(cfg.ga, problem.rig, seed)
+    engine = Engine(cfg.ga, problem.rig, seed, genome=problem.genome)
     temperature = cfg.noise_temperature
+    view = problem.dynamic
     observer = Observer(
-        problem.metric,
-        problem.target,
+        problem.metric if view is None else view.distance,
+        problem.target if view is None else view.target,
         cfg.selections_at,
         final=cfg.ga.generations,
         ranking=cfg.ga.variant == "classical",
@@ -145,14 +159,19 @@ def engine_run(problem: Problem, run: int, seed: int) -> RunArrays:
     rank = np.full((1, n_gen, n), -1, dtype=np.int16)
     ops = np.empty((1, n_gen, n), dtype="<U32")
     shown_all = np.empty((1, n_gen, n, len(problem.columns)))
+    parts = None if view is None else (np.empty_like(error), np.empty_like(error))
     while not engine.done:
         pop = engine.ask()
         g = pop.generation
         shown = np.asarray(pop.weights)
         if problem.correction is not None:
             shown = problem.correction(shown)
-        elite, others, _ = observer.choose(pop, shown)
-        distance[0, g], error[0, g] = _measure(problem, shown)
+        elite, others, _ = observer.choose(pop, shown if view is None else pop.genes)
+        if view is not None and parts is not None:
+            distance[0, g], parts[0][0, g], parts[1][0, g] = view.measure(pop.genes)
+            error[0, g] = distance[0, g]
+        else:
+            distance[0, g], error[0, g] = _measure(problem, shown)
         where = {int(i): k for k, i in enumerate(pop.ids)}
         for k, face in enumerate([elite, *others]):
             rank[0, g, where[face]] = k
@@ -168,4 +187,5 @@ def engine_run(problem: Problem, run: int, seed: int) -> RunArrays:
         ops,
         shown_all if problem.all_weights else None,
         np.array([options], dtype=np.int64),
+        *(parts or (None, None)),
     )
