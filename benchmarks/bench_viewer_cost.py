@@ -15,14 +15,18 @@ average (the machine is shared; CPU time is what its load does not stretch):
   shading costs (a measurement only: that shader is not the stimulus);
 * ``visible triangles only`` (option 1 of issue #43's note: drop what the camera never sees): the
   triangles that showed in a triangle-ID buffer over ``--samples`` faces (every target alone at
-  weight 1, then random sparse faces), and their neighbours, drawn instead of all; its pixels
+  weight 1, then random sparse faces), and ``--rings`` rings of neighbours, drawn instead of all; its pixels
   compared with the full draw's over eight other random faces. This identity, framing and
   camera only, and shapes sampled rather than bounded: an estimate of the gain, not a safe
   culling set;
 * ``pre-rendered frames``: each face's frames captured once from the canvas (ImageBitmap) and
   shown by a 2D canvas's drawImage: the cost of playing frames rendered ahead.
 
-    python -m benchmarks.bench_viewer_cost [--seconds 3] [--samples 200]
+Measured on the shared 2-core VM (docs/render.md, load average 8–10): the GSP face 87 ms of
+GPU-process CPU a frame, 26 in 32×32 slots, 64 with 46 % of the triangles, 11 played from
+frames rendered ahead; ten tiles 558, 230, 292 and 61 ms.
+
+    python -m benchmarks.bench_viewer_cost [--seconds 3] [--samples 200] [--rings 1]
 """
 
 from __future__ import annotations
@@ -67,7 +71,7 @@ def _row(name: str, r: dict[str, Any], c0: dict[str, float], c1: dict[str, float
     )
 
 
-def measure(folder: Path, seconds: float, samples: int) -> None:
+def measure(folder: Path, seconds: float, samples: int, rings: int) -> None:
     from playwright.sync_api import sync_playwright
 
     server = http.server.ThreadingHTTPServer(
@@ -94,7 +98,11 @@ def measure(folder: Path, seconds: float, samples: int) -> None:
                         rows += [
                             ("skin alone", "sweep", {"only": 0}),
                             ("skin, its textures compiled out", "sweep", {"only": 0, "plain": 1}),
-                            ("visible triangles only", "cull", {"samples": samples}),
+                            (
+                                "visible triangles only",
+                                "cull",
+                                {"samples": samples, "rings": rings},
+                            ),
                             ("pre-rendered frames", "prerendered", {}),
                         ]
                     for name, fn, opts in rows:
@@ -117,13 +125,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=3.0)
     parser.add_argument("--samples", type=int, default=200, help="faces for the ID buffer")
+    parser.add_argument("--rings", type=int, default=1, help="rings of neighbours kept")
     parser.add_argument("--model", default=None, help="ICT-FaceKit FaceXModel folder")
     args = parser.parse_args()
     if not (BUILD / "viewer.js").is_file() or not CHROMIUM.exists():
         sys.exit("needs the viewer bundle (make setup) and Debian's Chromium")
     with tempfile.TemporaryDirectory() as tmp:
         _site(Path(tmp), args.model or os.environ.get("EMOGEN_MODEL"))
-        measure(Path(tmp), args.seconds, args.samples)
+        measure(Path(tmp), args.seconds, args.samples, args.rings)
 
 
 if __name__ == "__main__":

@@ -68,12 +68,15 @@
     return w;
   }
 
-  // A material drawing each triangle's number + 1 as RGB (the face's depth test and cut-outs).
+  // A material drawing each triangle's number + 1 as RGB: the face's vertex shader and uniforms
+  // (gaze) and its cut-outs, no blending.
   function idMaterial(material) {
     const m = material.clone();
-    m.vertexShader = material.vertexShader
-      .replace('void main() {', 'attribute float aTri;\nflat varying float vTri;\nvoid main() {\n    vTri = aTri;');
+    m.uniforms = material.uniforms;
+    const tri = 'attribute float aTri;\nflat varying float vTri;\nvoid main() {\n    vTri = aTri;';
+    m.vertexShader = material.vertexShader.replace('void main() {', tri);
     const at = material.fragmentShader.lastIndexOf('void main() {');
+    const rgb = 'float(id & 255), float((id >> 8) & 255), float((id >> 16) & 255)';
     m.fragmentShader =
       material.fragmentShader.slice(0, at) +
       'flat varying float vTri;\n' +
@@ -81,8 +84,7 @@
         .slice(at)
         .replace(
           'gl_FragColor = vec4(c, vSurface.w);',
-          'int id = int(vTri + 0.5) + 1;\n' +
-            '    gl_FragColor = vec4(float(id & 255), float((id >> 8) & 255), float((id >> 16) & 255), 255.0) / 255.0;',
+          `int id = int(vTri + 0.5) + 1;\n    gl_FragColor = vec4(${rgb}, 255.0) / 255.0;`,
         );
     m.transparent = false;
     m.depthWrite = true;
@@ -101,33 +103,19 @@
     return out;
   }
 
-  let uncull = () => {};
-
-  /**
-   * Option 1: the faces drawn with only the triangles a triangle-ID buffer ever showed (and
-   * their neighbours) until uncull(); returns what it kept and how its pixels compare.
-   */
-  function cull({ samples }) {
-    const v = view();
+  // Which triangles of face 0 (numbered across its primitives) showed in its ID buffer over
+  // ``samples`` faces. Blended primitives hide nothing behind them: left out of the ID buffer.
+  function seenTriangles(v, samples, blended, offsets, total) {
     const n = v.shapeNames.length;
-    const faces = v.faces;
-    const face = faces[0];
-    v.faces = [face];
-    const meshes = face.meshes;
-    const blended = meshes.map((m) => m.material.transparent);
-    const counts = meshes.map((m) => m.geometry.index.count / 3);
-    const offsets = counts.map((_, k) => counts.slice(0, k).reduce((a, b) => a + b, 0));
-    const total = counts.reduce((a, b) => a + b, 0);
+    const meshes = v.faces[0].meshes;
     const seen = new Uint8Array(total);
     const saved = meshes.map((m) => [m.geometry, m.material, m.visible]);
     const ids = meshes.map((m) => idMaterial(m.material));
     const rand = random(1);
-    const t0 = performance.now();
     for (let s = 0; s < samples; s++) {
       v.setFace(0, sampleWeights(n, s, rand));
       meshes.forEach((m, k) => {
-        m.geometry = saved[k][0];
-        if (blended[k]) return void (m.visible = false); // it hides nothing behind it
+        if (blended[k]) return void (m.visible = false);
         const flat = saved[k][0].toNonIndexed();
         const tri = new Float32Array(flat.attributes.position.count);
         for (let j = 0; j < tri.length; j++) tri[j] = offsets[k] + Math.floor(j / 3);
@@ -146,37 +134,42 @@
         [m.geometry, m.material, m.visible] = saved[k];
       });
     }
-    const idMs = performance.now() - t0;
-    // Kept: blended primitives whole; elsewhere the triangles seen and those sharing a vertex.
-    const full = meshes.map((m) => m.geometry.index);
-    const culled = meshes.map((m, k) => {
-      const idx = full[k].array;
-      if (blended[k]) return full[k];
-      const near = new Uint8Array(m.geometry.attributes.position.count);
-      for (let t = 0; t < counts[k]; t++) {
-        if (seen[offsets[k] + t]) for (let c = 0; c < 3; c++) near[idx[3 * t + c]] = 1;
+    return seen;
+  }
+
+  // An index of the triangles seen (seen: one flag a triangle of this primitive) and ``rings``
+  // rings of neighbours (triangles sharing a vertex with a kept one).
+  function keptIndex(index, vertices, seen, rings) {
+    const idx = index.array;
+    const count = idx.length / 3;
+    const kept = Uint8Array.from(seen);
+    for (let ring = 0; ring < rings; ring++) {
+      const near = new Uint8Array(vertices);
+      for (let t = 0; t < count; t++) {
+        if (kept[t]) for (let c = 0; c < 3; c++) near[idx[3 * t + c]] = 1;
       }
-      const keep = [];
-      for (let t = 0; t < counts[k]; t++) {
-        if (near[idx[3 * t]] || near[idx[3 * t + 1]] || near[idx[3 * t + 2]]) {
-          keep.push(idx[3 * t], idx[3 * t + 1], idx[3 * t + 2]);
-        }
+      for (let t = 0; t < count; t++) {
+        if (near[idx[3 * t]] || near[idx[3 * t + 1]] || near[idx[3 * t + 2]]) kept[t] = 1;
       }
-      return new full[k].constructor(new idx.constructor(keep), 1);
-    });
-    const kept = culled.reduce((a, c) => a + c.count / 3, 0);
-    const use = (which) => faces.forEach((f) => f.meshes.forEach((m, k) => m.geometry.setIndex(which[k])));
-    // Their pixels against the full draw's, over eight faces not among the samples.
+    }
+    const keep = [];
+    for (let t = 0; t < count; t++) if (kept[t]) keep.push(...idx.subarray(3 * t, 3 * t + 3));
+    return new index.constructor(new idx.constructor(keep), 1);
+  }
+
+  // Face 0 drawn with each index set (use(set)) over eight faces not among the samples:
+  // [pixels differing, their largest channel difference, pixels compared].
+  function comparePixels(v, use, full, culled) {
     const other = random(2);
+    const n = v.shapeNames.length;
     let differ = 0, worst = 0, pixels = 0;
     for (let s = 0; s < 8; s++) {
       v.setFace(0, sampleWeights(n, n, other));
-      use(full);
-      v.render();
-      const a = readFace(v, 0);
-      use(culled);
-      v.render();
-      const b = readFace(v, 0);
+      const [a, b] = [full, culled].map((which) => {
+        use(which);
+        v.render();
+        return readFace(v, 0);
+      });
       pixels += a.length / 4;
       for (let p = 0; p < a.length; p += 4) {
         const d = Math.max(...[0, 1, 2].map((c) => Math.abs(a[p + c] - b[p + c])));
@@ -184,13 +177,44 @@
         worst = Math.max(worst, d);
       }
     }
+    return [differ, worst, pixels];
+  }
+
+  let uncull = () => {};
+
+  /**
+   * Option 1: the faces drawn with only the triangles a triangle-ID buffer ever showed (and
+   * their neighbours) until uncull(); returns what it kept and how its pixels compare.
+   */
+  function cull({ samples, rings }) {
+    const v = view();
+    const faces = v.faces;
+    v.faces = [faces[0]]; // one face drawn while measuring
+    const meshes = faces[0].meshes;
+    const blended = meshes.map((m) => m.material.transparent);
+    const counts = meshes.map((m) => m.geometry.index.count / 3);
+    const offsets = counts.map((_, k) => counts.slice(0, k).reduce((a, b) => a + b, 0));
+    const total = counts.reduce((a, b) => a + b, 0);
+    const t0 = performance.now();
+    const seen = seenTriangles(v, samples, blended, offsets, total);
+    const idMs = performance.now() - t0;
+    const full = meshes.map((m) => m.geometry.index);
+    const culled = meshes.map((m, k) => {
+      if (blended[k]) return full[k]; // kept whole
+      const own = seen.subarray(offsets[k], offsets[k] + counts[k]);
+      return keptIndex(full[k], m.geometry.attributes.position.count, own, rings);
+    });
+    const kept = culled.reduce((a, c) => a + c.count / 3, 0);
+    const use = (which) => faces.forEach((f) => f.meshes.forEach((m, k) => m.geometry.setIndex(which[k])));
+    const [differ, worst, pixels] = comparePixels(v, use, full, culled);
     v.faces = faces;
     use(culled);
     uncull = () => use(full);
+    const share = ((100 * kept) / total).toFixed(0);
     return (
-      `${kept} of ${total} triangles (${((100 * kept) / total).toFixed(0)} %) from ${samples} ` +
-      `faces' ID buffers (${(idMs / 1000).toFixed(1)} s); 8 other faces: ${differ} of ${pixels} ` +
-      `pixels differ (at most ${worst}/255)`
+      `${kept} of ${total} triangles (${share} %) from ${samples} faces' ID buffers and ${rings} ` +
+      `ring(s) of neighbours (${(idMs / 1000).toFixed(1)} s); 8 other faces: ${differ} of ` +
+      `${pixels} pixels differ (at most ${worst}/255)`
     );
   }
 
@@ -206,9 +230,8 @@
     for (let k = 0; k < count; k++) {
       morphAll(v, sweepWeights(n, 2 * k));
       v.render();
-      frames.push(
-        rects.map((r) => createImageBitmap(v.canvas, r.left - box.left, r.top - box.top, r.width, r.height)),
-      );
+      const [x, y] = [(r) => r.left - box.left, (r) => r.top - box.top];
+      frames.push(rects.map((r) => createImageBitmap(v.canvas, x(r), y(r), r.width, r.height)));
     }
     const bitmaps = await Promise.all(frames.map((f) => Promise.all(f)));
     const aheadMs = performance.now() - t0;
@@ -219,10 +242,11 @@
     document.body.appendChild(canvas);
     const ctx = canvas.getContext('2d');
     const r = await loop(ms, (k) => {
-      rects.forEach((rect, i) => ctx.drawImage(bitmaps[k % count][i], rect.left - box.left, rect.top - box.top));
+      rects.forEach((r, i) => ctx.drawImage(bitmaps[k % count][i], r.left - box.left, r.top - box.top));
     });
     canvas.remove();
-    r.note = `${count} frames of ${v.faces.length} face(s) rendered ahead in ${(aheadMs / 1000).toFixed(1)} s`;
+    const ahead = (aheadMs / 1000).toFixed(1);
+    r.note = `${count} frames of ${v.faces.length} face(s) rendered ahead in ${ahead} s`;
     return r;
   }
 
