@@ -12,8 +12,10 @@ load does not stretch. Target: ≥ 30 frames/s at 1366×768 (issue #43).
 Measured on the shared 2-core VM, A/B within minutes (docs/study.md): the viewer morphing in its
 vertex shader, 3.1 frames/s at 1366×768 (7.1 at 683×384), 185 ms of GPU-process CPU a frame,
 load average 10.9; morphing on the CPU (viewer/morph.js), 11.8 and 10.8 frames/s (11.7, 14.5),
-80 ms a frame, load average 11.7 and 12.3; 11.2 (19.9), 82 ms, at load average 3.6. Not met:
-what is left is SwiftShader shading the face, on one core.
+80 ms a frame, load average 11.7 and 12.3; 11.2 (19.9), 82 ms, at load average 3.6; again 10.5
+(21.8), 92 ms, at load 1.5, and 9.5 (9.2), 86 ms, at load 10.3. Not met: what is left is
+SwiftShader shading the face, on one core (bench_viewer_cost.py: three quarters of the frame are
+the face's pixels).
 
     python -m benchmarks.bench_gsp_slider [--seconds 5]
 """
