@@ -14,6 +14,10 @@ generation) and prints the CPU time of every selection, p50/p95/mean:
   generation made, corrected and stored), of that the correction (``correct``) and of that
   ``collisions`` — the detect–solve loop, ray casting and eq. 5, compiled.
 
+``--dynamic`` runs the study in process with static faces and with dynamic ones (docs/ga.md,
+"Dynamic faces"), alternating twice, and prints the ratio of the dynamic step's p50 to the
+static one's (issue #44: at most 2), with the load average before and after.
+
 ``--against SRC`` (another checkout's ``src`` folder, e.g. a ``git worktree`` of main; one with
 the single step route of #38, as both servers are driven through it) runs a second server with
 that code beside this one, in the same virtual environment, and alternates participants
@@ -274,6 +278,39 @@ def run(participants: int = 8, http: bool = True, against: Path | None = None) -
     return result
 
 
+def _load() -> str:
+    return "load average " + " ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+def dynamic_ratio(participants: int, rounds: int = 2) -> dict[str, Any]:
+    """In process, static and dynamic studies alternating (static, dynamic, ``rounds`` times, on
+    the same machine in the same minutes): each one's selections and parts, then the ratio of
+    the dynamic step's p50 to the static one's, per round and over all selections (#44's goal:
+    at most 2). The load average is printed before and after (the machine is shared)."""
+    print(f"static vs dynamic step CPU, in process: {os.cpu_count()} cores, {_load()}")
+    runs: dict[str, list[np.ndarray]] = {"static": [], "dynamic": []}
+    ratios = []
+    for _ in range(rounds):
+        for label, study in (("static", BENCH_STUDY), ("dynamic", DYNAMIC_STUDY)):
+            ms, parts = in_process(participants, study)
+            runs[label].append(ms)
+            print(_line(label, ms) + "  " + ", ".join(f"{k} {v:.1f} ms" for k, v in parts.items()))
+        ratios.append(float(np.median(runs["dynamic"][-1]) / np.median(runs["static"][-1])))
+    static, dynamic = (np.concatenate(runs[k]) for k in ("static", "dynamic"))
+    overall = float(np.median(dynamic) / np.median(static))
+    print(
+        f"dynamic/static p50 ratio {overall:.2f} (per round: "
+        + ", ".join(f"{r:.2f}" for r in ratios)
+        + f"; goal ≤ 2), {_load()}"
+    )
+    return {
+        "static": _figures(static),
+        "dynamic": _figures(dynamic),
+        "ratio_p50": round(overall, 2),
+        "ratio_p50_rounds": [round(r, 2) for r in ratios],
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--participants", type=int, default=8)
@@ -281,7 +318,8 @@ def main() -> None:
     parser.add_argument(
         "--dynamic",
         action="store_true",
-        help="in process: static and dynamic faces, alternating (static, dynamic, twice)",
+        help="in process: static and dynamic faces, alternating (static, dynamic, twice), "
+        "and the ratio of their p50s",
     )
     parser.add_argument(
         "--against",
@@ -300,12 +338,7 @@ def main() -> None:
     if args.against is not None and args.no_http:
         parser.error("--against compares servers over HTTP; leave out --no-http")
     if args.dynamic:
-        for _ in range(2):
-            for label, study in (("static", BENCH_STUDY), ("dynamic", DYNAMIC_STUDY)):
-                ms, parts = in_process(args.participants, study)
-                print(
-                    _line(label, ms) + "  " + ", ".join(f"{k} {v:.1f} ms" for k, v in parts.items())
-                )
+        dynamic_ratio(args.participants)
         return
     run(args.participants, http=not args.no_http, against=args.against)
 

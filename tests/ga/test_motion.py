@@ -10,7 +10,7 @@ from emogen.correct import correct_faces
 from emogen.correct.lips import mouth_geometry
 from emogen.correct.measure import Interpenetration
 from emogen.ga.genome import DynamicGenome, keyframe_times
-from emogen.ga.motion import correct_keyframes, frames, interpolate
+from emogen.ga.motion import _distinct, correct_keyframes, frames, interpolate
 
 GENOME = DynamicGenome()
 
@@ -40,6 +40,18 @@ def test_frames_are_the_exact_curve_then_the_interpolated_correctives(ict_model)
             np.testing.assert_array_equal(shown[i, j, :s], core)
     np.testing.assert_array_equal(shown[..., s:], interpolate(GENOME, keyed, t))
     assert frames(GENOME, genes, None, t, expand).shape == (2, 4, s)
+
+
+def test_distinct_keyframes_are_numpys_unique_rows_in_order_of_first_appearance() -> None:
+    rng = np.random.default_rng(4)
+    rows = np.round(rng.random((400, 9)), 1)
+    rows[rng.random(400) < 0.4] = 0.0  # many at rest, as a clip's ends are
+    distinct, where = _distinct(rows)
+    np.testing.assert_array_equal(distinct[where], rows)
+    np.testing.assert_array_equal(np.unique(distinct, axis=0), np.unique(rows, axis=0))
+    assert len(distinct) == len(np.unique(rows, axis=0))
+    firsts = [int(np.flatnonzero((rows == d).all(axis=1))[0]) for d in distinct]
+    assert firsts == sorted(firsts)
 
 
 def test_keyframes_are_corrected_as_every_keyframe_alone(ict_model) -> None:

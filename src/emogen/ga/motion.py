@@ -38,10 +38,24 @@ def correct_keyframes(
     n, f, s = core.shape
     # a face's correction is its own (tests/correct): identical keyframes (the face at rest
     # before its first onset and after its last offset) are corrected once
-    unique, where = np.unique(core.reshape(n * f, s), axis=0, return_inverse=True)
-    names, values = correct(unique)
-    keyed = np.asarray(values, dtype=np.float64)[where.reshape(-1)]
+    distinct, where = _distinct(core.reshape(n * f, s))
+    names, values = correct(distinct)
+    keyed = np.asarray(values, dtype=np.float64)[where]
     return names, keyed.reshape(n, f, -1)
+
+
+def _distinct(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of ``rows`` (N, S) in order of first appearance, and each row's index
+    among them: (D, S), (N,). Rows are equal when their bytes are (a dict of them: 0.15 ms for
+    a population's 210 keyframes, where ``np.unique(axis=0)``'s sort took 1.4 ms a step)."""
+    index: dict[bytes, int] = {}
+    first: list[int] = []
+    where = np.empty(len(rows), dtype=np.int64)
+    for i, row in enumerate(np.ascontiguousarray(rows)):
+        where[i] = index.setdefault(row.tobytes(), len(index))
+        if where[i] == len(first):
+            first.append(i)
+    return rows[first], where
 
 
 def interpolate(genome: DynamicGenome, keyed: np.ndarray, t: np.ndarray) -> np.ndarray:
