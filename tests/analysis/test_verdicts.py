@@ -11,9 +11,9 @@ from emogen.analysis.replication.verdicts import (
     RULES,
     ci_verdict,
     combine,
+    join,
     mean_ci,
     number_verdict,
-    parts_verdict,
 )
 
 
@@ -22,10 +22,20 @@ def f(verdict: str, value: float | None = None, claim: str = "c") -> Finding:
 
 
 def test_ci_rule() -> None:
-    assert ci_verdict(0.01, 0.2, +1) == "holds"
-    assert ci_verdict(-0.2, -0.01, +1) == "differs"
-    assert ci_verdict(-0.2, -0.01, -1) == "holds"
-    assert ci_verdict(-0.1, 0.1, +1) == "inconclusive"
+    assert ci_verdict(0.01, 0.2, +1, 0.05) == "holds"
+    assert ci_verdict(-0.2, -0.01, +1, 0.05) == "differs"
+    assert ci_verdict(-0.2, -0.01, -1, 0.05) == "holds"
+    assert ci_verdict(-0.1, 0.1, +1, 0.05) == "inconclusive"
+
+
+def test_ci_rule_fails_a_precisely_zero_effect() -> None:
+    """A precise zero — and a precise effect smaller than the smallest of interest, on
+    either side — is no effect of interest: the claim of a difference fails."""
+    assert ci_verdict(-0.001, 0.001, +1, 0.05) == "differs"
+    assert ci_verdict(0.01, 0.04, +1, 0.05) == "differs"
+    assert ci_verdict(-0.04, -0.01, -1, 0.05) == "differs"
+    with pytest.raises(ValueError, match="smallest effect of interest must be > 0; got 0"):
+        ci_verdict(0.1, 0.2, +1, 0)
 
 
 def test_number_rule_judges_the_table_v_threshold_as_different() -> None:
@@ -39,10 +49,11 @@ def test_number_rule_judges_the_table_v_threshold_as_different() -> None:
 
 
 def test_parts() -> None:
-    assert parts_verdict(["holds", "holds"]) == "holds"
-    assert parts_verdict(["holds", "inconclusive"]) == "partly"
-    assert parts_verdict(["differs", "inconclusive"]) == "differs"
-    assert parts_verdict(["inconclusive", "inconclusive"]) == "inconclusive"
+    assert join(["holds", "holds"]) == "holds"
+    assert join(["holds", "inconclusive"]) == "inconclusive"
+    assert join(["differs", "inconclusive"]) == "inconclusive"
+    assert join(["holds", "differs"]) == "partly"
+    assert join(["inconclusive", "inconclusive"]) == "inconclusive"
 
 
 def test_mean_ci_is_the_t_interval() -> None:
