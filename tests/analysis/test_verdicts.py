@@ -89,3 +89,39 @@ def test_seeds_that_disagree_make_a_finding_inconclusive() -> None:
 def test_every_rule_a_finding_names_is_written_down() -> None:
     assert set(RULES) >= {"order", "ci", "number", "direction", "threshold", "kl"}
     assert set(RULES) >= {"tost", "noninferior", "level", "compromise"}
+
+
+def test_tally_both_ways_counts_like_a_plain_loop() -> None:
+    from emogen.analysis.replication.write_report import tally_both_ways
+
+    verdicts = ["holds"] * 4 + ["partly"] * 3 + ["differs"] * 2 + ["inconclusive"] * 5
+    counts = {v: 0 for v in ("holds", "partly", "differs", "inconclusive")}
+    for v in verdicts:
+        counts[v] += 1
+    text = tally_both_ways(verdicts)
+    assert text.startswith("4 hold, 3 partly, 2 differ, 5 inconclusive")
+    assert "strictly 4 of 14 hold" in text and "leniently (partly counted) 7 of 14" in text
+    assert "among the 9 decided, 4 hold and 7 hold at least partly, 2 differ" in text
+
+
+def test_the_change_table_lists_moved_verdicts_and_findings_that_left_the_tally() -> None:
+    """Against the previous report's verdicts: a changed verdict is listed with the rule
+    changes that apply to it; an unchanged one is not, unless it left the tally."""
+    from emogen.analysis.replication.previous import BEFORE
+    from emogen.analysis.replication.settings import ReplicateSettings
+    from emogen.analysis.replication.verdicts import Combined
+    from emogen.analysis.replication.write_report import _changed
+
+    (s1, c1), (n1, v1) = next(iter(BEFORE.items()))
+    (s2, c2), (_, v2) = list(BEFORE.items())[1]
+    (s3, c3), (n3, v3) = list(BEFORE.items())[2]
+    other = next(v for v in ("holds", "differs") if v != v1)
+    moved = Finding(s1, c1, "p", "o", other, fitted="GMM")
+    same = Finding(s2, c2, "p", "o", v2)
+    apart = Finding(s3, c3, "p", "o", v3, outside="model-specific")
+    combined = [Combined(f, f.verdict, (f.verdict,) * 2, 0.0, 0.0) for f in (moved, same, apart)]
+    table = _changed(combined, ReplicateSettings(seed=41, seeds=2))
+    assert list(table["finding (previous no.)"]) == [n1, n3]
+    assert list(table["before"]) == [v1, v3]
+    assert list(table["now"]) == [other, f"{v3} (outside the tally)"]
+    assert "seed level" in table["why"].iloc[0] and "new seeds 41–42" in table["why"].iloc[0]

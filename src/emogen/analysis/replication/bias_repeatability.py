@@ -19,7 +19,6 @@ from emogen.analysis.replication.intervals import Direction, Evidence, judged
 from emogen.analysis.replication.repeat_intervals import BinContrast, BinShares
 from emogen.analysis.replication.verdicts import (
     chain_verdict,
-    join,
     readings_parts_verdict,
 )
 
@@ -149,7 +148,6 @@ def _findings(
             "ci, paired per run (average target): initial bias protocol − the best fixed "
             f"set's > 0, and > {FAR} ('far more': half the paper's gap of 0.17), paired t 95% "
             "CIs (SESOI 0.2 SD); parts joined (rule join)",
-            parts=join,
             note="our simulated participants build happy faces from the same building blocks "
             "that protocol initialisation draws its two happy faces from",
             value=prot_avg - fixed_avg,

@@ -113,22 +113,7 @@ def write_closing(
     report.heading("Findings: the paper beside ours")
     tally = tally_both_ways([c.verdict for c in paper])
     k = settings.seeds
-    report.paragraph(
-        f"{len(paper)} findings of the paper, one per event, each judged on {k} independent "
-        f"seed{'s' if k > 1 else ''} ({provenance['seeds']}) by its written rule: {tally}. The "
-        "rules were written down and committed before this run, on seeds not used while "
-        "writing them. A finding whose quantity rests on one fitted object per seed (a GMM, a "
-        "PCA, an empirical metric's training, a target built from the seed's own runs) is "
-        "decided on the seeds' estimates, one per fit (rule 'seed level'); any other finding "
-        "with an interval on the runs of all seeds pooled (paired where conditions share "
-        "their runs' generators). 'Pooled interval' shows the estimate, its CI and the test, "
-        "and 'per seed' each seed's own verdict on its own runs as a robustness check. A "
-        "finding without an interval keeps the seeds' common verdict, **inconclusive** when "
-        "they disagree. 'Effect over seeds' is the mean of the finding's effect size over the "
-        f"seeds ± the half-width of its 95% t-interval ({k} seeds). Tables and figures above "
-        "are the first seed's. Model-specific and oracle checks, findings that restate "
-        "another's event, and our own checks are listed apart and are not in the tally."
-    )
+    report.paragraph(_how_decided(len(paper), k, provenance["seeds"], tally))
     report.insert_paragraph(
         glance_at,
         f"**At a glance:** {len(paper)} findings of the paper checked on our model over {k} "
@@ -178,6 +163,25 @@ def write_closing(
     report.bullets([f"{key}: `{value}`" for key, value in provenance.items()])
     timing = pd.DataFrame({"experiment": list(timings), "seconds": list(timings.values())})
     report.table(timing, "timings", "Seconds per experiment (all seeds)")
+
+
+def _how_decided(n: int, k: int, seeds: str, tally: str) -> str:
+    return (
+        f"{n} findings of the paper, one per event, each judged on {k} independent "
+        f"seed{'s' if k > 1 else ''} ({seeds}) by its written rule: {tally}. The "
+        "rules were written down and committed before this run, on seeds not used while "
+        "writing them. A finding whose quantity rests on one fitted object per seed (a GMM, a "
+        "PCA, an empirical metric's training, a target built from the seed's own runs) is "
+        "decided on the seeds' estimates, one per fit (rule 'seed level'); any other finding "
+        "with an interval on the runs of all seeds pooled (paired where conditions share "
+        "their runs' generators). 'Pooled interval' shows the estimate, its CI and the test, "
+        "and 'per seed' each seed's own verdict on its own runs as a robustness check. A "
+        "finding without an interval keeps the seeds' common verdict, **inconclusive** when "
+        "they disagree. 'Effect over seeds' is the mean of the finding's effect size over the "
+        f"seeds ± the half-width of its 95% t-interval ({k} seeds). Tables and figures above "
+        "are the first seed's. Model-specific and oracle checks, findings that restate "
+        "another's event, and our own checks are listed apart and are not in the tally."
+    )
 
 
 def tally_both_ways(verdicts: list[str]) -> str:
