@@ -30,7 +30,7 @@ TARGET = {"jawOpen": 0.8, "noseSneer": 0.48}
         # rms: a's mean face further from the target than b's
         ("rms", +1, 0.0, {"jawOpen": 0.3, "noseSneer": 0.48}, TARGET, "holds"),
         ("rms", -1, 0.0, {"jawOpen": 0.3, "noseSneer": 0.48}, TARGET, "differs"),
-        ("rms", +1, 0.0, TARGET, TARGET, "inconclusive"),
+        ("rms", +1, 0.0, TARGET, TARGET, "differs"),  # a precise zero: no effect of interest
         ("rms_below", +1, 0.6, TARGET, TARGET, "holds"),
         ("rms_below", +1, 0.01, {"jawOpen": 0.3, "noseSneer": 0.48}, TARGET, "differs"),
         # ratio noseSneer/jawOpen: 0.6 in the target, 0.2 in a

@@ -73,11 +73,17 @@ def _rows(rng: np.random.Generator, tight: list[bool], biases: list[float]) -> l
         # slope: protocol flat, fixed rises from spread to tight: protocol less sensitive
         ("slope", -1, [True, True, False, True], [0.7, 0.5, 0.9, 0.4], "holds"),
         ("slope", -1, [False, True, True, True], [0.7, 0.5, 0.9, 0.4], "differs"),
-        ("slope", -1, [True, True, True, True], [0.7, 0.5, 0.9, 0.4], "inconclusive"),
+        ("slope", -1, [True, True, True, True], [0.7, 0.5, 0.9, 0.4], "differs"),  # a precise zero
         # matched: the fixed row tight where protocol (flat slope) is spread at that bias
         ("matched", +1, [False, False, False, True], [0.7, 0.5, 0.5, 0.45], "holds"),
         ("matched", +1, [True, True, True, False], [0.7, 0.5, 0.5, 0.45], "differs"),
-        ("matched", +1, [True, True, True, True], [0.7, 0.5, 0.5, 0.45], "inconclusive"),
+        (
+            "matched",
+            +1,
+            [True, True, True, True],
+            [0.7, 0.5, 0.5, 0.45],
+            "differs",
+        ),  # a precise zero
     ],
 )
 def test_bin_contrast_reaches_each_verdict(
@@ -133,7 +139,7 @@ def _two(tight_a: bool, tight_b: bool) -> list[np.ndarray]:
         ("first_at_least", 50, 0, (False,), "differs"),
         ("first_above", 0, 0, (True, False), "holds"),
         ("first_above", 0, 0, (False, True), "differs"),
-        ("first_above", 0, 0, (True, True), "inconclusive"),
+        ("first_above", 0, 0, (True, True), "differs"),  # a precise zero
         ("tvd_below", 10, 20, (True, True), "holds"),
         ("tvd_below", 10, 20, (True, False), "differs"),
         ("tvd_below", 0.5, 150, (True, False), "partly"),

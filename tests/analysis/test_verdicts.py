@@ -11,9 +11,9 @@ from emogen.analysis.replication.verdicts import (
     RULES,
     ci_verdict,
     combine,
+    join,
     mean_ci,
     number_verdict,
-    parts_verdict,
 )
 
 
@@ -22,10 +22,20 @@ def f(verdict: str, value: float | None = None, claim: str = "c") -> Finding:
 
 
 def test_ci_rule() -> None:
-    assert ci_verdict(0.01, 0.2, +1) == "holds"
-    assert ci_verdict(-0.2, -0.01, +1) == "differs"
-    assert ci_verdict(-0.2, -0.01, -1) == "holds"
-    assert ci_verdict(-0.1, 0.1, +1) == "inconclusive"
+    assert ci_verdict(0.01, 0.2, +1, 0.05) == "holds"
+    assert ci_verdict(-0.2, -0.01, +1, 0.05) == "differs"
+    assert ci_verdict(-0.2, -0.01, -1, 0.05) == "holds"
+    assert ci_verdict(-0.1, 0.1, +1, 0.05) == "inconclusive"
+
+
+def test_ci_rule_fails_a_precisely_zero_effect() -> None:
+    """A precise zero — and a precise effect smaller than the smallest of interest, on
+    either side — is no effect of interest: the claim of a difference fails."""
+    assert ci_verdict(-0.001, 0.001, +1, 0.05) == "differs"
+    assert ci_verdict(0.01, 0.04, +1, 0.05) == "differs"
+    assert ci_verdict(-0.04, -0.01, -1, 0.05) == "differs"
+    with pytest.raises(ValueError, match="smallest effect of interest must be > 0; got 0"):
+        ci_verdict(0.1, 0.2, +1, 0)
 
 
 def test_number_rule_judges_the_table_v_threshold_as_different() -> None:
@@ -39,10 +49,11 @@ def test_number_rule_judges_the_table_v_threshold_as_different() -> None:
 
 
 def test_parts() -> None:
-    assert parts_verdict(["holds", "holds"]) == "holds"
-    assert parts_verdict(["holds", "inconclusive"]) == "partly"
-    assert parts_verdict(["differs", "inconclusive"]) == "differs"
-    assert parts_verdict(["inconclusive", "inconclusive"]) == "inconclusive"
+    assert join(["holds", "holds"]) == "holds"
+    assert join(["holds", "inconclusive"]) == "inconclusive"
+    assert join(["differs", "inconclusive"]) == "inconclusive"
+    assert join(["holds", "differs"]) == "partly"
+    assert join(["inconclusive", "inconclusive"]) == "inconclusive"
 
 
 def test_mean_ci_is_the_t_interval() -> None:
@@ -78,3 +89,39 @@ def test_seeds_that_disagree_make_a_finding_inconclusive() -> None:
 def test_every_rule_a_finding_names_is_written_down() -> None:
     assert set(RULES) >= {"order", "ci", "number", "direction", "threshold", "kl"}
     assert set(RULES) >= {"tost", "noninferior", "level", "compromise"}
+
+
+def test_tally_both_ways_counts_like_a_plain_loop() -> None:
+    from emogen.analysis.replication.write_report import tally_both_ways
+
+    verdicts = ["holds"] * 4 + ["partly"] * 3 + ["differs"] * 2 + ["inconclusive"] * 5
+    counts = {v: 0 for v in ("holds", "partly", "differs", "inconclusive")}
+    for v in verdicts:
+        counts[v] += 1
+    text = tally_both_ways(verdicts)
+    assert text.startswith("4 hold, 3 partly, 2 differ, 5 inconclusive")
+    assert "strictly 4 of 14 hold" in text and "leniently (partly counted) 7 of 14" in text
+    assert "among the 9 decided, 4 hold and 7 hold at least partly, 2 differ" in text
+
+
+def test_the_change_table_lists_moved_verdicts_and_findings_that_left_the_tally() -> None:
+    """Against the previous report's verdicts: a changed verdict is listed with the rule
+    changes that apply to it; an unchanged one is not, unless it left the tally."""
+    from emogen.analysis.replication.previous import BEFORE
+    from emogen.analysis.replication.settings import ReplicateSettings
+    from emogen.analysis.replication.verdicts import Combined
+    from emogen.analysis.replication.write_report import _changed
+
+    (s1, c1), (n1, v1) = next(iter(BEFORE.items()))
+    (s2, c2), (_, v2) = list(BEFORE.items())[1]
+    (s3, c3), (n3, v3) = list(BEFORE.items())[2]
+    other = next(v for v in ("holds", "differs") if v != v1)
+    moved = Finding(s1, c1, "p", "o", other, fitted="GMM")
+    same = Finding(s2, c2, "p", "o", v2)
+    apart = Finding(s3, c3, "p", "o", v3, outside="model-specific")
+    combined = [Combined(f, f.verdict, (f.verdict,) * 2, 0.0, 0.0) for f in (moved, same, apart)]
+    table = _changed(combined, ReplicateSettings(seed=41, seeds=2))
+    assert list(table["finding (previous no.)"]) == [n1, n3]
+    assert list(table["before"]) == [v1, v3]
+    assert list(table["now"]) == [other, f"{v3} (outside the tally)"]
+    assert "seed level" in table["why"].iloc[0] and "new seeds 41–42" in table["why"].iloc[0]

@@ -314,17 +314,22 @@ def _replicate_line(
 def _show_findings(
     as_json: bool, findings: list[Any], seconds: float, command: str, out: Path
 ) -> None:
-    """Every finding's line and the tally of the paper's findings (ours counted apart)."""
+    """Every finding's line and the tally of the paper's findings (the rest apart)."""
     from emogen.analysis.replication.findings import VERDICTS
 
-    paper = [f for f in findings if f.paper_finding]
+    paper = [f for f in findings if f.counted]
     counts = {v: sum(f.verdict == v for f in paper) for v in VERDICTS}
     wrote = [str(out / "index.html"), str(out / "README.md")]
     show_result(
         as_json,
         {
             "findings": [
-                {"verdict": f.verdict, "paper_finding": f.paper_finding, "line": f.line()}
+                {
+                    "verdict": f.verdict,
+                    "paper_finding": f.paper_finding,
+                    "counted": f.counted,
+                    "line": f.line(),
+                }
                 for f in findings
             ],
             "counts": counts,
@@ -337,7 +342,7 @@ def _show_findings(
             *(f.line() for f in findings),
             f"{len(paper)} paper findings: {counts['holds']} hold, {counts['partly']} partly, "
             f"{counts['differs']} differ, {counts['inconclusive']} inconclusive "
-            f"({len(findings) - len(paper)} of ours reported apart; {seconds:.0f} s); "
+            f"({len(findings) - len(paper)} reported apart; {seconds:.0f} s); "
             f"wrote {wrote[0]} and {wrote[1]}",
         ],
     )

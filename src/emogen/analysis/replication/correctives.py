@@ -64,7 +64,7 @@ def correctives(runner: ConditionRunner) -> Correctives:
         "d (corrected − uncorrected) " + ", ".join(f"{t}: {d:+.2f}" for t, d in ds.items()),
         evidence,
         "tost, paired per run, per target: μ10 corrected − uncorrected within ±0.2 pooled SD; "
-        "parts joined: all hold → holds, some → partly",
+        "parts joined (rule join)",
         note=f"our check ({runs} runs per condition, first seed): the other sections simulate "
         "uncorrected faces",
         value=float(max(abs(d) for d in ds.values())),

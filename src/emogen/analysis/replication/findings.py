@@ -22,8 +22,12 @@ class Finding:
     ``paper_finding=False``: our own proposal, reported apart from the tally.
     ``evidence``: per-run data and their tests (one per part of the claim): the verdict over
     seeds is decided on the runs of all seeds pooled, the parts' verdicts joined by ``parts``
-    (default :func:`~emogen.analysis.replication.verdicts.parts_verdict`); ``interval``: the
-    decisions in words."""
+    (default :func:`~emogen.analysis.replication.verdicts.join`); ``interval``: the
+    decisions in words. ``fitted``: the fitted object per seed the quantity rests on (a GMM,
+    a PCA, an empirical metric's training, a target built from the seed's runs): decided on
+    the seeds' estimates, one per fit, not on the pooled runs. ``outside``: why a paper
+    finding stays outside the tally (a model-specific absolute level, an oracle, another
+    finding's event), empty when it counts."""
 
     section: str
     claim: str
@@ -38,10 +42,17 @@ class Finding:
     evidence: tuple[Any, ...] = field(default=(), compare=False)  # intervals.Evidence
     parts: Callable[[list[str]], str] | None = field(default=None, compare=False)
     interval: str = ""
+    fitted: str = ""
+    outside: str = ""
 
     def __post_init__(self) -> None:
         if self.verdict not in VERDICTS:
             raise ValueError(f"verdict must be one of {VERDICTS}; got {self.verdict!r}")
+
+    @property
+    def counted(self) -> bool:
+        """In the tally: a paper finding, not outside it."""
+        return self.paper_finding and not self.outside
 
     @property
     def key(self) -> tuple[str, str]:

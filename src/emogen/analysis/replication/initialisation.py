@@ -27,7 +27,7 @@ from emogen.analysis.replication.intervals import (
 )
 from emogen.analysis.replication.kl_steps import KLRises
 from emogen.analysis.replication.mean_faces import MeanFaceTest
-from emogen.analysis.replication.verdicts import main_part_verdict
+from emogen.analysis.replication.verdicts import join
 
 #: (initialisation, selections) → the condition's settings
 CONDITIONS: dict[tuple[str, str], ConditionSpec] = {
@@ -142,8 +142,8 @@ def _kl_findings(
 
     rule = (
         "kl, on the pooled runs: rises count only above the KL noise floor of the pooled "
-        "runs (same-size samples of one distribution); the point is fixed's rise (none: "
-        "differs), protocol's steady fall qualifies it (partly without it)"
+        "runs (same-size samples of one distribution); fixed's rise and protocol's steady "
+        "fall, parts joined (rule join)"
     )
 
     def evidence(sel: str, window: str) -> list[Evidence]:
@@ -160,7 +160,7 @@ def _kl_findings(
             said("default"),
             evidence("default", "late"),
             rule,
-            parts=main_part_verdict,
+            parts=join,
             value=float(late[("fixed", "default")]),
             value_label="fixed's late rises above floor (this seed)",
         ),
@@ -172,7 +172,7 @@ def _kl_findings(
             said("three"),
             evidence("three", "all"),
             rule,
-            parts=main_part_verdict,
+            parts=join,
             value=float(up[("fixed", "three")] - up[("protocol", "three")]),
             value_label="fixed − protocol rises above floor (this seed)",
         ),
@@ -200,7 +200,8 @@ def _start_findings(
                 Evidence(SpreadDirection(+1, seed=14), (p[:, 1], f[:, 1])),
             ],
             "ci at generation 1 (generation 0 holds by construction): μ1(fixed) − μ1(protocol)"
-            " > 0 (paired t) and σ1(protocol) − σ1(fixed) > 0 (paired bootstrap); partly: one",
+            " > 0 (paired t) and σ1(protocol) − σ1(fixed) > 0 (paired bootstrap); parts joined "
+            "(rule join)",
             value_label="μ1 fixed − protocol",
         )
     ]
@@ -289,7 +290,7 @@ def _three_findings(sims: dict[tuple[str, str], Condition]) -> list[Finding]:
                 Evidence(SpreadDirection(-1, seed=16), (pt, pd_)),
             ],
             "ci, paired per run, per part: Δσ10 fixed > 0 (bootstrap), Δμ10 protocol < 0 "
-            "(t), Δσ10 protocol < 0 (bootstrap); parts joined: all hold → holds, some → partly",
+            "(t), Δσ10 protocol < 0 (bootstrap); parts joined (rule join)",
             note="the paper calls the effect marginal",
             value=float(pt.mean() - pd_.mean()),
             value_label="Δμ10 protocol",

@@ -22,7 +22,6 @@ share of faces and the paired difference, not on a cm level.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -33,7 +32,7 @@ from emogen.analysis.paper_targets import paper_targets
 from emogen.analysis.replication.conditions import ConditionSpec
 from emogen.analysis.replication.findings import Finding
 from emogen.analysis.replication.intervals import Direction, Evidence, Share, judged
-from emogen.analysis.replication.verdicts import main_part_verdict
+from emogen.analysis.replication.verdicts import join
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -129,7 +128,7 @@ def measure_faces(model: FaceModel, weights: np.ndarray) -> dict[str, np.ndarray
 def interpenetration_finding(depth_before: np.ndarray, depth_after: np.ndarray) -> Finding:
     """Fig. 2: of the faces penetrating uncorrected, the share clean after correction (the
     point: level ``REMOVED``, weaker ``REMOVED_WEAKER``), and the paired fall of the deepest
-    penetration over all faces (else partly)."""
+    penetration over all faces; joined by :func:`join`."""
     from emogen.correct.measure import CONTACT
 
     before, after = np.asarray(depth_before), np.asarray(depth_after)
@@ -149,12 +148,12 @@ def interpenetration_finding(depth_before: np.ndarray, depth_after: np.ndarray) 
             Evidence(Direction(+1), (before, after)),
         ],
         f"level: penetrating faces clean after correction ≥ {REMOVED:.0%} holds, "
-        f"≥ {REMOVED_WEAKER:.0%} partly (the point; Wilson 95% CI); ci, paired per face: "
-        "deepest penetration uncorrected − corrected > 0 (else partly)",
+        f"≥ {REMOVED_WEAKER:.0%} partly (Wilson 95% CI); ci, paired per face: deepest "
+        "penetration uncorrected − corrected > 0; parts joined (rule join)",
         note="measured by the winding-number test, independent of the correctives' own "
         "detector; 'before' is the base rate among shown faces (no chance level applies); "
         "depths in our mesh's cm: model-specific",
-        parts=partial(main_part_verdict, n_main=1),
+        parts=join,
         value=float(clean.mean()),
         value_label="share of penetrating faces clean after correction",
     )

@@ -26,7 +26,7 @@ Cohen's "small"); a margin from the pooled SD is computed on the pooled runs.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 import numpy as np
@@ -36,10 +36,10 @@ from emogen.analysis.replication.findings import Finding
 from emogen.analysis.replication.verdicts import (
     ALPHA,
     ci_verdict,
+    join,
     level_verdict,
     noninferior_verdict,
     number_verdict,
-    parts_verdict,
     tost_verdict,
 )
 
@@ -55,6 +55,9 @@ class Decision:
     hi: float
     level: float
     test: str
+    #: the rule with this decision's margins, as a function of an interval: what
+    #: :meth:`Evidence.seed_level` applies to the seeds' interval
+    rule: Callable[[float, float], str] | None = field(default=None, compare=False)
 
     def text(self) -> str:
         return (
@@ -111,23 +114,36 @@ def _kind(paired: bool) -> str:
     return "paired t" if paired else "Welch t"
 
 
+def _ci_rule(sign: int, sesoi: float) -> Callable[[float, float], str]:
+    return lambda lo, hi: ci_verdict(lo, hi, sign, sesoi)
+
+
 @dataclass(frozen=True)
 class Direction:
-    """mean(a) − mean(b) against the paper's sign (±1): rule ``ci`` on the 95% interval."""
+    """mean(a) − mean(b) against the paper's sign (±1): rule ``ci`` on the 95% interval,
+    with the smallest effect of interest ``sesoi`` (the data's unit) or ``sesoi_sd`` × the
+    pooled SD (default 0.2, Cohen's 'small')."""
 
     sign: int
     paired: bool = True
+    sesoi: float = 0.0
+    sesoi_sd: float = 0.2
 
     def __call__(self, *arrays: np.ndarray) -> Decision:
         a, b = _pair(arrays[0], arrays[1], self.paired)
         lo, hi = _interval(a, b, self.paired, 0.95)
+        delta = self.sesoi or _margin(a, b, 0.0, self.sesoi_sd)
+        if not delta > 0:  # both arrays constant: any difference at all is of interest
+            delta = float(np.finfo(np.float64).eps)
+        rule = _ci_rule(self.sign, delta)
         return Decision(
-            ci_verdict(lo, hi, self.sign),
+            rule(lo, hi),
             float(a.mean() - b.mean()),
             lo,
             hi,
             0.95,
-            f"{_kind(self.paired)}, n = {len(a)}",
+            f"{_kind(self.paired)}, n = {len(a)}, SESOI {delta:.3g}",
+            rule,
         )
 
 
@@ -159,7 +175,12 @@ class Equivalence:
             raise ValueError(f"an equivalence margin must be > 0; got {m!r}")
         p = tost_p(a, b, m, self.paired)
         said = f"TOST ±{m:.3g}, p = {p:.2g}, {_kind(self.paired)}, n = {len(a)}"
-        return Decision(tost_verdict(p, lo, hi, m), float(a.mean() - b.mean()), lo, hi, 0.9, said)
+
+        def rule(lo: float, hi: float) -> str:  # the 90% interval inside ±m: TOST at α
+            return "holds" if -m < lo and hi < m else tost_verdict(1.0, lo, hi, m)
+
+        d = float(a.mean() - b.mean())
+        return Decision(tost_verdict(p, lo, hi, m), d, lo, hi, 0.9, said, rule)
 
 
 @dataclass(frozen=True)
@@ -174,19 +195,23 @@ class NotWorse:
     def __call__(self, *arrays: np.ndarray) -> Decision:
         a, b, m, lo, hi = _margined(arrays, self.margin, self.margin_sd, self.paired)
         said = f"not worse by {m:.3g}, {_kind(self.paired)}, n = {len(a)}"
-        return Decision(
-            noninferior_verdict(lo, hi, m), float(a.mean() - b.mean()), lo, hi, 0.9, said
-        )
+
+        def rule(lo: float, hi: float) -> str:
+            return noninferior_verdict(lo, hi, m)
+
+        return Decision(rule(lo, hi), float(a.mean() - b.mean()), lo, hi, 0.9, said, rule)
 
 
 @dataclass(frozen=True)
 class SpreadDirection:
     """sd(a) − sd(b) against the paper's sign (±1): rule ``ci`` on a 95% paired bootstrap
-    interval (scipy's BCa, ``resamples`` draws from a generator seeded with ``seed``)."""
+    interval (scipy's BCa, ``resamples`` draws from a generator seeded with ``seed``), with
+    the smallest effect of interest ``sesoi_rel`` × the mean of the two SDs (default 10%)."""
 
     sign: int
     seed: int = 0
     resamples: int = 999
+    sesoi_rel: float = 0.1
 
     def __call__(self, *arrays: np.ndarray) -> Decision:
         a, b = _pair(arrays[0], arrays[1], True)
@@ -202,13 +227,16 @@ class SpreadDirection:
             rng=np.random.default_rng(self.seed),
         ).confidence_interval
         lo, hi = float(ci.low), float(ci.high)
+        delta = self.sesoi_rel * float(np.mean([a.std(ddof=1), b.std(ddof=1)]))
+        rule = _ci_rule(self.sign, max(delta, float(np.finfo(np.float64).eps)))
         return Decision(
-            ci_verdict(lo, hi, self.sign),
+            rule(lo, hi),
             float(diff(a, b)),
             lo,
             hi,
             0.95,
-            f"paired bootstrap of the SD difference, n = {len(a)}",
+            f"paired bootstrap of the SD difference, n = {len(a)}, SESOI {delta:.3g}",
+            rule,
         )
 
 
@@ -226,14 +254,12 @@ class Share:
             raise ValueError(f"a share needs a non-empty 0/1 array; got {x!r}")
         k = int(x.sum())
         ci = stats.binomtest(k, len(x)).proportion_ci(0.95, method="wilson")
-        return Decision(
-            level_verdict(ci.low, ci.high, self.level, self.weaker),
-            k / len(x),
-            float(ci.low),
-            float(ci.high),
-            0.95,
-            f"Wilson, {k} of {len(x)}",
-        )
+
+        def rule(lo: float, hi: float) -> str:
+            return level_verdict(lo, hi, self.level, self.weaker)
+
+        lo, hi = float(ci.low), float(ci.high)
+        return Decision(rule(lo, hi), k / len(x), lo, hi, 0.95, f"Wilson, {k} of {len(x)}", rule)
 
 
 @dataclass(frozen=True)
@@ -255,8 +281,11 @@ class Number:
         ci = stats.ttest_1samp(per_run, self.paper_mu).confidence_interval(0.95)
         lo, hi = float(ci.low), float(ci.high)
         said = f"t over runs, n = {len(per_run)}; σ {sd:.3g} against the paper's {self.paper_sd}"
-        verdict = number_verdict(lo, hi, sd, self.paper_mu, self.paper_sd)
-        return Decision(verdict, float(per_run.mean()), lo, hi, 0.95, said)
+
+        def rule(lo: float, hi: float) -> str:
+            return number_verdict(lo, hi, sd, self.paper_mu, self.paper_sd)
+
+        return Decision(rule(lo, hi), float(per_run.mean()), lo, hi, 0.95, said, rule)
 
 
 @dataclass(frozen=True, eq=False)
@@ -280,14 +309,44 @@ class Evidence:
         )
         return Evidence(first.test, arrays)
 
+    @staticmethod
+    def seed_level(items: list[Evidence], fitted: str) -> Decision:
+        """The decision at the level of a fitted object (rule 'seed level'): each seed's
+        estimate (its own fit of ``fitted``), their t-interval over the seeds at the test's
+        level, judged by the test's rule with the margins of the pooled runs. One seed has
+        no such interval: its runs decide, and the text says so."""
+        pooled = Evidence.pool(items).decide()
+        x = np.array([e.decide().estimate for e in items], dtype=np.float64)
+        x = x[np.isfinite(x)]
+        if len(x) < 2 or pooled.rule is None:
+            why = "fewer than 2 seeds" if len(x) < 2 else "the test has no seed-level rule"
+            if len(items) > 1 and pooled.rule is None:
+                raise ValueError(f"{pooled.test}: {why}, yet the quantity rests on {fitted}")
+            return replace(pooled, test=f"{pooled.test}; runs pooled: {why}")
+        half = float(stats.t.ppf(0.5 + pooled.level / 2, len(x) - 1) * x.std(ddof=1))
+        half /= np.sqrt(len(x))
+        mean = float(x.mean())
+        said = (
+            f"t over {len(x)} seeds' estimates, each its own {fitted}; pooled runs: {pooled.test}"
+        )
+        return Decision(
+            pooled.rule(mean - half, mean + half),
+            mean,
+            mean - half,
+            mean + half,
+            pooled.level,
+            said,
+            pooled.rule,
+        )
+
 
 def decided(
     evidence: tuple[Evidence, ...], parts: Callable[[list[str]], str] | None = None
 ) -> tuple[str, str]:
     """One seed's verdict on its own runs (the parts joined by ``parts``, default
-    :func:`~emogen.analysis.replication.verdicts.parts_verdict`) and the decisions in words."""
+    :func:`~emogen.analysis.replication.verdicts.join`) and the decisions in words."""
     decisions = [e.decide() for e in evidence]
-    verdict = (parts or parts_verdict)([d.verdict for d in decisions])
+    verdict = (parts or join)([d.verdict for d in decisions])
     return verdict, "; ".join(d.text() for d in decisions)
 
 
@@ -303,6 +362,8 @@ def judged(
     parts: Callable[[list[str]], str] | None = None,
     value: float | None = None,
     value_label: str = "",
+    fitted: str = "",
+    outside: str = "",
 ) -> Finding:
     """A finding whose verdict is its evidence's (this seed's runs; over seeds the pooled
     runs'); its effect size defaults to the first part's estimate."""
@@ -324,4 +385,6 @@ def judged(
         evidence=ev,
         parts=parts,
         interval=text,
+        fitted=fitted,
+        outside=outside,
     )

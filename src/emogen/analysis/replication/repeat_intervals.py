@@ -78,12 +78,15 @@ class BinContrast:
       the fixed row matched); estimate share_fixed − (share_protocol + slope(protocol) ×
       (bias_protocol − bias_fixed)), in points.
 
-    ``sign``: the paper's sign of the estimate (``ci`` rule on the 95% interval)."""
+    ``sign``: the paper's sign of the estimate (``ci`` rule on the 95% interval); ``sesoi``:
+    its smallest effect of interest — 5 first-bin points (``matched``), or 25 points per unit
+    bias (``slope``: 5 points over a bias change of 0.2, the span of Table III's rows)."""
 
     kind: str
     sign: int
     seed: int = 0
     resamples: int = 400
+    sesoi: float = 0.0
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -107,8 +110,13 @@ class BinContrast:
             est = share[3] - (share[2] + slope_p * (bias[2] - bias[3]))
         lo, hi = (float(q) for q in np.quantile(est[1:], [0.025, 0.975]))
         unit = "points per unit bias" if self.kind == "slope" else "first-bin points"
-        said = f"bootstrap over runs within seeds, {unit}, n = {len(group)}"
-        return Decision(ci_verdict(lo, hi, self.sign), float(est[0]), lo, hi, 0.95, said)
+        delta = self.sesoi or (25.0 if self.kind == "slope" else 5.0)
+        said = f"bootstrap over runs within seeds, {unit}, n = {len(group)}, SESOI {delta:g}"
+
+        def rule(lo: float, hi: float) -> str:
+            return ci_verdict(lo, hi, self.sign, delta)
+
+        return Decision(rule(lo, hi), float(est[0]), lo, hi, 0.95, said, rule)
 
 
 SHARE_KINDS = ("first_at_least", "first_above", "tvd_below", "tvd_to")
@@ -131,7 +139,8 @@ class BinShares:
 
     * ``first_at_least`` — the first-bin share (points) of the row against ``level``: **holds**
       when the interval lies at or above it, **differs** when below, else **inconclusive**;
-    * ``first_above`` — first-bin share of row 1 − row 2 (points), rule ``ci`` with sign +1;
+    * ``first_above`` — first-bin share of row 1 − row 2 (points), rule ``ci`` with sign +1
+      and a smallest effect of interest of 5 points;
     * ``tvd_below`` — the total variation distance of the two rows' bins (points), rule
       ``band``: **holds** when the interval's upper end is below ``level``, **partly** below
       ``weaker``, **differs** when its lower end is at or above ``weaker``, else
@@ -168,16 +177,15 @@ class BinShares:
             other = shares[1] if self.kind == "tvd_below" else self._reference(shares[0])
             est = 0.5 * np.abs(shares[0] - other).sum(axis=1)
         lo, hi = (float(q) for q in np.quantile(est[1:], [0.025, 0.975]))
-        if self.kind == "first_at_least":
-            verdict = (
-                "holds" if lo >= self.level else "differs" if hi < self.level else "inconclusive"
-            )
-        elif self.kind == "first_above":
-            verdict = ci_verdict(lo, hi, +1)
-        else:
-            verdict = band_verdict(lo, hi, self.level, self.weaker)
         said = f"bootstrap over runs within seeds, {self.kind}, points, n = {len(group)}"
-        return Decision(verdict, float(est[0]), lo, hi, 0.95, said)
+        return Decision(self._rule(lo, hi), float(est[0]), lo, hi, 0.95, said, self._rule)
+
+    def _rule(self, lo: float, hi: float) -> str:
+        if self.kind == "first_at_least":
+            return "holds" if lo >= self.level else "differs" if hi < self.level else "inconclusive"
+        if self.kind == "first_above":
+            return ci_verdict(lo, hi, +1, 5.0)
+        return band_verdict(lo, hi, self.level, self.weaker)
 
     def _reference(self, shares: np.ndarray) -> np.ndarray:
         ref = np.asarray(self.reference, dtype=np.float64)

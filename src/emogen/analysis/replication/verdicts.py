@@ -2,8 +2,11 @@
 
 A finding with :attr:`~emogen.analysis.replication.findings.Finding.evidence` (per-run data and
 the test that decides on them, :mod:`~emogen.analysis.replication.intervals`) is decided on
-the runs of all seeds pooled: its verdict is the test's on the pooled runs, and each seed's
-own verdict is kept as a robustness column. A finding without evidence keeps the seeds'
+the runs of all seeds pooled, or, when its quantity rests on one fitted object per seed
+(``Finding.fitted``: a GMM, a PCA, an empirical metric's training, a target built from the
+seed's runs), on the seeds' estimates (one per fit, rule 'seed level'); each seed's own
+verdict is kept as a robustness column. Several parts are joined by the one symmetric
+:func:`join`. A finding without evidence keeps the seeds'
 common verdict, or **inconclusive** when they disagree. The effect size (``Finding.value``)
 is reported as the mean over the seeds with a 95% t-interval (mean ± t₀.₉₇₅,ₖ₋₁ · sd / √k).
 """
@@ -24,9 +27,13 @@ ALPHA = 0.05
 RULES: dict[str, str] = {
     "order": "orderings: **holds** when every ordering the paper states holds; **partly** when "
     "some do (or only the first place); **differs** when none does",
-    "ci": "a difference with a direction: **holds** when the 95% CI of our difference lies on "
-    "the paper's side of 0; **inconclusive** when it includes 0; **differs** when it lies on "
-    "the other side",
+    "ci": "a difference with a direction, against a smallest effect of interest δ (SESOI, "
+    "stated per test; default 0.2 pooled SD for means, 10% of the mean SD for SDs, 5 points "
+    "for repeatability shares, 0.05 cm for vertex distances, 0.05 for ratios): **holds** when "
+    "the 95% CI excludes 0 on the paper's side and reaches past δ; **differs** when it "
+    "excludes 0 on the other side and reaches past −δ, or lies wholly within ±δ (no effect "
+    "of interest either way, so a precisely zero effect fails the claim); **inconclusive** "
+    "otherwise",
     "number": "a value the paper gives (μ ± σ): the 95% CI of our μ, as a distance from the "
     "paper's μ in pooled σ: **holds** when the whole CI lies within 0.5 σ; **partly** within "
     "1 σ; **differs** when it lies wholly beyond 1 σ; **inconclusive** otherwise",
@@ -36,38 +43,57 @@ RULES: dict[str, str] = {
     "threshold": "a stated level: **holds** at or past the level the claim names (given in the "
     "claim); **partly** past its weaker level; **differs** otherwise",
     "tost": "no difference claimed, tested for equivalence (TOST, α = 0.05) against a stated "
-    "margin: **holds** when the 90% CI lies inside ±margin; **differs** when it lies wholly "
-    "outside; **inconclusive** otherwise",
+    "margin (the SESOI): **holds** when the 90% CI lies inside ±margin; **differs** when it "
+    "lies wholly outside; **inconclusive** otherwise",
     "noninferior": "'not worse than' (lower is better): **holds** when the 90% CI's upper end "
-    "is below the margin; **differs** when its lower end is above it; **inconclusive** "
-    "otherwise",
+    "is below the margin (the SESOI); **differs** when its lower end is above it; "
+    "**inconclusive** otherwise",
     "level": "a share against a stated level: **holds** when its 95% CI lies at or past the "
     "level; **partly** when past the weaker level only; **differs** when wholly short of the "
     "weaker level; **inconclusive** otherwise",
     "compromise": "a setting as a compromise of two criteria (lower is better), paired CIs "
-    "against each other setting: **differs** when another is significantly better on both; "
-    "**holds** when it is significantly better than every other on at least one, for every "
-    "target; **partly** for some targets; **inconclusive** otherwise",
+    "(rule ci) against each other setting, per target: **differs** when another is "
+    "better on both, **holds** when it is better than every other on at least one, "
+    "**inconclusive** otherwise; the targets joined (rule join)",
     "chain": "orderings (x₁ > x₂ > …, per group — a target, a generation), each link a paired "
-    "95% CI (means: t; SDs: bootstrap): a group **holds** when every link holds; **holds** when "
-    "every group does; **partly** when at least the stated number of groups do (one, unless "
-    "the claim says); **differs** when fewer do and some link lies on the other side of 0; "
-    "**inconclusive** otherwise",
+    "95% CI (rule ci; means: t, SDs: bootstrap): the links of a group joined, then the groups "
+    "(rule join)",
     "band": "a distance or residual (lower is better) against stated levels: **holds** when "
     "its 95% CI lies below the level; **partly** when below the weaker level only; "
     "**differs** when it lies wholly at or beyond the weaker level; **inconclusive** otherwise",
     "kl": "KL steps: a rise counts only where KL(P_g ‖ P_g−1) grows by more than the KL "
     "noise floor (95th percentile of the KL of two same-size samples of one distribution); "
-    "**holds** when the paper's pattern of rises holds for both initialisations, **partly** "
-    "for one, **differs** for none",
+    "each initialisation's pattern a part (rule join)",
+    "join": "a claim of several parts (symmetric: the same whichever way the parts go): "
+    "**holds** when every part holds, **differs** when every part differs; **inconclusive** "
+    "when some parts are undecided and the decided ones agree (either way); **partly** when "
+    "the decided parts disagree",
+    "readings": "two readings the paper leaves open (e.g. the GMM's dimension): their common "
+    "verdict, else **inconclusive**",
+    "seed level": "a quantity that rests on one fitted object per seed (a GMM, a PCA, an "
+    "empirical metric's training set, a target built from the seed's own runs) is decided "
+    "at the level of that object: the 95% t-interval (90% for TOST and non-inferiority) of "
+    "the seeds' estimates, each seed one fit, under the same rule and SESOI; runs pooled "
+    "only where every run is an independent replicate",
+    "tally": "the tally counts paper findings only, one per event; model-specific absolute "
+    "levels, oracle checks (which use what a study cannot know) and findings that restate "
+    "another's event are listed apart, outside it",
 }
 
 
-def ci_verdict(lo: float, hi: float, paper_sign: int) -> str:
-    """Rule 'ci': the 95% CI (lo, hi) of our difference against the paper's sign (±1)."""
-    if lo <= 0 <= hi:
-        return "inconclusive"
-    return "holds" if (lo > 0) == (paper_sign > 0) else "differs"
+def ci_verdict(lo: float, hi: float, paper_sign: int, sesoi: float) -> str:
+    """Rule 'ci': the 95% CI (lo, hi) of our difference against the paper's sign (±1) and
+    the smallest effect of interest ``sesoi`` (> 0): an interval wholly within ±sesoi
+    **differs** (no effect of interest), one past 0 **holds** or **differs** by its side."""
+    if not sesoi > 0:
+        raise ValueError(f"a smallest effect of interest must be > 0; got {sesoi!r}")
+    if -sesoi < lo and hi < sesoi:
+        return "differs"
+    if lo > 0:
+        return "holds" if paper_sign > 0 else "differs"
+    if hi < 0:
+        return "differs" if paper_sign > 0 else "holds"
+    return "inconclusive"
 
 
 def tost_verdict(p: float, lo: float, hi: float, margin: float) -> str:
@@ -157,24 +183,26 @@ class Combined:
 
 
 def judge(found: list[Finding]) -> tuple[str, str]:
-    """The verdict of findings with evidence (one per seed) on their runs pooled, part by part,
+    """The verdict of findings with evidence (one per seed), part by part — on the runs
+    pooled, or on the seeds' estimates when the finding rests on a fitted object per seed —
     and the decisions in words."""
     first = found[0]
     if any(len(g.evidence) != len(first.evidence) for g in found) or not first.evidence:
         raise ValueError(f"every seed's finding needs the same parts of evidence: {first.claim}")
-    decisions = [
-        first.evidence[i].pool([g.evidence[i] for g in found]).decide()
-        for i in range(len(first.evidence))
-    ]
-    verdicts = [d.verdict for d in decisions]
-    verdict = (first.parts or parts_verdict)(verdicts)
+    decisions = []
+    for i, part in enumerate(first.evidence):
+        items = [g.evidence[i] for g in found]
+        decisions.append(
+            part.seed_level(items, first.fitted) if first.fitted else part.pool(items).decide()
+        )
+    verdict = (first.parts or join)([d.verdict for d in decisions])
     return verdict, "; ".join(d.text() for d in decisions)
 
 
 def combine(per_seed: list[list[Finding]]) -> list[Combined]:
     """Match the seeds' findings (same section and claim, in the first seed's order) and
-    combine them: decided on the pooled runs where they carry evidence, else the common
-    verdict, or inconclusive when the seeds disagree."""
+    combine them: decided on the pooled runs (or the seeds' fits) where they carry evidence,
+    else the common verdict, or inconclusive when the seeds disagree."""
     first = per_seed[0]
     out = []
     for f in first:
@@ -191,51 +219,25 @@ def combine(per_seed: list[list[Finding]]) -> list[Combined]:
     return out
 
 
-def chain_verdict(verdicts: list[str], groups: int = 1, partly_at: int = 1) -> str:
-    """Rule 'chain': ``verdicts`` are the links' ``ci``-verdicts, group after group (equal
-    sizes). A group holds when all its links hold. **holds** when every group holds;
-    **partly** when at least ``partly_at`` groups hold; **differs** when fewer do and some link
-    differs; **inconclusive** otherwise."""
-    if groups < 1 or not verdicts or len(verdicts) % groups:
-        raise ValueError(f"{len(verdicts)} links do not split into {groups} equal groups")
-    if not 1 <= partly_at <= groups:
-        raise ValueError(f"partly_at must be 1…{groups}; got {partly_at}")
-    size = len(verdicts) // groups
-    held = sum(
-        all(v == "holds" for v in verdicts[i * size : (i + 1) * size]) for i in range(groups)
-    )
-    if held == groups:
-        return "holds"
-    if held >= partly_at:
-        return "partly"
-    return "differs" if "differs" in verdicts else "inconclusive"
-
-
-def parts_verdict(verdicts: list[str]) -> str:
-    """A claim of several parts: their common verdict; else **partly** when some part holds,
-    **differs** when some part differs, **inconclusive** otherwise."""
+def join(verdicts: list[str]) -> str:
+    """Rule 'join', the one way parts of a claim combine, symmetric in holds and differs:
+    their common verdict; **inconclusive** when some parts are undecided and the decided ones
+    agree (whichever way they agree); **partly** when the decided parts disagree."""
+    if not verdicts:
+        raise ValueError("a claim needs at least one part to join")
     if len(set(verdicts)) == 1:
         return verdicts[0]
-    return (
-        "partly" if "holds" in verdicts else "differs" if "differs" in verdicts else "inconclusive"
-    )
+    decided = {v for v in verdicts if v != "inconclusive"}
+    return "inconclusive" if len(decided) == 1 else "partly"
 
 
-def main_part_verdict(verdicts: list[str], n_main: int = 1) -> str:
-    """A claim whose first ``n_main`` parts are its point and the rest qualify it: the main
-    parts' common verdict decides when it is **differs** or **inconclusive** (a qualifying
-    part cannot rescue a failed point); when the main parts hold, **holds** if every other
-    part holds too, else **partly**."""
-    if not 0 < n_main <= len(verdicts):
-        raise ValueError(f"n_main must be 1…{len(verdicts)}; got {n_main}")
-    main = verdicts[:n_main]
-    if "differs" in main:
-        return "differs"
-    if "inconclusive" in main:
-        return "inconclusive"
-    if all(v == "holds" for v in verdicts):
-        return "holds"
-    return "partly"
+def chain_verdict(verdicts: list[str], groups: int = 1) -> str:
+    """Rule 'chain': ``verdicts`` are the links' ``ci``-verdicts, group after group (equal
+    sizes): each group's links joined (:func:`join`), then the groups."""
+    if groups < 1 or not verdicts or len(verdicts) % groups:
+        raise ValueError(f"{len(verdicts)} links do not split into {groups} equal groups")
+    size = len(verdicts) // groups
+    return join([join(verdicts[i * size : (i + 1) * size]) for i in range(groups)])
 
 
 def readings_verdict(first: str, second: str) -> str:
@@ -246,27 +248,28 @@ def readings_verdict(first: str, second: str) -> str:
 
 def readings_parts_verdict(verdicts: list[str], first: int = 2) -> str:
     """Two readings of one claim, each of several parts: the first ``first`` verdicts are
-    the first reading's parts, the rest the second's; each reading joined by
-    :func:`parts_verdict`, the two by :func:`readings_verdict`."""
+    the first reading's parts, the rest the second's; each reading joined by :func:`join`,
+    the two by :func:`readings_verdict`."""
     if not 0 < first < len(verdicts):
         raise ValueError(f"first must be 1…{len(verdicts) - 1}; got {first}")
-    return readings_verdict(parts_verdict(verdicts[:first]), parts_verdict(verdicts[first:]))
+    return readings_verdict(join(verdicts[:first]), join(verdicts[first:]))
 
 
 def compromise_verdict(verdicts: list[str], targets: int = 2, others: int = 2) -> str:
     """Rule 'compromise': a setting is a compromise of two criteria when no other setting
-    beats it on both (it is not dominated) and it beats each other setting on at least one.
-    ``verdicts``: per target, per other setting, (criterion 1, criterion 2) of
-    ``ci``-verdicts of (other − ours), lower is better (**holds**: ours significantly better,
-    **differs**: the other significantly better). **differs** when some other setting is
-    significantly better on both for some target; **holds** when it is significantly beaten
-    on one criterion by every other setting for every target; **partly** for some targets;
-    **inconclusive** otherwise."""
+    beats it on both and it beats each other setting on at least one. ``verdicts``: per
+    target, per other setting, (criterion 1, criterion 2) of ``ci``-verdicts of (other −
+    ours), lower is better (**holds**: ours better, **differs**: the other better). Per
+    target: **differs** when some other setting is better on both, **holds** when ours is
+    better than every other on one, **inconclusive** otherwise; the targets joined
+    (:func:`join`)."""
     if len(verdicts) != targets * others * 2:
         raise ValueError(f"expected {targets * others * 2} verdicts; got {len(verdicts)}")
     pairs = [verdicts[i : i + 2] for i in range(0, len(verdicts), 2)]
-    per_target = [pairs[t * others : (t + 1) * others] for t in range(targets)]
-    if any(p == ["differs", "differs"] for p in pairs):
-        return "differs"
-    optimal = [all("holds" in p for p in ps) for ps in per_target]
-    return "holds" if all(optimal) else "partly" if any(optimal) else "inconclusive"
+    per_target = []
+    for t in range(targets):
+        ps = pairs[t * others : (t + 1) * others]
+        dominated = any(p == ["differs", "differs"] for p in ps)
+        optimal = all("holds" in p for p in ps)
+        per_target.append("differs" if dominated else "holds" if optimal else "inconclusive")
+    return join(per_target)

@@ -104,44 +104,29 @@ def write_closing(
     settings: ReplicateSettings,
     provenance: dict[str, str],
 ) -> None:
-    """The findings table (and its tally at ``glance_at``), the rules, our own checks apart,
-    the run's provenance and timings."""
-    paper = [c for c in combined if c.finding.paper_finding]
+    """The findings table (and its tally, both ways, at ``glance_at``), the rules, the paper
+    findings outside the tally and our own checks apart, the change table, the run's
+    provenance and timings."""
+    paper = [c for c in combined if c.finding.paper_finding and not c.finding.outside]
+    apart = [c for c in combined if c.finding.paper_finding and c.finding.outside]
     ours = [c for c in combined if not c.finding.paper_finding]
     report.heading("Findings: the paper beside ours")
-    counts = pd.Series([c.verdict for c in paper], dtype=object).value_counts()
-    words = {
-        "holds": "hold",
-        "partly": "partly",
-        "differs": "differ",
-        "inconclusive": "inconclusive",
-    }
-    tally = ", ".join(f"{counts.get(v, 0)} {words[v]}" for v in VERDICTS)
+    tally = tally_both_ways([c.verdict for c in paper])
     k = settings.seeds
-    report.paragraph(
-        f"{len(paper)} findings of the paper, each judged on {k} independent seed"
-        f"{'s' if k > 1 else ''} ({provenance['seeds']}) by its written rule: {tally}. A "
-        "finding with an interval is decided on the runs of all seeds pooled (paired where "
-        "conditions share their runs' generators): 'pooled interval' shows the estimate, its "
-        "CI and the test, and 'per seed' each seed's own verdict as a robustness check. A "
-        "finding without one keeps the seeds' common verdict, **inconclusive** when they "
-        "disagree. 'Effect over seeds' is the mean of the finding's effect size over the seeds "
-        f"± the half-width of its 95% t-interval ({k} seeds). Tables and figures above are the first seed's. Our own "
-        "checks (not paper findings) are listed apart and are not in the tally."
-    )
+    report.paragraph(_how_decided(len(paper), k, provenance["seeds"], tally))
     report.insert_paragraph(
         glance_at,
         f"**At a glance:** {len(paper)} findings of the paper checked on our model over {k} "
         f"seeds: {tally}. The closing table lists every one with the paper's numbers, ours, "
-        "the rule and the verdict; our own checks are reported apart.",
+        f"the rule and the verdict; {len(apart)} model-specific, oracle or repeated findings "
+        "and our own checks are reported apart.",
     )
     report.paragraph(
         "**Multiple comparisons.** The table makes "
         f"{len(combined)} comparisons. They are **exploratory**: the rules are descriptive "
         "(orderings, thresholds, 95% intervals at the per-comparison level), no family-wise or "
         "false-discovery correction is applied, and a single 'holds' or 'differs' should not be "
-        "read as a confirmed test result. The verdict over seeds guards against the largest "
-        "source of chance verdicts (one simulation seed)."
+        "read as a confirmed test result."
     )
     report.table(_rules_table(), "verdict_rules", "The verdict rules")
     report.table(
@@ -150,7 +135,15 @@ def write_closing(
         "Every finding, with the paper's numbers and ours",
         data=_records(paper),
     )
-    _write_changed(report, paper)
+    if apart:
+        report.heading("Paper findings outside the tally", level=3)
+        report.table(
+            _rows(apart, reason=True),
+            "outside_tally",
+            "Model-specific levels, oracle checks and repeated events: reported, not counted",
+            data=_records(apart),
+        )
+    _write_changed(report, combined, settings)
     if ours:
         report.heading("Our own checks (outside the tally)", level=3)
         report.table(
@@ -172,43 +165,98 @@ def write_closing(
     report.table(timing, "timings", "Seconds per experiment (all seeds)")
 
 
-def _write_changed(report: Report, paper: list[Combined]) -> None:
-    """The closing note: every verdict that changed with issue #30, and why."""
-    changed = _changed(paper)
-    if len(changed):
-        report.heading("Verdicts that changed with issue #30", level=3)
-        report.paragraph(
-            f"{len(changed)} of {len(paper)} verdicts differ from the report before verdicts "
-            "were decided on intervals and equivalence tests (3 seeds, rules on point "
-            "estimates, seeds' agreement)."
-        )
-        report.table(changed, "verdict_changes", "Every verdict that changed, and why")
+def _how_decided(n: int, k: int, seeds: str, tally: str) -> str:
+    return (
+        f"{n} findings of the paper, one per event, each judged on {k} independent "
+        f"seed{'s' if k > 1 else ''} ({seeds}) by its written rule: {tally}. The "
+        "rules were written down and committed before this run, on seeds not used while "
+        "writing them. A finding whose quantity rests on one fitted object per seed (a GMM, a "
+        "PCA, an empirical metric's training, a target built from the seed's own runs) is "
+        "decided on the seeds' estimates, one per fit (rule 'seed level'); any other finding "
+        "with an interval on the runs of all seeds pooled (paired where conditions share "
+        "their runs' generators). 'Pooled interval' shows the estimate, its CI and the test, "
+        "and 'per seed' each seed's own verdict on its own runs as a robustness check. A "
+        "finding without an interval keeps the seeds' common verdict, **inconclusive** when "
+        "they disagree. 'Effect over seeds' is the mean of the finding's effect size over the "
+        f"seeds ± the half-width of its 95% t-interval ({k} seeds). Tables and figures above "
+        "are the first seed's. Model-specific and oracle checks, findings that restate "
+        "another's event, and our own checks are listed apart and are not in the tally."
+    )
 
 
-def _changed(combined: list[Combined]) -> pd.DataFrame:
-    """Findings whose verdict differs from :data:`~.previous.BEFORE`, with the reason."""
+def tally_both_ways(verdicts: list[str]) -> str:
+    """The tally in words, read strictly and leniently (rule 'tally'): the four counts; how
+    many hold (strict: 'partly' does not hold) or hold at least partly (lenient); and the same
+    among the decided findings (the inconclusive set aside)."""
+    n = len(verdicts)
+    c = {v: verdicts.count(v) for v in VERDICTS}
+    decided = n - c["inconclusive"]
+    words = f"{c['holds']} hold, {c['partly']} partly, {c['differs']} differ, "
+    words += f"{c['inconclusive']} inconclusive"
+    strict = f"strictly {c['holds']} of {n} hold"
+    lenient = f"leniently (partly counted) {c['holds'] + c['partly']} of {n}"
+    among = (
+        f"among the {decided} decided, {c['holds']} hold and {c['holds'] + c['partly']} hold "
+        f"at least partly, {c['differs']} differ"
+    )
+    return f"{words} — {strict}, {lenient}; {among}"
+
+
+def _write_changed(report: Report, combined: list[Combined], s: ReplicateSettings) -> None:
+    """Every verdict that moved from the previous report (issue #30's), and why."""
+    changed = _changed(combined, s)
+    report.heading("Verdicts that moved with issue #41", level=3)
+    report.paragraph(
+        f"{len(changed)} findings moved from the previous report (issue #30: seeds 1–3, runs "
+        "pooled for every interval, no smallest effect of interest, asymmetric joins, every "
+        "paper finding counted): verdicts that changed, and findings that left the tally. "
+        "'Why' names the rule changes of issue #41 that apply to the finding (decided before "
+        "this run) and the seeds' own verdicts; a finding whose rules did not change moved "
+        "with the new seeds alone."
+    )
+    report.table(changed, "verdict_changes", "Every verdict that moved, and why")
+
+
+def _changed(combined: list[Combined], s: ReplicateSettings) -> pd.DataFrame:
+    """Findings whose verdict or place (counted / apart) differs from
+    :data:`~.previous.BEFORE`, with the rule changes that apply to each."""
     from emogen.analysis.replication.previous import BEFORE, WHY
 
     rows = []
-    for k, c in enumerate(combined, start=1):
+    for c in combined:
         f = c.finding
-        old = BEFORE.get(f.key)
-        if old is None or old == c.verdict:
+        if f.key not in BEFORE:
             continue
-        why = WHY.get(f.claim) or (
-            "decided on the pooled runs' interval" if c.interval else "the seeds' verdicts"
-        )
+        number, old = BEFORE[f.key]
+        now = c.verdict + (" (outside the tally)" if f.outside else "")
+        if now == old:
+            continue
         rows.append(
             {
-                "finding": k,
+                "finding (previous no.)": number,
                 "section": f.section,
                 "claim": f.claim,
                 "before": old,
-                "now": c.verdict,
-                "why": why,
+                "now": now,
+                "why": "; ".join(_reasons(c, WHY.get(f.claim, ""), s)),
             }
         )
-    return pd.DataFrame(rows, columns=["finding", "section", "claim", "before", "now", "why"])
+    columns = ["finding (previous no.)", "section", "claim", "before", "now", "why"]
+    return pd.DataFrame(rows, columns=columns)
+
+
+def _reasons(c: Combined, specific: str, s: ReplicateSettings) -> list[str]:
+    f = c.finding
+    out = [specific] if specific else []
+    if f.fitted:
+        out.append(f"seed level: the seeds' estimates, each its own {f.fitted}")
+    if "SESOI" in c.interval:
+        out.append("a smallest effect of interest (rule ci)")
+    if len(f.evidence) > 1:
+        out.append("parts joined symmetrically (rule join)")
+    per_seed = ", ".join(f"{n} {v}" for v in VERDICTS if (n := c.seed_verdicts.count(v)))
+    out.append(f"new seeds {s.seed_list[0]}–{s.seed_list[-1]} (per seed: {per_seed})")
+    return out
 
 
 def _rules_table() -> pd.DataFrame:
@@ -235,6 +283,8 @@ def _records(combined: list[Combined]) -> pd.DataFrame:
             "pooled_interval": c.interval or None,
             "rule": f.rule,
             "verdict": c.verdict,
+            "decided_on": f"seeds' estimates ({f.fitted})" if f.fitted else "runs pooled",
+            "outside_tally": f.outside or None,
             "n_seeds": len(c.seed_verdicts),
             "note": f.note,
         }
@@ -243,10 +293,11 @@ def _records(combined: list[Combined]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _rows(combined: list[Combined]) -> pd.DataFrame:
+def _rows(combined: list[Combined], reason: bool = False) -> pd.DataFrame:
     return pd.DataFrame(
         [
-            {
+            ({"why apart": c.finding.outside} if reason else {})
+            | {
                 "section": c.finding.section,
                 "paper finding": c.finding.claim,
                 "paper": c.finding.paper,
