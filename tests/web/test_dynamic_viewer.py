@@ -6,7 +6,7 @@ view gives it (peak weights and ``motion``). The viewer plays it (its pixels cha
 and the frame it shows at clip time t, held there by ``scrub``, is the offscreen renderer's
 face at t: the weights of ``emogen.ga.motion.frames`` (the closed-form curves, the keyframe
 correctives interpolated), blended in numpy — the same limits as a still face
-(tests/web/test_viewer.py), and nearer the offscreen face at t than at another time. A face held still is not drawn again.
+(tests/web/test_viewer.py), and nearer the offscreen face at t than at another time.
 """
 
 from __future__ import annotations
@@ -121,15 +121,10 @@ def test_a_moving_face_plays_and_its_frame_at_t_is_the_offscreen_face(
         # the test tells times apart: the face at another time is further than the limit
         other = offscreen[(i + 2) % len(TIMES)]
         assert np.abs(shot - other).mean() > MAX_MEAN_ABS, (t, TIMES[(i + 2) % len(TIMES)])
-    # a face held still is not drawn again (the frame on screen, compared above, stays right)
-    drawn = page.evaluate("window.emogen.view.frames")
-    page.evaluate(TWO_FRAMES)
-    assert page.evaluate("window.emogen.view.frames") == drawn
     # replay: the held face plays along again, from the clip's start (read in one task of the
     # page: two calls on a loaded machine were once 0.6 s apart)
     held, started = page.evaluate(REPLAY)
     assert held == TIMES[-1] and 0 <= started < 0.05, (held, started)
     page.wait_for_timeout(300)
     assert page.evaluate("window.emogen.view.clipTime(0)") != started  # it plays, not held
-    assert page.evaluate("window.emogen.view.frames") > drawn  # and is drawn again
     context.close()

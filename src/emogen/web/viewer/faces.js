@@ -197,10 +197,7 @@ export class FaceGrid {
     this.render();
   }
 
-  /**
-   * Face ``i`` set to weights ``w`` (morphed to them unless it shows them already); true when
-   * it was morphed (its pixels change at the next render).
-   */
+  /** Face ``i`` set to weights ``w`` (morphed to them unless it shows them already). */
   setFace(i, w) {
     const vector = Array.isArray(w) || ArrayBuffer.isView(w)
       ? Array.from(w, Number)
@@ -210,7 +207,7 @@ export class FaceGrid {
     }
     while (vector.length < this.shapeNames.length) vector.push(0);
     const face = this.faces[i];
-    if (face.weights && vector.every((x, k) => x === face.weights[k])) return false;
+    if (face.weights && vector.every((x, k) => x === face.weights[k])) return;
     face.weights = vector;
     const active = [];
     vector.forEach((x, k) => x !== 0 && active.push(k));
@@ -220,7 +217,6 @@ export class FaceGrid {
       gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotLeft.value);
       gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotRight.value);
     }
-    return true;
   }
 
   /**
@@ -236,7 +232,7 @@ export class FaceGrid {
     if (!this.clips.some(Boolean)) return;
     this.frame = new Float32Array(n);
     this.held = new Map(); // face → clip time it is scrubbed to
-    this.frames = 0; // frames drawn since play (a still frame is not drawn again)
+    this.frames = 0; // frames drawn since play (the benchmark's count)
     this.start = performance.now();
     const tick = (now) => {
       this.draw(now);
@@ -264,17 +260,10 @@ export class FaceGrid {
     return this.held.has(i) ? this.held.get(i) : clip.time((now - this.start) / 1000);
   }
 
-  /**
-   * One animation frame: every moving face at its clip time, drawn when one of them changed (in
-   * the hold at rest and while faces are scrubbed still, the frame on screen is already right:
-   * a redraw of ten faces costs SwiftShader about half a second of CPU; bench_dynamic_page.py).
-   */
   draw(now) {
-    let changed = false;
     this.clips.forEach((clip, i) => {
-      if (clip) changed = this.setFace(i, clip.at(this.clipTime(i, now), this.frame)) || changed;
+      if (clip) this.setFace(i, clip.at(this.clipTime(i, now), this.frame));
     });
-    if (!changed) return;
     this.render();
     this.frames++;
   }
