@@ -3,7 +3,8 @@ simulated on the model with the data's GA settings?"""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -15,7 +16,8 @@ from emogen.analysis.elites import final_faces_simulator
 from emogen.analysis.face_sheets import model_weights
 from emogen.analysis.noise import PAPER_NOISE, latent_spread_test, spread_test
 from emogen.analysis.noise_empirical import empirical_spread_test, has_repeats
-from emogen.analysis.report import Report
+from emogen.analysis.report import Content
+from emogen.analysis.results import Section
 from emogen.config import PAPER_SELECTIONS, GAConfig, SimulationConfig
 
 if TYPE_CHECKING:
@@ -65,16 +67,14 @@ def noise_config(ds: Dataset, group: str, opts: AnalysisOptions) -> SimulationCo
 
 
 def noise_section(
-    ds: Dataset,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> None:
-    report.heading("GA noise: does each group's spread exceed it?")
+    ds: Dataset, out: Path, opts: AnalysisOptions, model: FaceModel | None
+) -> Section:
+    """Does each group's spread exceed the GA noise (unit: the participant's face)?"""
+    sec = Section(out)
+    sec.heading("GA noise: does each group's spread exceed it?")
     if not ds.has_weights:
-        report.paragraph("Skipped: needs face weights.")
-        return
+        sec.paragraph("Skipped: needs face weights.")
+        return sec
     rng = np.random.default_rng(opts.seed)
     rows, notes, records = [], [], []
     candidates: list[dict[str, object]] = []
@@ -120,39 +120,41 @@ def noise_section(
                 "choice_noise_source": source,
             }
         )
-    report.paragraph(_method_text(ds, opts, model))
-    _assumption_note(report, rows)
-    report.bullets([f"Skipped {n}" for n in notes])
+    sec.paragraph(_method_text(ds, opts, model))
+    _assumption_note(sec, rows)
+    sec.bullets([f"Skipped {n}" for n in notes])
     if rows:
         table = pd.DataFrame(rows)
-        report.table(
-            table, "spread_test", "Group spread against GA noise", data=pd.DataFrame(records)
-        )
-        report.figure(
-            plots.spread(table, report.figures / "spread.png"),
+        sec.table(table, "spread_test", "Group spread against GA noise", data=pd.DataFrame(records))
+        sec.figure(
+            plots.spread(table, sec.figures / "spread.png"),
             "Mean proxy error of each group against GA noise at the same n.",
         )
-        summary["spread_test"] = rows
+        sec.data["spread_test"] = rows
+        for row in rows:
+            sec.test(f"spread_test[{row['group']}]", row, _unit(ds))
     if candidates:
-        report.table(
+        sec.table(
             pd.DataFrame(candidates),
             "spread_candidates",
             "Latent-target candidates per group (τ: weights below τ × max zeroed)",
             data=pd.DataFrame(candidate_records),
         )
     if ds.kind == "study":
-        empirical_section(ds, report, summary, opts, model)
+        empirical_section(ds, sec, opts, model)
+    return sec
+
+
+def _unit(ds: Dataset) -> str:
+    return "participant" if ds.kind == "study" else "simulated run"
 
 
 def empirical_section(
-    ds: Dataset,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
+    ds: Dataset, sec: Section, opts: AnalysisOptions, model: FaceModel | None
 ) -> None:
     """Where participants repeated a group: their between-person spread against their own
-    within-person spread (the empirical null, :mod:`emogen.analysis.noise_empirical`)."""
+    within-person spread (the empirical null, :mod:`emogen.analysis.noise_empirical`), added
+    to ``sec``."""
     rng = np.random.default_rng(opts.seed)
     rows, records = [], []
     for g in ds.groups:
@@ -167,7 +169,7 @@ def empirical_section(
         records.append(test.record())
     if not rows:
         return
-    report.paragraph(
+    sec.paragraph(
         "**Empirical null: repeated faces of the same participants.** Where participants made "
         "a group's emotion several times, the spread of their own repeated faces is the GA "
         "noise plus their choice noise, measured on them (no simulation, no assumed T). "
@@ -176,13 +178,15 @@ def empirical_section(
         "interval over participants, and a one-sided permutation p (faces shuffled among "
         f"participants, each keeping their number of faces; 999 permutations; α = {opts.alpha})."
     )
-    report.table(
+    sec.table(
         pd.DataFrame(rows),
         "spread_empirical",
         "Between-participant spread against within-participant (repeated) spread",
         data=pd.DataFrame(records),
     )
-    summary["spread_empirical"] = rows
+    sec.data["spread_empirical"] = rows
+    for row in rows:
+        sec.test(f"spread_empirical[{row['group']}]", row)
 
 
 def _method_text(ds: Dataset, opts: AnalysisOptions, model: FaceModel | None) -> str:
@@ -215,7 +219,7 @@ def _method_text(ds: Dataset, opts: AnalysisOptions, model: FaceModel | None) ->
     )
 
 
-def _assumption_note(report: Report, rows: list[dict[str, object]]) -> None:
+def _assumption_note(report: Content, rows: list[dict[str, object]]) -> None:
     """Say loudly which groups' null assumed noiseless choosers."""
     assumed = [str(r["group"]) for r in rows if str(r["T source"]).startswith("ASSUMED")]
     if assumed:

@@ -5,6 +5,7 @@ field is their own (split halves), clusters of participants, and maps."""
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -23,7 +24,8 @@ from emogen.analysis.fields import (
     perceptive_fields,
 )
 from emogen.analysis.people import People
-from emogen.analysis.report import Report
+from emogen.analysis.report import Content
+from emogen.analysis.results import Section
 from emogen.errors import EmoGenError
 
 if TYPE_CHECKING:
@@ -41,56 +43,54 @@ SHEET_PARTICIPANTS = 48
 
 
 def fields_section(
-    people: People,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> None:
+    people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
+) -> Section:
     """Perceptive fields of every participant per emotion, their overlap and clusters."""
-    report.heading("Perceptive fields")
+    sec = Section(folder)
+    sec.heading("Perceptive fields")
     counts = people.faces.groupby(["participant_id", "emotion"]).size()
     if people.n_participants < MIN_PARTICIPANTS or counts.max() < 2:
-        report.paragraph(
+        sec.paragraph(
             f"Skipped: perceptive fields need at least {MIN_PARTICIPANTS} participants with two "
             f"or more final faces of an emotion; this study has {people.n_participants} "
             f"participant(s) with at most {counts.max()} face(s) per emotion."
         )
-        return
+        return sec.tests_in_data()
     from threadpoolctl import threadpool_limits
 
     rng = np.random.default_rng(opts.seed)
     space = face_space(people)
     fields = perceptive_fields(people, space)
     out: dict[str, Any] = {"components": space.k, "variance": float(space.explained.sum())}
-    _describe(fields, counts, report, out)
+    _describe(fields, counts, sec, out)
     # BLAS on one thread: the matrices are small and many (100 null studies); on the busy
     # 2-core machine one null study at 336 took 4.8 s wall, 0.69 s CPU on BLAS's default
     # threads and 0.28 s, 0.03 s on one (benchmarks/bench_fields.py, load 12)
     with threadpool_limits(limits=1, user_api="blas"):
-        matrices = _overlaps(fields, report, rng, out)
-        _individuality(people, fields, report, opts, out)
-        clustering = _clusters(fields, report, opts, rng, out)
+        matrices = _overlaps(fields, sec, rng, out)
+        _individuality(people, fields, sec, opts, out)
+        clustering = _clusters(fields, sec, opts, rng, out)
     order = list(clustering.participants) if clustering else []
     if clustering is not None and clustering.structure:
         order = [p for _, p in sorted(zip(clustering.labels, clustering.participants, strict=True))]
     order += sorted({p for m in matrices.values() for p in m.index} - set(order))
-    report.figure(
-        field_maps.field_heatmaps(fields, report.figures / "fields_pc_maps.png"),
+    sec.figure(
+        field_maps.field_heatmaps(fields, sec.figures / "fields_pc_maps.png"),
         "Where each emotion's fields lie: the population field (every participant's field "
         "weighing the same) on the face space's first two components, relative density; white "
         "dots: each participant's field centre.",
     )
-    report.figure(
-        field_maps.overlap_heatmaps(matrices, order, report.figures / "fields_overlap.png"),
+    sec.figure(
+        field_maps.overlap_heatmaps(matrices, order, sec.figures / "fields_overlap.png"),
         "Overlap of every pair of participants' fields, per emotion (participants ordered by "
         "cluster when there are clusters, else by id).",
     )
-    _sheets(people, report, opts, model)
-    summary["fields"] = out
+    _sheets(people, sec, opts, model)
+    sec.data["fields"] = out
+    return sec.tests_in_data()
 
 
-def _describe(fields: Fields, counts: pd.Series, report: Report, out: dict[str, Any]) -> None:
+def _describe(fields: Fields, counts: pd.Series, report: Content, out: dict[str, Any]) -> None:
     sp = fields.space
     n_min, n_med = int(counts.min()), float(counts.median())
     report.paragraph(
@@ -128,7 +128,7 @@ def _describe(fields: Fields, counts: pd.Series, report: Report, out: dict[str, 
 
 
 def _overlaps(
-    fields: Fields, report: Report, rng: np.random.Generator, out: dict[str, Any]
+    fields: Fields, report: Content, rng: np.random.Generator, out: dict[str, Any]
 ) -> dict[str, pd.DataFrame]:
     matrices, long = {}, []
     for e in fields.emotions:
@@ -173,17 +173,15 @@ def _overlaps(
     return matrices
 
 
-def _write_only(report: Report, table: pd.DataFrame, name: str) -> None:
+def _write_only(report: Content, table: pd.DataFrame, name: str) -> None:
     """A machine table under tables/ without showing it in the report (too many rows)."""
     from emogen import columns as tidy
 
-    path = report.out / "tables" / f"{name}.csv"
-    tidy.write_csv(tidy.machine_table(table), path, col_types=True)
-    report.tables[name] = path
+    report.csv(tidy.machine_table(table), name)
 
 
 def _individuality(
-    people: People, fields: Fields, report: Report, opts: AnalysisOptions, out: dict[str, Any]
+    people: People, fields: Fields, report: Content, opts: AnalysisOptions, out: dict[str, Any]
 ) -> None:
     ind = field_individuality(people, fields)
     if ind.empty:
@@ -231,7 +229,7 @@ def _individuality(
 
 def _clusters(
     fields: Fields,
-    report: Report,
+    report: Content,
     opts: AnalysisOptions,
     rng: np.random.Generator,
     out: dict[str, Any],
@@ -281,7 +279,9 @@ def _clusters(
     return c
 
 
-def _sheets(people: People, report: Report, opts: AnalysisOptions, model: FaceModel | None) -> None:
+def _sheets(
+    people: People, report: Content, opts: AnalysisOptions, model: FaceModel | None
+) -> None:
     if model is None or not opts.render:
         report.paragraph(
             "Contact sheets of the participants' faces skipped (no face model, or --no-render)."

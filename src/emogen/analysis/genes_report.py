@@ -14,7 +14,8 @@ from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.facs import CAVEAT, facs_table, gene_label
 from emogen.analysis.genes import USED, GeneTestOptions, emotion_gene_tests, group_gene_tests
 from emogen.analysis.people import People
-from emogen.analysis.report import Report
+from emogen.analysis.report import Content
+from emogen.analysis.results import Section
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
@@ -23,25 +24,22 @@ MIN_PARTICIPANTS = 3
 
 
 def genes_section(
-    people: People,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> None:
-    """Per-gene inference (see :mod:`emogen.analysis.genes`) into ``report``; headline numbers
-    into ``summary["genes"]``."""
+    people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
+) -> Section:
+    """Per-gene inference (see :mod:`emogen.analysis.genes`) into the section; headline numbers
+    into ``analysis.json``'s ``genes``."""
+    sec = Section(folder)
     del model
-    report.heading("Per-gene inference")
+    sec.heading("Per-gene inference")
     if people.n_participants < MIN_PARTICIPANTS:
-        report.paragraph(
+        sec.paragraph(
             f"Per-gene tests need >= {MIN_PARTICIPANTS} participants; this study has "
             f"{people.n_participants}."
         )
-        return
+        return sec.tests_in_data()
     rng = np.random.default_rng(opts.seed)
     gopts = GeneTestOptions(level=1 - opts.alpha)
-    report.paragraph(
+    sec.paragraph(
         "**Unit: the participant.** Each participant's final faces are averaged per emotion (over "
         "identities and repetitions) before any test. Statistic: the studentised mean difference "
         "(t), its p-value from permutations, never from the t distribution (genes are bounded in "
@@ -54,33 +52,33 @@ def genes_section(
         "participants per group in docs/analysis.md); `used_*`: the share of participants whose "
         f"mean of the gene exceeds {USED:g}."
     )
-    report.table(
+    sec.table(
         facs_table(people.genes),
         "genes_facs",
         "Blendshape genes and the FACS action units they approximate (not AUs).",
     )
-    report.paragraph(CAVEAT)
+    sec.paragraph(CAVEAT)
     out: dict[str, Any] = {}
     if len(people.emotions) < 2:
-        report.paragraph("Emotion contrasts: the study has one emotion, so there is none to test.")
+        sec.paragraph("Emotion contrasts: the study has one emotion, so there is none to test.")
     else:
         emo = emotion_gene_tests(people, gopts, rng=rng)
-        report.paragraph(
+        sec.paragraph(
             "**Emotions** (within participants): every pair of emotions; under H0 the two are "
             "exchangeable within each participant, so the sign of each participant's difference "
             "is flipped at random (one flip shared by all genes of a contrast, independent flips "
             "across contrasts: exact per contrast, conservative across them). Assumes "
             "participants independent of one another."
         )
-        report.table(
+        sec.table(
             _shown(emo, "contrast"),
             "genes_emotion_tests",
             "Genes that differ between emotions (FWER- or FDR-significant rows; the "
             "CSV has every gene × contrast).",
             data=emo,
         )
-        path = heatmap(emo, report.figures / "genes_emotions", alpha=opts.alpha)
-        report.figure(
+        path = heatmap(emo, sec.figures / "genes_emotions", alpha=opts.alpha)
+        sec.figure(
             path,
             "Participant-mean difference per gene (rows, ≈ action unit) and pair "
             "of emotions (columns). * BH q < α; ** max-T p < α (FWER).",
@@ -88,12 +86,13 @@ def genes_section(
         out["emotion_maxt"] = int(emo["significant_maxt"].sum())
         out["emotion_bh"] = int(emo["significant_bh"].sum())
         out["emotion_tests"] = len(emo)
-    _groups(people, report, gopts, rng, out)
-    summary["genes"] = out
+    _groups(people, sec, gopts, rng, out)
+    sec.data["genes"] = out
+    return sec.tests_in_data()
 
 
 def _groups(
-    people: People, report: Report, gopts: GeneTestOptions, rng: np.random.Generator, out: dict
+    people: People, report: Content, gopts: GeneTestOptions, rng: np.random.Generator, out: dict
 ) -> None:
     if "group" not in people.participant_columns:
         report.paragraph("Group contrasts: no participant table with a `group` column was given.")

@@ -22,17 +22,18 @@ Euclidean distances between mean faces (genes in [0, 1]).
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
+from emogen.analysis.results import Section
 from emogen.errors import DataError
 
 if TYPE_CHECKING:
     from emogen.analysis.analyse_options import AnalysisOptions
     from emogen.analysis.people import People
-    from emogen.analysis.report import Report
 
 MIN_PER_GROUP = 3
 
@@ -138,16 +139,13 @@ def _bootstrap(
 
 
 def groups_section(
-    people: People,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    column: str = "group",
-) -> None:
+    people: People, folder: Path, opts: AnalysisOptions, column: str = "group"
+) -> Section:
     """The report's group comparison per emotion (nothing without a participant table)."""
+    sec = Section(folder)
     if column not in people.participant_columns:
-        return
-    report.heading(f"Groups of participants ('{column}')")
+        return sec.tests_in_data()
+    sec.heading(f"Groups of participants ('{column}')")
     rng = np.random.default_rng(np.random.SeedSequence(opts.seed, spawn_key=(0x6A,)))
     rows, notes = [], []
     for emotion in people.emotions:
@@ -158,7 +156,7 @@ def groups_section(
             notes.append(f"{emotion}: {exc}")
             continue
         rows.append({"emotion": emotion, **res})
-    report.paragraph(
+    sec.paragraph(
         "Unit: the participant (their mean face of the emotion, over identities and "
         "repetitions). Location: one-way PERMANOVA (Anderson 2001) on the mean faces, Euclidean "
         "distance in gene space, R² with p from 4999 permutations of participants between "
@@ -168,10 +166,11 @@ def groups_section(
         "for the number of emotions tested; assumptions: participants independent, "
         "exchangeable between groups under the null."
     )
-    report.bullets([f"Skipped {n}" for n in notes])
+    sec.bullets([f"Skipped {n}" for n in notes])
     if rows:
         table = pd.DataFrame(rows)
-        report.table(
+        sec.table(
             table, "participant_groups", f"Groups ('{column}') per emotion: location and dispersion"
         )
-        summary["groups"] = rows
+        sec.data["groups"] = rows
+    return sec.tests_in_data()

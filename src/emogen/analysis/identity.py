@@ -21,6 +21,7 @@ depend on the identity it is made on? (Murray et al. 2024, *Emotion* 24:495.)
 from __future__ import annotations
 
 from itertools import permutations
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -29,7 +30,7 @@ from scipy import stats
 
 from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.people import People
-from emogen.analysis.report import Report
+from emogen.analysis.results import Section
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
@@ -198,35 +199,32 @@ def cross_identity_decoding(
 
 
 def identity_section(
-    people: People,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> None:
+    people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
+) -> Section:
     """Identity effects within participants: distances within against between identities, and
     cross-identity decoding of the emotion."""
+    sec = Section(folder)
     del model  # nothing is rendered here
-    report.heading("Identity effects")
+    sec.heading("Identity effects")
     names = people.identity_names
     if len(names) < 2:
-        report.paragraph(
+        sec.paragraph(
             f"Skipped: every face was made on one identity ({names[0] if names else 'none'}), "
             "so there is no identity effect to measure."
         )
-        return
+        return sec.tests_in_data()
     rng = np.random.default_rng(opts.seed)
     out: dict[str, Any] = {}
     dist = identity_distances(people)
     test = within_between_test(dist, alpha=opts.alpha, rng=rng)
     if test.get("n", 0) < 3:
-        report.paragraph(
+        sec.paragraph(
             "No within- against between-identity distance test: it needs participants who "
             "made an emotion at least twice on one identity and on another (repetitions); "
             f"{int(test.get('n', 0))} did."
         )
     else:
-        report.paragraph(
+        sec.paragraph(
             "Distance within against between identities (gene-space Euclidean distance between "
             "two final faces of one participant and emotion, on the same identity or on two "
             "different ones; per participant averaged over pairs and emotions). Unit: "
@@ -237,15 +235,15 @@ def identity_section(
             "time — if each identity had its own block, drift over the session reads as an "
             "identity effect (Murray et al. 2024)."
         )
-        report.table(
+        sec.table(
             pd.DataFrame([test]),
             "identity_distance_test",
             "Between − within identity distance over participants",
         )
         out["distance"] = test
-    report.table(dist, "identity_distances", "Per participant and emotion: mean distances")
+    sec.table(dist, "identity_distances", "Per participant and emotion: mean distances")
     dec = cross_identity_decoding(people, rng=rng, n_perm=DECODING_PERMUTATIONS)
-    report.paragraph(
+    sec.paragraph(
         "Cross-identity decoding: linear discriminant analysis (Ledoit–Wolf shrinkage) of the "
         "emotion from the genes, trained on the faces made on one identity, tested on the faces "
         "made on another, with participants never split across training and test (5-fold "
@@ -257,6 +255,7 @@ def identity_section(
         "decoding that holds across identities, near that reference, means the participants' "
         "faces of an emotion keep their form across identities."
     )
-    report.table(dec, "identity_decoding", "Decoding the emotion across identities")
+    sec.table(dec, "identity_decoding", "Decoding the emotion across identities")
     out["decoding"] = dec.to_dict(orient="records")
-    summary["identity"] = out
+    sec.data["identity"] = out
+    return sec.tests_in_data()
