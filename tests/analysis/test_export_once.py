@@ -65,6 +65,7 @@ def test_analyse_reads_each_table_once(
     assert derived == []  # the export has a final_faces table: nothing derived
 
 
+@pytest.mark.slow  # a planted study written and loaded twice
 def test_an_old_exports_final_faces_are_derived_once_and_equal_the_table(
     export: Path, reads: Counter[str], derived: list[int]
 ) -> None:
