@@ -28,19 +28,19 @@ log = logging.getLogger(__name__)
 
 def separability_section(ds: Dataset, out: Path, opts: AnalysisOptions) -> Section:
     """PCA + GMM: can the groups' final faces be told apart (descriptive; no test)?"""
-    sec = Section(out)
-    sec.heading("Separability of the groups (PCA + GMM)")
+    report = Section(out)
+    report.heading("Separability of the groups (PCA + GMM)")
     if not ds.has_weights or len(ds.groups) < 2:
-        sec.paragraph("Skipped: needs face weights and at least two groups.")
-        return sec
+        report.paragraph("Skipped: needs face weights and at least two groups.")
+        return report
     final = ds.final
     counts = final.groupby("group").size().reindex(list(ds.groups), fill_value=0)
     if (counts < 2).any() or counts.sum() < 2 * len(ds.groups) + 1:
-        sec.paragraph(
+        report.paragraph(
             f"Skipped: too few final faces per group for a {len(ds.groups)}-component mixture "
             f"({', '.join(f'{g}: {n}' for g, n in counts.items())}; at least 2 per group)."
         )
-        return sec
+        return report
     x = final[list(ds.columns)].to_numpy(dtype=np.float64)
     labels = final["group"].map({g: i for i, g in enumerate(ds.groups)}).to_numpy()
     targets = np.stack([ds.targets[g] for g in ds.groups]) if ds.targets else None
@@ -49,9 +49,9 @@ def separability_section(ds: Dataset, out: Path, opts: AnalysisOptions) -> Secti
             x, labels, ds.groups, targets=targets, n_pca=opts.gmm_dims, seed=opts.seed
         )
     except EmoGenError as exc:
-        sec.paragraph(f"Skipped: {exc}")
-        return sec
-    sec.paragraph(
+        report.paragraph(f"Skipped: {exc}")
+        return report
+    report.paragraph(
         f"PCA of the final faces{' and the targets' if targets is not None else ''}; a "
         f"{len(ds.groups)}-component Gaussian mixture in the first {sep.n_pca} components "
         f"({sep.explained_variance:.0%} of the variance). Clusters are named after the groups "
@@ -67,7 +67,7 @@ def separability_section(ds: Dataset, out: Path, opts: AnalysisOptions) -> Secti
             for j, c in enumerate(sep.confusion.columns)
         ]
     )
-    sec.table(
+    report.table(
         sep.confusion,
         "confusion",
         "GMM classification of each group's final faces",
@@ -86,21 +86,21 @@ def separability_section(ds: Dataset, out: Path, opts: AnalysisOptions) -> Secti
                 ],
             }
         )
-        sec.table(corr, "correspondence", "Cluster-to-target correspondence")
-    sec.bullets([f"Note: {n}" for n in sep.notes])
-    _mixture_warning(sec, len(x), len(ds.groups), sep.n_pca, ds.kind)
-    sec.figure(
-        separability_figure(sep, sec.figures / "separability.png"),
+        report.table(corr, "correspondence", "Cluster-to-target correspondence")
+    report.bullets([f"Note: {n}" for n in sep.notes])
+    _mixture_warning(report, len(x), len(ds.groups), sep.n_pca, ds.kind)
+    report.figure(
+        separability_figure(sep, report.figures / "separability.png"),
         "Final faces in the first two PCA components; GMM components (1σ, 2σ), group "
         "means (×) and targets (★).",
     )
-    sec.data["separability"] = {
+    report.data["separability"] = {
         "accuracy": sep.accuracy,
         "ari": sep.ari,
         "one_to_one": sep.one_to_one,
         "n_pca": sep.n_pca,
     }
-    return sec
+    return report
 
 
 def _mixture_warning(report: Content, n: int, k: int, d: int, kind: str) -> None:
@@ -130,32 +130,32 @@ def prototypes_section(
 ) -> Section:
     """Participants' prototypes, group means and their renders; ``identities``: the identity
     each group was made on (a study's), to draw its mean face as participants saw it."""
-    sec = Section(out)
-    sec.heading("Prototypes and mean faces")
+    report = Section(out)
+    report.heading("Prototypes and mean faces")
     if not ds.has_weights or ds.final.empty:
-        sec.paragraph("Skipped: needs final faces with weights.")
-        return sec
+        report.paragraph("Skipped: needs final faces with weights.")
+        return report
     cols = list(ds.columns)
     protos = participant_prototypes(ds.final, cols)
     means = group_means(protos, cols)
     if ds.kind == "study":
-        sec.csv(protos.rename(columns={c: f"w_{c}" for c in cols}), "prototypes")
+        report.csv(protos.rename(columns={c: f"w_{c}" for c in cols}), "prototypes")
         show = protos[["group", "participant", "n_trials"]].copy()
         show["largest weights"] = [top_weights(r, cols) for r in protos[cols].to_numpy()]
-        sec.table(
+        report.table(
             show,
             None,
             "Per-participant prototypes: mean final face per group "
             "(full weights in tables/prototypes.csv)",
         )
     mean_rows, data = _group_means_tables(ds, means, cols)
-    sec.table(
+    report.table(
         pd.DataFrame(mean_rows), "group_means", "Group mean faces (mean of prototypes)", data=data
     )
-    sec.data["group_means"] = {g: m.tolist() for g, m in means.items()}
+    report.data["group_means"] = {g: m.tolist() for g, m in means.items()}
     if model is None or not opts.render:
-        sec.paragraph("Renders skipped (no face model, or --no-render).")
-        return sec
+        report.paragraph("Renders skipped (no face model, or --no-render).")
+        return report
     from emogen.analysis.face_sheets import Panel, face_sheet, heatmap_sheet, model_weights
 
     try:
@@ -165,7 +165,7 @@ def prototypes_section(
             model,
             np.stack(list(mw.values())),
             list(mw),
-            sec.figures / "mean_faces.png",
+            report.figures / "mean_faces.png",
             size=opts.render_size,
             identities=on,
         )
@@ -174,7 +174,7 @@ def prototypes_section(
             if any(i is not None for i in on)
             else ""
         )
-        sec.figure(sheet, f"Mean final face of each group{drawn}.")
+        report.figure(sheet, f"Mean final face of each group{drawn}.")
         neutral = np.zeros(model.n_shapes)
         if ds.targets:
             panels = [Panel(g, mw[g], model_weights(ds.targets[g], cols, model)) for g in mw]
@@ -183,14 +183,14 @@ def prototypes_section(
             panels = [Panel(g, mw[g], neutral) for g in mw]
             caption = "Distance (cm) of each group's mean final face from the neutral face."
         stats = heatmap_sheet(
-            model, panels, sec.figures / "mean_face_heatmaps.png", size=opts.render_size
+            model, panels, report.figures / "mean_face_heatmaps.png", size=opts.render_size
         )
-        sec.figure(sec.figures / "mean_face_heatmaps.png", caption)
-        sec.table(stats, "mean_face_distances", "Vertex distances of the mean faces (cm)")
+        report.figure(report.figures / "mean_face_heatmaps.png", caption)
+        report.table(stats, "mean_face_distances", "Vertex distances of the mean faces (cm)")
     except EmoGenError as exc:
         log.warning("rendering failed: %s", exc)
-        sec.paragraph(f"Renders failed: {exc}")
-    return sec
+        report.paragraph(f"Renders failed: {exc}")
+    return report
 
 
 def _group_means_tables(

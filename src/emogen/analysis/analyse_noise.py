@@ -70,11 +70,11 @@ def noise_section(
     ds: Dataset, out: Path, opts: AnalysisOptions, model: FaceModel | None
 ) -> Section:
     """Does each group's spread exceed the GA noise (unit: the participant's face)?"""
-    sec = Section(out)
-    sec.heading("GA noise: does each group's spread exceed it?")
+    report = Section(out)
+    report.heading("GA noise: does each group's spread exceed it?")
     if not ds.has_weights:
-        sec.paragraph("Skipped: needs face weights.")
-        return sec
+        report.paragraph("Skipped: needs face weights.")
+        return report
     rng = np.random.default_rng(opts.seed)
     rows, notes, records = [], [], []
     candidates: list[dict[str, object]] = []
@@ -120,29 +120,31 @@ def noise_section(
                 "choice_noise_source": source,
             }
         )
-    sec.paragraph(_method_text(ds, opts, model))
-    _assumption_note(sec, rows)
-    sec.bullets([f"Skipped {n}" for n in notes])
+    report.paragraph(_method_text(ds, opts, model))
+    _assumption_note(report, rows)
+    report.bullets([f"Skipped {n}" for n in notes])
     if rows:
         table = pd.DataFrame(rows)
-        sec.table(table, "spread_test", "Group spread against GA noise", data=pd.DataFrame(records))
-        sec.figure(
-            plots.spread(table, sec.figures / "spread.png"),
+        report.table(
+            table, "spread_test", "Group spread against GA noise", data=pd.DataFrame(records)
+        )
+        report.figure(
+            plots.spread(table, report.figures / "spread.png"),
             "Mean proxy error of each group against GA noise at the same n.",
         )
-        sec.data["spread_test"] = rows
+        report.data["spread_test"] = rows
         for row in rows:
-            sec.test(f"spread_test[{row['group']}]", row, _unit(ds))
+            report.test(f"spread_test[{row['group']}]", row, _unit(ds))
     if candidates:
-        sec.table(
+        report.table(
             pd.DataFrame(candidates),
             "spread_candidates",
             "Latent-target candidates per group (τ: weights below τ × max zeroed)",
             data=pd.DataFrame(candidate_records),
         )
     if ds.kind == "study":
-        empirical_section(ds, sec, opts, model)
-    return sec
+        empirical_section(ds, report, opts, model)
+    return report
 
 
 def _unit(ds: Dataset) -> str:
@@ -150,7 +152,7 @@ def _unit(ds: Dataset) -> str:
 
 
 def empirical_section(
-    ds: Dataset, sec: Section, opts: AnalysisOptions, model: FaceModel | None
+    ds: Dataset, report: Section, opts: AnalysisOptions, model: FaceModel | None
 ) -> None:
     """Where participants repeated a group: their between-person spread against their own
     within-person spread (the empirical null, :mod:`emogen.analysis.noise_empirical`), added
@@ -169,7 +171,7 @@ def empirical_section(
         records.append(test.record())
     if not rows:
         return
-    sec.paragraph(
+    report.paragraph(
         "**Empirical null: repeated faces of the same participants.** Where participants made "
         "a group's emotion several times, the spread of their own repeated faces is the GA "
         "noise plus their choice noise, measured on them (no simulation, no assumed T). "
@@ -178,15 +180,15 @@ def empirical_section(
         "interval over participants, and a one-sided permutation p (faces shuffled among "
         f"participants, each keeping their number of faces; 999 permutations; α = {opts.alpha})."
     )
-    sec.table(
+    report.table(
         pd.DataFrame(rows),
         "spread_empirical",
         "Between-participant spread against within-participant (repeated) spread",
         data=pd.DataFrame(records),
     )
-    sec.data["spread_empirical"] = rows
+    report.data["spread_empirical"] = rows
     for row in rows:
-        sec.test(f"spread_empirical[{row['group']}]", row)
+        report.test(f"spread_empirical[{row['group']}]", row)
 
 
 def _method_text(ds: Dataset, opts: AnalysisOptions, model: FaceModel | None) -> str:

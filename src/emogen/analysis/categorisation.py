@@ -130,43 +130,45 @@ def categorisation_section(
     older call: no own-distance model, which needs the final faces; nothing at all is written
     without answers, as a GA dataset has none). ``model`` is not used (faces are compared in
     gene space)."""
-    sec = Section(folder)
+    report = Section(folder)
     opts = opts or AnalysisOptions()
     full = people if isinstance(people, People) else None
     responses = full.responses if full is not None else people
     if not isinstance(responses, pd.DataFrame) or responses.empty or "label" not in responses:
         if full is not None:
-            sec.heading("Categorisation of faces")
-            sec.paragraph(
+            report.heading("Categorisation of faces")
+            report.paragraph(
                 "No categorisation analysis: no categorise answers (the study has no categorise "
                 "block, or nobody has reached it yet)."
             )
-            sec.data["categorisation"] = {"n_answers": 0, "note": "no categorise answers"}
-        return sec.tests_in_data()
-    sec.heading("Categorisation of faces")
+            report.data["categorisation"] = {"n_answers": 0, "note": "no categorise answers"}
+        return report.tests_in_data()
+    report.heading("Categorisation of faces")
     answered = rec.answered(responses)
     if answered.empty:
-        sec.paragraph("No categorisation analysis: the study's categorise trials are unanswered.")
-        sec.data["categorisation"] = {"n_answers": 0, "note": "no answers"}
-        return sec.tests_in_data()
+        report.paragraph(
+            "No categorisation analysis: the study's categorise trials are unanswered."
+        )
+        report.data["categorisation"] = {"n_answers": 0, "note": "no answers"}
+        return report.tests_in_data()
     out: dict[str, Any] = {
         "n_answers": len(answered),
         "n_participants": int(answered["participant_id"].nunique()),
     }
-    sec.data["categorisation"] = out
-    _overview(responses, answered, sec, out)
-    _confusion(responses, sec)
-    _hit_rates(responses, sec, out, opts)
-    _sources(responses, sec, out, opts)
+    report.data["categorisation"] = out
+    _overview(responses, answered, report, out)
+    _confusion(responses, report)
+    _hit_rates(responses, report, out, opts)
+    _sources(responses, report, out, opts)
     if full is None:
-        sec.paragraph(
+        report.paragraph(
             "Own-distance model: not fitted here (it needs the study's final faces, which "
             "this call did not receive)."
         )
-        return sec.tests_in_data()
-    own_distance_section(full, sec, out, opts)
-    fields_accuracy_section(full, sec, out, opts)
-    return sec.tests_in_data()
+        return report.tests_in_data()
+    own_distance_section(full, report, out, opts)
+    fields_accuracy_section(full, report, out, opts)
+    return report.tests_in_data()
 
 
 def _long(report: Content, table: pd.DataFrame, name: str, caption: str, shown: int = 8) -> None:

@@ -186,19 +186,19 @@ def conditions_section(
 ) -> Section:
     """The tests between emotions, identities and their interaction into the section; headline
     numbers into ``analysis.json``'s ``conditions``."""
-    sec = Section(folder)
+    report = Section(folder)
     del model
-    sec.heading("Emotions, identities and their interaction")
+    report.heading("Emotions, identities and their interaction")
     if len(people.emotions) < 2 and len(people.identity_names) < 2:
-        sec.paragraph("The study has one emotion and one identity: no condition to compare.")
-        return sec.tests_in_data()
+        report.paragraph("The study has one emotion and one identity: no condition to compare.")
+        return report.tests_in_data()
     _, ids, _, _ = cell_cube(people)
     if len(ids) < 3:
-        sec.paragraph(
+        report.paragraph(
             f"Condition tests need >= 3 participants with a face in every emotion × identity "
             f"cell; {len(ids)} have one."
         )
-        return sec.tests_in_data()
+        return report.tests_in_data()
     permutations, draws = 2000, 1000
     table = condition_tests(
         people,
@@ -208,7 +208,7 @@ def conditions_section(
         rng=np.random.default_rng(opts.seed),
     )
     left_out = people.n_participants - len(ids)
-    sec.paragraph(
+    report.paragraph(
         "**Unit: the participant.** Test: a repeated-measures permutation MANOVA on the genes "
         "(PERMANOVA-style pseudo-F with Euclidean gene distance, McArdle & Anderson 2001): each "
         "participant's final faces averaged per emotion × identity cell, centred on the "
@@ -222,13 +222,13 @@ def conditions_section(
         f"with a {1 - opts.alpha:.0%} basic bootstrap CI over participants ({draws} resamples). Not a mixed "
         f"model. {left_out} participant(s) without every cell left out."
     )
-    sec.table(
+    report.table(
         table,
         "conditions_tests",
         "Emotion, identity and interaction effects on the genes (participant as unit).",
     )
-    sec.data["conditions"] = {
+    report.data["conditions"] = {
         r["effect"]: {"p": r["p_perm"], "partial_eta2": r["partial_eta2"]}
         for r in table.to_dict("records")
     }
-    return sec.tests_in_data()
+    return report.tests_in_data()

@@ -46,48 +46,48 @@ def fields_section(
     people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
 ) -> Section:
     """Perceptive fields of every participant per emotion, their overlap and clusters."""
-    sec = Section(folder)
-    sec.heading("Perceptive fields")
+    report = Section(folder)
+    report.heading("Perceptive fields")
     counts = people.faces.groupby(["participant_id", "emotion"]).size()
     if people.n_participants < MIN_PARTICIPANTS or counts.max() < 2:
-        sec.paragraph(
+        report.paragraph(
             f"Skipped: perceptive fields need at least {MIN_PARTICIPANTS} participants with two "
             f"or more final faces of an emotion; this study has {people.n_participants} "
             f"participant(s) with at most {counts.max()} face(s) per emotion."
         )
-        return sec.tests_in_data()
+        return report.tests_in_data()
     from threadpoolctl import threadpool_limits
 
     rng = np.random.default_rng(opts.seed)
     space = face_space(people)
     fields = perceptive_fields(people, space)
     out: dict[str, Any] = {"components": space.k, "variance": float(space.explained.sum())}
-    _describe(fields, counts, sec, out)
+    _describe(fields, counts, report, out)
     # BLAS on one thread: the matrices are small and many (100 null studies); on the busy
     # 2-core machine one null study at 336 took 4.8 s wall, 0.69 s CPU on BLAS's default
     # threads and 0.28 s, 0.03 s on one (benchmarks/bench_fields.py, load 12)
     with threadpool_limits(limits=1, user_api="blas"):
-        matrices = _overlaps(fields, sec, rng, out)
-        _individuality(people, fields, sec, opts, out)
-        clustering = _clusters(fields, sec, opts, rng, out)
+        matrices = _overlaps(fields, report, rng, out)
+        _individuality(people, fields, report, opts, out)
+        clustering = _clusters(fields, report, opts, rng, out)
     order = list(clustering.participants) if clustering else []
     if clustering is not None and clustering.structure:
         order = [p for _, p in sorted(zip(clustering.labels, clustering.participants, strict=True))]
     order += sorted({p for m in matrices.values() for p in m.index} - set(order))
-    sec.figure(
-        field_maps.field_heatmaps(fields, sec.figures / "fields_pc_maps.png"),
+    report.figure(
+        field_maps.field_heatmaps(fields, report.figures / "fields_pc_maps.png"),
         "Where each emotion's fields lie: the population field (every participant's field "
         "weighing the same) on the face space's first two components, relative density; white "
         "dots: each participant's field centre.",
     )
-    sec.figure(
-        field_maps.overlap_heatmaps(matrices, order, sec.figures / "fields_overlap.png"),
+    report.figure(
+        field_maps.overlap_heatmaps(matrices, order, report.figures / "fields_overlap.png"),
         "Overlap of every pair of participants' fields, per emotion (participants ordered by "
         "cluster when there are clusters, else by id).",
     )
-    _sheets(people, sec, opts, model)
-    sec.data["fields"] = out
-    return sec.tests_in_data()
+    _sheets(people, report, opts, model)
+    report.data["fields"] = out
+    return report.tests_in_data()
 
 
 def _describe(fields: Fields, counts: pd.Series, report: Content, out: dict[str, Any]) -> None:

@@ -28,18 +28,18 @@ def genes_section(
 ) -> Section:
     """Per-gene inference (see :mod:`emogen.analysis.genes`) into the section; headline numbers
     into ``analysis.json``'s ``genes``."""
-    sec = Section(folder)
+    report = Section(folder)
     del model
-    sec.heading("Per-gene inference")
+    report.heading("Per-gene inference")
     if people.n_participants < MIN_PARTICIPANTS:
-        sec.paragraph(
+        report.paragraph(
             f"Per-gene tests need >= {MIN_PARTICIPANTS} participants; this study has "
             f"{people.n_participants}."
         )
-        return sec.tests_in_data()
+        return report.tests_in_data()
     rng = np.random.default_rng(opts.seed)
     gopts = GeneTestOptions(level=1 - opts.alpha)
-    sec.paragraph(
+    report.paragraph(
         "**Unit: the participant.** Each participant's final faces are averaged per emotion (over "
         "identities and repetitions) before any test. Statistic: the studentised mean difference "
         "(t), its p-value from permutations, never from the t distribution (genes are bounded in "
@@ -52,33 +52,33 @@ def genes_section(
         "participants per group in docs/analysis.md); `used_*`: the share of participants whose "
         f"mean of the gene exceeds {USED:g}."
     )
-    sec.table(
+    report.table(
         facs_table(people.genes),
         "genes_facs",
         "Blendshape genes and the FACS action units they approximate (not AUs).",
     )
-    sec.paragraph(CAVEAT)
+    report.paragraph(CAVEAT)
     out: dict[str, Any] = {}
     if len(people.emotions) < 2:
-        sec.paragraph("Emotion contrasts: the study has one emotion, so there is none to test.")
+        report.paragraph("Emotion contrasts: the study has one emotion, so there is none to test.")
     else:
         emo = emotion_gene_tests(people, gopts, rng=rng)
-        sec.paragraph(
+        report.paragraph(
             "**Emotions** (within participants): every pair of emotions; under H0 the two are "
             "exchangeable within each participant, so the sign of each participant's difference "
             "is flipped at random (one flip shared by all genes of a contrast, independent flips "
             "across contrasts: exact per contrast, conservative across them). Assumes "
             "participants independent of one another."
         )
-        sec.table(
+        report.table(
             _shown(emo, "contrast"),
             "genes_emotion_tests",
             "Genes that differ between emotions (FWER- or FDR-significant rows; the "
             "CSV has every gene × contrast).",
             data=emo,
         )
-        path = heatmap(emo, sec.figures / "genes_emotions", alpha=opts.alpha)
-        sec.figure(
+        path = heatmap(emo, report.figures / "genes_emotions", alpha=opts.alpha)
+        report.figure(
             path,
             "Participant-mean difference per gene (rows, ≈ action unit) and pair "
             "of emotions (columns). * BH q < α; ** max-T p < α (FWER).",
@@ -86,9 +86,9 @@ def genes_section(
         out["emotion_maxt"] = int(emo["significant_maxt"].sum())
         out["emotion_bh"] = int(emo["significant_bh"].sum())
         out["emotion_tests"] = len(emo)
-    _groups(people, sec, gopts, rng, out)
-    sec.data["genes"] = out
-    return sec.tests_in_data()
+    _groups(people, report, gopts, rng, out)
+    report.data["genes"] = out
+    return report.tests_in_data()
 
 
 def _groups(

@@ -142,10 +142,10 @@ def groups_section(
     people: People, folder: Path, opts: AnalysisOptions, column: str = "group"
 ) -> Section:
     """The report's group comparison per emotion (nothing without a participant table)."""
-    sec = Section(folder)
+    report = Section(folder)
     if column not in people.participant_columns:
-        return sec.tests_in_data()
-    sec.heading(f"Groups of participants ('{column}')")
+        return report.tests_in_data()
+    report.heading(f"Groups of participants ('{column}')")
     rng = np.random.default_rng(np.random.SeedSequence(opts.seed, spawn_key=(0x6A,)))
     rows, notes = [], []
     for emotion in people.emotions:
@@ -156,7 +156,7 @@ def groups_section(
             notes.append(f"{emotion}: {exc}")
             continue
         rows.append({"emotion": emotion, **res})
-    sec.paragraph(
+    report.paragraph(
         "Unit: the participant (their mean face of the emotion, over identities and "
         "repetitions). Location: one-way PERMANOVA (Anderson 2001) on the mean faces, Euclidean "
         "distance in gene space, R² with p from 4999 permutations of participants between "
@@ -166,11 +166,11 @@ def groups_section(
         "for the number of emotions tested; assumptions: participants independent, "
         "exchangeable between groups under the null."
     )
-    sec.bullets([f"Skipped {n}" for n in notes])
+    report.bullets([f"Skipped {n}" for n in notes])
     if rows:
         table = pd.DataFrame(rows)
-        sec.table(
+        report.table(
             table, "participant_groups", f"Groups ('{column}') per emotion: location and dispersion"
         )
-        sec.data["groups"] = rows
-    return sec.tests_in_data()
+        report.data["groups"] = rows
+    return report.tests_in_data()

@@ -203,28 +203,28 @@ def identity_section(
 ) -> Section:
     """Identity effects within participants: distances within against between identities, and
     cross-identity decoding of the emotion."""
-    sec = Section(folder)
+    report = Section(folder)
     del model  # nothing is rendered here
-    sec.heading("Identity effects")
+    report.heading("Identity effects")
     names = people.identity_names
     if len(names) < 2:
-        sec.paragraph(
+        report.paragraph(
             f"Skipped: every face was made on one identity ({names[0] if names else 'none'}), "
             "so there is no identity effect to measure."
         )
-        return sec.tests_in_data()
+        return report.tests_in_data()
     rng = np.random.default_rng(opts.seed)
     out: dict[str, Any] = {}
     dist = identity_distances(people)
     test = within_between_test(dist, alpha=opts.alpha, rng=rng)
     if test.get("n", 0) < 3:
-        sec.paragraph(
+        report.paragraph(
             "No within- against between-identity distance test: it needs participants who "
             "made an emotion at least twice on one identity and on another (repetitions); "
             f"{int(test.get('n', 0))} did."
         )
     else:
-        sec.paragraph(
+        report.paragraph(
             "Distance within against between identities (gene-space Euclidean distance between "
             "two final faces of one participant and emotion, on the same identity or on two "
             "different ones; per participant averaged over pairs and emotions). Unit: "
@@ -235,15 +235,15 @@ def identity_section(
             "time — if each identity had its own block, drift over the session reads as an "
             "identity effect (Murray et al. 2024)."
         )
-        sec.table(
+        report.table(
             pd.DataFrame([test]),
             "identity_distance_test",
             "Between − within identity distance over participants",
         )
         out["distance"] = test
-    sec.table(dist, "identity_distances", "Per participant and emotion: mean distances")
+    report.table(dist, "identity_distances", "Per participant and emotion: mean distances")
     dec = cross_identity_decoding(people, rng=rng, n_perm=DECODING_PERMUTATIONS)
-    sec.paragraph(
+    report.paragraph(
         "Cross-identity decoding: linear discriminant analysis (Ledoit–Wolf shrinkage) of the "
         "emotion from the genes, trained on the faces made on one identity, tested on the faces "
         "made on another, with participants never split across training and test (5-fold "
@@ -255,7 +255,7 @@ def identity_section(
         "decoding that holds across identities, near that reference, means the participants' "
         "faces of an emotion keep their form across identities."
     )
-    sec.table(dec, "identity_decoding", "Decoding the emotion across identities")
+    report.table(dec, "identity_decoding", "Decoding the emotion across identities")
     out["decoding"] = dec.to_dict(orient="records")
-    sec.data["identity"] = out
-    return sec.tests_in_data()
+    report.data["identity"] = out
+    return report.tests_in_data()

@@ -104,27 +104,27 @@ def reliability_table(
 def reliability_section(
     people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
 ) -> Section:
-    sec = Section(folder)
-    sec.heading("Test–retest reliability")
+    report = Section(folder)
+    report.heading("Test–retest reliability")
     reps = people.faces.groupby(["participant_id", "emotion", "identity"]).size()
     if reps.empty or reps.max() < 2:
-        sec.paragraph(
+        report.paragraph(
             "No reliability: every participant made each emotion on each identity once "
             "(repetitions = 1); a test–retest analysis needs repeated trials of an emotion."
         )
-        return sec.tests_in_data()
+        return report.tests_in_data()
     rng = np.random.default_rng(np.random.SeedSequence(opts.seed, spawn_key=(0x2E1,)))
     try:
         table = reliability_table(people, model, rng=rng)
     except DataError as exc:
-        sec.paragraph(f"No reliability: {exc}.")
-        return sec.tests_in_data()
+        report.paragraph(f"No reliability: {exc}.")
+        return report.tests_in_data()
     if table.empty:
-        sec.paragraph(
+        report.paragraph(
             "No reliability: fewer than 2 participants made any emotion twice on one identity."
         )
-        return sec.tests_in_data()
-    sec.paragraph(_method(opts, model))
+        return report.tests_in_data()
+    report.paragraph(_method(opts, model))
     shown = table[
         [
             "emotion",
@@ -141,16 +141,16 @@ def reliability_section(
             "chance",
         ]
     ]
-    sec.table(
+    report.table(
         shown, "reliability", "Test–retest reliability per emotion, identity and space", data=table
     )
-    sec.figure(
-        _forest(table, sec.figures / "reliability_icc.png"),
+    report.figure(
+        _forest(table, report.figures / "reliability_icc.png"),
         "ICC (share of the faces' variance that is the person) with 95% jackknife intervals "
         "over participants, per emotion × identity and space.",
     )
     ed = table[table["space"] == "ed"]
-    sec.data["reliability"] = {
+    report.data["reliability"] = {
         f"{r.emotion} / {r.identity}": {
             "icc": r.icc,
             "ci": [r.icc_low, r.icc_high],
@@ -158,8 +158,8 @@ def reliability_section(
         }
         for r in ed.itertuples()
     }
-    sec.paragraph(_floor_text(table))
-    return sec.tests_in_data()
+    report.paragraph(_floor_text(table))
+    return report.tests_in_data()
 
 
 def _method(opts: AnalysisOptions, model: FaceModel | None) -> str:

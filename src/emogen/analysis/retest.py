@@ -122,14 +122,14 @@ def retest_section(
 ) -> Section:
     """``emogen analyse FIRST RETEST``: the between-session section, the retest export read
     with the same exclusion rule as the first (nothing where no retest export is given)."""
-    sec = Section(folder)
+    report = Section(folder)
     if opts.retest is None:
-        return sec.tests_in_data()
+        return report.tests_in_data()
     from emogen.analysis.exclusions import apply_exclusions
     from emogen.analysis.people import load_people
     from emogen.errors import EmoGenError
 
-    sec.heading("Between-session reliability (retest)")
+    report.heading("Between-session reliability (retest)")
     try:
         second = load_people(opts.retest)
         everyone = second.n_participants
@@ -137,16 +137,16 @@ def retest_section(
             second, _ = apply_exclusions(second, opts.exclusions)
         table = retest_table(people, second)
     except EmoGenError as exc:
-        sec.paragraph(f"No between-session reliability from {opts.retest}: {exc}.")
-        return sec.tests_in_data()
-    sec.paragraph(
+        report.paragraph(f"No between-session reliability from {opts.retest}: {exc}.")
+        return report.tests_in_data()
+    report.paragraph(
         f"The retest export {opts.retest.name}: {second.n_participants} participants "
         f"analysed ({everyone - second.n_participants} excluded by the same rule).\n\n"
         f"{retest_text(table)}"
     )
-    sec.table(table, "retest", "Between-session ICC per emotion × identity (genes)")
-    sec.data["retest"] = {
+    report.table(table, "retest", "Between-session ICC per emotion × identity (genes)")
+    report.data["retest"] = {
         "reported": "between-session ICC(1) of the participants' mean final faces (genes)",
         "cells": table.to_dict("records"),
     }
-    return sec.tests_in_data()
+    return report.tests_in_data()
