@@ -11,14 +11,15 @@ import pytest
 
 from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.categorisation import categorisation_section
-from emogen.analysis.report import Report
+from emogen.analysis.report import Content
+from emogen.analysis.results import write_analysis
 from emogen.analysis.simulated_study import PeopleDesign, as_people, simulate_people
 from tests.r_readers import dictionary_section, undocumented
 
 DESIGN = PeopleDesign(participants=12, repetitions=1, identities=("female-medium",))
 
 
-def paragraphs(report: Report) -> list[str]:
+def paragraphs(report: Content) -> list[str]:
     return [b.text for b in report.blocks if type(b).__name__ == "_Paragraph"]  # type: ignore[union-attr]
 
 
@@ -28,9 +29,9 @@ def people(ict_model: Any):  # type: ignore[no-untyped-def]
 
 
 def test_the_section_of_a_study_with_a_categorise_block(people, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    report, summary = Report("t", tmp_path), {}  # type: ignore[var-annotated]
-    categorisation_section(people, report, summary, AnalysisOptions(seed=3), None)
-    tables = {p.stem for p in (tmp_path / "tables").glob("*.csv")}
+    report = categorisation_section(people, tmp_path, AnalysisOptions(seed=3), None)
+    summary = report.data
+    tables = set(report.tables)  # written with the report
     assert {
         "categorisation_confusion",
         "categorisation_hit_rates",
@@ -51,6 +52,7 @@ def test_the_section_of_a_study_with_a_categorise_block(people, tmp_path: Path) 
     got = summary["categorisation"]
     assert got["n_answers"] == len(people.responses) and got["own_distance"]["primary"]["p"] < 0.05
     # the CSV holds every row of a long table the report shows the head of
+    write_analysis("t", report.out, [report], {})
     long = pd.read_csv(tmp_path / "tables" / "categorisation_hit_rates.csv")
     assert len(long) == 12 * 4
     # every column of every table is in docs/data.md
@@ -65,8 +67,8 @@ def test_no_categorise_block_is_one_line(ict_model: Any, tmp_path: Path) -> None
         participants=4, repetitions=1, identities=("female-medium",), categorise=False
     )
     people = as_people(simulate_people(design, ict_model.rig, seed=1))
-    report, summary = Report("t", tmp_path), {}  # type: ignore[var-annotated]
-    categorisation_section(people, report, summary, AnalysisOptions(), None)
+    report = categorisation_section(people, tmp_path, AnalysisOptions(), None)
+    summary = report.data
     assert paragraphs(report) == [
         "No categorisation analysis: no categorise answers (the study has no categorise block, or nobody has reached it yet)."
     ]
@@ -74,9 +76,8 @@ def test_no_categorise_block_is_one_line(ict_model: Any, tmp_path: Path) -> None
 
 
 def test_the_older_call_with_a_responses_table(people, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    report, summary = Report("t", tmp_path), {}  # type: ignore[var-annotated]
-    categorisation_section(None, report, summary)
-    assert report.blocks == [] and summary == {}
-    categorisation_section(people.responses, report, summary)
-    assert summary["categorisation"]["own_advantage"]["n_participants"] == 12
+    report = categorisation_section(None, tmp_path)
+    assert report.blocks == [] and report.data == {} and report.results == []
+    report = categorisation_section(people.responses, tmp_path)
+    assert report.data["categorisation"]["own_advantage"]["n_participants"] == 12
     assert any("not fitted here" in t for t in paragraphs(report))

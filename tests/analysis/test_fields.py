@@ -24,7 +24,7 @@ from emogen.analysis.fields import (
     pooled_bandwidth,
 )
 from emogen.analysis.fields_report import fields_section
-from emogen.analysis.report import Report
+from emogen.analysis.results import write_analysis
 from emogen.analysis.simulated_study import PeopleDesign, as_people, simulate_people
 from emogen.tasks.simulated import SimulatedDesign
 
@@ -188,18 +188,18 @@ def test_fields_are_their_owners_when_participants_differ(rig) -> None:  # type:
 
 def test_fields_section_writes_tables_and_skips_what_it_cannot(rig, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
     people = as_people(simulate_people(_grouped(12, True), rig, seed=4))
-    report, summary = Report("t", tmp_path / "a"), {}  # type: ignore[var-annotated]
-    fields_section(people, report, summary, AnalysisOptions(), None)
+    report = fields_section(people, tmp_path / "a", AnalysisOptions(), None)
+    summary = report.data
+    write_analysis("t", report.out, [report], {})
     for name in ("fields_bandwidth", "fields_fields", "fields_overlap", "fields_clusters"):
         assert (tmp_path / "a" / "tables" / f"{name}.csv").is_file()
     assert (tmp_path / "a" / "figures" / "fields_pc_maps.svg").is_file()
     assert set(summary["fields"]["bandwidth"]) == set(people.emotions)
     one = PeopleDesign(participants=3, repetitions=1, categorise=False)
-    report = Report("t", tmp_path / "b")
-    fields_section(
-        as_people(simulate_people(one, rig, seed=1)), report, {}, AnalysisOptions(), None
+    report = fields_section(
+        as_people(simulate_people(one, rig, seed=1)), tmp_path / "b", AnalysisOptions(), None
     )
-    text = report._markdown()
+    text = write_analysis("t", report.out, [report], {})[1].read_text()
     assert "Skipped: perceptive fields need at least 6 participants" in text
 
 
@@ -254,10 +254,12 @@ def test_contact_sheets_show_a_seeded_sample_of_a_large_study(
 
     monkeypatch.setattr(fields_report, "SHEET_PARTICIPANTS", 2)
     people = as_people(simulate_people(_grouped(8, False), rig, seed=6))
-    report = Report("t", tmp_path / "a")
     opts = AnalysisOptions(render_size=64)
-    fields_section(people, report, {}, opts, ict_model)
-    assert f"2 of the 8 participants, drawn at random (seed {opts.seed})" in report._markdown()
+    report = fields_section(people, tmp_path / "a", opts, ict_model)
+    assert (
+        f"2 of the 8 participants, drawn at random (seed {opts.seed})"
+        in write_analysis("t", report.out, [report], {})[1].read_text()
+    )
     means = mean_faces(people)
     e = str(means["emotion"].iloc[0])
     n = int((means["emotion"] == e).sum() / 8 * 2)  # two participants' faces of emotion e

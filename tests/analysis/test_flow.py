@@ -22,7 +22,7 @@ from emogen.analysis.analyse_people import prepare_people, quality_first
 from emogen.analysis.exclusions import ExclusionRule, apply_exclusions
 from emogen.analysis.flow import NO_GROUP, participant_flow
 from emogen.analysis.people import load_people
-from emogen.analysis.report import Report
+from emogen.analysis.report import write_tables
 from tests.study.drive import command, run_to_end
 
 STUDY: dict[str, Any] = {
@@ -131,9 +131,9 @@ def test_the_flow_per_group_and_in_the_report(export: Path, tmp_path: Path) -> N
     )
     opts = AnalysisOptions(participants=groups_file)
     prepared = prepare_people(export, opts)
-    report = Report("flow", tmp_path / "report")
-    summary: dict[str, Any] = {}
-    quality_first(prepared, report, summary, opts)
+    section = quality_first(prepared, tmp_path / "report", opts)
+    write_tables(section.out, section.blocks)
+    summary = section.data
     assert summary["flow"]["finished the study"] == 5
     assert summary["flow"]["excluded by the rule"] == 3
     written = pd.read_csv(tmp_path / "report" / "tables" / "participant_flow.csv")

@@ -17,7 +17,7 @@ from emogen.analysis.identity import (
     identity_section,
     within_between_test,
 )
-from emogen.analysis.report import Report
+from emogen.analysis.results import write_analysis
 from emogen.analysis.simulated_study import PeopleDesign, as_people, simulate_people
 
 ALPHA = 0.05
@@ -109,14 +109,16 @@ def test_identity_section_skips_one_identity_and_writes_tables(
 ) -> None:  # type: ignore[no-untyped-def]
     monkeypatch.setattr(identity, "DECODING_PERMUTATIONS", 19)
     one = PeopleDesign(participants=4, identities=("female-medium",), categorise=False)
-    report = Report("t", tmp_path / "a")
-    identity_section(
-        as_people(simulate_people(one, rig, seed=1)), report, {}, AnalysisOptions(), None
+    report = identity_section(
+        as_people(simulate_people(one, rig, seed=1)), tmp_path / "a", AnalysisOptions(), None
     )
-    assert "Skipped: every face was made on one identity" in report._markdown()
-    report, summary = Report("t", tmp_path / "b"), {}  # type: ignore[var-annotated]
+    assert "Skipped: every face was made on one identity" in (
+        write_analysis("t", report.out, [report], {})[1].read_text()
+    )
     people = as_people(simulate_people(_design(8, False), rig, seed=2))
-    identity_section(people, report, summary, AnalysisOptions(), None)
+    report = identity_section(people, tmp_path / "b", AnalysisOptions(), None)
+    summary = report.data
+    write_analysis("t", report.out, [report], {})
     for name in ("identity_distances", "identity_distance_test", "identity_decoding"):
         assert (tmp_path / "b" / "tables" / f"{name}.csv").is_file()
     assert {"distance", "decoding"} <= set(summary["identity"])

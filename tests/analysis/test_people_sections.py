@@ -23,8 +23,12 @@ def test_sections_on_a_simulated_study(ict_model, tmp_path: Path) -> None:  # ty
     people = as_people(simulate_people(design, ict_model.rig, seed=1))
     report, summary = Report("t", tmp_path), {}
     opts = AnalysisOptions()
-    for section in (quality_section, genes_section, conditions_section):
-        section(people, report, summary, opts, None)
+    quality_section(people, report, summary, opts, None)  # within the quality section
+    for section in (genes_section, conditions_section):
+        part = section(people, tmp_path, opts, None)
+        report.blocks += part.blocks
+        summary |= part.data
+    report.write()
     for name in (
         "genes_facs",
         "genes_emotion_tests",
@@ -40,8 +44,8 @@ def test_sections_on_a_simulated_study(ict_model, tmp_path: Path) -> None:  # ty
     assert "no selections table" in _text(report)  # as_people has none: no position test
     one = replace(people, faces=people.faces[people.faces["emotion"] == "happy"])
     one = replace(one, faces=one.faces[one.faces["identity"] == "female-medium"])
-    report2, summary2 = Report("t", tmp_path / "one"), {}
-    genes_section(one, report2, summary2, opts, None)
-    conditions_section(one, report2, summary2, opts, None)
+    parts = [s(one, tmp_path / "one", opts, None) for s in (genes_section, conditions_section)]
+    report2 = Report("t", tmp_path / "one")
+    report2.blocks = [b for p in parts for b in p.blocks]
     text = _text(report2)
     assert "has one emotion" in text and "one emotion and one identity" in text

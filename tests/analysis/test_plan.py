@@ -13,7 +13,8 @@ from scipy import stats
 from typer.testing import CliRunner
 
 from emogen.analysis.categorisation import dz_interval, own_advantage
-from emogen.analysis.plan import check_primary, collect_tests, plan_table
+from emogen.analysis.plan import check_primary, mark_roles, plan_table
+from emogen.analysis.results import records_in, result_of
 from emogen.cli.analysis import analysis_app
 from emogen.errors import ConfigError
 
@@ -34,10 +35,14 @@ SUMMARY = {
 }
 
 
+def _results(summary: dict[str, object]):  # type: ignore[no-untyped-def]
+    return [result_of(n, r) for n, r in records_in(summary)]
+
+
 def test_every_test_is_found_and_marked() -> None:
     primary = ("categorisation.own_distance.primary", "categorisation.hit_rates")
     summary = {k: v for k, v in SUMMARY.items()}
-    table = plan_table(summary, primary)
+    table = plan_table(mark_roles(_results(summary), primary))
     assert set(table["test"]) == {
         "categorisation.own_advantage",
         "categorisation.hit_rates[happy]",
@@ -81,16 +86,11 @@ def test_the_plan_in_the_json_has_no_nan(tmp_path: Path) -> None:
     import json
 
     from emogen.analysis.plan import plan_section
-    from emogen.analysis.report import Report
 
-    summary = {k: v for k, v in SUMMARY.items()}
-    plan_section(Report("t", tmp_path), summary, ("conditions.emotion",))
-    text = json.dumps(summary["plan"])
-    assert "NaN" not in text and summary["plan"]["tests"][0]["p_holm_primary"] == 0.0002
-
-
-def test_collect_skips_the_plan_itself() -> None:
-    assert all(not path.startswith("plan") for path, _ in collect_tests({**SUMMARY, "plan": {}}))
+    primary = ("conditions.emotion",)
+    plan = plan_section(mark_roles(_results(SUMMARY), primary), primary, tmp_path).data["plan"]
+    text = json.dumps(plan)
+    assert "NaN" not in text and plan["tests"][0]["p_holm_primary"] == 0.0002
 
 
 def test_dz_interval_inverts_the_noncentral_t() -> None:

@@ -137,6 +137,7 @@ def test_the_comparison_interval_covers_a_known_difference() -> None:
 
 def test_a_study_without_complete_nodes_says_so(tmp_path: Path) -> None:
     from emogen.analysis.report import Report
+    from emogen.analysis.study_export import StudyExport
     from emogen.analysis.task_sections import TaskTools
     from emogen.tasks.gsp.analysis_report import gsp_section
 
@@ -161,5 +162,5 @@ def test_a_study_without_complete_nodes_says_so(tmp_path: Path) -> None:
     rows.to_csv(tmp_path / "gsp_iterations.csv", index=False)
     report = Report("t", tmp_path / "out")
     summary: dict[str, Any] = {}
-    gsp_section(TaskTools(tmp_path, report, AnalysisOptions(), None), summary)
+    gsp_section(TaskTools(StudyExport(tmp_path), report, AnalysisOptions(), None), summary)
     assert summary["gsp"]["note"] == "no complete node"

@@ -20,8 +20,12 @@ Sections (each skipped, with a note saying why, when the data cannot support it)
    accuracy by source, the own-distance model), reliability, per-gene inference, conditions,
    perceptive fields, identity effects and groups of participants.
 
-Everything lands in ``OUT``: ``index.html`` and ``README.md``, ``figures/*.png``,
-``tables/*.csv`` and ``analysis.json`` (the headline numbers).
+Each section is a :class:`~emogen.analysis.results.Section` (content, its entries of
+``analysis.json``, its tests as typed results); one renderer
+(:func:`~emogen.analysis.results.write_analysis`) writes everything to ``OUT``: ``index.html``
+and ``README.md``, ``tables/*.csv`` and ``analysis.json`` (the headline numbers), with the
+figures the sections saved under ``figures/``. A study's export is read once
+(:class:`~emogen.analysis.study_export.StudyExport`) and handed to every section.
 """
 
 from __future__ import annotations
@@ -49,11 +53,10 @@ from emogen.analysis.analyse_people import (
 from emogen.analysis.data import Dataset, load_dataset
 from emogen.analysis.distributions import generation_summary, kl_per_generation
 from emogen.analysis.methods import methods_record, methods_text
-from emogen.analysis.plan import plan_section
+from emogen.analysis.plan import mark_roles, plan_section
 from emogen.analysis.repeatability import BIN_LABELS, repeatability_bins
-from emogen.analysis.report import Report
-from emogen.analysis.study_export import read_table
-from emogen.analysis.task_sections import TaskTools, task_sections
+from emogen.analysis.results import Result, Section, write_analysis
+from emogen.analysis.task_sections import task_sections
 
 if TYPE_CHECKING:
     from emogen.appearance.identities import Identity
@@ -67,7 +70,8 @@ class AnalysisResult:
     out: Path
     html: Path
     markdown: Path
-    summary: dict[str, Any] = field(default_factory=dict)
+    summary: dict[str, Any] = field(default_factory=dict)  # analysis.json, as written
+    results: list[Result] = field(default_factory=list)  # every test, its role set
 
 
 def analyse(
@@ -85,79 +89,72 @@ def analyse(
     opts = options or AnalysisOptions()
     step = progress or (lambda _name: None)
     ds = data if isinstance(data, Dataset) else load_dataset(Path(data))
-    prepared = prepare_people(ds.source, opts) if ds.kind == "study" else None
-    if prepared is not None and prepared.excluded:  # every analysis without them
-        ds = load_dataset(ds.source, exclude=prepared.excluded)
-    report = Report(f"EmoGen analysis: {ds.source.name}", Path(out))
-    summary: dict[str, Any] = {"source": str(ds.source), "kind": ds.kind, "groups": list(ds.groups)}
-    study = read_table(ds.source, "study", required=False) if ds.kind == "study" else None
-    summary["methods"] = methods_record(ds, opts, model, study)
-    report.paragraph(methods_text(summary["methods"]))
+    export = ds.export  # a study's export, each table read once, for every section
+    prepared = prepare_people(export, opts) if export is not None else None
+    if export is not None and prepared is not None and prepared.excluded:
+        ds = load_dataset(export, exclude=prepared.excluded)  # every analysis without them
+    out = Path(out)
+    study = export.table("study") if export is not None else None
+    methods = methods_record(ds, opts, model, study)
+    head = Section(out, data={"source": str(ds.source), "kind": ds.kind})
+    head.data |= {"groups": list(ds.groups), "methods": methods}
+    head.paragraph(methods_text(methods))
     step("overview and error distributions")
-    _overview(ds, report, summary)
+    sections = [head, _overview(ds, out)]
     if prepared is not None:
         step("quality and exclusions")
-        quality_first(prepared, report, summary, opts)
+        sections.append(quality_first(prepared, out, opts))
     if ds.groups:
         identities = group_identities(prepared) if model is not None and opts.render else {}
-        _ga_sections(ds, report, summary, opts, model, step, identities)
+        sections += _ga_sections(ds, out, opts, model, step, identities)
     else:
-        report.heading("The GA's faces")
-        report.paragraph(
+        none = Section(out)
+        none.heading("The GA's faces")
+        none.paragraph(
             "None: the export has no GA trial (error distributions, repeatability, "
             "separability, GA noise and prototypes need them)."
         )
-    _ratings(ds, report, summary)
-    if prepared is not None:
-        people_sections(prepared, report, summary, opts, model, step)
-        task_sections(TaskTools(ds.source, report, opts, model), summary, step)
-    plan_section(report, summary, opts.primary)
+        sections.append(none)
+    sections.append(_ratings(ds, out))
+    if export is not None and prepared is not None:
+        sections += people_sections(prepared, out, opts, model, step)
+        sections += task_sections(export, out, opts, model, step)
+    results = mark_roles([r for s in sections for r in s.results], opts.primary)
+    sections.append(plan_section(results, opts.primary, out))
     step("writing the report")
     if ds.has_weights:
-        tidy.write_csv(
-            ds.elites.rename(columns={c: f"w_{c}" for c in ds.columns}),
-            report.out / "tables" / "elites.csv",
-            col_types=True,
-        )
-    (report.out / "analysis.json").write_text(json.dumps(summary, indent=2, default=_json) + "\n")
-    html_path, md_path = report.write()
-    return AnalysisResult(report.out, html_path, md_path, summary)
+        sections[-1].csv(ds.elites.rename(columns={c: f"w_{c}" for c in ds.columns}), "elites")
+    title = f"EmoGen analysis: {ds.source.name}"
+    html_path, md_path, json_path = write_analysis(title, out, sections, {})
+    summary = json.loads(json_path.read_text())
+    return AnalysisResult(out, html_path, md_path, summary, results)
 
 
 def _ga_sections(
     ds: Dataset,
-    report: Report,
-    summary: dict[str, Any],
+    out: Path,
     opts: AnalysisOptions,
     model: FaceModel | None,
     step: Callable[[str], None],
     identities: dict[str, Identity],
-) -> None:
+) -> list[Section]:
     """The sections on the GA's faces: errors, repeatability, separability, noise, prototypes."""
-    _errors(ds, report, summary)
+    sections = [_errors(ds, out)]
     step("repeatability")
-    _repeatability(ds, report, summary)
+    sections.append(_repeatability(ds, out))
     step("separability (PCA + GMM)")
-    separability_section(ds, report, summary, opts)
+    sections.append(separability_section(ds, out, opts))
     step(f"GA noise ({opts.noise_runs} simulated runs per group)")
-    noise_section(ds, report, summary, opts, model)
+    sections.append(noise_section(ds, out, opts, model))
     step("prototypes and renders")
-    prototypes_section(ds, report, summary, opts, model, identities)
-
-
-def _json(o: object) -> object:
-    if isinstance(o, np.integer):
-        return int(o)
-    if isinstance(o, np.floating):
-        return float(o)
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    return str(o)
+    sections.append(prototypes_section(ds, out, opts, model, identities))
+    return sections
 
 
 # ---- sections ------------------------------------------------------------------------------
-def _overview(ds: Dataset, report: Report, summary: dict[str, Any]) -> None:
-    report.paragraph(
+def _overview(ds: Dataset, out: Path) -> Section:
+    sec = Section(out)
+    sec.paragraph(
         f"Source: `{ds.source}` ({ds.kind}). Generations 0–{ds.generations}; errors are the "
         f"{ds.error_kind}. Tables are also CSV files under `tables/` (`elites.csv`: one row per "
         "elite, with its weights)."
@@ -174,20 +171,20 @@ def _overview(ds: Dataset, report: Report, summary: dict[str, Any]) -> None:
                 "elites": len(e),
             }
         )
-    report.table(pd.DataFrame(rows), "groups", "Groups (emotions or simulations) and samples")
-    report.bullets([f"Note: {n}" for n in ds.notes])
-    summary["samples"] = {r["group"]: r["samples"] for r in rows}
+    sec.table(pd.DataFrame(rows), "groups", "Groups (emotions or simulations) and samples")
+    sec.bullets([f"Note: {n}" for n in ds.notes])
+    sec.data["samples"] = {r["group"]: r["samples"] for r in rows}
+    return sec
 
 
-def _errors(ds: Dataset, report: Report, summary: dict[str, Any]) -> None:
-    report.heading("Error distributions per generation")
+def _errors(ds: Dataset, out: Path) -> Section:
+    sec = Section(out)
+    sec.heading("Error distributions per generation")
     panels = {g: ds.errors(g) for g in ds.groups}
     panels = {g: e for g, e in panels.items() if np.isfinite(e).any()}
     if not panels:
-        report.paragraph(
-            "No errors: no group has a complete sample with weights (no proxy target)."
-        )
-        return
+        sec.paragraph("No errors: no group has a complete sample with weights (no proxy target).")
+        return sec
     tables, kls = [], {}
     for g, e in panels.items():
         s = generation_summary(e)
@@ -197,10 +194,10 @@ def _errors(ds: Dataset, report: Report, summary: dict[str, Any]) -> None:
         if len(ok) >= 2 and ds.generations >= 1:
             kls[g] = kl_per_generation(ok)
     table = pd.concat(tables, ignore_index=True)
-    report.table(table, "errors_by_generation", "Elite error per generation (CD)")
-    fig = plots.generation_distributions(panels, report.figures / "error_distributions.png")
-    report.figure(fig, "Per-generation distributions of the elite's error (violins; mean ± sd).")
-    summary["final_error"] = {
+    sec.table(table, "errors_by_generation", "Elite error per generation (CD)")
+    fig = plots.generation_distributions(panels, sec.figures / "error_distributions.png")
+    sec.figure(fig, "Per-generation distributions of the elite's error (violins; mean ± sd).")
+    sec.data["final_error"] = {
         g: {"mean": float(np.nanmean(e[:, -1])), "sd": float(np.nanstd(e[:, -1], ddof=1))}
         for g, e in panels.items()
         if np.isfinite(e[:, -1]).sum() > 1
@@ -211,26 +208,26 @@ def _errors(ds: Dataset, report: Report, summary: dict[str, Any]) -> None:
             for g, kl in kls.items()
             for i, v in enumerate(kl)
         ]
-        report.paragraph(
+        sec.paragraph(
             "KL(P_g ‖ P_g−1) between consecutive generations' error distributions: Gaussian "
             "kernel density estimates (Scott's bandwidth, at least 0.005) on a common 512-point "
             "grid, trapezoid rule, in nats. Samples complete through every generation only."
         )
-        report.table(
+        sec.table(
             pd.DataFrame(rows).pivot(index="generation", columns="group", values="kl_nats"),
             "kl_by_generation",
             "KL divergence between consecutive generations [nats]",
             index=True,
             data=pd.DataFrame(rows),
         )
-        report.figure(
-            plots.kl_curves(kls, report.figures / "kl.png"), "KL per generation (log scale)."
-        )
-        summary["kl"] = {g: kl.tolist() for g, kl in kls.items()}
+        sec.figure(plots.kl_curves(kls, sec.figures / "kl.png"), "KL per generation (log scale).")
+        sec.data["kl"] = {g: kl.tolist() for g, kl in kls.items()}
+    return sec
 
 
-def _repeatability(ds: Dataset, report: Report, summary: dict[str, Any]) -> None:
-    report.heading("Initial bias and repeatability")
+def _repeatability(ds: Dataset, out: Path) -> Section:
+    sec = Section(out)
+    sec.heading("Initial bias and repeatability")
     rows = []
     for g in ds.groups:
         row: dict[str, Any] = {"group": g}
@@ -244,7 +241,7 @@ def _repeatability(ds: Dataset, report: Report, summary: dict[str, Any]) -> None
             row[f"{label} %"] = 100 * float(v)
         rows.append(row)
     table = pd.DataFrame(rows)
-    report.paragraph(
+    sec.paragraph(
         "Bias: CD of the best generation-0 face to the (proxy) target — 1.0 means no bias. "
         "Bins: shares of all pairs of final faces by their CD (the paper's Table III)."
     )
@@ -252,7 +249,7 @@ def _repeatability(ds: Dataset, report: Report, summary: dict[str, Any]) -> None
         columns={"bias mean": "bias_mean", "bias sd": "bias_sd", "final faces": "n_final_faces"}
         | {f"{b} %": tidy.machine_name(f"pct pairs cd {b}") for b in BIN_LABELS}
     )
-    report.table(
+    sec.table(
         table,
         "repeatability",
         "Target bias and inter-sample CD bins of the final faces",
@@ -261,20 +258,23 @@ def _repeatability(ds: Dataset, report: Report, summary: dict[str, Any]) -> None
     bins_only = table.set_index("group")[[f"{b} %" for b in BIN_LABELS]].dropna()
     if len(bins_only):
         bins_only.columns = list(BIN_LABELS)
-        report.figure(
-            plots.bins(bins_only, report.figures / "repeatability.png"),
+        sec.figure(
+            plots.bins(bins_only, sec.figures / "repeatability.png"),
             "Inter-sample CD of final faces, by bin.",
         )
-    summary["repeatability"] = table.to_dict(orient="records")
+    sec.data["repeatability"] = table.to_dict(orient="records")
+    return sec
 
 
-def _ratings(ds: Dataset, report: Report, summary: dict[str, Any]) -> None:
+def _ratings(ds: Dataset, out: Path) -> Section:
+    sec = Section(out)
     r = ds.ratings
     if r is None or r.empty or "value" not in r.columns:
-        return
-    report.heading("Ratings of the final faces")
+        return sec
+    sec.heading("Ratings of the final faces")
     key = r["emotion"].astype(str) if "emotion" in r.columns else pd.Series("all", index=r.index)
     table = r.groupby(key)["value"].agg(["count", "mean", "std", "min", "max"]).reset_index()
     table.columns = ["group", "n", "mean", "sd", "min", "max"]
-    report.table(table, "ratings", "Ratings (1 = not at all … points = perfectly)")
-    summary["ratings"] = table.to_dict(orient="records")
+    sec.table(table, "ratings", "Ratings (1 = not at all … points = perfectly)")
+    sec.data["ratings"] = table.to_dict(orient="records")
+    return sec

@@ -4,16 +4,17 @@ GMM) and the prototypes (each participant's mean final face, group means, render
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
-from emogen import columns as tidy
 from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.data import Dataset
 from emogen.analysis.prototypes import group_means, participant_prototypes, top_weights
-from emogen.analysis.report import Report
+from emogen.analysis.report import Content
+from emogen.analysis.results import Section
 from emogen.analysis.separability import gmm_separability
 from emogen.analysis.separability_figure import separability_figure
 from emogen.errors import EmoGenError
@@ -25,13 +26,13 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 
-def separability_section(
-    ds: Dataset, report: Report, summary: dict[str, Any], opts: AnalysisOptions
-) -> None:
+def separability_section(ds: Dataset, out: Path, opts: AnalysisOptions) -> Section:
+    """PCA + GMM: can the groups' final faces be told apart (descriptive; no test)?"""
+    report = Section(out)
     report.heading("Separability of the groups (PCA + GMM)")
     if not ds.has_weights or len(ds.groups) < 2:
         report.paragraph("Skipped: needs face weights and at least two groups.")
-        return
+        return report
     final = ds.final
     counts = final.groupby("group").size().reindex(list(ds.groups), fill_value=0)
     if (counts < 2).any() or counts.sum() < 2 * len(ds.groups) + 1:
@@ -39,7 +40,7 @@ def separability_section(
             f"Skipped: too few final faces per group for a {len(ds.groups)}-component mixture "
             f"({', '.join(f'{g}: {n}' for g, n in counts.items())}; at least 2 per group)."
         )
-        return
+        return report
     x = final[list(ds.columns)].to_numpy(dtype=np.float64)
     labels = final["group"].map({g: i for i, g in enumerate(ds.groups)}).to_numpy()
     targets = np.stack([ds.targets[g] for g in ds.groups]) if ds.targets else None
@@ -49,7 +50,7 @@ def separability_section(
         )
     except EmoGenError as exc:
         report.paragraph(f"Skipped: {exc}")
-        return
+        return report
     report.paragraph(
         f"PCA of the final faces{' and the targets' if targets is not None else ''}; a "
         f"{len(ds.groups)}-component Gaussian mixture in the first {sep.n_pca} components "
@@ -93,15 +94,16 @@ def separability_section(
         "Final faces in the first two PCA components; GMM components (1σ, 2σ), group "
         "means (×) and targets (★).",
     )
-    summary["separability"] = {
+    report.data["separability"] = {
         "accuracy": sep.accuracy,
         "ari": sep.ari,
         "one_to_one": sep.one_to_one,
         "n_pca": sep.n_pca,
     }
+    return report
 
 
-def _mixture_warning(report: Report, n: int, k: int, d: int, kind: str) -> None:
+def _mixture_warning(report: Content, n: int, k: int, d: int, kind: str) -> None:
     """Say loudly when the mixture has too many parameters for the faces, and that the
     clustering is descriptive (faces, not participants, are its points)."""
     params = k * (d + d * (d + 1) // 2) + (k - 1)
@@ -121,27 +123,23 @@ def _mixture_warning(report: Report, n: int, k: int, d: int, kind: str) -> None:
 
 def prototypes_section(
     ds: Dataset,
-    report: Report,
-    summary: dict[str, Any],
+    out: Path,
     opts: AnalysisOptions,
     model: FaceModel | None,
     identities: dict[str, Identity] | None = None,
-) -> None:
+) -> Section:
     """Participants' prototypes, group means and their renders; ``identities``: the identity
     each group was made on (a study's), to draw its mean face as participants saw it."""
+    report = Section(out)
     report.heading("Prototypes and mean faces")
     if not ds.has_weights or ds.final.empty:
         report.paragraph("Skipped: needs final faces with weights.")
-        return
+        return report
     cols = list(ds.columns)
     protos = participant_prototypes(ds.final, cols)
     means = group_means(protos, cols)
     if ds.kind == "study":
-        tidy.write_csv(
-            protos.rename(columns={c: f"w_{c}" for c in cols}),
-            report.out / "tables" / "prototypes.csv",
-            col_types=True,
-        )
+        report.csv(protos.rename(columns={c: f"w_{c}" for c in cols}), "prototypes")
         show = protos[["group", "participant", "n_trials"]].copy()
         show["largest weights"] = [top_weights(r, cols) for r in protos[cols].to_numpy()]
         report.table(
@@ -154,10 +152,10 @@ def prototypes_section(
     report.table(
         pd.DataFrame(mean_rows), "group_means", "Group mean faces (mean of prototypes)", data=data
     )
-    summary["group_means"] = {g: m.tolist() for g, m in means.items()}
+    report.data["group_means"] = {g: m.tolist() for g, m in means.items()}
     if model is None or not opts.render:
         report.paragraph("Renders skipped (no face model, or --no-render).")
-        return
+        return report
     from emogen.analysis.face_sheets import Panel, face_sheet, heatmap_sheet, model_weights
 
     try:
@@ -192,6 +190,7 @@ def prototypes_section(
     except EmoGenError as exc:
         log.warning("rendering failed: %s", exc)
         report.paragraph(f"Renders failed: {exc}")
+    return report
 
 
 def _group_means_tables(

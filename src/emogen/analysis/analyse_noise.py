@@ -3,7 +3,8 @@ simulated on the model with the data's GA settings?"""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -15,7 +16,8 @@ from emogen.analysis.elites import final_faces_simulator
 from emogen.analysis.face_sheets import model_weights
 from emogen.analysis.noise import PAPER_NOISE, latent_spread_test, spread_test
 from emogen.analysis.noise_empirical import empirical_spread_test, has_repeats
-from emogen.analysis.report import Report
+from emogen.analysis.report import Content
+from emogen.analysis.results import Section
 from emogen.config import PAPER_SELECTIONS, GAConfig, SimulationConfig
 
 if TYPE_CHECKING:
@@ -65,16 +67,14 @@ def noise_config(ds: Dataset, group: str, opts: AnalysisOptions) -> SimulationCo
 
 
 def noise_section(
-    ds: Dataset,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> None:
+    ds: Dataset, out: Path, opts: AnalysisOptions, model: FaceModel | None
+) -> Section:
+    """Does each group's spread exceed the GA noise (unit: the participant's face)?"""
+    report = Section(out)
     report.heading("GA noise: does each group's spread exceed it?")
     if not ds.has_weights:
         report.paragraph("Skipped: needs face weights.")
-        return
+        return report
     rng = np.random.default_rng(opts.seed)
     rows, notes, records = [], [], []
     candidates: list[dict[str, object]] = []
@@ -132,7 +132,9 @@ def noise_section(
             plots.spread(table, report.figures / "spread.png"),
             "Mean proxy error of each group against GA noise at the same n.",
         )
-        summary["spread_test"] = rows
+        report.data["spread_test"] = rows
+        for row in rows:
+            report.test(f"spread_test[{row['group']}]", row, _unit(ds))
     if candidates:
         report.table(
             pd.DataFrame(candidates),
@@ -141,18 +143,20 @@ def noise_section(
             data=pd.DataFrame(candidate_records),
         )
     if ds.kind == "study":
-        empirical_section(ds, report, summary, opts, model)
+        empirical_section(ds, report, opts, model)
+    return report
+
+
+def _unit(ds: Dataset) -> str:
+    return "participant" if ds.kind == "study" else "simulated run"
 
 
 def empirical_section(
-    ds: Dataset,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
+    ds: Dataset, report: Section, opts: AnalysisOptions, model: FaceModel | None
 ) -> None:
     """Where participants repeated a group: their between-person spread against their own
-    within-person spread (the empirical null, :mod:`emogen.analysis.noise_empirical`)."""
+    within-person spread (the empirical null, :mod:`emogen.analysis.noise_empirical`), added
+    to ``sec``."""
     rng = np.random.default_rng(opts.seed)
     rows, records = [], []
     for g in ds.groups:
@@ -182,7 +186,9 @@ def empirical_section(
         "Between-participant spread against within-participant (repeated) spread",
         data=pd.DataFrame(records),
     )
-    summary["spread_empirical"] = rows
+    report.data["spread_empirical"] = rows
+    for row in rows:
+        report.test(f"spread_empirical[{row['group']}]", row)
 
 
 def _method_text(ds: Dataset, opts: AnalysisOptions, model: FaceModel | None) -> str:
@@ -215,7 +221,7 @@ def _method_text(ds: Dataset, opts: AnalysisOptions, model: FaceModel | None) ->
     )
 
 
-def _assumption_note(report: Report, rows: list[dict[str, object]]) -> None:
+def _assumption_note(report: Content, rows: list[dict[str, object]]) -> None:
     """Say loudly which groups' null assumed noiseless choosers."""
     assumed = [str(r["group"]) for r in rows if str(r["T source"]).startswith("ASSUMED")]
     if assumed:

@@ -11,6 +11,7 @@ in one line why when the design cannot support it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from emogen.analysis.categorisation import categorisation_section
@@ -24,19 +25,20 @@ from emogen.analysis.identity import identity_section
 from emogen.analysis.people import load_people, read_participant_table
 from emogen.analysis.quality_report import quality_section
 from emogen.analysis.reliability_report import reliability_section
+from emogen.analysis.results import Section, section_of
 from emogen.analysis.retest import retest_section
+from emogen.analysis.study_export import StudyExport
 from emogen.errors import ConfigError, EmoGenError
 
 if TYPE_CHECKING:
     from collections.abc import Callable
-    from pathlib import Path
 
     import pandas as pd
 
     from emogen.analysis.analyse_options import AnalysisOptions
     from emogen.analysis.data import Dataset
     from emogen.analysis.people import People
-    from emogen.analysis.report import Report
+    from emogen.analysis.report import Content
     from emogen.appearance.identities import Identity
     from emogen.model.face import FaceModel
 
@@ -50,28 +52,30 @@ class Prepared:
     kept: People | None
     excluded: frozenset[str]
     problem: str = ""
-    source: Path | None = None  # the export (its sessions and trials: the participant flow)
+    export: StudyExport | None = None  # its sessions and trials: the participant flow
 
 
-def people_for(source: Path, opts: AnalysisOptions) -> People:
+def people_for(export: StudyExport, opts: AnalysisOptions) -> People:
     """The export's people, the participant table joined (errors name what is wrong)."""
-    people = load_people(source)
+    people = load_people(export)
     if opts.participants is not None:
         people = people.with_participants(read_participant_table(opts.participants))
     return people
 
 
-def prepare_people(source: Path, opts: AnalysisOptions) -> Prepared:
-    """The study's people with the exclusion rule applied (none: ``opts.exclusions`` None)."""
+def prepare_people(source: Path | StudyExport, opts: AnalysisOptions) -> Prepared:
+    """The study's people with the exclusion rule applied (none: ``opts.exclusions`` None);
+    ``source``: the export, or its folder."""
+    export = source if isinstance(source, StudyExport) else StudyExport(source)
     try:
-        everyone = people_for(source, opts)
+        everyone = people_for(export, opts)
     except EmoGenError as exc:
-        return Prepared(None, None, frozenset(), str(exc), source)
+        return Prepared(None, None, frozenset(), str(exc), export)
     if opts.exclusions is None or everyone.faces.empty:
-        return Prepared(everyone, everyone, frozenset(), source=source)
+        return Prepared(everyone, everyone, frozenset(), export=export)
     kept, table = apply_exclusions(everyone, opts.exclusions)
     out = frozenset(table.loc[table["excluded"], "participant_id"].astype(str))
-    return Prepared(everyone, kept, out, source=source)
+    return Prepared(everyone, kept, out, export=export)
 
 
 def check_participants(ds: Dataset, table: Path, group_column: str) -> None:
@@ -85,21 +89,25 @@ def check_participants(ds: Dataset, table: Path, group_column: str) -> None:
             f"participant table {table} has no column '{group_column}' (--group-column); it "
             f"has {', '.join(map(str, frame.columns))}"
         )
-    load_people(ds.source).with_participants(frame)
+    load_people(ds.export or ds.source).with_participants(frame)
 
 
-def quality_first(
-    prepared: Prepared, report: Report, summary: dict[str, Any], opts: AnalysisOptions
-) -> None:
+def quality_first(prepared: Prepared, out: Path, opts: AnalysisOptions) -> Section:
     """Quality and exclusions: reported before the analyses they apply to."""
+    return section_of(lambda r, s: _quality(prepared, r, s, opts), out)
+
+
+def _quality(
+    prepared: Prepared, report: Content, summary: dict[str, Any], opts: AnalysisOptions
+) -> None:
     if prepared.everyone is None or prepared.everyone.faces.empty:
         return
     table = quality_section(prepared.everyone, report, summary, opts, None, rule=opts.exclusions)
-    if prepared.source is not None:
+    if prepared.export is not None:
         kept = prepared.kept
         analysed = set() if kept is None else set(kept.faces["participant_id"].astype(str))
         flow_section(
-            prepared.source,
+            prepared.export,
             table if opts.exclusions is not None else None,
             analysed,
             report,
@@ -125,27 +133,29 @@ def _groups(opts: AnalysisOptions) -> pd.Series | None:
 
 def people_sections(
     prepared: Prepared,
-    report: Report,
-    summary: dict[str, Any],
+    out: Path,
     opts: AnalysisOptions,
     model: FaceModel | None,
     step: Callable[[str], None],
-) -> None:
+) -> list[Section]:
+    """The analyses of participants, each a section (``out``: the report's folder)."""
     people = prepared.kept
     if people is None:
-        report.heading("Analyses of participants")
-        report.paragraph(f"No analyses of participants: {prepared.problem}")
-        return
+        none = Section(out)
+        none.heading("Analyses of participants")
+        none.paragraph(f"No analyses of participants: {prepared.problem}")
+        return [none]
     step("categorisation")
-    categorisation_section(people, report, summary, opts, model)
+    sections = [categorisation_section(people, out, opts, model)]
     if people.faces.empty:
-        report.heading("Analyses of the faces participants made")
-        report.paragraph(
+        none = Section(out)
+        none.heading("Analyses of the faces participants made")
+        none.paragraph(
             "None: no GA trial is finished (reliability, per-gene inference, conditions, "
             "perceptive fields, identity and group comparisons need final faces)."
         )
-        return
-    summary["participants"] = people.n_participants
+        return [*sections, none]
+    sections.append(Section(out, data={"participants": people.n_participants}))
     for name, section in (
         ("reliability", reliability_section),
         ("per-gene inference", genes_section),
@@ -155,9 +165,10 @@ def people_sections(
         ("between-session reliability", retest_section),
     ):
         step(name)
-        section(people, report, summary, opts, model)
+        sections.append(section(people, out, opts, model))
     step("groups of participants")
-    groups_section(people, report, summary, opts, opts.group_column)
+    sections.append(groups_section(people, out, opts, opts.group_column))
+    return sections
 
 
 def group_identities(prepared: Prepared | None) -> dict[str, Identity]:

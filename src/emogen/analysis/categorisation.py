@@ -17,6 +17,7 @@ per-participant differences, with its 95% CI; scipy.stats.ttest_1samp).
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -27,10 +28,11 @@ from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.fields_accuracy import fields_accuracy_section
 from emogen.analysis.own_distance_report import own_distance_section
 from emogen.analysis.people import People
+from emogen.analysis.results import Section
 from emogen.errors import DataError
 
 if TYPE_CHECKING:
-    from emogen.analysis.report import Report
+    from emogen.analysis.report import Content
     from emogen.model.face import FaceModel
 
 
@@ -118,17 +120,17 @@ def dz_interval(t: float, n: int, confidence: float = 0.95) -> tuple[float, floa
 
 def categorisation_section(
     people: People | pd.DataFrame | None,
-    report: Report,
-    summary: dict[str, Any],
+    folder: Path,
     opts: AnalysisOptions | None = None,
     model: FaceModel | None = None,
-) -> None:
-    """The report's section on a study's categorise answers (``summary["categorisation"]``).
+) -> Section:
+    """The report's section on a study's categorise answers (``analysis.json``'s ``categorisation``).
 
     ``people``: the study (:class:`People`: every analysis), or only its responses table (the
     older call: no own-distance model, which needs the final faces; nothing at all is written
     without answers, as a GA dataset has none). ``model`` is not used (faces are compared in
     gene space)."""
+    report = Section(folder)
     opts = opts or AnalysisOptions()
     full = people if isinstance(people, People) else None
     responses = full.responses if full is not None else people
@@ -139,21 +141,21 @@ def categorisation_section(
                 "No categorisation analysis: no categorise answers (the study has no categorise "
                 "block, or nobody has reached it yet)."
             )
-            summary["categorisation"] = {"n_answers": 0, "note": "no categorise answers"}
-        return
+            report.data["categorisation"] = {"n_answers": 0, "note": "no categorise answers"}
+        return report.tests_in_data()
     report.heading("Categorisation of faces")
     answered = rec.answered(responses)
     if answered.empty:
         report.paragraph(
             "No categorisation analysis: the study's categorise trials are unanswered."
         )
-        summary["categorisation"] = {"n_answers": 0, "note": "no answers"}
-        return
+        report.data["categorisation"] = {"n_answers": 0, "note": "no answers"}
+        return report.tests_in_data()
     out: dict[str, Any] = {
         "n_answers": len(answered),
         "n_participants": int(answered["participant_id"].nunique()),
     }
-    summary["categorisation"] = out
+    report.data["categorisation"] = out
     _overview(responses, answered, report, out)
     _confusion(responses, report)
     _hit_rates(responses, report, out, opts)
@@ -163,12 +165,13 @@ def categorisation_section(
             "Own-distance model: not fitted here (it needs the study's final faces, which "
             "this call did not receive)."
         )
-        return
+        return report.tests_in_data()
     own_distance_section(full, report, out, opts)
     fields_accuracy_section(full, report, out, opts)
+    return report.tests_in_data()
 
 
-def _long(report: Report, table: pd.DataFrame, name: str, caption: str, shown: int = 8) -> None:
+def _long(report: Content, table: pd.DataFrame, name: str, caption: str, shown: int = 8) -> None:
     """A long table: its first rows in the report, every row in ``tables/<name>.csv``."""
     more = len(table) > shown
     note = f" (first {shown} of {len(table)} rows; all in tables/{name}.csv)" if more else ""
@@ -176,7 +179,7 @@ def _long(report: Report, table: pd.DataFrame, name: str, caption: str, shown: i
 
 
 def _overview(
-    responses: pd.DataFrame, answered: pd.DataFrame, report: Report, out: dict[str, Any]
+    responses: pd.DataFrame, answered: pd.DataFrame, report: Content, out: dict[str, Any]
 ) -> None:
     known = answered[answered["intended"].notna()]
     by_source = (
@@ -209,7 +212,7 @@ def _overview(
     )
 
 
-def _confusion(responses: pd.DataFrame, report: Report) -> None:
+def _confusion(responses: pd.DataFrame, report: Content) -> None:
     from emogen.analysis.categorisation_figures import confusion_figure
 
     table = rec.confusion_table(responses)
@@ -231,7 +234,7 @@ def _confusion(responses: pd.DataFrame, report: Report) -> None:
 
 
 def _hit_rates(
-    responses: pd.DataFrame, report: Report, out: dict[str, Any], opts: AnalysisOptions
+    responses: pd.DataFrame, report: Content, out: dict[str, Any], opts: AnalysisOptions
 ) -> None:
     hu = rec.unbiased_hit_rates(responses)
     if hu.empty:
@@ -261,7 +264,7 @@ def _hit_rates(
 
 
 def _sources(
-    responses: pd.DataFrame, report: Report, out: dict[str, Any], opts: AnalysisOptions
+    responses: pd.DataFrame, report: Content, out: dict[str, Any], opts: AnalysisOptions
 ) -> None:
     per = rec.accuracy_per_participant(responses)
     pairs = rec.source_comparisons(per, opts.alpha)

@@ -27,7 +27,8 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -35,7 +36,7 @@ import pandas as pd
 from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.block_positions import order_sentence
 from emogen.analysis.people import People
-from emogen.analysis.report import Report
+from emogen.analysis.results import Section
 from emogen.errors import ConfigError
 
 if TYPE_CHECKING:
@@ -181,26 +182,23 @@ def condition_tests(
 
 
 def conditions_section(
-    people: People,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> None:
-    """The tests between emotions, identities and their interaction into ``report``; headline
-    numbers into ``summary["conditions"]``."""
+    people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
+) -> Section:
+    """The tests between emotions, identities and their interaction into the section; headline
+    numbers into ``analysis.json``'s ``conditions``."""
+    report = Section(folder)
     del model
     report.heading("Emotions, identities and their interaction")
     if len(people.emotions) < 2 and len(people.identity_names) < 2:
         report.paragraph("The study has one emotion and one identity: no condition to compare.")
-        return
+        return report.tests_in_data()
     _, ids, _, _ = cell_cube(people)
     if len(ids) < 3:
         report.paragraph(
             f"Condition tests need >= 3 participants with a face in every emotion × identity "
             f"cell; {len(ids)} have one."
         )
-        return
+        return report.tests_in_data()
     permutations, draws = 2000, 1000
     table = condition_tests(
         people,
@@ -229,7 +227,8 @@ def conditions_section(
         "conditions_tests",
         "Emotion, identity and interaction effects on the genes (participant as unit).",
     )
-    summary["conditions"] = {
+    report.data["conditions"] = {
         r["effect"]: {"p": r["p_perm"], "partial_eta2": r["partial_eta2"]}
         for r in table.to_dict("records")
     }
+    return report.tests_in_data()

@@ -7,8 +7,9 @@
   Groups are emotions (``emotion / identity`` when a study has several identities); a sample
   is one trial (its last attempt, after any restarts); the final faces are the export's
   ``final_faces`` table (an export written before it: derived once, by
-  :func:`~emogen.analysis.study_export.derive_final_faces`). Errors are CDs to the group's
-  mean final face (the proxy target: participants' targets are latent);
+  :meth:`~emogen.analysis.study_export.StudyExport.final_faces`); every table is read once.
+  Errors are CDs to the group's mean final face (the proxy target: participants' targets are
+  latent);
 * a **simulation** folder (``emogen simulate``: ``simulation.json`` + ``simulation.parquet``,
   ``faces.parquet`` with ``--all-weights`` for anything that needs faces), a **sweep** folder
   (``cells/*/``) or a folder of simulation folders: each simulation is a group, named after its
@@ -30,6 +31,7 @@ import pandas as pd
 from emogen.analysis.data_study import load_study
 from emogen.analysis.dataset import Dataset as Dataset
 from emogen.analysis.dataset import read_output as _read
+from emogen.analysis.study_export import StudyExport
 from emogen.analysis.validate import check_simulation
 from emogen.errors import ConfigError, DataError, did_you_mean_path
 
@@ -37,16 +39,19 @@ STUDY_TABLES = ("trials", "faces", "selections")
 SIM_FACE_COLUMNS = ("run", "generation", "slot", "operator", "distance", "error", "rank")
 
 
-def load_dataset(path: Path, exclude: frozenset[str] = frozenset()) -> Dataset:
+def load_dataset(path: Path | StudyExport, exclude: frozenset[str] = frozenset()) -> Dataset:
     """A study export or simulation output folder (see the module docstring); ``exclude``: ids
-    of a study's participants left out of everything (an exclusion rule's verdict)."""
+    of a study's participants left out of everything (an exclusion rule's verdict). A study's
+    tables are read once (its :attr:`Dataset.export`; pass that again to reuse them)."""
+    if isinstance(path, StudyExport):
+        return load_study(path, exclude)
     folder = Path(path)
     if not folder.exists():
         raise ConfigError(f"DATA folder {folder} does not exist{did_you_mean_path(folder)}")
     if not folder.is_dir():
         raise ConfigError(f"DATA must be a folder (a study export or simulation output): {folder}")
     if all(any((folder / f"{t}{s}").is_file() for s in (".parquet", ".csv")) for t in STUDY_TABLES):
-        return load_study(folder, exclude)
+        return load_study(StudyExport(folder), exclude)
     sims = simulation_folders(folder)
     if sims:
         return load_simulations(folder, sims)

@@ -3,16 +3,14 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
 
 from emogen.analysis.dataset import ORDERED, Dataset
-from emogen.analysis.dataset import read_output as _read
 from emogen.analysis.people import sessions_of
-from emogen.analysis.study_export import derive_final_faces
+from emogen.analysis.study_export import StudyExport
 from emogen.analysis.validate import check_study
 from emogen.errors import ConfigError
 from emogen.metrics import cosine_distance
@@ -34,12 +32,13 @@ class StudyTables(NamedTuple):
     responses: pd.DataFrame | None
 
 
-def _study_tables(folder: Path, exclude: frozenset[str]) -> StudyTables:
+def _study_tables(export: StudyExport, exclude: frozenset[str]) -> StudyTables:
     """A study export's tables, checked, without the ``exclude``d participants' sessions."""
-    trials = _read(folder, "trials")
-    faces = _read(folder, "faces")
-    selections = _read(folder, "selections")
-    ratings = _read(folder, "evolve_ratings", required=False)
+    folder = export.folder
+    trials = export.required("trials")
+    faces = export.required("faces")
+    selections = export.required("selections")
+    ratings = export.table("evolve_ratings")
     assert_cols = {
         "trials": (trials, ("session_id", "participant_id", "trial", "emotion", "status")),
         "faces": (faces, ("session_id", "trial", "attempt", "generation", "face_id")),
@@ -58,9 +57,8 @@ def _study_tables(folder: Path, exclude: frozenset[str]) -> StudyTables:
     if "task" in trials.columns:  # the GA's trials; categorise trials are the responses table
         trials = trials[trials["task"] == "evolve"].reset_index(drop=True)
     check_study(folder, {"trials": trials, "faces": faces, "selections": selections}, other)
-    responses = _read(folder, "categorise_responses", required=False)
-    final = _read(folder, "final_faces", required=False)
-    final = derive_final_faces(trials, faces, selections) if final is None else final
+    responses = export.table("categorise_responses")
+    final = export.final_faces()
     gone = sessions_of(trials, exclude) if exclude else set()
     trials, faces, selections, final = (
         t[~t["session_id"].isin(gone)] for t in (trials, faces, selections, final)
@@ -71,8 +69,10 @@ def _study_tables(folder: Path, exclude: frozenset[str]) -> StudyTables:
     return StudyTables(trials.reset_index(drop=True), faces, selections, final, ratings, responses)
 
 
-def load_study(folder: Path, exclude: frozenset[str] = frozenset()) -> Dataset:
-    trials, faces, selections, final, ratings, responses = _study_tables(folder, exclude)
+def load_study(export: StudyExport, exclude: frozenset[str] = frozenset()) -> Dataset:
+    """The study export's GA data (each table read once, by ``export``), without the
+    ``exclude``d participants."""
+    trials, faces, selections, final, ratings, responses = _study_tables(export, exclude)
     notes: list[str] = []
     wcols = [c for c in faces.columns if str(c).startswith("w_")]
     columns = tuple(str(c)[2:] for c in wcols)
@@ -134,7 +134,7 @@ def load_study(folder: Path, exclude: frozenset[str] = frozenset()) -> Dataset:
     elites = elites[[*ORDERED, *columns]].sort_values(["group", "sample", "generation"])
     return Dataset(
         kind="study",
-        source=folder,
+        source=export.folder,
         elites=elites.reset_index(drop=True),
         columns=columns,
         generations=generations,
@@ -147,6 +147,7 @@ def load_study(folder: Path, exclude: frozenset[str] = frozenset()) -> Dataset:
         population_size=pop_size,
         selections=tuple(int(s) for s in sel_counts),
         notes=notes,
+        export=export,
     )
 
 

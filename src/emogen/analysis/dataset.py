@@ -10,9 +10,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from emogen import columns as tidy
-from emogen.analysis.study_export import table_path
-from emogen.errors import ConfigError
+from emogen.analysis.study_export import StudyExport
+from emogen.analysis.study_export import read_output as read_output
 
 #: The columns of :attr:`Dataset.elites` before the weights.
 ORDERED = ["group", "participant", "sample", "generation", "n_selected", "error", "complete"]
@@ -47,6 +46,8 @@ class Dataset:
     population_size: int = 10
     selections: tuple[int, ...] = ()
     notes: list[str] = field(default_factory=list)
+    #: a study's export, loaded once (every table of it the analysis reads)
+    export: StudyExport | None = None
 
     @property
     def has_weights(self) -> bool:
@@ -75,20 +76,3 @@ class Dataset:
         wide = e.pivot_table(index="sample", columns="generation", values="error", aggfunc="first")
         wide = wide.reindex(columns=range(self.generations + 1))
         return wide.to_numpy(dtype=np.float64)
-
-
-def read_output(folder: Path, name: str, required: bool = True) -> pd.DataFrame | None:
-    path = table_path(folder, name)  # an old export's table under its old name too
-    if path is None:
-        if required:
-            raise ConfigError(f"{folder} has no {name}.parquet or {name}.csv")
-        return None
-    try:
-        if path.suffix == ".parquet":
-            return pd.read_parquet(path)
-        try:
-            return tidy.read_csv(path)
-        except ConfigError:  # a cell that does not fit its column's type:
-            return pd.read_csv(path)  # the checks name it, with its row
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"cannot read {path}: {exc}") from None

@@ -32,7 +32,7 @@ from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.people import People
 
 if TYPE_CHECKING:
-    from emogen.analysis.report import Report
+    from emogen.analysis.report import Content
 
 #: The fewest participants with both measures the relation is tested on.
 MIN_PARTICIPANTS = 8
@@ -116,7 +116,7 @@ def distinctness_accuracy(
 
 
 def fields_accuracy_section(
-    people: People, report: Report, out: dict[str, Any], opts: AnalysisOptions
+    people: People, report: Content, out: dict[str, Any], opts: AnalysisOptions
 ) -> None:
     """The report's paragraph and table on distinctness and accuracy
     (``out["fields_accuracy"]``)."""

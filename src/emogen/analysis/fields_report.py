@@ -5,6 +5,7 @@ field is their own (split halves), clusters of participants, and maps."""
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -23,7 +24,8 @@ from emogen.analysis.fields import (
     perceptive_fields,
 )
 from emogen.analysis.people import People
-from emogen.analysis.report import Report
+from emogen.analysis.report import Content
+from emogen.analysis.results import Section
 from emogen.errors import EmoGenError
 
 if TYPE_CHECKING:
@@ -41,13 +43,10 @@ SHEET_PARTICIPANTS = 48
 
 
 def fields_section(
-    people: People,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> None:
+    people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
+) -> Section:
     """Perceptive fields of every participant per emotion, their overlap and clusters."""
+    report = Section(folder)
     report.heading("Perceptive fields")
     counts = people.faces.groupby(["participant_id", "emotion"]).size()
     if people.n_participants < MIN_PARTICIPANTS or counts.max() < 2:
@@ -56,7 +55,7 @@ def fields_section(
             f"or more final faces of an emotion; this study has {people.n_participants} "
             f"participant(s) with at most {counts.max()} face(s) per emotion."
         )
-        return
+        return report.tests_in_data()
     from threadpoolctl import threadpool_limits
 
     rng = np.random.default_rng(opts.seed)
@@ -87,10 +86,11 @@ def fields_section(
         "cluster when there are clusters, else by id).",
     )
     _sheets(people, report, opts, model)
-    summary["fields"] = out
+    report.data["fields"] = out
+    return report.tests_in_data()
 
 
-def _describe(fields: Fields, counts: pd.Series, report: Report, out: dict[str, Any]) -> None:
+def _describe(fields: Fields, counts: pd.Series, report: Content, out: dict[str, Any]) -> None:
     sp = fields.space
     n_min, n_med = int(counts.min()), float(counts.median())
     report.paragraph(
@@ -128,7 +128,7 @@ def _describe(fields: Fields, counts: pd.Series, report: Report, out: dict[str, 
 
 
 def _overlaps(
-    fields: Fields, report: Report, rng: np.random.Generator, out: dict[str, Any]
+    fields: Fields, report: Content, rng: np.random.Generator, out: dict[str, Any]
 ) -> dict[str, pd.DataFrame]:
     matrices, long = {}, []
     for e in fields.emotions:
@@ -173,17 +173,15 @@ def _overlaps(
     return matrices
 
 
-def _write_only(report: Report, table: pd.DataFrame, name: str) -> None:
+def _write_only(report: Content, table: pd.DataFrame, name: str) -> None:
     """A machine table under tables/ without showing it in the report (too many rows)."""
     from emogen import columns as tidy
 
-    path = report.out / "tables" / f"{name}.csv"
-    tidy.write_csv(tidy.machine_table(table), path, col_types=True)
-    report.tables[name] = path
+    report.csv(tidy.machine_table(table), name)
 
 
 def _individuality(
-    people: People, fields: Fields, report: Report, opts: AnalysisOptions, out: dict[str, Any]
+    people: People, fields: Fields, report: Content, opts: AnalysisOptions, out: dict[str, Any]
 ) -> None:
     ind = field_individuality(people, fields)
     if ind.empty:
@@ -231,7 +229,7 @@ def _individuality(
 
 def _clusters(
     fields: Fields,
-    report: Report,
+    report: Content,
     opts: AnalysisOptions,
     rng: np.random.Generator,
     out: dict[str, Any],
@@ -281,7 +279,9 @@ def _clusters(
     return c
 
 
-def _sheets(people: People, report: Report, opts: AnalysisOptions, model: FaceModel | None) -> None:
+def _sheets(
+    people: People, report: Content, opts: AnalysisOptions, model: FaceModel | None
+) -> None:
     if model is None or not opts.render:
         report.paragraph(
             "Contact sheets of the participants' faces skipped (no face model, or --no-render)."

@@ -14,12 +14,10 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
-from emogen.analysis.study_export import read_table
+from emogen.analysis.study_export import StudyExport
 
 if TYPE_CHECKING:
-    from pathlib import Path
-
-    from emogen.analysis.report import Report
+    from emogen.analysis.report import Content
 
 #: A participant without a row in the participant table, in the per-group columns.
 NO_GROUP = "(not in the participant table)"
@@ -95,17 +93,16 @@ def participant_flow(
 
 
 def flow_section(
-    source: Path,
+    export: StudyExport,
     exclusions: pd.DataFrame | None,
     analysed: set[str],
-    report: Report,
+    report: Content,
     summary: dict[str, Any],
     groups: pd.Series | None = None,
 ) -> None:
-    """The participant-flow table of the export in ``source`` into ``report`` (its counts into
+    """The participant-flow table of ``export`` into ``report`` (its counts into
     ``summary["flow"]``)."""
-    sessions = read_table(source, "sessions", required=False)
-    trials = read_table(source, "trials", required=False)
+    sessions, trials = export.table("sessions"), export.table("trials")
     if sessions is None or trials is None or "block_name" not in trials.columns:
         report.paragraph("Participant flow: the export has no sessions or trials table.")
         return

@@ -14,7 +14,8 @@ from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.facs import CAVEAT, facs_table, gene_label
 from emogen.analysis.genes import USED, GeneTestOptions, emotion_gene_tests, group_gene_tests
 from emogen.analysis.people import People
-from emogen.analysis.report import Report
+from emogen.analysis.report import Content
+from emogen.analysis.results import Section
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
@@ -23,14 +24,11 @@ MIN_PARTICIPANTS = 3
 
 
 def genes_section(
-    people: People,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> None:
-    """Per-gene inference (see :mod:`emogen.analysis.genes`) into ``report``; headline numbers
-    into ``summary["genes"]``."""
+    people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
+) -> Section:
+    """Per-gene inference (see :mod:`emogen.analysis.genes`) into the section; headline numbers
+    into ``analysis.json``'s ``genes``."""
+    report = Section(folder)
     del model
     report.heading("Per-gene inference")
     if people.n_participants < MIN_PARTICIPANTS:
@@ -38,7 +36,7 @@ def genes_section(
             f"Per-gene tests need >= {MIN_PARTICIPANTS} participants; this study has "
             f"{people.n_participants}."
         )
-        return
+        return report.tests_in_data()
     rng = np.random.default_rng(opts.seed)
     gopts = GeneTestOptions(level=1 - opts.alpha)
     report.paragraph(
@@ -89,11 +87,12 @@ def genes_section(
         out["emotion_bh"] = int(emo["significant_bh"].sum())
         out["emotion_tests"] = len(emo)
     _groups(people, report, gopts, rng, out)
-    summary["genes"] = out
+    report.data["genes"] = out
+    return report.tests_in_data()
 
 
 def _groups(
-    people: People, report: Report, gopts: GeneTestOptions, rng: np.random.Generator, out: dict
+    people: People, report: Content, gopts: GeneTestOptions, rng: np.random.Generator, out: dict
 ) -> None:
     if "group" not in people.participant_columns:
         report.paragraph("Group contrasts: no participant table with a `group` column was given.")

@@ -22,17 +22,18 @@ Euclidean distances between mean faces (genes in [0, 1]).
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
 
+from emogen.analysis.results import Section
 from emogen.errors import DataError
 
 if TYPE_CHECKING:
     from emogen.analysis.analyse_options import AnalysisOptions
     from emogen.analysis.people import People
-    from emogen.analysis.report import Report
 
 MIN_PER_GROUP = 3
 
@@ -138,15 +139,12 @@ def _bootstrap(
 
 
 def groups_section(
-    people: People,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    column: str = "group",
-) -> None:
+    people: People, folder: Path, opts: AnalysisOptions, column: str = "group"
+) -> Section:
     """The report's group comparison per emotion (nothing without a participant table)."""
+    report = Section(folder)
     if column not in people.participant_columns:
-        return
+        return report.tests_in_data()
     report.heading(f"Groups of participants ('{column}')")
     rng = np.random.default_rng(np.random.SeedSequence(opts.seed, spawn_key=(0x6A,)))
     rows, notes = [], []
@@ -174,4 +172,5 @@ def groups_section(
         report.table(
             table, "participant_groups", f"Groups ('{column}') per emotion: location and dispersion"
         )
-        summary["groups"] = rows
+        report.data["groups"] = rows
+    return report.tests_in_data()

@@ -21,6 +21,7 @@ depend on the identity it is made on? (Murray et al. 2024, *Emotion* 24:495.)
 from __future__ import annotations
 
 from itertools import permutations
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -29,7 +30,7 @@ from scipy import stats
 
 from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.people import People
-from emogen.analysis.report import Report
+from emogen.analysis.results import Section
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
@@ -198,14 +199,11 @@ def cross_identity_decoding(
 
 
 def identity_section(
-    people: People,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> None:
+    people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
+) -> Section:
     """Identity effects within participants: distances within against between identities, and
     cross-identity decoding of the emotion."""
+    report = Section(folder)
     del model  # nothing is rendered here
     report.heading("Identity effects")
     names = people.identity_names
@@ -214,7 +212,7 @@ def identity_section(
             f"Skipped: every face was made on one identity ({names[0] if names else 'none'}), "
             "so there is no identity effect to measure."
         )
-        return
+        return report.tests_in_data()
     rng = np.random.default_rng(opts.seed)
     out: dict[str, Any] = {}
     dist = identity_distances(people)
@@ -259,4 +257,5 @@ def identity_section(
     )
     report.table(dec, "identity_decoding", "Decoding the emotion across identities")
     out["decoding"] = dec.to_dict(orient="records")
-    summary["identity"] = out
+    report.data["identity"] = out
+    return report.tests_in_data()

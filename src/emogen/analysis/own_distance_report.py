@@ -17,14 +17,14 @@ from emogen.analysis.analyse_options import AnalysisOptions
 if TYPE_CHECKING:
     from emogen.analysis.categorisation_models import OwnDistance
     from emogen.analysis.people import People
-    from emogen.analysis.report import Report
+    from emogen.analysis.report import Content
 
 #: Shuffles (derangements of participants) of the report's shuffled-prototype control.
 SHUFFLES = 199
 
 
 def own_distance_section(
-    people: People, report: Report, out: dict[str, Any], opts: AnalysisOptions
+    people: People, report: Content, out: dict[str, Any], opts: AnalysisOptions
 ) -> None:
     """Fit the own-distance model of ``people`` and write it (``out["own_distance"]``)."""
     from emogen.analysis import categorisation_models as cm
@@ -60,7 +60,7 @@ def fit_problems(tests: dict[str, dict[str, Any]]) -> list[dict[str, str]]:
     return rows
 
 
-def _tables(report: Report, res: OwnDistance) -> None:
+def _tables(report: Content, res: OwnDistance) -> None:
     for table, name, caption in (
         (
             res.table,
@@ -80,7 +80,7 @@ def _tables(report: Report, res: OwnDistance) -> None:
         report.table(table.head(8), name, caption + note, data=table)
 
 
-def _method(report: Report, res: OwnDistance, opts: AnalysisOptions) -> None:
+def _method(report: Content, res: OwnDistance, opts: AnalysisOptions) -> None:
     p = res.primary
     report.paragraph(
         f"For each answer to a face the participant did not make (others' and random faces: "
@@ -106,13 +106,13 @@ def _slopes(t: dict[str, Any]) -> str:
     )
 
 
-def _say(report: Report, head: str, t: dict[str, Any], body: Callable[[], str]) -> None:
+def _say(report: Content, head: str, t: dict[str, Any], body: Callable[[], str]) -> None:
     """One test's paragraph: ``head`` then its result, or that it was not estimated and why."""
     text = body() if t["status"] == "ok" else f"**not estimated** — {t['reason']}."
     report.paragraph(head + text)
 
 
-def _primary(report: Report, p: dict[str, Any]) -> None:
+def _primary(report: Content, p: dict[str, Any]) -> None:
     head = (
         "Primary test — conditional logit (the label chosen among those offered; McFadden "
         "1974) on d_own, d_ref and one constant per label, pooled over answers, with two-way "
@@ -134,7 +134,7 @@ def _primary(report: Report, p: dict[str, Any]) -> None:
     )
 
 
-def _secondary(report: Report, res: OwnDistance, opts: AnalysisOptions) -> None:
+def _secondary(report: Content, res: OwnDistance, opts: AnalysisOptions) -> None:
     g, two, ctl = res.gee, res.two_stage, res.control
     _say(
         report,
@@ -175,7 +175,7 @@ def _secondary(report: Report, res: OwnDistance, opts: AnalysisOptions) -> None:
     )
 
 
-def _problems(report: Report, problems: list[dict[str, str]]) -> None:
+def _problems(report: Content, problems: list[dict[str, str]]) -> None:
     if not problems:
         report.paragraph("Every fit of the own-distance model converged, with no fallback.")
         return
@@ -186,7 +186,7 @@ def _problems(report: Report, problems: list[dict[str, str]]) -> None:
     report.bullets([f"{p['test']}: {p['outcome']} — {p['reason']}" for p in problems])
 
 
-def _figure(report: Report, res: OwnDistance) -> None:
+def _figure(report: Content, res: OwnDistance) -> None:
     from emogen.analysis.categorisation_figures import own_distance_figure
 
     path = own_distance_figure(res, report.figures / "categorisation_own_distance.png")

@@ -5,7 +5,7 @@ the unit.
 
 * ``faces``: one row per **finished** GA trial (``task = evolve``, status ``done``) — the face
   the participant ended with, as the export's ``final_faces`` table gives it (an export
-  written before that table: :func:`~emogen.analysis.study_export.derive_final_faces`).
+  written before that table: :meth:`~emogen.analysis.study_export.StudyExport.final_faces`).
   Columns: ``participant_id``, ``session_id``, ``trial``, ``block_name``, ``emotion``,
   ``identity``, ``repetition`` (0, 1, … : the how-many-th trial of this emotion on this
   identity the participant made), ``duration_s`` (the trial's first shown face to its end),
@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from emogen.analysis.study_export import TRIAL_KEY, read_final_faces, read_table
+from emogen.analysis.study_export import TRIAL_KEY, StudyExport
 from emogen.errors import ConfigError, DataError
 
 
@@ -51,6 +51,8 @@ class People:
     identities: pd.DataFrame | None = None
     #: columns joined from a participant table (empty without one)
     participant_columns: tuple[str, ...] = ()
+    #: the export they were read from (its other tables, read once); None: made in memory
+    export: StudyExport | None = None
 
     @property
     def emotions(self) -> tuple[str, ...]:
@@ -122,17 +124,12 @@ def read_participant_table(path: Path) -> pd.DataFrame:
     return table
 
 
-def _required(folder: Path, name: str) -> pd.DataFrame:
-    table = read_table(folder, name)
-    if table is None:  # read_table raised already; for the type checker
-        raise ConfigError(f"{folder} has no {name} table")
-    return table
-
-
-def load_people(folder: Path) -> People:
-    """The final faces and answers of a study export folder (see the module docstring)."""
-    folder = Path(folder)
-    trials, faces, selections = (_required(folder, n) for n in ("trials", "faces", "selections"))
+def load_people(source: Path | StudyExport) -> People:
+    """The final faces and answers of a study export (a folder, or one loaded already: its
+    tables are read once; see the module docstring)."""
+    export = source if isinstance(source, StudyExport) else StudyExport(source)
+    folder = export.folder
+    trials, faces, selections = (export.required(n) for n in ("trials", "faces", "selections"))
     need = {"session_id", "participant_id", "trial", "emotion", "status", "final_face_id"}
     missing = sorted(need - set(trials.columns))
     if missing:
@@ -144,7 +141,7 @@ def load_people(folder: Path) -> People:
     weights = tuple(c for c in faces.columns if str(c).startswith("w_"))
     if not genes and len(faces):
         raise DataError(f"{folder}/faces has no gene (g_*) columns: export the study again")
-    final = _final_faces(trials, read_final_faces(folder, trials, faces), faces, genes, weights)
+    final = _final_faces(trials, export.final_faces(), faces, genes, weights)
     return People(
         source=folder,
         faces=final,
@@ -152,10 +149,11 @@ def load_people(folder: Path) -> People:
         selections=selections,
         genes=genes,
         weights=weights,
-        responses=read_table(folder, "categorise_responses", required=False),
-        ratings=read_table(folder, "evolve_ratings", required=False),
-        sessions=read_table(folder, "sessions", required=False),
-        identities=read_table(folder, "identities", required=False),
+        responses=export.table("categorise_responses"),
+        ratings=export.table("evolve_ratings"),
+        sessions=export.table("sessions"),
+        identities=export.table("identities"),
+        export=export,
     )
 
 

@@ -1,9 +1,9 @@
 """The multiplicity plan of ``emogen analyse``: which tests are primary (named before the
 analysis: ``--primary``, default :data:`DEFAULT_PRIMARY`), every other test exploratory.
 
-Every test the report computes leaves a record in ``analysis.json`` (a dict with a p-value);
-:func:`plan_section` finds them all, marks each ``role`` = ``primary`` or ``exploratory`` in
-the JSON, adjusts the primary family by Holm (1979) — the only family-wise claim the report
+Every test the report computes is a :class:`~emogen.analysis.results.Result` of its section;
+:func:`plan_section` takes them all, marks each ``role`` = ``primary`` or ``exploratory`` (in
+the JSON too), adjusts the primary family by Holm (1979) — the only family-wise claim the report
 makes across sections — and writes one table of every test with its estimate and interval.
 Exploratory p-values are descriptive: each table's own correction (Holm over emotions, max-T
 over genes, …) controls that table only. A named primary test the data could not support is
@@ -12,15 +12,16 @@ listed as not run, with its reason, never dropped silently.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
+from emogen.analysis.results import Result, Section
 from emogen.errors import ConfigError
 
 if TYPE_CHECKING:
-    from emogen.analysis.report import Report
+    from pathlib import Path
 
 #: The primary test when none is named: the own-distance model's contrast (its primary fit).
 DEFAULT_PRIMARY = ("categorisation.own_distance.primary",)
@@ -40,8 +41,6 @@ PLANNABLE = (
     "spread_test",
     "spread_empirical",
 )
-_P = ("p", "p_perm", "p_t")
-_ESTIMATE = ("contrast", "difference", "mean_difference", "mean_contrast", "r", "excess")
 
 
 def check_primary(names: tuple[str, ...]) -> tuple[str, ...]:
@@ -57,61 +56,31 @@ def check_primary(names: tuple[str, ...]) -> tuple[str, ...]:
     return names
 
 
-def collect_tests(summary: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
-    """Every test record in ``summary`` (a dict with a p-value), with its dotted path; list
-    items are named by their ``emotion``/``group``/``space`` when they have one."""
-    found: list[tuple[str, dict[str, Any]]] = []
-
-    def walk(node: object, path: str) -> None:
-        if isinstance(node, dict):
-            if any(k in node for k in _P) and path:
-                found.append((path, node))
-            for key, value in node.items():
-                walk(value, f"{path}.{key}" if path else str(key))
-        elif isinstance(node, list):
-            for i, value in enumerate(node):
-                name = _item_name(value, i)
-                walk(value, f"{path}[{name}]")
-
-    walk({k: v for k, v in summary.items() if k != "plan"}, "")
-    return found
+def mark_roles(results: list[Result], primary: tuple[str, ...]) -> list[Result]:
+    """``results`` with each ``role`` set: primary where ``primary`` names it (or a name above
+    it), else exploratory (the records in ``analysis.json`` say so too)."""
+    return [
+        r.with_role("primary" if any(_under(r.name, n) for n in primary) else "exploratory")
+        for r in results
+    ]
 
 
-def _item_name(value: object, i: int) -> str:
-    if isinstance(value, dict):
-        for key in ("emotion", "group", "space", "contrast"):
-            if key in value:
-                return str(value[key])
-    return str(i)
-
-
-def _first(record: dict[str, Any], keys: tuple[str, ...]) -> Any:
-    for key in keys:
-        value = record.get(key)
-        if value is not None:
-            return value
-    return None
-
-
-def plan_table(summary: dict[str, Any], primary: tuple[str, ...]) -> pd.DataFrame:
+def plan_table(results: list[Result]) -> pd.DataFrame:
     """One row per test: ``test``, ``role``, ``p``, ``p_holm_primary`` (primary only),
     ``estimate``, ``ci_low``, ``ci_high``, ``effect_size`` (standardised, where the test gives
-    one); marks ``role`` in each record of ``summary``."""
-    rows = []
-    for path, record in collect_tests(summary):
-        role = "primary" if any(_under(path, name) for name in primary) else "exploratory"
-        record["role"] = role
-        rows.append(
-            {
-                "test": path,
-                "role": role,
-                "p": _first(record, _P),
-                "estimate": _first(record, _ESTIMATE),
-                "ci_low": record.get("ci_low"),
-                "ci_high": record.get("ci_high"),
-                "effect_size": _first(record, ("dz", "r")),
-            }
-        )
+    one); primary first."""
+    rows = [
+        {
+            "test": r.name,
+            "role": r.role,
+            "p": r.p,
+            "estimate": r.estimate,
+            "ci_low": None if r.interval is None else r.interval.low,
+            "ci_high": None if r.interval is None else r.interval.high,
+            "effect_size": None if r.effect_size is None else r.effect_size.value,
+        }
+        for r in results
+    ]
     table = pd.DataFrame(
         rows, columns=["test", "role", "p", "estimate", "ci_low", "ci_high", "effect_size"]
     )
@@ -140,18 +109,20 @@ def _holm(table: pd.DataFrame) -> pd.Series:
     return out
 
 
-def plan_section(report: Report, summary: dict[str, Any], primary: tuple[str, ...]) -> None:
-    """The report's multiplicity plan (``summary["plan"]``)."""
-    table = plan_table(summary, primary)
+def plan_section(results: list[Result], primary: tuple[str, ...], out: Path) -> Section:
+    """The report's multiplicity plan (``analysis.json``'s ``plan``) over every test of the
+    report (``results``, their roles set by :func:`mark_roles`)."""
+    sec = Section(out)
+    table = plan_table(results)
     missing = [n for n in primary if not any(_under(t, n) for t in table["test"])]
-    summary["plan"] = {
+    sec.data["plan"] = {
         "primary": list(primary),
         "not_run": missing,
         "tests": table.astype(object).where(table.notna(), None).to_dict(orient="records"),
     }
-    report.heading("Multiplicity plan: primary and exploratory tests")
+    sec.heading("Multiplicity plan: primary and exploratory tests")
     named = ", ".join(f"`{n}`" for n in primary) or "none"
-    report.paragraph(
+    sec.paragraph(
         f"Primary test(s), named before the analysis (`--primary`): {named}; the family-wise "
         "error over them is held by Holm's method (`p_holm_primary`). Every other test is "
         "exploratory: its p-value describes, and its own table's correction (where it has "
@@ -160,8 +131,9 @@ def plan_section(report: Report, summary: dict[str, Any], primary: tuple[str, ..
         "difference over the SD of the participants' differences; r)."
     )
     if missing:
-        report.paragraph(
+        sec.paragraph(
             "**Named primary test(s) not run** (the data could not support them; their "
             "sections say why): " + ", ".join(f"`{n}`" for n in missing) + "."
         )
-    report.table(table, "plan", f"Every test of this report ({len(table)}), primary first")
+    sec.table(table, "plan", f"Every test of this report ({len(table)}), primary first")
+    return sec

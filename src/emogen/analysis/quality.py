@@ -28,7 +28,6 @@ import numpy as np
 import pandas as pd
 
 from emogen.analysis.people import People
-from emogen.analysis.study_export import read_table
 from emogen.errors import ConfigError
 
 PICK_KEY = ["session_id", "trial", "attempt", "generation", "face_id"]
@@ -42,9 +41,7 @@ def selection_positions(people: People) -> pd.DataFrame | None:
         return None
     tiles = sel["position"].max() if "position" in sel.columns else np.nan
     if "position" not in sel.columns:
-        faces = (
-            read_table(people.source, "faces", required=False) if people.source.is_dir() else None
-        )
+        faces = None if people.export is None else people.export.table("faces")
         if faces is None or "position" not in faces.columns:
             return None
         sel = sel.merge(faces[[*PICK_KEY, "position"]], on=PICK_KEY, how="left")

@@ -11,7 +11,7 @@ from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.exclusions import ExclusionRule, apply_exclusions
 from emogen.analysis.people import People
 from emogen.analysis.quality import participant_quality, position_bias, selection_positions
-from emogen.analysis.report import Report
+from emogen.analysis.report import Content
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
@@ -22,7 +22,7 @@ DRAWS = 2000
 
 def quality_section(
     people: People,
-    report: Report,
+    report: Content,
     summary: dict[str, Any],
     opts: AnalysisOptions,
     model: FaceModel | None,
@@ -73,7 +73,7 @@ def quality_section(
     return table
 
 
-def _position(people: People, report: Report, opts: AnalysisOptions, out: dict) -> None:
+def _position(people: People, report: Content, opts: AnalysisOptions, out: dict) -> None:
     sel = selection_positions(people)
     if sel is None or sel["position"].isna().all():
         report.paragraph(

@@ -3,6 +3,7 @@ identity, in three spaces (:mod:`emogen.analysis.reliability`)."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -18,12 +19,12 @@ from emogen.analysis.reliability import (
     icc_interval,
     split_half,
 )
+from emogen.analysis.results import Section
 from emogen.errors import DataError
 
 if TYPE_CHECKING:
     from emogen.analysis.analyse_options import AnalysisOptions
     from emogen.analysis.people import People
-    from emogen.analysis.report import Report
     from emogen.model.face import FaceModel
 
 #: Fewer participants: no interval (the jackknife's t approximation is untested below 10).
@@ -101,12 +102,9 @@ def reliability_table(
 
 
 def reliability_section(
-    people: People,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> None:
+    people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
+) -> Section:
+    report = Section(folder)
     report.heading("Test–retest reliability")
     reps = people.faces.groupby(["participant_id", "emotion", "identity"]).size()
     if reps.empty or reps.max() < 2:
@@ -114,18 +112,18 @@ def reliability_section(
             "No reliability: every participant made each emotion on each identity once "
             "(repetitions = 1); a test–retest analysis needs repeated trials of an emotion."
         )
-        return
+        return report.tests_in_data()
     rng = np.random.default_rng(np.random.SeedSequence(opts.seed, spawn_key=(0x2E1,)))
     try:
         table = reliability_table(people, model, rng=rng)
     except DataError as exc:
         report.paragraph(f"No reliability: {exc}.")
-        return
+        return report.tests_in_data()
     if table.empty:
         report.paragraph(
             "No reliability: fewer than 2 participants made any emotion twice on one identity."
         )
-        return
+        return report.tests_in_data()
     report.paragraph(_method(opts, model))
     shown = table[
         [
@@ -152,7 +150,7 @@ def reliability_section(
         "over participants, per emotion × identity and space.",
     )
     ed = table[table["space"] == "ed"]
-    summary["reliability"] = {
+    report.data["reliability"] = {
         f"{r.emotion} / {r.identity}": {
             "icc": r.icc,
             "ci": [r.icc_low, r.icc_high],
@@ -161,6 +159,7 @@ def reliability_section(
         for r in ed.itertuples()
     }
     report.paragraph(_floor_text(table))
+    return report.tests_in_data()
 
 
 def _method(opts: AnalysisOptions, model: FaceModel | None) -> str:

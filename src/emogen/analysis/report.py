@@ -94,6 +94,9 @@ class _Table:
     df: pd.DataFrame
     caption: str
     name: str | None
+    #: the table for machines (``tables/<name>.csv``); None: not written
+    machine: pd.DataFrame | None = None
+    shown: bool = True
 
 
 @dataclass(frozen=True)
@@ -106,14 +109,13 @@ Block = _Heading | _Paragraph | _Bullets | _Table | _Figure
 
 
 @dataclass
-class Report:
-    """Build with :meth:`heading`, :meth:`paragraph`, :meth:`bullets`, :meth:`table`,
-    :meth:`figure`; :meth:`write` puts ``index.html`` and ``README.md`` in ``out``."""
+class Content:
+    """A report's content, built with :meth:`heading`, :meth:`paragraph`, :meth:`bullets`,
+    :meth:`table`, :meth:`csv` and :meth:`figure`; figures are saved under ``out/figures`` by
+    whoever makes them, tables are written when the content is (:func:`write_tables`)."""
 
-    title: str
     out: Path
     blocks: list[Block] = field(default_factory=list)
-    tables: dict[str, Path] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.out = Path(self.out)
@@ -123,6 +125,15 @@ class Report:
     @property
     def figures(self) -> Path:
         return self.out / "figures"
+
+    @property
+    def tables(self) -> dict[str, Path]:
+        """The CSV file of each named table, by name."""
+        return {
+            b.name: self.out / "tables" / f"{b.name}.csv"
+            for b in self.blocks
+            if isinstance(b, _Table) and b.name is not None and b.machine is not None
+        }
 
     def heading(self, text: str, level: int = 2) -> None:
         self.blocks.append(_Heading(level, text))
@@ -150,82 +161,106 @@ class Report:
         """A table in the report; with ``name`` also ``tables/<name>.csv``: ``data`` (else the
         table) for machines, full precision, long format with identifier headers
         (:func:`emogen.columns.machine_table`; ``index``: a matrix, written long)."""
+        machine = None
         if name is not None:
-            path = self.out / "tables" / f"{name}.csv"
             machine = tidy.machine_table(df if data is None else data, index=index and data is None)
-            tidy.write_csv(machine, path, col_types=True)
-            self.tables[name] = path
         shown = df.reset_index() if index else df
-        self.blocks.append(_Table(shown, caption, name))
+        self.blocks.append(_Table(shown, caption, name, machine))
+
+    def csv(self, frame: pd.DataFrame, name: str) -> None:
+        """``tables/<name>.csv`` written as ``frame`` is, not shown in the report (too many
+        rows, or a table for machines only)."""
+        self.blocks.append(_Table(frame, "", name, frame, shown=False))
 
     def figure(self, path: Path, caption: str = "") -> None:
         rel = Path(path).resolve().relative_to(self.out.resolve())
         self.blocks.append(_Figure(rel.as_posix(), caption))
 
-    # ---- writing ---------------------------------------------------------------------------
-    def _html(self) -> str:
-        parts = [
-            "<!doctype html>",
-            '<html lang="en"><head><meta charset="utf-8">',
-            f"<title>{html.escape(self.title)}</title><style>{CSS}</style></head><body>",
-            f"<h1>{html.escape(self.title)}</h1>",
-        ]
-        for b in self.blocks:
-            if isinstance(b, _Heading):
-                parts.append(f"<h{b.level}>{_inline_html(b.text)}</h{b.level}>")
-            elif isinstance(b, _Paragraph):
-                parts.append(f"<p>{_inline_html(b.text)}</p>")
-            elif isinstance(b, _Bullets):
-                items = "".join(f"<li>{_inline_html(i)}</li>" for i in b.items)
-                parts.append(f"<ul>{items}</ul>")
-            elif isinstance(b, _Table):
-                head = "".join(f"<th>{html.escape(str(c))}</th>" for c in b.df.columns)
-                body = "".join(
-                    "<tr>" + "".join(_cell(v) for v in row) + "</tr>"
-                    for row in b.df.itertuples(index=False)
-                )
-                link = f' <a class="csv" href="tables/{b.name}.csv">CSV</a>' if b.name else ""
-                cap = (
-                    f"<caption>{_inline_html(b.caption)}{link}</caption>"
-                    if b.caption or b.name
-                    else ""
-                )
-                parts.append(
-                    f"<table>{cap}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
-                )
-            else:
-                parts.append(
-                    f'<figure><img src="{html.escape(b.src)}" alt="{html.escape(b.caption)}">'
-                    f"<figcaption>{_inline_html(b.caption)}</figcaption></figure>"
-                )
-        parts.append("</body></html>")
-        return "\n".join(parts) + "\n"
 
-    def _markdown(self) -> str:
-        lines = [f"# {self.title}", ""]
-        for b in self.blocks:
-            if isinstance(b, _Heading):
-                lines += ["#" * b.level + " " + b.text, ""]
-            elif isinstance(b, _Paragraph):
-                lines += [b.text, ""]
-            elif isinstance(b, _Bullets):
-                lines += [f"* {i}" for i in b.items] + [""]
-            elif isinstance(b, _Table):
-                if b.caption or b.name:
-                    link = f" ([CSV](tables/{b.name}.csv))" if b.name else ""
-                    lines += [f"*{b.caption}*{link}" if b.caption else link.strip(), ""]
-                lines.append("| " + " | ".join(_md_cell(str(c)) for c in b.df.columns) + " |")
-                lines.append("|" + "---|" * len(b.df.columns))
-                for row in b.df.itertuples(index=False):
-                    lines.append("| " + " | ".join(_md_cell(fmt(v)) for v in row) + " |")
-                lines.append("")
-            else:
-                lines += [f"![{b.caption}]({b.src})", "", f"*{b.caption}*", ""]
-        return "\n".join(lines)
+class Report(Content):
+    """A whole report: its title and content; :meth:`write` puts ``index.html`` and
+    ``README.md`` in ``out`` and every named table under ``tables/``."""
+
+    def __init__(self, title: str, out: Path) -> None:
+        super().__init__(Path(out))
+        self.title = title
 
     def write(self) -> tuple[Path, Path]:
-        html_path = self.out / "index.html"
-        md_path = self.out / "README.md"
-        html_path.write_text(self._html())
-        md_path.write_text(self._markdown())
-        return html_path, md_path
+        return write_pages(self.title, self.out, self.blocks)
+
+
+def write_tables(out: Path, blocks: list[Block]) -> None:
+    """Every named table of ``blocks`` as ``out/tables/<name>.csv`` (with its readr types)."""
+    for b in blocks:
+        if isinstance(b, _Table) and b.name is not None and b.machine is not None:
+            tidy.write_csv(b.machine, Path(out) / "tables" / f"{b.name}.csv", col_types=True)
+
+
+def write_pages(title: str, out: Path, blocks: list[Block]) -> tuple[Path, Path]:
+    """``blocks`` as ``index.html`` and ``README.md`` in ``out``, their tables as CSV."""
+    write_tables(out, blocks)
+    shown = [b for b in blocks if not (isinstance(b, _Table) and not b.shown)]
+    html_path = Path(out) / "index.html"
+    md_path = Path(out) / "README.md"
+    html_path.write_text(_html(title, shown))
+    md_path.write_text(_markdown(title, shown))
+    return html_path, md_path
+
+
+# ---- writing -------------------------------------------------------------------------------
+def _html(title: str, blocks: list[Block]) -> str:
+    parts = [
+        "<!doctype html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        f"<title>{html.escape(title)}</title><style>{CSS}</style></head><body>",
+        f"<h1>{html.escape(title)}</h1>",
+    ]
+    for b in blocks:
+        if isinstance(b, _Heading):
+            parts.append(f"<h{b.level}>{_inline_html(b.text)}</h{b.level}>")
+        elif isinstance(b, _Paragraph):
+            parts.append(f"<p>{_inline_html(b.text)}</p>")
+        elif isinstance(b, _Bullets):
+            items = "".join(f"<li>{_inline_html(i)}</li>" for i in b.items)
+            parts.append(f"<ul>{items}</ul>")
+        elif isinstance(b, _Table):
+            head = "".join(f"<th>{html.escape(str(c))}</th>" for c in b.df.columns)
+            body = "".join(
+                "<tr>" + "".join(_cell(v) for v in row) + "</tr>"
+                for row in b.df.itertuples(index=False)
+            )
+            link = f' <a class="csv" href="tables/{b.name}.csv">CSV</a>' if b.name else ""
+            cap = (
+                f"<caption>{_inline_html(b.caption)}{link}</caption>" if b.caption or b.name else ""
+            )
+            parts.append(f"<table>{cap}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
+        else:
+            parts.append(
+                f'<figure><img src="{html.escape(b.src)}" alt="{html.escape(b.caption)}">'
+                f"<figcaption>{_inline_html(b.caption)}</figcaption></figure>"
+            )
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"
+
+
+def _markdown(title: str, blocks: list[Block]) -> str:
+    lines = [f"# {title}", ""]
+    for b in blocks:
+        if isinstance(b, _Heading):
+            lines += ["#" * b.level + " " + b.text, ""]
+        elif isinstance(b, _Paragraph):
+            lines += [b.text, ""]
+        elif isinstance(b, _Bullets):
+            lines += [f"* {i}" for i in b.items] + [""]
+        elif isinstance(b, _Table):
+            if b.caption or b.name:
+                link = f" ([CSV](tables/{b.name}.csv))" if b.name else ""
+                lines += [f"*{b.caption}*{link}" if b.caption else link.strip(), ""]
+            lines.append("| " + " | ".join(_md_cell(str(c)) for c in b.df.columns) + " |")
+            lines.append("|" + "---|" * len(b.df.columns))
+            for row in b.df.itertuples(index=False):
+                lines.append("| " + " | ".join(_md_cell(fmt(v)) for v in row) + " |")
+            lines.append("")
+        else:
+            lines += [f"![{b.caption}]({b.src})", "", f"*{b.caption}*", ""]
+    return "\n".join(lines)

@@ -13,18 +13,19 @@ report says which is which.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from emogen.analysis.people import People
 from emogen.analysis.reliability import components, icc_interval
+from emogen.analysis.results import Section
 from emogen.errors import DataError
 
 if TYPE_CHECKING:
     from emogen.analysis.analyse_options import AnalysisOptions
-    from emogen.analysis.report import Report
     from emogen.model import FaceModel
 
 COLUMNS = (
@@ -117,16 +118,13 @@ def retest_text(table: pd.DataFrame, level: float = 0.95) -> str:
 
 
 def retest_section(
-    people: People,
-    report: Report,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> None:
+    people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
+) -> Section:
     """``emogen analyse FIRST RETEST``: the between-session section, the retest export read
     with the same exclusion rule as the first (nothing where no retest export is given)."""
+    report = Section(folder)
     if opts.retest is None:
-        return
+        return report.tests_in_data()
     from emogen.analysis.exclusions import apply_exclusions
     from emogen.analysis.people import load_people
     from emogen.errors import EmoGenError
@@ -140,14 +138,15 @@ def retest_section(
         table = retest_table(people, second)
     except EmoGenError as exc:
         report.paragraph(f"No between-session reliability from {opts.retest}: {exc}.")
-        return
+        return report.tests_in_data()
     report.paragraph(
         f"The retest export {opts.retest.name}: {second.n_participants} participants "
         f"analysed ({everyone - second.n_participants} excluded by the same rule).\n\n"
         f"{retest_text(table)}"
     )
     report.table(table, "retest", "Between-session ICC per emotion × identity (genes)")
-    summary["retest"] = {
+    report.data["retest"] = {
         "reported": "between-session ICC(1) of the participants' mean final faces (genes)",
         "cells": table.to_dict("records"),
     }
+    return report.tests_in_data()

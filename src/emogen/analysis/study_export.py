@@ -4,9 +4,12 @@
   export written before schema ``emogen.study/6``, under its old name (``responses`` is now
   ``categorise_responses``, ``ratings`` now ``evolve_ratings``:
   :data:`emogen.study.export.FORMERLY`).
-* :func:`read_final_faces`: the ``final_faces`` table (one row per finished evolve trial: its
-  final face's genes and weights). Exports written before it existed get it from
-  :func:`derive_final_faces` — the one place the analysis derives a final face.
+* :class:`StudyExport`: the one loaded export of an analysis — each table read once, on first
+  use, and handed to every part of ``emogen analyse`` that needs it;
+* :meth:`StudyExport.final_faces`: the ``final_faces`` table (one row per finished evolve
+  trial: its final face's genes and weights). Exports written before it existed get it from
+  :func:`derive_final_faces` — the one place the analysis derives a final face, once per
+  export.
 """
 
 from __future__ import annotations
@@ -41,9 +44,7 @@ def read_table(folder: Path, name: str, required: bool = True) -> pd.DataFrame |
     path = table_path(folder, name)
     if path is None:
         if required:
-            raise ConfigError(
-                f"{folder} has no {name}.parquet or {name}.csv (a study export's table)"
-            )
+            raise _absent(folder, name)
         return None
     try:
         return pd.read_parquet(path) if path.suffix == ".parquet" else tidy.read_csv(path)
@@ -51,11 +52,57 @@ def read_table(folder: Path, name: str, required: bool = True) -> pd.DataFrame |
         raise ConfigError(f"cannot read {path}: {exc}") from None
 
 
-def read_final_faces(folder: Path, trials: pd.DataFrame, faces: pd.DataFrame) -> pd.DataFrame:
-    """The export's ``final_faces`` table; for an export without one (written before it
-    existed), :func:`derive_final_faces` of its ``trials`` and ``faces``."""
-    table = read_table(folder, "final_faces", required=False)
-    return derive_final_faces(trials, faces) if table is None else table
+def _absent(folder: Path, name: str) -> ConfigError:
+    return ConfigError(f"{folder} has no {name}.parquet or {name}.csv (a study export's table)")
+
+
+def read_output(folder: Path, name: str, required: bool = True) -> pd.DataFrame | None:
+    """As :func:`read_table`, but a CSV cell that does not fit its column's type is read
+    untyped (the export's checks then name it, with its row)."""
+    path = table_path(folder, name)
+    if path is None or path.suffix == ".parquet":
+        return read_table(folder, name, required)
+    try:
+        try:
+            return tidy.read_csv(path)
+        except ConfigError:  # a cell that does not fit its column's type:
+            return pd.read_csv(path)  # the checks name it, with its row
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"cannot read {path}: {exc}") from None
+
+
+class StudyExport:
+    """A study export folder as the analysis reads it: each table read once, on first use
+    (:func:`read_output`), the same frame for every reader — readers must not change it."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = Path(folder)
+        self._tables: dict[str, pd.DataFrame | None] = {}
+        self._final: pd.DataFrame | None = None
+
+    def table(self, name: str) -> pd.DataFrame | None:
+        """The table ``name`` (None when the export has none)."""
+        if name not in self._tables:
+            self._tables[name] = read_output(self.folder, name, required=False)
+        return self._tables[name]
+
+    def required(self, name: str) -> pd.DataFrame:
+        """The table ``name``; an error naming it when the export has none."""
+        table = self.table(name)
+        if table is None:
+            raise _absent(self.folder, name)
+        return table
+
+    def final_faces(self) -> pd.DataFrame:
+        """The export's ``final_faces``; for an export without one (written before it existed),
+        :func:`derive_final_faces` of its ``trials``, ``faces`` and ``selections`` — once."""
+        if self._final is None:
+            table = self.table("final_faces")
+            if table is None:
+                trials, faces = self.required("trials"), self.required("faces")
+                table = derive_final_faces(trials, faces, self.table("selections"))
+            self._final = table
+        return self._final
 
 
 def derive_final_faces(

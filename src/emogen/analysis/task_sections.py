@@ -2,8 +2,11 @@
 ``analysis_section(tools, summary)``, :mod:`emogen.tasks.protocol`).
 
 Tasks sit below the analysis in the package's layers, so a task's section does not import it:
-it is handed :class:`TaskTools` — the export's tables, the report, new figures saved in the
-report's formats, faces drawn as participants saw them — and fills ``summary`` under its name.
+it is handed :class:`TaskTools` — the export's tables (the analysis's one loaded export), its
+section of the report, new figures saved in the report's formats, faces drawn as participants
+saw them — and fills ``summary`` under its name. Its section is one
+:class:`~emogen.analysis.results.Section` of the report: its records with a p-value become
+typed results, in the multiplicity plan like every other test.
 """
 
 from __future__ import annotations
@@ -16,7 +19,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from emogen.analysis import plots
-from emogen.analysis.study_export import read_table
+from emogen.analysis.results import Section, section_of
+from emogen.analysis.study_export import StudyExport
 from emogen.tasks.registry import TASKS
 
 if TYPE_CHECKING:
@@ -24,7 +28,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from emogen.analysis.analyse_options import AnalysisOptions
-    from emogen.analysis.report import Report
+    from emogen.analysis.report import Content
     from emogen.model.face import FaceModel
 
 
@@ -32,14 +36,14 @@ if TYPE_CHECKING:
 class TaskTools:
     """What a task's analysis section works with."""
 
-    source: Path
-    report: Report
+    export: StudyExport
+    report: Content
     opts: AnalysisOptions
     model: FaceModel | None
 
     def table(self, name: str) -> pd.DataFrame | None:
         """The study export's table ``name`` (None where the export has none)."""
-        return read_table(self.source, name, required=False)
+        return self.export.table(name)
 
     def new_figure(self, width: float, height: float) -> Figure:
         return plots.new_figure(width, height)
@@ -98,10 +102,30 @@ class TaskTools:
         return None
 
 
-def task_sections(tools: TaskTools, summary: dict[str, Any], step: Callable[[str], None]) -> None:
-    """Every registered task's own section, where it has one."""
+def task_sections(
+    export: StudyExport,
+    out: Path,
+    opts: AnalysisOptions,
+    model: FaceModel | None,
+    step: Callable[[str], None],
+) -> list[Section]:
+    """Every registered task's own section, where it has one: each fills a :class:`Section`
+    (its content through :class:`TaskTools`, its entries of ``analysis.json`` in ``summary``;
+    its tests — records with a p-value — become the section's results)."""
+    sections = []
     for task in TASKS.values():
-        section = getattr(task, "analysis_section", None)
-        if section is not None:
+        fill = getattr(task, "analysis_section", None)
+        if fill is not None:
             step(f"{task.name} blocks")
-            section(tools, summary)
+            sections.append(section_of(_with_tools(fill, export, opts, model), out))
+    return sections
+
+
+def _with_tools(
+    fill: Callable[[TaskTools, dict[str, Any]], None],
+    export: StudyExport,
+    opts: AnalysisOptions,
+    model: FaceModel | None,
+) -> Callable[[Content, dict[str, Any]], None]:
+    """A task's ``analysis_section(tools, summary)`` as ``fill(report, summary)``."""
+    return lambda report, summary: fill(TaskTools(export, report, opts, model), summary)

@@ -1,0 +1,185 @@
+"""``emogen analyse``'s results type and its one renderer (emogen.analysis.results): a test's
+record read into a typed Result (its fields checked against the record written by hand), the
+report written from sections (HTML, Markdown, CSV, JSON), and — on a planted study — the
+numbers and the report's text equal to main's before the change (tests/data/analyse_planted.*,
+written by tests/data/makers/analyse_planted.py at the commit tests/data/README.md names)."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+import pytest
+from benchmarks.planted_study import PlantedDesign, write_planted_study
+
+from emogen.analysis.analyse import AnalysisOptions, analyse
+from emogen.analysis.plan import mark_roles, plan_section
+from emogen.analysis.results import (
+    HypothesisTest,
+    Interval,
+    Section,
+    records_in,
+    result_of,
+    section_of,
+    write_analysis,
+)
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+#: The planted study and options of tests/data/analyse_planted.* (its maker imports them).
+DESIGN = PlantedDesign(participants=10, own_weight=0.6, distinctness_sd=0.3)
+SEED = 3
+OPTIONS = AnalysisOptions(render=False, noise_runs=20, noise_draws=200)
+
+OWN_ADVANTAGE = {
+    "test": "paired t",
+    "unit": "participant",
+    "n_participants": 12,
+    "difference": 0.1,
+    "ci_low": 0.02,
+    "ci_high": 0.18,
+    "confidence": 0.9,
+    "t": 2.6,
+    "df": 11,
+    "p": 0.025,
+    "dz": 0.75,
+    "dz_low": 0.1,
+    "dz_high": 1.4,
+}
+
+
+def test_a_record_becomes_a_typed_result() -> None:
+    r = result_of("categorisation.own_advantage", OWN_ADVANTAGE)
+    assert r.test == HypothesisTest(name="paired t", p=0.025, statistic=2.6, df=11.0)
+    assert r.estimate == 0.1
+    assert r.interval == Interval(0.02, 0.18, 0.9)
+    assert (r.unit, r.n, r.family, r.role, r.fit) == (
+        "participant",
+        12,
+        "categorisation.own_advantage",
+        "exploratory",
+        "ok",
+    )
+    assert r.effect_size is not None
+    assert (r.effect_size.name, r.effect_size.value) == ("dz", 0.75)
+    assert r.effect_size.interval == Interval(0.1, 1.4, 0.9)
+
+
+def test_a_failed_fit_keeps_its_reason_and_no_made_up_numbers() -> None:
+    record = {
+        "model": "GEE",
+        "status": "fallback",
+        "reason": "exchangeable correlation diverged",
+        "warnings": ["exchangeable correlation diverged; independence used"],
+        "contrast": -1.2,
+        "ci_low": float("nan"),
+        "ci_high": 0.3,
+        "z": float("nan"),
+        "p": 0.2,
+    }
+    r = result_of("categorisation.own_distance.gee", record, unit="answer")
+    assert r.fit == "fallback"
+    assert r.warnings == ("exchangeable correlation diverged; independence used",)
+    assert r.interval is None  # one bound is not a number: no interval
+    assert r.test is not None and r.test.statistic is None and r.test.p == 0.2
+    assert r.unit == "answer" and r.n is None and r.effect_size is None
+    # a record that does not give its interval's level: the level is not guessed
+    bare = result_of("x", {"p": 0.1, "ci_low": 0.0, "ci_high": 1.0})
+    assert bare.interval == Interval(0.0, 1.0, None)
+
+
+def test_records_are_named_by_their_place_and_item() -> None:
+    data = {
+        "spread_test": [{"group": "happy", "p": 0.2}, {"group": "sad", "p": 0.01}],
+        "conditions": {"emotion": {"p": 0.001}, "note": "x", "n": 3},
+        "categorisation": {"hit_rates": [{"p": 0.5}]},
+    }
+    names = [n for n, _ in records_in(data)]
+    assert names == [
+        "spread_test[happy]",
+        "spread_test[sad]",
+        "conditions.emotion",
+        "categorisation.hit_rates[0]",
+    ]
+    families = {result_of(n, r).family for n, r in records_in(data)}
+    assert families == {"spread_test", "conditions.emotion", "categorisation.hit_rates"}
+
+
+def _one_section(out: Path) -> Section:
+    def fill(report: Any, summary: dict[str, Any]) -> None:
+        report.heading("Own vs others")
+        report.paragraph("The participant is the **unit**.")
+        report.table(pd.DataFrame({"group": ["a", "b"], "mean": [0.5, 0.25]}), "means", "Means")
+        report.csv(pd.DataFrame({"x": [1, 2, 3]}), "hidden")
+        summary["categorisation"] = {"own_advantage": dict(OWN_ADVANTAGE)}
+
+    return section_of(fill, out)
+
+
+def test_the_renderer_writes_every_format_from_the_sections(tmp_path: Path) -> None:
+    sec = _one_section(tmp_path)
+    results = mark_roles(sec.results, ("categorisation.own_advantage",))
+    plan = plan_section(results, ("categorisation.own_advantage",), tmp_path)
+    html, md, js = write_analysis("T", tmp_path, [sec, plan], {"source": "here"})
+    data = json.loads(js.read_text())
+    assert list(data) == ["source", "categorisation", "plan"]
+    assert data["categorisation"]["own_advantage"]["role"] == "primary"
+    (row,) = data["plan"]["tests"]
+    assert row["test"] == "categorisation.own_advantage" and row["p_holm_primary"] == 0.025
+    assert (row["estimate"], row["ci_low"], row["ci_high"], row["effect_size"]) == (
+        0.1,
+        0.02,
+        0.18,
+        0.75,
+    )
+    text = md.read_text()
+    assert "## Own vs others" in text and "| a | 0.500 |" in text
+    assert "hidden" not in text and "hidden" not in html.read_text()  # CSV only
+    assert "<strong>unit</strong>" in html.read_text()
+    assert (tmp_path / "tables" / "hidden.csv").read_text().splitlines() == ["x", "1", "2", "3"]
+    assert pd.read_csv(tmp_path / "tables" / "means.csv")["mean"].tolist() == [0.5, 0.25]
+    assert "means" in (tmp_path / "tables" / "col_types.csv").read_text()
+
+
+def _numbers_equal(main: object, new: object, path: str = "") -> list[str]:
+    """Where ``new`` differs from ``main``: keys, lengths, text, or numbers beyond a relative
+    1e-7 (another machine's rounding)."""
+    if isinstance(main, dict):
+        if not isinstance(new, dict) or list(main) != list(new):
+            return [f"{path}: keys {list(main)} != {list(new) if isinstance(new, dict) else new}"]
+        return [d for k in main for d in _numbers_equal(main[k], new[k], f"{path}.{k}")]
+    if isinstance(main, list):
+        if not isinstance(new, list) or len(main) != len(new):
+            return [f"{path}: length"]
+        return [d for i, (a, b) in enumerate(zip(main, new, strict=True)) for d in
+                _numbers_equal(a, b, f"{path}[{i}]")]  # fmt: skip
+    if isinstance(main, float) and isinstance(new, int | float):
+        same = math.isclose(main, new, rel_tol=1e-7, abs_tol=1e-12)
+        return [] if same or (math.isnan(main) and math.isnan(new)) else [f"{path}: {main} {new}"]
+    return [] if main == new else [f"{path}: {main!r} != {new!r}"]
+
+
+def _masked(text: str) -> list[str]:
+    """The report's lines with every number masked (a last digit may round differently)."""
+    return [re.sub(r"\d[\d.,]*(e[+-]?\d+)?", "#", line) for line in text.splitlines()]
+
+
+@pytest.mark.slow
+def test_a_planted_study_gives_mains_numbers_and_report(tmp_path: Path) -> None:
+    export = write_planted_study(DESIGN, tmp_path / "export", seed=SEED)
+    result = analyse(export, tmp_path / "report", options=OPTIONS)
+    new = json.loads((result.out / "analysis.json").read_text().replace(str(export), "EXPORT"))
+    main = json.loads((DATA / "analyse_planted.json").read_text())
+    assert _numbers_equal(main, new) == []
+    assert result.summary["plan"] == new["plan"]
+    md = result.markdown.read_text().replace(str(export), "EXPORT")
+    assert _masked(md) == _masked((DATA / "analyse_planted.md").read_text())
+    by_name = {r.name: r for r in result.results}
+    assert [t["test"] for t in main["plan"]["tests"]] == sorted(
+        by_name, key=lambda n: by_name[n].role != "primary"
+    )
+    primary = by_name["categorisation.own_distance.primary"]
+    assert primary.role == "primary" and primary.unit.startswith("participant")
