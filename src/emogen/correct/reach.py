@@ -15,7 +15,7 @@ drivers, its right twin the mirrored ones; the neutral is left/right symmetric, 
 mirror each other (tested against the mesh's mirror map). All lengths are centimetres, model
 axes: x to the subject's left, y up, z forward.
 
-Version 1 (``[reach] version = 1`` in the rig; rig 2, ``ict_rig.toml``):
+Version 1 (``[reach] version = 1`` in the rig; rig 2, ``ict_rig_2.toml``):
 
 ==========================  ========================  =============================================
 name (per side)             drivers                   offsets
@@ -36,6 +36,19 @@ name (per side)             drivers                   offsets
                                                       tightened)
 ``reach_lipStretch``        mouthStretch              0.6 × mouthStretch's sideways offset, 0.2 ×
                                                       its vertical, 0.3 × its backward (AU20)
+==========================  ========================  =============================================
+
+Version 2 (rig 3, ``ict_rig.toml``): version 1 and two more, for the mouths the emotion
+prototypes lacked (FACS AU12 at E with AU25: the upper lip drawn up off the upper teeth; AU23:
+the lips narrowed and their red thinned):
+
+==========================  ========================  =============================================
+``reach_smileOpen``         mouthSmile ×              0.4 × (mouthUpperUp − mouthLowerDown): the
+                            mouthLowerDown            lips part by raising the upper lip as well
+                                                      as lowering the lower, showing upper teeth
+``reach_lipTightener``      mouthPress                0.5 × (mouthRollUpper + mouthRollLower),
+                                                      each unpaired shape made mirror-symmetric
+                                                      and split into sides that sum to the whole
 ==========================  ========================  =============================================
 """
 
@@ -61,7 +74,7 @@ ALA = {+1: 35, -1: 31}
 CORNER = {+1: 54, -1: 48}
 SIDE = {+1: "_L", -1: "_R"}
 MIRROR = np.array([-1.0, 1.0, 1.0])
-REACH_VERSIONS = (1,)
+REACH_VERSIONS = (1, 2)
 REACH_PREFIX = "reach_"  # every reach shape's name starts so
 
 
@@ -124,6 +137,14 @@ class _Builder:
         own, twin = self.delta(shape + SIDE[s]), self.delta(shape + SIDE[-s])
         mean = (own + twin[self.mirror] * MIRROR) / 2
         return np.where(self.mirrored[:, None], mean, own)
+
+    def side_of(self, shape: str, s: int) -> np.ndarray:
+        """Side ``s`` of an unpaired (whole-mouth) shape: made mirror-symmetric, then weighted
+        across the midline so that the two sides' halves sum to the whole shape."""
+        own = self.delta(shape)
+        mean = (own + own[self.mirror] * MIRROR) / 2
+        whole = np.where(self.mirrored[:, None], mean, own)
+        return whole * smoothstep(-0.3, 0.3, s * self.neutral[:, 0])[:, None]
 
     def field(self, values: np.ndarray) -> np.ndarray:
         """Offsets (V, 3) confined to the face mesh (not the eyes, teeth or head)."""
@@ -194,6 +215,14 @@ def _lip_stretch(b: _Builder, s: int) -> np.ndarray:
     return b.symmetric("mouthStretch", s) * np.array([0.6, 0.2, 0.3])
 
 
+def _smile_open(b: _Builder, s: int) -> np.ndarray:
+    return 0.4 * (b.symmetric("mouthUpperUp", s) - b.symmetric("mouthLowerDown", s))
+
+
+def _lip_tightener(b: _Builder, s: int) -> np.ndarray:
+    return 0.5 * (b.side_of("mouthRollUpper", s) + b.side_of("mouthRollLower", s))
+
+
 #: version 1: (name, drivers without side, builder(builder, side))
 VERSION_1: tuple[tuple[str, tuple[str, ...], Callable[[_Builder, int], np.ndarray]], ...] = (
     ("reach_browDown", ("browDown",), _brow_down),
@@ -205,13 +234,22 @@ VERSION_1: tuple[tuple[str, tuple[str, ...], Callable[[_Builder, int], np.ndarra
 )
 
 
+#: version 2 (rig 3): version 1 and the open smile and the lip tightener
+VERSION_2 = (
+    *VERSION_1,
+    ("reach_smileOpen", ("mouthSmile", "mouthLowerDown"), _smile_open),
+    ("reach_lipTightener", ("mouthPress",), _lip_tightener),
+)
+VERSIONS = {1: VERSION_1, 2: VERSION_2}
+
+
 def reach_shapes(model: FaceModel, version: int) -> list[ReachShape]:
     """The reach shapes of ``version`` for ``model``, left then right for each (docstring)."""
     if version not in REACH_VERSIONS:
         raise ModelFileError(f"reach version must be one of {REACH_VERSIONS}; got {version}")
     b = _Builder(model)
     out = []
-    for name, drivers, build in VERSION_1:
+    for name, drivers, build in VERSIONS[version]:
         for s in (+1, -1):
             out.append(
                 ReachShape(
