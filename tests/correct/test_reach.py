@@ -54,8 +54,13 @@ def test_rig_3_declares_version_2_rig_2_version_1_and_rig_1_none(
     from emogen.correct.faces import model_correctives
 
     names = [ict_correctives.combinational_names[i] for i in _reach(ict_correctives)]
-    assert len(names) == 16
-    assert {n[:-2] for n in names} == VERSION_1 | {"reach_smileOpen", "reach_lipTightener"}
+    assert len(names) == 20
+    assert {n[:-2] for n in names} == VERSION_1 | {
+        "reach_smileOpen",
+        "reach_lipTightener",
+        "reach_tightenRolledUpper",
+        "reach_tightenRolledLower",
+    }
     old = model_correctives(rig2_model)
     assert {old.combinational_names[i][:-2] for i in _reach(old)} == VERSION_1
     assert len(_reach(old)) == 12
@@ -139,7 +144,8 @@ def test_left_and_right_reach_shapes_mirror_each_other(ict_model, ict_corrective
 def test_no_interpenetration_or_lid_crossing_added_on_ga_faces(
     ict_model, rig1_model, ga_weights, mouth
 ) -> None:
-    """≥ 500 GA faces, corrected with rig 1 and rig 2, measured by the independent tests."""
+    """≥ 500 GA faces, corrected with rig 1 and rig 3, measured by the independent tests (over
+    3,000 GA faces, seed 11, both rigs have none: docs/model.md, "Budgets")."""
     w, _ = ga_weights
     neutral = ict_model.base_neutral.astype(np.float64)
     inside = Interpenetration.build(neutral, ict_model.regions, mouth)
@@ -147,7 +153,7 @@ def test_no_interpenetration_or_lid_crossing_added_on_ga_faces(
         neutral, ict_model.polygons, ict_model.regions, mouth, ict_model.deltas
     )
     counts = {}
-    for label, model in (("rig1", rig1_model), ("rig2", ict_model)):
+    for label, model in (("rig1", rig1_model), ("rig3", ict_model)):
         v = corrected_vertices(model, correct_faces(model, w), gaze=False)
         m = plaus.measure(v)
         counts[label] = (
@@ -155,9 +161,9 @@ def test_no_interpenetration_or_lid_crossing_added_on_ga_faces(
             int((m["lid_crossing"] > CROSSING).sum()),
             int((m["lip_overlap"] > CROSSING).sum()),
         )
-    assert counts["rig2"][0] <= max(counts["rig1"][0], 0.005 * len(w)), counts
-    assert counts["rig2"][1] <= counts["rig1"][1], counts
-    assert counts["rig2"][2] <= counts["rig1"][2] + 1, counts
+    assert counts["rig3"][0] <= counts["rig1"][0], counts
+    assert counts["rig3"][1] <= counts["rig1"][1], counts
+    assert counts["rig3"][2] <= counts["rig1"][2] + 1, counts
 
 
 def test_the_anger_prototype_reaches_further_with_rig_2(ict_model, rig1_model) -> None:
@@ -217,3 +223,19 @@ def test_rig_3_prototypes_part_the_lips_and_thin_anger_s(ict_model, rig2_model) 
     for k in (1, 2):
         assert new["angry"][k] <= 0.6 * old["angry"][k], (new["angry"], old["angry"])
     assert abs(new["angry"][0]) < 1.0  # pressed, not parted
+
+
+def test_a_rolled_lip_pressed_is_rolled_no_further_than_ict_s_full_roll(
+    ict_model, rig2_model
+) -> None:
+    """mouthPress with mouthRollLower at 1: rig 3's lower lip is where rig 2's is (the roll
+    capped at 1), while the pressed, unrolled upper lip is thinned (the tightener)."""
+    lm = ict_model.landmarks
+    w = ict_model.rig.weights_from_names({"mouthPress": 1.0, "mouthRollLower": 1.0})[None]
+    new, old = (
+        corrected_vertices(m, correct_faces(m, w), gaze=False)[0] for m in (ict_model, rig2_model)
+    )
+    lower = lm[[57, 66]]
+    np.testing.assert_allclose(new[lower], old[lower], atol=0.02)  # 0.2 mm
+    red_upper = lambda v: v[lm[51], 1] - v[lm[62], 1]  # noqa: E731
+    assert red_upper(new) <= red_upper(old) - 0.2

@@ -38,7 +38,7 @@ name (per side)             drivers                   offsets
                                                       its vertical, 0.3 × its backward (AU20)
 ==========================  ========================  =============================================
 
-Version 2 (rig 3, ``ict_rig.toml``): version 1 and two more, for the mouths the emotion
+Version 2 (rig 3, ``ict_rig.toml``): version 1 and four more, for the mouths the emotion
 prototypes lacked (FACS AU12 at E with AU25: the upper lip drawn up off the upper teeth; AU23:
 the lips narrowed and their red thinned):
 
@@ -49,6 +49,9 @@ the lips narrowed and their red thinned):
 ``reach_lipTightener``      mouthPress                0.5 × (mouthRollUpper + mouthRollLower),
                                                       each unpaired shape made mirror-symmetric
                                                       and split into sides that sum to the whole
+``reach_tightenRolled*``    mouthPress ×              −0.5 × that roll's side (``…Upper``,
+                            mouthRollUpper or         ``…Lower``): a lip the face already rolls
+                            mouthRollLower            is not rolled past ICT's full roll
 ==========================  ========================  =============================================
 """
 
@@ -223,6 +226,12 @@ def _lip_tightener(b: _Builder, s: int) -> np.ndarray:
     return 0.5 * (b.side_of("mouthRollUpper", s) + b.side_of("mouthRollLower", s))
 
 
+def _unroll(shape: str) -> Callable[[_Builder, int], np.ndarray]:
+    """−0.5 × side of a lip roll: with the tightener's +0.5 × press, the roll a face gets is
+    roll + 0.5 press (1 − roll) ≤ 1, never beyond the roll ICT's shape was made for."""
+    return lambda b, s: -0.5 * b.side_of(shape, s)
+
+
 #: version 1: (name, drivers without side, builder(builder, side))
 VERSION_1: tuple[tuple[str, tuple[str, ...], Callable[[_Builder, int], np.ndarray]], ...] = (
     ("reach_browDown", ("browDown",), _brow_down),
@@ -234,11 +243,13 @@ VERSION_1: tuple[tuple[str, tuple[str, ...], Callable[[_Builder, int], np.ndarra
 )
 
 
-#: version 2 (rig 3): version 1 and the open smile and the lip tightener
+#: version 2 (rig 3): version 1, the open smile, the lip tightener and its cap on rolled lips
 VERSION_2 = (
     *VERSION_1,
     ("reach_smileOpen", ("mouthSmile", "mouthLowerDown"), _smile_open),
     ("reach_lipTightener", ("mouthPress",), _lip_tightener),
+    ("reach_tightenRolledUpper", ("mouthPress", "mouthRollUpper"), _unroll("mouthRollUpper")),
+    ("reach_tightenRolledLower", ("mouthPress", "mouthRollLower"), _unroll("mouthRollLower")),
 )
 VERSIONS = {1: VERSION_1, 2: VERSION_2}
 
@@ -254,7 +265,7 @@ def reach_shapes(model: FaceModel, version: int) -> list[ReachShape]:
             out.append(
                 ReachShape(
                     name=name + SIDE[s],
-                    drivers=tuple(d + SIDE[s] for d in drivers),
+                    drivers=tuple(d + SIDE[s] if d + SIDE[s] in b.shapes else d for d in drivers),
                     delta=build(b, s).astype(np.float32),
                 )
             )
