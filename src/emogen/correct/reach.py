@@ -79,6 +79,9 @@ SIDE = {+1: "_L", -1: "_R"}
 MIRROR = np.array([-1.0, 1.0, 1.0])
 REACH_VERSIONS = (1, 2)
 REACH_PREFIX = "reach_"  # every reach shape's name starts so
+#: reach shapes that only cap a roll (rarely on, no relief of their own): the viewer's GLB
+#: gives them no normal deltas, as other correctives (it keeps the GLB within 3 MB on the wire)
+NO_RELIEF = ("reach_tightenRolled",)
 
 
 @dataclass(frozen=True)
