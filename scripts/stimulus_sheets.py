@@ -5,6 +5,7 @@ and the rig's six EMFACS core blocks at full weight) on the six identity presets
     python scripts/stimulus_sheets.py docs/images --rigs   # rig 1 and rig 2 (the reach shapes)
     python scripts/stimulus_sheets.py docs/images --dark   # the dark presets and their -v2
     python scripts/stimulus_sheets.py docs/images --v3     # the presets for new studies (-v3)
+    python scripts/stimulus_sheets.py docs/images --rig3   # the same presets with rig 3
 
 "before": the flat look of EmoGen ≤ 0.2 (no textures, head-and-shoulders framing);
 "after": each preset's appearance and the face framing. 512² and the participant tile (256²).
@@ -33,6 +34,15 @@ def prototypes(model: emogen.FaceModel) -> tuple[list[str], np.ndarray]:
     for e in EMOTIONS:
         rows.append(model.rig.weights_from_names({g: 1.0 for g in model.rig.emotions[e].core}))
     return names, np.asarray(rows)
+
+
+def packaged(rig: int) -> emogen.FaceModel:
+    """The model with packaged rig ``rig`` (1 or 2; kept for replay), the sheets' "before"."""
+    from importlib import resources
+
+    file = resources.files("emogen.data").joinpath(f"ict_rig_{rig}.toml")
+    with resources.as_file(file) as p:
+        return emogen.load_model(rig=p)
 
 
 def sheet(
@@ -70,10 +80,7 @@ def textured_sheets(out: Path, tag: str) -> None:
 def rig_sheets(out: Path) -> None:
     """Rig 1 (before the reach shapes) and rig 2, textured, face framing, 512² and tile size:
     stimuli_rig1_face_SIZE.jpg and stimuli_rig2_face_SIZE.jpg."""
-    from importlib import resources
-
-    with resources.as_file(resources.files("emogen.data").joinpath("ict_rig_1.toml")) as p:
-        models = {"rig1": emogen.load_model(rig=p), "rig2": emogen.load_model()}
+    models = {"rig1": packaged(1), "rig2": packaged(2)}
     for tag, model in models.items():
         for size, name in ((512, "512"), (256, "tile")):
             path = out / f"stimuli_{tag}_face_{name}.jpg"
@@ -84,7 +91,7 @@ def rig_sheets(out: Path) -> None:
 def dark_sheets(out: Path) -> None:
     """The dark presets beside their -v2 (deeper lips), rig 2, face framing, 512² and tile size:
     stimuli_dark_v2_face_SIZE.jpg."""
-    model = emogen.load_model()
+    model = packaged(2)
     presets = ("female-dark", "female-dark-v2", "male-dark", "male-dark-v2")
     for size, name in ((512, "512"), (256, "tile")):
         path = out / f"stimuli_dark_v2_face_{name}.jpg"
@@ -97,7 +104,7 @@ def v3_sheets(out: Path) -> None:
     """The six presets for new studies (light, medium, dark-v3: deeper wrinkles) and the dark
     presets' -v2 beside their -v3, rig 2, face framing, 512² and tile size:
     stimuli_v3_face_SIZE.jpg and stimuli_dark_v3_face_SIZE.jpg."""
-    model = emogen.load_model()
+    model = packaged(2)
     new = tuple(f"{s}-{t}" for s in ("female", "male") for t in ("light", "medium", "dark-v3"))
     dark = ("female-dark-v2", "female-dark-v3", "male-dark-v2", "male-dark-v3")
     for tag, presets in (("v3", new), ("dark_v3", dark)):
@@ -108,6 +115,19 @@ def v3_sheets(out: Path) -> None:
             print(path)
 
 
+def rig3_sheets(out: Path) -> None:
+    """The six presets for new studies with rig 3 (open smile, AU23, fear's parted lips), face
+    framing, 512² and tile size: stimuli_rig3_face_SIZE.jpg; the "before" is the --v3 sheet
+    (the same presets with rig 2)."""
+    model = emogen.load_model()
+    new = tuple(f"{s}-{t}" for s in ("female", "male") for t in ("light", "medium", "dark-v3"))
+    for size, name in ((512, "512"), (256, "tile")):
+        path = out / f"stimuli_rig3_face_{name}.jpg"
+        image = sheet(model, size, True, presets=new)
+        Image.fromarray(image).save(path, quality=88, optimize=True)
+        print(path)
+
+
 def main() -> None:
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/images")
     if "--rigs" in sys.argv:
@@ -115,6 +135,9 @@ def main() -> None:
         return
     if "--dark" in sys.argv:
         dark_sheets(out)
+        return
+    if "--rig3" in sys.argv:
+        rig3_sheets(out)
         return
     if "--v3" in sys.argv:
         v3_sheets(out)

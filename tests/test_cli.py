@@ -27,7 +27,11 @@ def test_model_info_json_reports_the_whole_model(ict_dir: Path, ict_model) -> No
     assert set(info["shapes"]) == set(ict_model.shape_names) and len(info["shapes"]) == 57
     genes = [g["name"] for g in info["rig"]["genes"]]
     assert "mouthSmile" in genes and len(genes) == 30
-    assert info["rig"]["emotions"]["happy"]["core"] == ["cheekSquint", "mouthSmile"]
+    assert info["rig"]["emotions"]["happy"]["core"] == [
+        "cheekSquint",
+        "mouthSmile",
+        "mouthLowerDown",
+    ]
     assert {"face", "teeth", "tooth_upper_left_incisor_central"} <= set(info["regions"])
     assert info["model_hash"] == ict_model.model_hash
 

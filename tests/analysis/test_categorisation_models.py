@@ -21,8 +21,8 @@ SMALL = dict(participants=20, repetitions=2, identities=("female-medium",))
 
 
 @pytest.fixture(scope="module")
-def rig(ict_model):  # type: ignore[no-untyped-def]
-    return ict_model.rig
+def rig(seeded_rig):  # type: ignore[no-untyped-def]
+    return seeded_rig  # the seeds below were chosen on rig 2's blocks (tests/conftest.py)
 
 
 @pytest.fixture(scope="module")

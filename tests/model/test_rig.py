@@ -65,7 +65,7 @@ def test_emotion_blocks_name_real_genes(ict_model) -> None:
     genes = set(rig.gene_names())
     for e in rig.emotions.values():
         assert set(e.blocks) <= genes and e.core and e.source
-    assert set(rig.emotions["happy"].core) == {"cheekSquint", "mouthSmile"}
+    assert set(rig.emotions["happy"].core) == {"cheekSquint", "mouthSmile", "mouthLowerDown"}
 
 
 def test_weights_from_names(ict_model) -> None:

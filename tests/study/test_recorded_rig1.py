@@ -1,6 +1,7 @@
-"""A corrected study recorded with rig 1 (before the reach shapes, tests/data/study_rig1.sqlite)
-replays exactly with today's package: the replay finds rig 1 by the recorded model hash, and
-corrects the replayed faces with rig 1's correctives (no reach shapes)."""
+"""Corrected studies recorded with rig 1 (before the reach shapes, tests/data/study_rig1.sqlite)
+and with rig 2 (reach shapes version 1, study_rig2.sqlite) replay exactly with today's package
+(rig 3): the replay finds the recorded rig by the recorded model hash, and corrects the replayed
+faces with that rig's correctives."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import json
 import shutil
 from pathlib import Path
 
+import pytest
 from sqlalchemy import select
 
 from emogen.model.load import model_for_recorded_hash
@@ -17,12 +19,15 @@ from emogen.study.replay_export import replay_exported
 from emogen.study.storage import Store
 from emogen.study.tables import SessionRow, StudyRow
 
-RECORDED = Path(__file__).parents[1] / "data" / "study_rig1.sqlite"
+DATA = Path(__file__).parents[1] / "data"
+RECORDED = DATA / "study_rig1.sqlite"
+#: (recorded file, its rig's reach version, its participants' populations and faces)
+RIGS = [("study_rig1.sqlite", None, 8, 80), ("study_rig2.sqlite", 1, 12, 120)]
 
 
-def _open(tmp_path: Path) -> Store:
+def _open(tmp_path: Path, recorded: Path = RECORDED) -> Store:
     copy = tmp_path / "recorded.sqlite"
-    shutil.copyfile(RECORDED, copy)
+    shutil.copyfile(recorded, copy)
     return Store(f"sqlite:///{copy}")
 
 
@@ -31,16 +36,19 @@ def _study(store: Store) -> StudyRow:
         return db.scalars(select(StudyRow)).one()
 
 
-def test_a_study_recorded_with_rig_1_replays_exactly(tmp_path: Path, ict_model) -> None:
-    assert ict_model.rig.reach_version == 1  # today's default rig is rig 2
-    store = _open(tmp_path)
+@pytest.mark.parametrize(("recorded", "reach", "populations", "faces"), RIGS)
+def test_a_study_recorded_with_an_older_rig_replays_exactly(
+    tmp_path: Path, ict_model, recorded: str, reach: int | None, populations: int, faces: int
+) -> None:
+    assert ict_model.rig.reach_version == 2  # today's default rig is rig 3
+    store = _open(tmp_path, DATA / recorded)
     try:
         study = _study(store)
         assert study.model_hash != ict_model.model_hash
         weights = json.loads(study.weight_names)
-        assert not any(w.startswith("reach_") for w in weights)
+        assert not any(w.startswith(("reach_smileOpen", "reach_lipTightener")) for w in weights)
         old = model_for_recorded_hash(ict_model, study.model_hash)
-        assert old.model_hash == study.model_hash and old.rig.reach_version is None
+        assert old.model_hash == study.model_hash and old.rig.reach_version == reach
         with store.read() as db:
             ids = list(db.scalars(select(SessionRow.id)))
         assert len(ids) == 2
@@ -49,7 +57,7 @@ def test_a_study_recorded_with_rig_1_replays_exactly(tmp_path: Path, ict_model) 
                 store, sid, ict_model.rig, ict_model.model_hash, model=ict_model
             )
             assert report.mismatches == [], report.mismatches
-            assert report.populations == 8 and report.faces == 80
+            assert report.populations == populations and report.faces == faces
             assert report.model_hash_matches and report.ok
         out = tmp_path / "export"
         write_export(export_tables(store), out)
@@ -75,14 +83,17 @@ def test_an_unknown_recorded_hash_keeps_the_model_and_replay_says_it_differs(
         store.dispose()
 
 
-def test_the_study_server_continues_a_rig_1_study_with_rig_1(tmp_path: Path, ict_model) -> None:
-    """`emogen serve` of the recorded config: the app loads rig 1 (its hash, its GLB's
-    correctives), so the study registers as the same study instead of refusing to start."""
+@pytest.mark.parametrize(("recorded", "reach", "populations", "faces"), RIGS)
+def test_the_study_server_continues_a_study_with_its_recorded_rig(
+    tmp_path: Path, ict_model, recorded: str, reach: int | None, populations: int, faces: int
+) -> None:
+    """`emogen serve` of the recorded config: the app loads the recorded rig (its hash, its
+    GLB's correctives), so the study registers as the same study instead of refusing to start."""
     from emogen.study.config import StudyConfig
     from emogen.web import create_app
 
     copy = tmp_path / "recorded.sqlite"
-    shutil.copyfile(RECORDED, copy)
+    shutil.copyfile(DATA / recorded, copy)
     store = Store(f"sqlite:///{copy}")
     try:
         study = _study(store)
@@ -92,7 +103,7 @@ def test_the_study_server_continues_a_rig_1_study_with_rig_1(tmp_path: Path, ict
     app = create_app(config, f"sqlite:///{copy}", model=ict_model)
     try:
         assert app.state.model.model_hash == study.model_hash
-        assert app.state.model.rig.reach_version is None
+        assert app.state.model.rig.reach_version == reach
         assert app.state.service.ctx.study_id == study.id
     finally:
         app.state.store.dispose()

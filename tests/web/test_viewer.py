@@ -161,7 +161,7 @@ def test_browser_and_offscreen_agree(chromium: Any, site: Site, ict_model) -> No
 
 
 def test_corrected_prototypes_agree_with_offscreen(chromium: Any, site: Site, ict_model) -> None:  # type: ignore[no-untyped-def]
-    """The happy, angry, sad and fearful prototypes, corrected (rig 2's reach shapes active:
+    """The happy, angry, sad and fearful prototypes, corrected (the reach shapes active:
     the nasolabial fold, the lid bulge, the knit brows, AU1+4, the lip stretch), and surprise,
     sent to the page as a study sends them — shape weights then corrective weights — agree with
     the offscreen renderer's corrected face within the same limit as uncorrected faces.

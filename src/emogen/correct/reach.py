@@ -15,7 +15,7 @@ drivers, its right twin the mirrored ones; the neutral is left/right symmetric, 
 mirror each other (tested against the mesh's mirror map). All lengths are centimetres, model
 axes: x to the subject's left, y up, z forward.
 
-Version 1 (``[reach] version = 1`` in the rig; rig 2, ``ict_rig.toml``):
+Version 1 (``[reach] version = 1`` in the rig; rig 2, ``ict_rig_2.toml``):
 
 ==========================  ========================  =============================================
 name (per side)             drivers                   offsets
@@ -36,6 +36,22 @@ name (per side)             drivers                   offsets
                                                       tightened)
 ``reach_lipStretch``        mouthStretch              0.6 × mouthStretch's sideways offset, 0.2 ×
                                                       its vertical, 0.3 × its backward (AU20)
+==========================  ========================  =============================================
+
+Version 2 (rig 3, ``ict_rig.toml``): version 1 and four more, for the mouths the emotion
+prototypes lacked (FACS AU12 at E with AU25: the upper lip drawn up off the upper teeth; AU23:
+the lips narrowed and their red thinned):
+
+==========================  ========================  =============================================
+``reach_smileOpen``         mouthSmile ×              0.4 × (mouthUpperUp − mouthLowerDown): the
+                            mouthLowerDown            lips part by raising the upper lip as well
+                                                      as lowering the lower, showing upper teeth
+``reach_lipTightener``      mouthPress                0.5 × (mouthRollUpper + mouthRollLower),
+                                                      each unpaired shape made mirror-symmetric
+                                                      and split into sides that sum to the whole
+``reach_tightenRolled*``    mouthPress ×              −0.5 × that roll's side (``…Upper``,
+                            mouthRollUpper or         ``…Lower``): a lip the face already rolls
+                            mouthRollLower            is not rolled past ICT's full roll
 ==========================  ========================  =============================================
 """
 
@@ -61,8 +77,11 @@ ALA = {+1: 35, -1: 31}
 CORNER = {+1: 54, -1: 48}
 SIDE = {+1: "_L", -1: "_R"}
 MIRROR = np.array([-1.0, 1.0, 1.0])
-REACH_VERSIONS = (1,)
+REACH_VERSIONS = (1, 2)
 REACH_PREFIX = "reach_"  # every reach shape's name starts so
+#: reach shapes that only cap a roll (rarely on, no relief of their own): the viewer's GLB
+#: gives them no normal deltas, as other correctives (it keeps the GLB within 3 MB on the wire)
+NO_RELIEF = ("reach_tightenRolled",)
 
 
 @dataclass(frozen=True)
@@ -124,6 +143,14 @@ class _Builder:
         own, twin = self.delta(shape + SIDE[s]), self.delta(shape + SIDE[-s])
         mean = (own + twin[self.mirror] * MIRROR) / 2
         return np.where(self.mirrored[:, None], mean, own)
+
+    def side_of(self, shape: str, s: int) -> np.ndarray:
+        """Side ``s`` of an unpaired (whole-mouth) shape: made mirror-symmetric, then weighted
+        across the midline so that the two sides' halves sum to the whole shape."""
+        own = self.delta(shape)
+        mean = (own + own[self.mirror] * MIRROR) / 2
+        whole = np.where(self.mirrored[:, None], mean, own)
+        return whole * smoothstep(-0.3, 0.3, s * self.neutral[:, 0])[:, None]
 
     def field(self, values: np.ndarray) -> np.ndarray:
         """Offsets (V, 3) confined to the face mesh (not the eyes, teeth or head)."""
@@ -194,6 +221,20 @@ def _lip_stretch(b: _Builder, s: int) -> np.ndarray:
     return b.symmetric("mouthStretch", s) * np.array([0.6, 0.2, 0.3])
 
 
+def _smile_open(b: _Builder, s: int) -> np.ndarray:
+    return 0.4 * (b.symmetric("mouthUpperUp", s) - b.symmetric("mouthLowerDown", s))
+
+
+def _lip_tightener(b: _Builder, s: int) -> np.ndarray:
+    return 0.5 * (b.side_of("mouthRollUpper", s) + b.side_of("mouthRollLower", s))
+
+
+def _unroll(shape: str) -> Callable[[_Builder, int], np.ndarray]:
+    """−0.5 × side of a lip roll: with the tightener's +0.5 × press, the roll a face gets is
+    roll + 0.5 press (1 − roll) ≤ 1, never beyond the roll ICT's shape was made for."""
+    return lambda b, s: -0.5 * b.side_of(shape, s)
+
+
 #: version 1: (name, drivers without side, builder(builder, side))
 VERSION_1: tuple[tuple[str, tuple[str, ...], Callable[[_Builder, int], np.ndarray]], ...] = (
     ("reach_browDown", ("browDown",), _brow_down),
@@ -205,18 +246,29 @@ VERSION_1: tuple[tuple[str, tuple[str, ...], Callable[[_Builder, int], np.ndarra
 )
 
 
+#: version 2 (rig 3): version 1, the open smile, the lip tightener and its cap on rolled lips
+VERSION_2 = (
+    *VERSION_1,
+    ("reach_smileOpen", ("mouthSmile", "mouthLowerDown"), _smile_open),
+    ("reach_lipTightener", ("mouthPress",), _lip_tightener),
+    ("reach_tightenRolledUpper", ("mouthPress", "mouthRollUpper"), _unroll("mouthRollUpper")),
+    ("reach_tightenRolledLower", ("mouthPress", "mouthRollLower"), _unroll("mouthRollLower")),
+)
+VERSIONS = {1: VERSION_1, 2: VERSION_2}
+
+
 def reach_shapes(model: FaceModel, version: int) -> list[ReachShape]:
     """The reach shapes of ``version`` for ``model``, left then right for each (docstring)."""
     if version not in REACH_VERSIONS:
         raise ModelFileError(f"reach version must be one of {REACH_VERSIONS}; got {version}")
     b = _Builder(model)
     out = []
-    for name, drivers, build in VERSION_1:
+    for name, drivers, build in VERSIONS[version]:
         for s in (+1, -1):
             out.append(
                 ReachShape(
                     name=name + SIDE[s],
-                    drivers=tuple(d + SIDE[s] for d in drivers),
+                    drivers=tuple(d + SIDE[s] if d + SIDE[s] in b.shapes else d for d in drivers),
                     delta=build(b, s).astype(np.float32),
                 )
             )

@@ -45,9 +45,14 @@ def load_model(
 
 
 #: the packaged ICT rigs, newest first (docs/model.md, "Rig versions"): rig 2 adds the reach
-#: shapes and the revised anger block; rig 1 is kept so that studies recorded with it replay
-#: and continue exactly as they were recorded.
-PACKAGED_RIGS = (("ict-rig-2", "ict_rig.toml"), ("ict-rig-1", "ict_rig_1.toml"))
+#: shapes and the revised anger block, rig 3 the open smile, anger's lip tightener and fear's
+#: parted lips; rigs 1 and 2 are kept so that studies recorded with them replay and continue
+#: exactly as they were recorded.
+PACKAGED_RIGS = (
+    ("ict-rig-3", "ict_rig.toml"),
+    ("ict-rig-2", "ict_rig_2.toml"),
+    ("ict-rig-1", "ict_rig_1.toml"),
+)
 
 
 def records_of(model: FaceModel, recorded_hash: str) -> bool:

@@ -71,7 +71,7 @@ class DeriveSpec(_Strict):
 class ReachSpec(_Strict):
     """Derived shapes that extend the rig's reach (:mod:`emogen.correct.reach`), by version."""
 
-    version: Annotated[int, Field(ge=1, le=1)]
+    version: Annotated[int, Field(ge=1, le=2)]
     description: str = ""
 
 

@@ -7,7 +7,8 @@ targets leave out vertices moved less than a tolerance and round their deltas to
 step; by default they carry no normal deltas (zero): with their own normals the ICT GLB grows
 past 3 MB gzipped (3.03 MB even with a 4.5/127 normal tolerance), without them it is 2.85 MB.
 The reach shapes (:mod:`emogen.correct.reach`: folds, bulges, furrows, seen by their shading)
-keep their normal deltas, thinned by that tolerance.
+keep their normal deltas, thinned by that tolerance, but for the caps on rolled lips
+(``NO_RELIEF``).
 A corrected face is then within this tolerance per unit corrective weight.
 """
 
@@ -19,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from emogen.correct.faces import model_correctives
-from emogen.correct.reach import REACH_PREFIX
+from emogen.correct.reach import NO_RELIEF, REACH_PREFIX
 from emogen.model.geometry import vertex_normals
 from emogen.model.io.gltf_asset import CM_TO_M
 
@@ -107,13 +108,16 @@ def morph_targets(
         cd[np.linalg.norm(cd, axis=-1) < corrective_tolerance_cm] = 0.0
         # the reach shapes are relief (a fold, a bulge, furrows), seen by their shading: they
         # keep their normal deltas, thinned like the others' (+0.01 MB on the wire)
-        keep = np.array(
-            [corrective_normals or n.startswith(REACH_PREFIX) for n in corrective_names]
-        )
+        keep = np.array([corrective_normals or _relief(n) for n in corrective_names])
         cn[~keep] = 0.0
         _exact_at_apex(model_correctives(model), neutral, triangles, normals0, delta, dn)
         cn[np.abs(cn).max(axis=-1) < corrective_normal_tolerance] = 0.0
     return MorphTargets(neutral, shapes, delta, normals0, dn, model.n_shapes, corrective_names)
+
+
+def _relief(name: str) -> bool:
+    """A reach shape whose target keeps its normal deltas (not the lips' :data:`NO_RELIEF`)."""
+    return name.startswith(REACH_PREFIX) and not name.startswith(NO_RELIEF)
 
 
 def _exact_at_apex(
@@ -137,7 +141,7 @@ def _exact_at_apex(
     """
     s = len(c.shape_names)
     drivers = [frozenset(c.drivers[i][c.driver_mask[i]].tolist()) for i in range(len(c.drivers))]
-    reach = [i for i, n in enumerate(c.combinational_names) if n.startswith(REACH_PREFIX)]
+    reach = [i for i, n in enumerate(c.combinational_names) if _relief(n)]
     for i in sorted(reach, key=lambda i: len(drivers[i])):  # a reach shape's sub-blends first
         # the driver shapes, and every combinational corrective they switch fully on (itself too)
         on = [*sorted(drivers[i]), *(s + j for j, d in enumerate(drivers) if d <= drivers[i])]
