@@ -11,9 +11,9 @@ often at 0, as genes are).
   each gene's group difference and of each emotion contrast is its expectation under the
   generating process (0 exactly where the two distributions are the same; else the mean over
   200 000 participants per group). Prints the coverage of the 95% intervals ``emogen analyse``
-  tables (between groups the inverted permutation test of a shift, ``--permutations``
-  relabellings; Student on paired differences between emotions) and of the Welch t and
-  percentile bootstrap intervals they replaced, for null and true genes, with ±2 SE (SE over studies,
+  tables (inverted permutation tests, ``--permutations`` rearrangements: between groups of a
+  shift, between emotions sign flips of the paired differences) and of the Welch t, Student t
+  and percentile bootstrap intervals they replaced, for null and true genes, with ±2 SE (SE over studies,
   genes of a study being dependent).
 * **icc**: 10-dimensional faces, ``--icc-people`` participants × 3 repetitions; ICC 0 (one
   shared prototype), and ICC about 0.3 (individual deviations); truth of the second from a
@@ -30,7 +30,12 @@ import time
 
 import numpy as np
 
-from emogen.analysis.permutation import shift_interval, t_mean_ci, welch_difference_ci
+from emogen.analysis.permutation import (
+    shift_interval,
+    signflip_interval,
+    t_mean_ci,
+    welch_difference_ci,
+)
 from emogen.analysis.reliability import components, icc_interval
 
 GENES, EMOTIONS, REPS = 10, 2, 3
@@ -76,7 +81,7 @@ def gene_coverage(args: argparse.Namespace, rng: np.random.Generator) -> None:
     )
     big_a = participant_means(pop_a, big, rng)
     truth_emotion = (big_a[:, 0] - big_a[:, 1]).mean(0)
-    hits = {k: [] for k in ("shift", "welch", "boot_group", "student", "boot_paired")}
+    hits = {k: [] for k in ("shift", "welch", "boot_group", "flip", "student", "boot_paired")}
     n = args.per_group
     for _ in range(args.studies):
         a, b = participant_means(pop_a, n, rng), participant_means(pop_b, n, rng)
@@ -94,6 +99,8 @@ def gene_coverage(args: argparse.Namespace, rng: np.random.Generator) -> None:
         blo, bhi = np.quantile(diffs, 0.025, axis=0), np.quantile(diffs, 0.975, axis=0)
         hits["boot_group"].append((blo <= truth_group) & (truth_group <= bhi))
         d = a[:, 0] - a[:, 1]
+        lo, hi = signflip_interval(d, level=0.95, permutations=args.permutations, rng=rng)
+        hits["flip"].append((lo <= truth_emotion) & (truth_emotion <= hi))
         lo, hi = t_mean_ci(d, level=0.95)
         hits["student"].append((lo <= truth_emotion) & (truth_emotion <= hi))
         blo, bhi = percentile_boot(d, rng)
@@ -108,7 +115,8 @@ def gene_coverage(args: argparse.Namespace, rng: np.random.Generator) -> None:
         _line(f"{label}, null genes", h[:, ~shifted & (truth_group == 0)])
         _line(f"{label}, true genes", h[:, shifted])
     for name, label in (
-        ("student", "emotions, paired Student t (analyse)"),
+        ("flip", "emotions, sign-flip inverted (analyse)"),
+        ("student", "emotions, paired Student t (before)"),
         ("boot_paired", "emotions, percentile bootstrap (before)"),
     ):
         _line(f"{label}, all genes", np.array(hits[name]))

@@ -175,18 +175,47 @@ def _shift_bounds(
     kept = s @ member.astype(np.float64)
     w = (kept / n1 - (n1 - kept) / (n - n1))[:, None]
     d = flat[member].mean(axis=0) - flat[~member].mean(axis=0)
+    lo, hi = _inverted(a, w, d, exact, level)
+    return lo.reshape(x.shape[1:]), hi.reshape(x.shape[1:])
+
+
+def signflip_interval(
+    d: np.ndarray, *, level: float, permutations: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """The mean over participants (axis 0) of paired differences ``d`` with the interval that
+    inverts the sign-flip test of d − δ (exact when the differences are symmetric about δ):
+    flips s move the mean to mean(s·d) − δ·mean(s), so the bounds follow as in
+    :func:`shift_interval`. Every flip (exact) when 2^n ≤ ``permutations``."""
+    n = d.shape[0]
+    flat = d.reshape(n, -1).astype(np.float64)
+    exact = 2**n <= permutations
+    if exact:
+        signs = np.array(list(itertools.product((1.0, -1.0), repeat=n)))
+    else:
+        signs = rng.choice((-1.0, 1.0), size=(permutations, n))
+    lo, hi = _inverted(
+        signs @ flat / n, signs.mean(axis=1)[:, None], flat.mean(axis=0), exact, level
+    )
+    return lo.reshape(d.shape[1:]), hi.reshape(d.shape[1:])
+
+
+def _inverted(
+    a: np.ndarray, w: np.ndarray, d: np.ndarray, exact: bool, level: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of {δ: p(δ) > 1 − level} where rearrangement r (B of them) gives the statistic
+    a_r − δ w_r against the observed d − δ (see :func:`shift_interval`)."""
     always = np.abs(np.abs(w) - 1) < 1e-12  # the identity (and the swap of equal groups)
+    always = np.broadcast_to(always, a.shape)
     quad = np.where(always, -1.0, w**2 - 1)
     half = a * w - d
     root = np.sqrt(np.maximum(half**2 - quad * (a**2 - d**2), 0.0))
     low = np.where(always, -np.inf, (half + root) / quad)
     high = np.where(always, np.inf, (half - root) / quad)
+    b = len(a)
     extra = 0 if exact else 1
-    need = math.floor(round((1 - level) * (len(splits) + extra) - extra, 9)) + 1
-    need = min(max(need, 1), len(splits))
-    lo = np.sort(low, axis=0)[need - 1]
-    hi = np.sort(high, axis=0)[len(splits) - need]
-    return lo.reshape(x.shape[1:]), hi.reshape(x.shape[1:])
+    need = math.floor(round((1 - level) * (b + extra) - extra, 9)) + 1
+    need = min(max(need, 1), b)
+    return np.sort(low, axis=0)[need - 1], np.sort(high, axis=0)[b - need]
 
 
 def t_mean_ci(d: np.ndarray, *, level: float) -> tuple[np.ndarray, np.ndarray]:
