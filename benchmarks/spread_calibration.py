@@ -134,6 +134,9 @@ def main() -> None:
         help="choice noise the null assumes (default: each cell's own T)",
     )
     ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument(
+        "--seed", type=int, default=1, help="cell seed (1: the docs' figures; another: fresh)"
+    )
     a = ap.parse_args()
     rig = emogen.load_model(os.environ["EMOGEN_MODEL"]).rig
     rows = []
@@ -144,7 +147,7 @@ def main() -> None:
                     rows.append(cell(rig, name, n, t, a.groups, assumed=assumed))
                     print(pd.DataFrame(rows[-1:]).to_string(index=False), flush=True)
                 if a.power_spread > 0:
-                    rows.append(cell(rig, name, n, t, a.groups, a.power_spread, seed=1))
+                    rows.append(cell(rig, name, n, t, a.groups, a.power_spread, seed=a.seed))
                     print(pd.DataFrame(rows[-1:]).to_string(index=False), flush=True)
     table = pd.DataFrame(rows)
     print(table.to_string(index=False))

@@ -150,3 +150,75 @@ def test_gene_intervals_are_scipys_t_intervals() -> None:
     ref = stats.ttest_ind(x[member, 1, 1], x[~member, 1, 1], equal_var=False)
     assert (lo[1, 1], hi[1, 1]) == pytest.approx(tuple(ref.confidence_interval(0.95)), rel=1e-10)
     assert (lo[0, 3], hi[0, 3]) == (0.0, 0.0)
+
+
+def test_the_permutation_interval_bounds_are_where_a_plain_loops_p_crosses_alpha() -> None:
+    """Just inside each bound the permutation test of x − δ·member (difference of means, the
+    same relabellings, counted in a plain loop) gives p > 0.05, just outside p ≤ 0.05."""
+    from emogen.analysis.permutation import _shift_bounds, relabellings
+
+    rng = np.random.default_rng(3)
+    x = rng.standard_t(3, size=(13, 2, 3))
+    member = np.arange(13) < 6
+    splits, exact = relabellings(member, permutations=999, rng=rng)
+    lo, hi = _shift_bounds(x, member, splits, exact, 0.95)
+
+    def p_of(delta: float, f: int) -> float:
+        y = x.reshape(13, -1)[:, f] - delta * member
+        obs = abs(y[member].mean() - y[~member].mean())
+        extreme = sum(abs(y[s].mean() - y[~s].mean()) >= obs - 1e-12 for s in splits)
+        return (extreme + 1) / (len(splits) + 1)
+
+    for f in range(6):
+        low, high = lo.ravel()[f], hi.ravel()[f]
+        assert p_of(low + 1e-7, f) > 0.05 >= p_of(low - 1e-7, f)
+        assert p_of(high - 1e-7, f) > 0.05 >= p_of(high + 1e-7, f)
+
+
+def test_groups_too_small_for_a_finite_permutation_interval_get_welchs() -> None:
+    """3 + 3 participants: 20 relabellings, p ≥ 0.1 everywhere; Welch's interval, named."""
+    from scipy import stats
+
+    from emogen.analysis.genes import GeneTestOptions, group_difference_ci
+
+    rng = np.random.default_rng(4)
+    x = rng.beta(0.5, 2.0, size=(6, 1, 2))
+    member = np.arange(6) < 3
+    lo, hi, method = group_difference_ci(x, member, GeneTestOptions(), rng=rng)
+    ref = stats.ttest_ind(x[member, 0, 1], x[~member, 0, 1], equal_var=False)
+    assert (lo[0, 1], hi[0, 1]) == pytest.approx(tuple(ref.confidence_interval(0.95)), rel=1e-10)
+    assert set(method.ravel()) == {"Welch t (too few relabellings)"}
+
+
+def test_the_signflip_interval_bounds_are_where_a_plain_loops_p_crosses_alpha() -> None:
+    """Paired differences: just inside each bound the sign-flip test of d − δ (every one of
+    the 2^9 flips, counted in a plain loop) gives p > 0.05, just outside p ≤ 0.05."""
+    import itertools
+
+    from emogen.analysis.permutation import signflip_interval
+
+    rng = np.random.default_rng(5)
+    d = rng.standard_t(3, size=(9, 1, 4)) + 0.3
+    lo, hi = signflip_interval(d, level=0.95, permutations=1000, rng=rng)
+    flips = np.array(list(itertools.product((1.0, -1.0), repeat=9)))
+
+    def p_of(delta: float, f: int) -> float:
+        y = d[:, 0, f] - delta
+        return float(np.mean(np.abs(flips @ y) >= abs(y.sum()) - 1e-12))
+
+    for f in range(4):
+        low, high = lo[0, f], hi[0, f]
+        assert p_of(low + 1e-7, f) > 0.05 >= p_of(low - 1e-7, f)
+        assert p_of(high - 1e-7, f) > 0.05 >= p_of(high + 1e-7, f)
+
+
+def test_too_few_participants_for_a_finite_signflip_interval_get_students() -> None:
+    from scipy import stats
+
+    from emogen.analysis.genes import GeneTestOptions, paired_difference_ci
+
+    d = np.random.default_rng(6).normal(size=(4, 1, 2))
+    lo, hi, method = paired_difference_ci(d, GeneTestOptions(), rng=np.random.default_rng(0))
+    ref = stats.ttest_1samp(d[:, 0, 1], 0.0).confidence_interval(0.95)
+    assert (lo[0, 1], hi[0, 1]) == pytest.approx((ref.low, ref.high), rel=1e-10)
+    assert set(method.ravel()) == {"Student t (too few participants)"}

@@ -127,3 +127,32 @@ def test_icc_interval_covers_the_simulated_truth(ict_model) -> None:  # type: ig
             hits.append(lo <= truth[emotion] <= hi)
     rate = float(np.mean(hits))
     assert rate >= 0.90, f"coverage {rate:.3f} of {len(hits)} intervals"
+
+
+def test_interval_is_a_plain_jackknife_of_fishers_z() -> None:
+    """The interval against a plain loop: one-way ANOVA mean squares summed over dimensions
+    (unbalanced: k0 from the group sizes), z = ½ log(MSB / MSW) of the study without each
+    participant in turn, pseudo-values' mean ± t(n − 1) SE, back by (F − 1) / (F + k0 − 1)."""
+    from scipy import stats
+
+    x, who = _faces(9, 3, 0.6, 1.0, 4, seed=21)
+    keep = np.ones(len(who), dtype=bool)
+    keep[[0, 5]] = False  # two participants with 2 faces: unbalanced
+    x, who = x[keep], who[keep]
+    people = np.unique(who)
+
+    def z_and_k0(sel: np.ndarray) -> tuple[float, float]:
+        xs, ws = x[sel], who[sel]
+        groups = [xs[ws == p] for p in np.unique(ws)]
+        n, total = len(groups), len(xs)
+        grand = xs.mean(axis=0)
+        ssb = sum(len(g) * np.sum((g.mean(axis=0) - grand) ** 2) for g in groups)
+        ssw = sum(np.sum((g - g.mean(axis=0)) ** 2) for g in groups)
+        k0 = (total - sum(len(g) ** 2 for g in groups) / total) / (n - 1)
+        return 0.5 * np.log((ssb / (n - 1)) / (ssw / (total - n))), k0
+
+    z, k0 = z_and_k0(np.ones(len(who), dtype=bool))
+    pseudo = [len(people) * z - (len(people) - 1) * z_and_k0(who != p)[0] for p in people]
+    half = stats.t.ppf(0.975, len(people) - 1) * np.std(pseudo, ddof=1) / np.sqrt(len(people))
+    f = np.exp(2 * (np.mean(pseudo) + np.array([-half, half])))
+    assert icc_interval(x, who) == pytest.approx(tuple((f - 1) / (f + k0 - 1)), rel=1e-9)

@@ -14,7 +14,9 @@ repetitions): one value per participant × emotion × gene (:func:`participant_g
 
 Family-wise control: max-T over every gene × contrast of a table (``p_maxt``), and separately
 Benjamini–Hochberg FDR over the same family (``q_bh``). Effect sizes: the mean difference (gene
-units: a gene in [0, 1]) with a t interval over participants (paired: Student; groups: Welch). Gene values are
+units: a gene in [0, 1]) with an interval over participants that inverts a permutation test
+(paired: sign flips; groups: relabellings, a shift; Student's or Welch's t where there are too
+few participants for a finite one). Gene values are
 bounded and often exactly zero (a shape left off): no p-value here assumes normality, and the
 tables give the share of participants who used the gene (participant mean > :data:`USED`).
 """
@@ -33,6 +35,8 @@ from emogen.analysis.permutation import (
     PermutationResult,
     group_permutation,
     paired_signflip,
+    shift_interval,
+    signflip_interval,
     t_mean_ci,
     welch_difference_ci,
 )
@@ -84,7 +88,7 @@ def emotion_gene_tests(
     pairs = list(itertools.combinations(range(len(emotions)), 2))
     d = np.stack([cube[:, a] - cube[:, b] for a, b in pairs], axis=1)  # (n, C, G)
     res = paired_signflip(d, permutations=opts.permutations, rng=rng)
-    lo, hi = t_mean_ci(d, level=opts.level)
+    lo, hi, method = paired_difference_ci(d, opts, rng=rng)
     used = (cube > USED).mean(axis=0)  # (E, G)
     rows = []
     for c, (a, b) in enumerate(pairs):
@@ -102,6 +106,7 @@ def emotion_gene_tests(
                     "difference": d[:, c, k].mean(),
                     "ci_low": lo[c, k],
                     "ci_high": hi[c, k],
+                    "ci_method": method[c, k],
                     "used_a": used[a, k],
                     "used_b": used[b, k],
                     **_stats(res, c, k),
@@ -152,13 +157,43 @@ def group_gene_tests(
         if member.sum() < 2 or (~member).sum() < 2:
             raise ConfigError(f"groups '{ga}' and '{gb}' need >= 2 participants each")
         res = group_permutation(x, member, permutations=opts.permutations, rng=rng)
-        lo, hi = welch_difference_ci(x, member, level=opts.level)
-        tables.append(_group_rows(people, emotions, x, member, (ga, gb), res, (lo, hi)))
+        ci = group_difference_ci(x, member, opts, rng=rng)
+        tables.append(_group_rows(people, emotions, x, member, (ga, gb), res, ci))
         if len(pairs) > 1:  # Bonferroni over the pairs of groups
             t = tables[-1]
             t["p_maxt"] = np.minimum(1.0, t["p_maxt"] * len(pairs))
         tables[-1] = _typed(tables[-1], res, 1 - opts.level)
     return pd.concat(tables, ignore_index=True)
+
+
+def paired_difference_ci(
+    d: np.ndarray, opts: GeneTestOptions, *, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per contrast × gene: the sign-flip-inverted interval of the mean paired difference
+    (:func:`emogen.analysis.permutation.signflip_interval`), and where there are too few
+    participants for a finite one (5 at 95%: 32 flips) Student's t interval; and which."""
+    lo, hi = signflip_interval(d, level=opts.level, permutations=opts.permutations, rng=rng)
+    finite = np.isfinite(lo) & np.isfinite(hi)
+    if finite.all():
+        return lo, hi, np.full(lo.shape, "sign-flip")
+    t_lo, t_hi = t_mean_ci(d, level=opts.level)
+    method = np.where(finite, "sign-flip", "Student t (too few participants)")
+    return np.where(finite, lo, t_lo), np.where(finite, hi, t_hi), method
+
+
+def group_difference_ci(
+    x: np.ndarray, member: np.ndarray, opts: GeneTestOptions, *, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per emotion × gene: the permutation-inverted interval of the groups' mean difference
+    (:func:`emogen.analysis.permutation.shift_interval`), and where the groups are too small for
+    a finite one (3 + 3 at 95%: 20 relabellings) Welch's t interval; and which was used."""
+    lo, hi = shift_interval(x, member, level=opts.level, permutations=opts.permutations, rng=rng)
+    finite = np.isfinite(lo) & np.isfinite(hi)
+    if finite.all():
+        return lo, hi, np.full(lo.shape, "permutation")
+    w_lo, w_hi = welch_difference_ci(x, member, level=opts.level)
+    method = np.where(finite, "permutation", "Welch t (too few relabellings)")
+    return np.where(finite, lo, w_lo), np.where(finite, hi, w_hi), method
 
 
 def _group_rows(
@@ -168,7 +203,7 @@ def _group_rows(
     member: np.ndarray,
     names: tuple[str, str],
     res: PermutationResult,
-    ci: tuple[np.ndarray, np.ndarray],
+    ci: tuple[np.ndarray, np.ndarray, np.ndarray],
 ) -> pd.DataFrame:
     a, b = x[member], x[~member]
     rows = []
@@ -188,6 +223,7 @@ def _group_rows(
                     "difference": a[:, e, k].mean() - b[:, e, k].mean(),
                     "ci_low": ci[0][e, k],
                     "ci_high": ci[1][e, k],
+                    "ci_method": ci[2][e, k],
                     "used_a": (a[:, e, k] > USED).mean(),
                     "used_b": (b[:, e, k] > USED).mean(),
                     **_stats(res, e, k),

@@ -47,9 +47,11 @@ def genes_section(
         "table (`p_maxt`, Westfall & Young 1993); false discovery rate: Benjamini–Hochberg over "
         f"the same family (`q_bh`). α = {opts.alpha:g}; seed {opts.seed}; "
         f"{gopts.permutations} permutations (exact enumeration when fewer exist). Effect: the "
-        f"mean difference (gene units) with a {gopts.level:.0%} t interval over participants "
-        "(emotions: Student's on the paired differences; groups: Welch's; coverage at 8 "
-        "participants per group in docs/analysis.md); `used_*`: the share of participants whose "
+        f"mean difference (gene units) with a {gopts.level:.0%} interval over participants that "
+        "inverts a permutation test (emotions: sign flips of the paired differences; groups: "
+        "relabellings, of a shift; Student's or Welch's t where too few participants allow no "
+        "finite one, named in `ci_method`; coverage at 8 participants per group in "
+        "docs/analysis.md); `used_*`: the share of participants whose "
         f"mean of the gene exceeds {USED:g}."
     )
     report.table(

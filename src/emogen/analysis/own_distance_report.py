@@ -1,6 +1,7 @@
 """The report's subsection on the own-distance model (Binetti et al. 2022;
-:mod:`emogen.analysis.categorisation_models`): the primary conditional logit with two-way
-clustering, then the secondary GEE, two-stage and shuffled-prototype tests. A fit without an
+:mod:`emogen.analysis.categorisation_models`): the primary conditional logit (two-way clustered
+intervals, tested by the shuffled-prototype permutation over participants), then the secondary
+GEE and two-stage tests and the permutation's details. A fit without an
 estimate is named with its reason (never a NaN in the text or the JSON); a fallback is named
 beside the estimate it gave.
 """
@@ -115,11 +116,13 @@ def _say(report: Content, head: str, t: dict[str, Any], body: Callable[[], str])
 def _primary(report: Content, p: dict[str, Any]) -> None:
     head = (
         "Primary test — conditional logit (the label chosen among those offered; McFadden "
-        "1974) on d_own, d_ref and one constant per label, pooled over answers, with two-way "
-        "cluster-robust standard errors over participants and faces (Cameron, Gelbach & Miller "
-        "2011; a face shown to many judges is an item, so the inference is about people and "
-        "faces in general); t test on min(participants, faces) − 1 degrees of freedom; assumes "
-        "a logit-linear effect of distance and independence between clusters: "
+        "1974) on d_own, d_ref and one constant per label, pooled over answers; intervals from "
+        "two-way cluster-robust standard errors over participants and faces (Cameron, Gelbach "
+        "& Miller 2011; a face shown to many judges is an item); the test a permutation over "
+        "participants: the slope on d_own against the same slope with every participant's own "
+        "faces replaced by another participant's (one-sided: own faces predict labels better), "
+        "valid whatever the distances' effect shape; assumes a logit-linear effect for the "
+        "estimates: "
     )
     _say(
         report,
@@ -127,8 +130,9 @@ def _primary(report: Content, p: dict[str, Any]) -> None:
         p,
         lambda: (
             f"{_slopes(p)}; contrast own − ref {p['contrast']:+.2f}, 95% CI "
-            f"[{p['ci_low']:+.2f}, {p['ci_high']:+.2f}], t({p['df']}) = {p['t']:.2f}, p = "
-            f"{p['p']:.3g} (converged in {p['iterations']} Newton steps; "
+            f"[{p['ci_low']:+.2f}, {p['ci_high']:+.2f}]; permutation p = {p['p']:.3g} "
+            f"({p['n_shuffles']} shuffles; two-way t({p['df']}) = {p['t']:.2f}, two-sided p = "
+            f"{p['p_two_way']:.3g}; converged in {p['iterations']} Newton steps; "
             f"{p['n_participant_clusters']} participants, {p['n_stimulus_clusters']} faces)."
         ),
     )
@@ -162,10 +166,10 @@ def _secondary(report: Content, res: OwnDistance, opts: AnalysisOptions) -> None
     )
     _say(
         report,
-        "Secondary — shuffled-prototype control (a permutation over participants: the pooled "
-        "conditional-logit slope on distance to one's own faces against the same slope with "
-        f"each participant's faces replaced by another's; {ctl['n_shuffles']} derangements, "
-        f"seed {opts.seed}; assumes participants exchangeable under the null): ",
+        "The primary test's permutation in detail (the pooled conditional-logit slope on "
+        "distance to one's own faces against the same slope with each participant's faces "
+        f"replaced by another's; {ctl['n_shuffles']} derangements, seed {opts.seed}; assumes "
+        "participants exchangeable under the null): ",
         ctl,
         lambda: (
             f"own {ctl['slope_own']:+.2f}; shuffled {ctl['control_mean']:+.2f} on average "

@@ -124,22 +124,98 @@ def group_permutation(
         raise ValueError(f"each group needs >= 2 participants; got {n1} and {n - n1}")
     flat = x.reshape(n, c * g)
     t = _welch(flat, member[None]).reshape(c, g)
-    exact = math.comb(n, n1) <= permutations
-    chunks: list[np.ndarray] = []
-    if exact:
+    splits, exact = relabellings(member, permutations=permutations, rng=rng)
+    chunks = [
+        np.abs(_welch(flat, s)).reshape(len(s), c, g)
+        for s in np.array_split(splits, max(1, len(splits) // CHUNK))
+    ]
+    return _finish(t, chunks, exact)
+
+
+def relabellings(
+    member: np.ndarray, *, permutations: int, rng: np.random.Generator
+) -> tuple[np.ndarray, bool]:
+    """(B, n) bool relabellings of participants into groups of ``member``'s sizes: every split
+    (exact, True) when there are ≤ ``permutations``, else ``permutations`` random ones."""
+    n, n1 = len(member), int(np.sum(member))
+    if math.comb(n, n1) <= permutations:
         splits = np.zeros((math.comb(n, n1), n), dtype=bool)
         for row, chosen in enumerate(itertools.combinations(range(n), n1)):
             splits[row, list(chosen)] = True
-        for s in np.array_split(splits, max(1, len(splits) // CHUNK)):
-            chunks.append(np.abs(_welch(flat, s)).reshape(len(s), c, g))
+        return splits, True
+    return np.array([rng.permutation(member) for _ in range(permutations)]), False
+
+
+def shift_interval(
+    x: np.ndarray, member: np.ndarray, *, level: float, permutations: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """The difference mean(group 1) − mean(group 0) over axis 0 of ``x``, with the interval
+    that inverts the permutation test of a shift: δ is inside when relabelling participants of
+    x − δ·member gives p > 1 − ``level`` for the difference of means (exact coverage when the
+    groups differ by a shift; Lehmann 1963). One set of relabellings
+    (:func:`relabellings`) serves every δ and every outcome: relabelling r moves the difference
+    to A_r − δ·w_r (w_r = the share of group 1 kept in group 1 minus group 1's share of group 0,
+    1 for the identity), so r counts as extreme on the δ where (A_r − δ w_r)² ≥ (D − δ)², one
+    interval around D; the bounds are order statistics of those intervals' ends. Where the
+    design has too few relabellings for a finite bound the bound is ±inf."""
+    member = np.asarray(member, dtype=bool)
+    splits, exact = relabellings(member, permutations=permutations, rng=rng)
+    return _shift_bounds(x, member, splits, exact, level)
+
+
+def _shift_bounds(
+    x: np.ndarray, member: np.ndarray, splits: np.ndarray, exact: bool, level: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`shift_interval` for given relabellings ``splits`` (B, n)."""
+    n = x.shape[0]
+    flat = x.reshape(n, -1).astype(np.float64)
+    n1 = int(member.sum())
+    s = splits.astype(np.float64)
+    a = s @ flat / n1 - (1 - s) @ flat / (n - n1)  # (B, F)
+    kept = s @ member.astype(np.float64)
+    w = (kept / n1 - (n1 - kept) / (n - n1))[:, None]
+    d = flat[member].mean(axis=0) - flat[~member].mean(axis=0)
+    lo, hi = _inverted(a, w, d, exact, level)
+    return lo.reshape(x.shape[1:]), hi.reshape(x.shape[1:])
+
+
+def signflip_interval(
+    d: np.ndarray, *, level: float, permutations: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """The mean over participants (axis 0) of paired differences ``d`` with the interval that
+    inverts the sign-flip test of d − δ (exact when the differences are symmetric about δ):
+    flips s move the mean to mean(s·d) − δ·mean(s), so the bounds follow as in
+    :func:`shift_interval`. Every flip (exact) when 2^n ≤ ``permutations``."""
+    n = d.shape[0]
+    flat = d.reshape(n, -1).astype(np.float64)
+    exact = 2**n <= permutations
+    if exact:
+        signs = np.array(list(itertools.product((1.0, -1.0), repeat=n)))
     else:
-        left = permutations
-        while left > 0:
-            k = min(CHUNK, left)
-            s = np.array([rng.permutation(member) for _ in range(k)])
-            chunks.append(np.abs(_welch(flat, s)).reshape(k, c, g))
-            left -= k
-    return _finish(t, chunks, exact)
+        signs = rng.choice((-1.0, 1.0), size=(permutations, n))
+    lo, hi = _inverted(
+        signs @ flat / n, signs.mean(axis=1)[:, None], flat.mean(axis=0), exact, level
+    )
+    return lo.reshape(d.shape[1:]), hi.reshape(d.shape[1:])
+
+
+def _inverted(
+    a: np.ndarray, w: np.ndarray, d: np.ndarray, exact: bool, level: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of {δ: p(δ) > 1 − level} where rearrangement r (B of them) gives the statistic
+    a_r − δ w_r against the observed d − δ (see :func:`shift_interval`)."""
+    always = np.abs(np.abs(w) - 1) < 1e-12  # the identity (and the swap of equal groups)
+    always = np.broadcast_to(always, a.shape)
+    quad = np.where(always, -1.0, w**2 - 1)
+    half = a * w - d
+    root = np.sqrt(np.maximum(half**2 - quad * (a**2 - d**2), 0.0))
+    low = np.where(always, -np.inf, (half + root) / quad)
+    high = np.where(always, np.inf, (half - root) / quad)
+    b = len(a)
+    extra = 0 if exact else 1
+    need = math.floor(round((1 - level) * (b + extra) - extra, 9)) + 1
+    need = min(max(need, 1), b)
+    return np.sort(low, axis=0)[need - 1], np.sort(high, axis=0)[b - need]
 
 
 def t_mean_ci(d: np.ndarray, *, level: float) -> tuple[np.ndarray, np.ndarray]:
