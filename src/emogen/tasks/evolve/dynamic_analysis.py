@@ -1,0 +1,184 @@
+"""What participants' dynamic faces show about timing: per emotion each gene's temporal profile
+across participants, and whether timing differs between emotions.
+
+The participant is the unit: a participant's value for an emotion is the mean over their final
+faces of that emotion (``final_faces`` joined with their rows in ``face_curves``). A face's
+peak (onset, offset) latency is the mean of its shown genes' latencies weighted by their
+amplitudes — when the face moves most. Intervals are percentile bootstraps over participants.
+
+The timing test (per block with dynamic faces, on participants who finished every emotion of
+it): the repeated-measures F of the participants' peak latencies by emotion, its p-value from
+permuting the emotion labels within each participant (exchangeable when timing does not depend
+on the emotion; ``PERMUTATIONS`` permutations, p = (1 + #{F* ≥ F}) / (1 + B)), and its effect
+size, partial η² = SS_emotion / (SS_emotion + SS_error), with a bootstrap interval over
+participants.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+#: Bootstrap resamples of every interval; permutations of the timing test.
+BOOTSTRAP = 2000
+PERMUTATIONS = 2000
+#: A face's latencies (columns of ``face_curves``) summarised per participant.
+LATENCIES = ("onset_s", "peak_s", "offset_s")
+_JOIN = ["session_id", "trial", "attempt", "generation", "face_id"]
+
+
+def final_curves(final_faces: pd.DataFrame, face_curves: pd.DataFrame) -> pd.DataFrame:
+    """The ``face_curves`` rows of every final face (one row per final face per shown gene),
+    with the final face's participant, block name and emotion."""
+    keys = final_faces[[*_JOIN, "participant_id", "block_name", "emotion"]]
+    curves = face_curves.drop(columns=["participant_id"], errors="ignore")
+    return curves.merge(keys, on=_JOIN, how="inner")
+
+
+def participant_timing(curves: pd.DataFrame) -> pd.DataFrame:
+    """One row per participant, block and emotion: the amplitude-weighted latencies of their
+    final faces (each face's, then the mean over the participant's faces) and how many."""
+    weighted = curves.assign(**{c: curves[c] * curves["amplitude"] for c in LATENCIES})
+    keys = ["participant_id", "block_name", "emotion", "session_id", "trial"]
+    faces = weighted.groupby(keys, sort=True)[[*LATENCIES, "amplitude"]].sum()
+    faces = faces[faces["amplitude"] > 0]
+    per_face = faces[list(LATENCIES)].div(faces["amplitude"], axis=0).reset_index()
+    out = per_face.groupby(["participant_id", "block_name", "emotion"], sort=True)
+    table = out[list(LATENCIES)].mean()
+    table["n_faces"] = out.size()
+    return table.reset_index()
+
+
+def _interval(values: np.ndarray, rng: np.random.Generator, alpha: float) -> tuple[float, float]:
+    if len(values) < 2:
+        return float("nan"), float("nan")
+    boots = values[rng.integers(0, len(values), (BOOTSTRAP, len(values)))].mean(axis=1)
+    lo, hi = np.quantile(boots, [alpha / 2, 1 - alpha / 2])
+    return float(lo), float(hi)
+
+
+def emotion_timing(timing: pd.DataFrame, rng: np.random.Generator, alpha: float) -> pd.DataFrame:
+    """Per block and emotion: the participants' mean peak latency with its interval."""
+    rows = []
+    for (block, emotion), g in timing.groupby(["block_name", "emotion"], sort=True):
+        peaks = g["peak_s"].to_numpy(dtype=np.float64)
+        lo, hi = _interval(peaks, rng, alpha)
+        rows.append(
+            {
+                "block_name": block,
+                "emotion": emotion,
+                "n_participants": len(peaks),
+                "peak_s": float(peaks.mean()),
+                "peak_low": lo,
+                "peak_high": hi,
+                "onset_s": float(g["onset_s"].mean()),
+                "offset_s": float(g["offset_s"].mean()),
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def gene_profiles(curves: pd.DataFrame, rng: np.random.Generator, alpha: float) -> pd.DataFrame:
+    """Per block, emotion and gene: the participants' mean amplitude (0 where their final
+    faces do not show the gene) and mean peak latency (of the participants whose faces show it),
+    each with its interval over participants."""
+    who_keys = ["block_name", "emotion", "participant_id"]
+    faces = curves.drop_duplicates([*who_keys, "session_id", "trial"]).groupby(who_keys).size()
+    n_faces: dict[Any, int] = {k: int(v) for k, v in faces.items()}
+    people: dict[Any, int] = {k: int(v) for k, v in faces.groupby(level=[0, 1]).size().items()}
+    per = curves.groupby([*who_keys[:2], "gene", "participant_id"], sort=True).agg(
+        amplitude=("amplitude", "sum"), peak_s=("peak_s", "mean")
+    )
+    rows = []
+    for (block, emotion, gene), g in per.groupby(level=[0, 1, 2], sort=True):
+        who = g.index.get_level_values("participant_id")
+        shown = np.array([n_faces[(block, emotion, p)] for p in who], dtype=np.float64)
+        amp = g["amplitude"].to_numpy(dtype=np.float64) / shown
+        n = people[(block, emotion)]
+        amp = np.concatenate([amp, np.zeros(n - len(amp))])
+        peaks = g["peak_s"].to_numpy(dtype=np.float64)
+        a_lo, a_hi = _interval(amp, rng, alpha)
+        p_lo, p_hi = _interval(peaks, rng, alpha)
+        rows.append(
+            {
+                "block_name": block,
+                "emotion": emotion,
+                "gene": gene,
+                "n_participants": n,
+                "n_showing": len(peaks),
+                "amplitude": float(amp.mean()),
+                "amplitude_low": a_lo,
+                "amplitude_high": a_hi,
+                "peak_s": float(peaks.mean()),
+                "peak_low": p_lo,
+                "peak_high": p_hi,
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def rm_anova(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Repeated-measures one-way ANOVA of (…, n participants, E emotions): (F, partial η²)."""
+    n, e = y.shape[-2:]
+    grand = y.mean(axis=(-2, -1), keepdims=True)
+    by_emotion = y.mean(axis=-2, keepdims=True)
+    by_person = y.mean(axis=-1, keepdims=True)
+    ss_emotion = n * ((by_emotion - grand) ** 2).sum(axis=(-2, -1))
+    ss_error = ((y - by_emotion - by_person + grand) ** 2).sum(axis=(-2, -1))
+    with np.errstate(divide="ignore", invalid="ignore"):  # one person resampled n times
+        f = (ss_emotion / (e - 1)) / (ss_error / ((n - 1) * (e - 1)))
+        return f, ss_emotion / (ss_emotion + ss_error)
+
+
+@dataclass(frozen=True)
+class TimingTest:
+    """Whether the participants' peak latencies differ between a block's emotions."""
+
+    block_name: str
+    emotions: tuple[str, ...]
+    n_participants: int
+    f: float
+    p_value: float
+    permutations: int
+    eta2: float
+    eta2_low: float
+    eta2_high: float
+
+    def to_dict(self) -> dict[str, object]:
+        return {**self.__dict__, "emotions": list(self.emotions)}
+
+
+def timing_test(
+    timing: pd.DataFrame,
+    block_name: str,
+    rng: np.random.Generator,
+    alpha: float,
+    permutations: int = PERMUTATIONS,
+) -> TimingTest | None:
+    """The permutation test of the module docstring on one block (None: fewer than three
+    participants with every emotion, or one emotion)."""
+    rows = timing[timing["block_name"] == block_name]
+    wide = rows.pivot(index="participant_id", columns="emotion", values="peak_s").dropna()
+    if wide.shape[1] < 2 or wide.shape[0] < 3:
+        return None
+    y = wide.to_numpy(dtype=np.float64)
+    f, eta2 = rm_anova(y)
+    shuffled = rng.permuted(np.broadcast_to(y, (permutations, *y.shape)), axis=2)
+    f_null, _ = rm_anova(shuffled)
+    boots = y[rng.integers(0, len(y), (BOOTSTRAP, len(y)))]
+    _, eta_boot = rm_anova(boots)
+    lo, hi = np.nanquantile(eta_boot, [alpha / 2, 1 - alpha / 2])
+    return TimingTest(
+        block_name=block_name,
+        emotions=tuple(str(c) for c in wide.columns),
+        n_participants=len(y),
+        f=float(f),
+        p_value=float((1 + np.sum(f_null >= f)) / (1 + permutations)),
+        permutations=permutations,
+        eta2=float(eta2),
+        eta2_low=float(lo),
+        eta2_high=float(hi),
+    )
