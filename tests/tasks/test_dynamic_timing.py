@@ -172,31 +172,53 @@ def test_no_test_without_two_emotions_and_three_complete_participants() -> None:
     assert timing_test(table, "b", np.random.default_rng(0), 0.05) is None
 
 
-def test_participant_timing_is_the_amplitude_weighted_mean_per_face_then_per_person() -> None:
-    rows = []
-    # participant a: two sad faces; participant b: one
-    faces = {("a", 1): [(0.8, 0.3), (0.2, 0.7)], ("a", 2): [(0.5, 0.5)], ("b", 3): [(1.0, 0.2)]}
-    for (who, trial), genes in faces.items():
-        for k, (amp, peak) in enumerate(genes):
-            rows.append(
-                {
-                    "participant_id": who,
-                    "block_name": "b",
-                    "emotion": "sad",
-                    "session_id": 1,
-                    "trial": trial,
-                    "gene": f"g{k}",
-                    "amplitude": amp,
-                    "onset_s": 0.0,
-                    "peak_s": peak,
-                    "offset_s": 1.0,
-                }
-            )
+def _face_rows(
+    who: str, trial: int, genes: np.ndarray, genome: DynamicGenome
+) -> list[dict[str, Any]]:
+    onset, peak, offset = genome.times(genes)
+    return [
+        {
+            "participant_id": who,
+            "block_name": "b",
+            "emotion": "sad",
+            "session_id": 1,
+            "trial": trial,
+            "gene": f"g{k}",
+            "amplitude": g[0],
+            "acceleration": g[2],
+            "deceleration": g[4],
+            "onset_s": onset[k],
+            "peak_s": peak[k],
+            "offset_s": offset[k],
+            "clip_s": genome.clip_s,
+        }
+        for k, g in enumerate(genes)
+    ]
+
+
+def test_participant_timing_follows_the_faces_motion_then_the_mean_per_person() -> None:
+    genome = DynamicGenome()
+    rng = np.random.default_rng(5)
+    faces = {
+        ("a", 1): rng.random((3, 6)),
+        ("a", 2): rng.random((2, 6)),
+        ("b", 3): rng.random((4, 6)),
+    }
+    rows = [r for (who, trial), g in faces.items() for r in _face_rows(who, trial, g, genome)]
     table = participant_timing(pd.DataFrame(rows)).set_index("participant_id")
-    face_1 = (0.8 * 0.3 + 0.2 * 0.7) / 1.0
-    assert table.loc["a", "peak_s"] == pytest.approx((face_1 + 0.5) / 2)
-    assert table.loc["b", "peak_s"] == pytest.approx(0.2)
-    assert table.loc["a", "n_faces"] == 2
+    t = np.arange(126) * 0.01  # every 10 ms over the 1.25 s clip
+    want: dict[str, list[tuple[float, float, float]]] = {"a": [], "b": []}
+    for (who, _), genes in faces.items():
+        energy = np.zeros(len(t))
+        for i, ti in enumerate(t):  # a plain loop over times and genes
+            for w in genome.weights_at(genes, np.array([ti]))[0]:
+                energy[i] += w * w
+        moving = [ti for ti, e in zip(t, energy, strict=True) if e >= 0.1 * energy.max()]
+        want[who].append((moving[0], t[int(np.argmax(energy))], moving[-1]))
+    for who, values in want.items():
+        got = table.loc[who, ["onset_s", "peak_s", "offset_s"]].to_numpy(dtype=float)
+        np.testing.assert_allclose(got, np.mean(values, axis=0), atol=1e-9)
+    assert table.loc["a", "n_faces"] == 2 and table.loc["b", "n_faces"] == 1
 
 
 # ---- known answers through the study service ------------------------------------------------

@@ -3,8 +3,13 @@ across participants, and whether timing differs between emotions.
 
 The participant is the unit: a participant's value for an emotion is the mean over their final
 faces of that emotion (``final_faces`` joined with their rows in ``face_curves``). A face's
-peak (onset, offset) latency is the mean of its shown genes' latencies weighted by their
-amplitudes — when the face moves most. Intervals are percentile bootstraps over participants.
+timing is that of its motion as shown: its energy E(t) = Σ_gene w(t)² (each shown gene's
+weight over the clip, :func:`face_motion`); its peak latency is when E is greatest, its onset
+and offset the first and last times E reaches ``ENVELOPE`` of that. (Weighting the genes'
+own peak latencies by their amplitudes instead flagged shared timing as different in a
+simulated null study: the GA leaves brief, late curves on genes the prototype does not move,
+and how many depends on the emotion; motion energy counts them by how much they show.)
+Intervals are percentile bootstraps over participants.
 
 The timing test (per block with dynamic faces, on participants who finished every emotion of
 it): the repeated-measures F of the participants' peak latencies by emotion, its p-value from
@@ -22,11 +27,16 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from emogen.ga.genome import course
+
 #: Bootstrap resamples of every interval; permutations of the timing test.
 BOOTSTRAP = 2000
 PERMUTATIONS = 2000
-#: A face's latencies (columns of ``face_curves``) summarised per participant.
+#: A face's latencies summarised per participant; the sampling step of its motion (s) and the
+#: share of its peak motion energy at which it counts as moving.
 LATENCIES = ("onset_s", "peak_s", "offset_s")
+STEP_S = 0.01
+ENVELOPE = 0.1
 _JOIN = ["session_id", "trial", "attempt", "generation", "face_id"]
 
 
@@ -38,14 +48,40 @@ def final_curves(final_faces: pd.DataFrame, face_curves: pd.DataFrame) -> pd.Dat
     return curves.merge(keys, on=_JOIN, how="inner")
 
 
+def face_motion(rows: pd.DataFrame, step_s: float = STEP_S) -> tuple[np.ndarray, np.ndarray]:
+    """One face's motion energy E(t) = Σ_gene w(t)² over its clip, sampled every ``step_s``:
+    (times, energy); w(t) is each shown gene's amplitude times its curve (docs/ga.md) from its
+    row's latencies and slopes."""
+    clip_s = float(rows["clip_s"].iloc[0])
+    t = np.linspace(0.0, clip_s, round(clip_s / step_s) + 1)
+    used = ("amplitude", "acceleration", "deceleration", *LATENCIES)
+    col = {c: rows[c].to_numpy(dtype=np.float64)[:, None] for c in used}
+    shape = course(
+        col["onset_s"],
+        col["peak_s"],
+        col["offset_s"],
+        3 * col["acceleration"],
+        3 * col["deceleration"],
+        t[None, :],
+    )
+    return t, ((col["amplitude"] * shape) ** 2).sum(axis=0)
+
+
 def participant_timing(curves: pd.DataFrame) -> pd.DataFrame:
-    """One row per participant, block and emotion: the amplitude-weighted latencies of their
-    final faces (each face's, then the mean over the participant's faces) and how many."""
-    weighted = curves.assign(**{c: curves[c] * curves["amplitude"] for c in LATENCIES})
+    """One row per participant, block and emotion: the latencies of their final faces (each
+    face's, then the mean over the participant's faces; :data:`LATENCIES`) and how many."""
     keys = ["participant_id", "block_name", "emotion", "session_id", "trial"]
-    faces = weighted.groupby(keys, sort=True)[[*LATENCIES, "amplitude"]].sum()
-    faces = faces[faces["amplitude"] > 0]
-    per_face = faces[list(LATENCIES)].div(faces["amplitude"], axis=0).reset_index()
+    faces = []
+    for key, rows in curves.groupby(keys, sort=True):
+        t, energy = face_motion(rows)
+        if energy.max() <= 0:
+            continue
+        moving = t[energy >= ENVELOPE * energy.max()]
+        values = (moving[0], t[int(np.argmax(energy))], moving[-1])
+        faces.append(
+            {**dict(zip(keys, key, strict=True)), **dict(zip(LATENCIES, values, strict=True))}
+        )
+    per_face = pd.DataFrame(faces, columns=[*keys, *LATENCIES])
     out = per_face.groupby(["participant_id", "block_name", "emotion"], sort=True)
     table = out[list(LATENCIES)].mean()
     table["n_faces"] = out.size()

@@ -39,10 +39,11 @@ def dynamic_section(tools: Any, summary: dict[str, Any]) -> None:
     level = int(100 * (1 - opts.alpha))
     report.paragraph(
         f"{len(timing)} participant × emotion values from {curves['participant_id'].nunique()} "
-        "participants' final dynamic faces. The participant is the unit: a face's latency is "
-        "its shown genes' latencies weighted by their amplitudes, and a participant's value "
-        f"the mean over their final faces of the emotion; {level}% percentile bootstrap "
-        "intervals over participants."
+        "participants' final dynamic faces. The participant is the unit: a face's peak "
+        "latency is when its motion (the sum of its genes' squared weights) is greatest, its "
+        "onset and offset when that first and last reaches 10% of the peak; a participant's "
+        f"value is the mean over their final faces of the emotion; {level}% percentile "
+        "bootstrap intervals over participants."
     )
     by_emotion = emotion_timing(timing, rng, opts.alpha)
     report.table(
