@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from emogen.model import load_model
 from emogen.model.face import FaceModel
@@ -76,9 +77,11 @@ def record_timing_study(
     return url
 
 
-def timing_study(folder: Path, *, alpha: float = 0.05, **design: Any) -> TimingTest | None:
+def timing_study(
+    folder: Path, *, alpha: float = 0.05, **design: Any
+) -> tuple[TimingTest | None, pd.DataFrame]:
     """One simulated dynamic study (:func:`record_timing_study` with ``design``), exported and
-    tested."""
+    tested; the test and the participants' timing."""
     url = record_timing_study(folder, **design)
     store = Store(url)
     try:
@@ -88,7 +91,7 @@ def timing_study(folder: Path, *, alpha: float = 0.05, **design: Any) -> TimingT
     curves = final_curves(tables["final_faces"], tables["face_curves"])
     timing = participant_timing(curves)
     rng = np.random.default_rng(design["seed"])
-    return timing_test(timing, str(timing["block_name"].iloc[0]), rng, alpha)
+    return timing_test(timing, str(timing["block_name"].iloc[0]), rng, alpha), timing
 
 
 def wilson(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
@@ -113,7 +116,7 @@ def main() -> None:
     model = load_model(args.model)
     with tempfile.TemporaryDirectory() as tmp:
         for s in range(args.studies):
-            test = timing_study(
+            test, timing = timing_study(
                 Path(tmp),
                 participants=args.participants,
                 seed=1000 + s,
@@ -126,8 +129,9 @@ def main() -> None:
                 print(f"study {s}: no test (too few participants with both emotions)")
                 continue
             rejected += test.p_value < args.alpha
+            peaks = timing.groupby("emotion")["peak_s"].mean().round(3).to_dict()
             print(
-                f"study {s}: n={test.n_participants} F={test.f:.2f} p={test.p_value:.4f} "
+                f"study {s}: mean peak latency (s) {peaks}; n={test.n_participants} F={test.f:.2f} p={test.p_value:.4f} "
                 f"eta2={test.eta2:.3f} [{test.eta2_low:.3f}, {test.eta2_high:.3f}]",
                 flush=True,
             )

@@ -262,6 +262,6 @@ def test_the_report_shows_fearful_peaking_before_sad(planted: dict[str, Any]) ->
 def test_shared_timing_is_not_flagged(tmp_path: Path, ict_model: Any) -> None:
     from benchmarks.calibrate_timing import timing_study
 
-    test = timing_study(tmp_path, participants=12, seed=1001, peak_at={}, model=ict_model)
+    test, _ = timing_study(tmp_path, participants=12, seed=1001, peak_at={}, model=ict_model)
     assert test is not None
     assert test.p_value > 0.05
