@@ -55,9 +55,9 @@ def dynamic_section(tools: Any, summary: dict[str, Any]) -> None:
     )
     _strip(timing, tools)
     profiles = gene_profiles(curves, rng, opts.alpha)
-    shown = profiles.sort_values("amplitude", ascending=False).groupby(
-        ["block_name", "emotion"], sort=True
-    )
+    shown = profiles.sort_values(
+        ["block_name", "emotion", "amplitude"], ascending=[True, True, False]
+    ).groupby(["block_name", "emotion"], sort=True)
     report.table(
         shown.head(5).round(3).reset_index(drop=True),
         name="dynamic_gene_profiles",
