@@ -108,6 +108,7 @@ def main() -> None:
     parser.add_argument("--generations", type=int, default=16)
     parser.add_argument("--condition", choices=["null", "planted"], default="null")
     parser.add_argument("--alpha", type=float, default=0.05)
+    parser.add_argument("--first-seed", type=int, default=1000, help="Study s has seed first + s.")
     parser.add_argument("--model", type=Path, default=None)
     args = parser.parse_args()
     peak_at = PLANTED if args.condition == "planted" else {}
@@ -119,7 +120,7 @@ def main() -> None:
             test, timing = timing_study(
                 Path(tmp),
                 participants=args.participants,
-                seed=1000 + s,
+                seed=args.first_seed + s,
                 peak_at=peak_at,
                 generations=args.generations,
                 model=model,
