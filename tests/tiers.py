@@ -138,6 +138,9 @@ SLOW: dict[str, str] = {
     "tests/web/test_security.py::test_the_researcher_token_is_never_logged": f"{_PARALLEL}: 30.4",
     "tests/web/test_dynamic_view.py::test_the_page_is_sent_what_the_records_play": f"{_SECONDS}: 23.8",
     "tests/tasks/test_dynamic_evolve.py::test_a_dynamic_block_is_checked_and_served": f"{_SECONDS}: 7.7",
+    "tests/tasks/test_dynamic_timing.py::test_a_planted_timing_difference_is_found": f"{_SECONDS}: 100 (30 simulated dynamic participants, load ~17)",
+    "tests/tasks/test_dynamic_timing.py::test_the_report_shows_fearful_peaking_before_sad": f"{_SECONDS}: its fixture, shared",
+    "tests/tasks/test_dynamic_timing.py::test_shared_timing_is_not_flagged": f"{_SECONDS}: 45 (12 simulated dynamic participants, load ~17)",
 }
 
 _KEYS = "idempotency keys: a repeated key is one step, on each backend's transactions"

@@ -264,12 +264,23 @@ def curve(timing: np.ndarray, t: np.ndarray, clip_s: float, min_segment_s: float
     1 at full speed. Continuous everywhere, smooth at the peak.
     """
     t_on, t_peak, t_off = latencies(timing, clip_s, min_segment_s)
-    acc, dec = timing[..., 1], timing[..., 3]
+    return course(t_on, t_peak, t_off, 3 * timing[..., 1], 3 * timing[..., 3], t)
+
+
+def course(
+    t_on: np.ndarray,
+    t_peak: np.ndarray,
+    t_off: np.ndarray,
+    up: np.ndarray,
+    down: np.ndarray,
+    t: np.ndarray,
+) -> np.ndarray:
+    """:func:`curve` from its latencies (s, t_on < t_peak < t_off) and its Hermite slopes
+    ``up`` = 3·acceleration and ``down`` = 3·deceleration (the rows the page is sent,
+    :func:`emogen.ga.motion.shape_curves`), at times ``t`` (broadcast)."""
     rise = np.clip((t - t_on) / (t_peak - t_on), 0.0, 1.0)
     fall = np.clip((t_off - t) / (t_off - t_peak), 0.0, 1.0)
-    up = hermite(rise, 3 * acc)
-    down = hermite(fall, 3 * dec)
-    out: np.ndarray = np.where(t <= t_peak, up, down)
+    out: np.ndarray = np.where(t <= t_peak, hermite(rise, up), hermite(fall, down))
     return out
 
 

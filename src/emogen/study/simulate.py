@@ -38,6 +38,7 @@ from emogen.tasks.simulated import (
     SimulatedDesign,
     SimulatedParticipant,
     SimulatedPeople,
+    own_courses,
     own_prototypes,
     population_prototypes,
 )
@@ -95,6 +96,13 @@ def participant_stream(
     return own_prototypes(population, plan.design, rng), rng
 
 
+def timing_stream(plan: SimulationPlan, i: int) -> np.random.Generator:
+    """Participant ``i``'s own stream of their time courses (a child of their stream's seed, so
+    their prototypes and choices are drawn as without it)."""
+    child = np.random.SeedSequence(plan.seed).spawn(plan.participants)[i]
+    return np.random.default_rng(child.spawn(1)[0])
+
+
 def all_prototypes(plan: SimulationPlan, rig: Any) -> list[dict[str, np.ndarray]]:
     """Every participant's prototypes."""
     return [participant_stream(plan, rig, i)[0] for i in range(plan.participants)]
@@ -114,8 +122,9 @@ class Walker:
         _, rng = participant_stream(plan, rig, i)
         n = plan.participants
         labeller = prototypes[(i + 1) % n] if plan.shuffle_prototypes else prototypes[i]
-        maker = SimulatedParticipant(prototypes[i], plan.design, rig, eyes, rng)
-        judge = SimulatedParticipant(labeller, plan.design, rig, eyes, rng)
+        courses = own_courses(plan.config.emotions, plan.design, timing_stream(plan, i))
+        maker = SimulatedParticipant(prototypes[i], plan.design, rig, eyes, rng, courses)
+        judge = SimulatedParticipant(labeller, plan.design, rig, eyes, rng, courses)
         self.who = SimulatedPeople(maker=maker, judge=judge)
         self.service, self.i = service, i
         self.token, self.state = service.create_session(participant_id(i), source=SOURCE)

@@ -319,8 +319,8 @@ class Task(Protocol):
     # Optional: ``analysis_section(tools, summary)`` — ``emogen analyse``'s section on the
     # task's export tables (``tools``: :class:`emogen.analysis.task_sections.TaskTools`, the
     # export's tables, the report, figures, faces drawn; tasks sit below the analysis and call
-    # back through it); a task without one is analysed by emogen.analysis itself (evolve,
-    # categorise) or not at all.
+    # back through it); a task without one is analysed by emogen.analysis itself (categorise;
+    # evolve's faces, its section adds dynamic blocks' timing) or not at all.
 
 
 def conditions_of(blocks: Sequence[TaskBlock], study: Any, rows: dict[int, int]) -> list[Condition]:

@@ -289,14 +289,18 @@ class EvolveTask:
         if view["rating"] is not None:
             face = view["rating"]["face"]
             value = who.maker.rate(
-                np.asarray(face["weights"]), view["emotion"], view["rating"]["points"]
+                np.asarray(face["weights"]),
+                view["emotion"],
+                view["rating"]["points"],
+                face.get("motion"),
             )
             return {"command": "rate", "trial": trial, "value": value}
         pop = view["population"]
         faces = pop["faces"]
         limits = (view["limits"]["min_selections"], view["limits"]["max_selections"])
         weights = np.asarray([f["weights"] for f in faces])
-        elite, others = who.maker.select(weights, view["emotion"], limits)
+        motions = [f.get("motion") for f in faces]
+        elite, others = who.maker.select(weights, view["emotion"], limits, motions)
         return {
             "command": "select",
             "trial": trial,
@@ -341,6 +345,14 @@ class EvolveTask:
     def notes(self, db: Session, sessions: Any, k: int, block: Any) -> list[str]:
         """Nothing the GA's blocks need say on the dashboard."""
         return []
+
+    def analysis_section(self, tools: Any, summary: dict[str, Any]) -> None:
+        """``emogen analyse``'s section on dynamic blocks' timing
+        (:mod:`emogen.tasks.evolve.dynamic_report`); the faces themselves are analysed by
+        :mod:`emogen.analysis`."""
+        from emogen.tasks.evolve.dynamic_report import dynamic_section
+
+        dynamic_section(tools, summary)
 
 
 def _shown(db: Session, row: TrialRow, cmd: _Shown) -> PopulationRow:

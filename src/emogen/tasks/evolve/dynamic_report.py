@@ -1,0 +1,108 @@
+"""``emogen analyse``'s section on a study's dynamic evolve blocks
+(:mod:`emogen.tasks.evolve.dynamic_analysis`): per emotion the participants' peak latencies
+with intervals, each gene's temporal profile across participants, and the test of whether
+timing differs between emotions (participants as the unit)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from emogen.tasks.evolve.dynamic_analysis import (
+    PERMUTATIONS,
+    emotion_timing,
+    final_curves,
+    gene_profiles,
+    participant_timing,
+    timing_test,
+)
+
+
+def dynamic_section(tools: Any, summary: dict[str, Any]) -> None:
+    """The section (nothing where the export has no dynamic faces); ``tools``:
+    :class:`emogen.analysis.task_sections.TaskTools`."""
+    report, opts = tools.report, tools.opts
+    face_curves = tools.table("face_curves")
+    finals = tools.table("final_faces")
+    if face_curves is None or face_curves.empty:
+        return
+    report.heading("Dynamic faces: timing")
+    curves = final_curves(finals, face_curves) if finals is not None else face_curves.iloc[:0]
+    if curves.empty:
+        report.paragraph("No timing analysis: no finished dynamic evolve trial yet.")
+        summary["dynamic"] = {"note": "no finished dynamic trial"}
+        return
+    rng = np.random.default_rng(opts.seed)
+    timing = participant_timing(curves)
+    level = int(100 * (1 - opts.alpha))
+    report.paragraph(
+        f"{len(timing)} participant × emotion values from {curves['participant_id'].nunique()} "
+        "participants' final dynamic faces. The participant is the unit: a face's peak "
+        "latency is when its motion (the sum of its genes' squared weights) is greatest, its "
+        "onset and offset when that first and last reaches 10% of the peak; a participant's "
+        f"value is the mean over their final faces of the emotion; {level}% percentile "
+        "bootstrap intervals over participants."
+    )
+    by_emotion = emotion_timing(timing, rng, opts.alpha)
+    report.table(
+        by_emotion.round(3),
+        name="dynamic_timing",
+        caption="Peak latency (s) of each emotion's final faces across participants [interval]; "
+        "mean onset and offset latencies (every participant's values: the CSV).",
+        data=timing,
+    )
+    _strip(timing, tools)
+    profiles = gene_profiles(curves, rng, opts.alpha)
+    shown = profiles.sort_values(
+        ["block_name", "emotion", "amplitude"], ascending=[True, True, False]
+    ).groupby(["block_name", "emotion"], sort=True)
+    report.table(
+        shown.head(5).round(3).reset_index(drop=True),
+        name="dynamic_gene_profiles",
+        caption="Each emotion's five strongest genes: mean amplitude across participants (0 "
+        "where not shown) and peak latency (s) of the participants whose faces show the gene, "
+        "with intervals (every gene: the CSV).",
+        data=profiles,
+    )
+    tests = []
+    for block in sorted(timing["block_name"].unique()):
+        test = timing_test(timing, str(block), rng, opts.alpha)
+        if test is not None:
+            tests.append(test.to_dict())
+    if tests:
+        report.table(
+            pd.DataFrame(tests).drop(columns=["emotions"]).round(4),
+            name="dynamic_timing_test",
+            caption="Does timing differ between emotions? Repeated-measures F of participants' "
+            f"peak latencies, p from {PERMUTATIONS} permutations of the emotion labels within "
+            f"participants; partial η² with its {level}% bootstrap interval over participants "
+            "(participants with every emotion of the block).",
+        )
+    else:
+        report.paragraph("No timing test: it needs two emotions and three participants with both.")
+    summary["dynamic"] = {
+        "n_participants": int(curves["participant_id"].nunique()),
+        "timing_tests": tests,
+    }
+
+
+def _strip(timing: pd.DataFrame, tools: Any) -> None:
+    """Each participant's peak latency per emotion, with the emotion's mean."""
+    fig = tools.new_figure(5.0, 3.0)
+    ax = fig.subplots()
+    emotions = sorted(timing["emotion"].unique())
+    for i, emotion in enumerate(emotions):
+        peaks = timing.loc[timing["emotion"] == emotion, "peak_s"].to_numpy()
+        jitter = np.linspace(-0.15, 0.15, len(peaks)) if len(peaks) > 1 else np.zeros(1)
+        ax.plot(i + jitter, peaks, "o", ms=3, alpha=0.6, color=tools.style(i)["color"])
+        ax.plot([i - 0.25, i + 0.25], [peaks.mean()] * 2, "-", color="black")
+    ax.set_xticks(range(len(emotions)), emotions)
+    ax.set_ylabel("peak latency (s)")
+    ax.grid(alpha=0.3, axis="y")
+    tools.save_figure(
+        fig,
+        "dynamic_peak_latency.png",
+        "Participants' peak latencies by emotion (one dot per participant; bar: the mean).",
+    )
