@@ -136,8 +136,13 @@ def test_fresh_participants_from_the_ga(ict_model) -> None:  # type: ignore[no-u
 
 def test_identical_prototypes_on_the_ga_reject_at_alpha(ict_model) -> None:  # type: ignore[no-untyped-def]
     """The known answer on the real GA (short runs for speed): one prototype for both groups,
-    with participant spread and choice noise, stays at α up to n = 100 (tolerance: module
-    doc, R = 200 → 3 SE = 0.046)."""
+    with participant spread and choice noise, stays at α up to n = 100. Tolerance: the test is
+    exact here (the groups are exchangeable), so each of the 30 rates (15 n × power and false
+    positives) is Binomial(200, ≤ α); each is held below its Bonferroni bound for a family-wise
+    1% (scipy's binomial quantile: 22 of 200 = 0.11; 3 SE per rate fails an exact test at about
+    one seed in four here: seeds 1 and 31 of 4 tried), and their mean to α ± 3 SE."""
+    from scipy.stats import binom
+
     rig = ict_model.rig
     cfg = SimulationConfig(
         ga=GAConfig(generations=2), target={"jawOpen": 1.0}, noise_temperature=0.05
@@ -154,5 +159,7 @@ def test_identical_prototypes_on_the_ga_reject_at_alpha(ict_model) -> None:  # t
         seed=3,
     )
     assert res.curve["n"].max() == 100
-    assert (res.curve["power"] <= ALPHA + 3 * se).all(), res.curve
-    assert (res.curve["false_positive"] <= ALPHA + 3 * se).all(), res.curve
+    rates = res.curve[["power", "false_positive"]]
+    bound = binom.isf(0.01 / rates.size, r, ALPHA) / r
+    assert (rates <= bound).all().all(), (bound, res.curve)
+    assert (abs(rates.mean() - ALPHA) <= 3 * se).all(), res.curve
