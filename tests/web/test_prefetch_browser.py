@@ -126,10 +126,13 @@ def test_the_next_identity_is_ready_at_the_switch(site: ServerProcess, browser: 
     after = loads(page)
     assert after == made, f"a model was built at the switch: {after[len(made) :]}"
     # The bound: the first screen of the new identity is ready as fast as an ordinary screen
-    # (ten faces drawn), not that plus a model build (the first identity's build on this page,
-    # on this machine now, seconds in SwiftShader); half a build is the margin for the load.
+    # (ten faces drawn) plus the new container's first draw, not that plus a model build (the
+    # first identity's build on this page, on this machine now). A build at the switch costs a
+    # whole build and the first draw on top of an ordinary screen; the first draw alone took
+    # 183–293 ms against builds of 480–690 ms (half a build as the margin failed once in a
+    # fresh-clone CI run: 293 ms against 37 + 242), so the bound is one build.
     typical = statistics.median(times)
-    assert switch < typical + 0.5 * first_build, (switch, times, first_build)
+    assert switch < typical + first_build, (switch, times, first_build)
     assert page.evaluate("() => document.querySelectorAll('#grid .faces-canvas').length") == 2
     visible = page.eval_on_selector_all(
         "#grid .faces-canvas", "cs => cs.filter((c) => c.style.visibility !== 'hidden').length"
