@@ -42,7 +42,7 @@ class TrialView(TypedDict):
     shown), its attempt (restarts) and status; ``next_identity``: the identity of the session's
     next trial, so that the page can make that face model ready while the participant is on
     this trial (None at the last trial, and before a block that chooses its faces when it
-    starts: a categorise block's)."""
+    starts)."""
 
     position: int
     block: int
@@ -89,8 +89,8 @@ def completion(config: StudyConfig, participant_id: str) -> Completion:
     return {"message": c.message, "code": c.code, "redirect_url": url}
 
 
-#: The identity of a session's trial at a position ('' for a categorise trial before its block
-#: has drawn its faces).
+#: The identity of a session's trial at a position ('' for a trial of a block that draws its
+#: faces when it starts, before it has).
 _NEXT_IDENTITY = select(TrialRow.identity).where(
     TrialRow.session_id == bindparam("session_id"), TrialRow.position == bindparam("position")
 )
