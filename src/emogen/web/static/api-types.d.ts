@@ -818,7 +818,7 @@ export interface components {
          *     shown), its attempt (restarts) and status; ``next_identity``: the identity of the session's
          *     next trial, so that the page can make that face model ready while the participant is on
          *     this trial (None at the last trial, and before a block that chooses its faces when it
-         *     starts: a categorise block's).
+         *     starts).
          */
         TrialView: {
             /** Attempt */
