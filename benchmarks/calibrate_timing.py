@@ -9,8 +9,9 @@ database; the study is exported and analysed as ``emogen analyse`` does.
 Conditions: ``null`` (one time course shared by the emotions: the test should reject at α),
 ``planted`` (fearful peaks at 0.2 of the clip, sad at 0.7). The study: examples/dynamic.toml's
 dynamic block alone, emotions sad and fearful, ``--generations`` generations (16: in 8 the GA
-moves the genes' timing too little for 30 participants to show the planted difference, p 0.07). Prints per study
-the test and then the rejection rate at α with its Wilson 95% interval.
+moves the genes' timing too little for 30 participants to show the planted difference, p 0.07).
+Study s has seed ``--first-seed`` + s. Prints per study its seed and test, then the rejection
+rate at α with its exact (Clopper–Pearson) 95% interval and the rig the faces were made on.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from scipy.stats import binomtest
 
 from emogen.model import load_model
 from emogen.model.face import FaceModel
@@ -94,11 +96,10 @@ def timing_study(
     return timing_test(timing, str(timing["block_name"].iloc[0]), rng, alpha), timing
 
 
-def wilson(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
-    p = k / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return centre - half, centre + half
+def clopper_pearson(k: int, n: int, level: float = 0.95) -> tuple[float, float]:
+    """The exact (Clopper–Pearson) interval of a rate k / n (scipy's ``binomtest``)."""
+    ci = binomtest(k, n).proportion_ci(confidence_level=level, method="exact")
+    return float(ci.low), float(ci.high)
 
 
 def main() -> None:
@@ -112,7 +113,7 @@ def main() -> None:
     parser.add_argument("--model", type=Path, default=None)
     args = parser.parse_args()
     peak_at = PLANTED if args.condition == "planted" else {}
-    rejected = 0
+    rejected = tested = 0
     started = time.perf_counter()
     model = load_model(args.model)
     with tempfile.TemporaryDirectory() as tmp:
@@ -127,20 +128,24 @@ def main() -> None:
                 alpha=args.alpha,
             )
             if test is None:
-                print(f"study {s}: no test (too few participants with both emotions)")
+                print(
+                    f"study {s} (seed {args.first_seed + s}): no test (too few participants with both emotions)"
+                )
                 continue
+            tested += 1
             rejected += test.p_value < args.alpha
             peaks = timing.groupby("emotion")["peak_s"].mean().round(3).to_dict()
             print(
-                f"study {s}: mean peak latency (s) {peaks}; n={test.n_participants} F={test.f:.2f} p={test.p_value:.4f} "
+                f"study {s} (seed {args.first_seed + s}): mean peak latency (s) {peaks}; n={test.n_participants} F={test.f:.2f} p={test.p_value:.4f} "
                 f"eta2={test.eta2:.3f} [{test.eta2_low:.3f}, {test.eta2_high:.3f}]",
                 flush=True,
             )
-    lo, hi = wilson(rejected, args.studies)
+    lo, hi = clopper_pearson(rejected, tested) if tested else (float("nan"), float("nan"))
     print(
-        f"{args.condition}: rejected {rejected}/{args.studies} at alpha {args.alpha} "
-        f"({rejected / args.studies:.3f}, Wilson 95% [{lo:.3f}, {hi:.3f}]); "
-        f"{time.perf_counter() - started:.0f} s"
+        f"{args.condition} on {model.rig.name}, seeds {args.first_seed}-"
+        f"{args.first_seed + args.studies - 1}: rejected {rejected}/{tested} at alpha "
+        f"{args.alpha} ({rejected / max(tested, 1):.3f}, Clopper-Pearson 95% [{lo:.3f}, "
+        f"{hi:.3f}]); {time.perf_counter() - started:.0f} s"
     )
 
 

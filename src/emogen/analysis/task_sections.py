@@ -29,6 +29,7 @@ if TYPE_CHECKING:
 
     from emogen.analysis.analyse_options import AnalysisOptions
     from emogen.analysis.report import Content
+    from emogen.appearance.identities import Identity
     from emogen.model.face import FaceModel
 
 
@@ -61,6 +62,18 @@ class TaskTools:
         self.report.figure(path, caption)
         return path
 
+    def identity(self, name: str) -> Identity:
+        """The identity ``name`` as participants saw it: the study's own (the export's
+        ``identities`` table), else the preset of that name (ConfigError: neither)."""
+        from emogen.appearance.identities import resolve_identity
+        from emogen.study.export import identities_from_table
+
+        table = self.table("identities")
+        known = (
+            {} if table is None else {n: i for (_, n), i in identities_from_table(table).items()}
+        )
+        return resolve_identity(name, known)
+
     def face_sheet(
         self,
         genes: np.ndarray,
@@ -75,18 +88,12 @@ class TaskTools:
         if self.model is None or not self.opts.render:
             return "no face model, or --no-render"
         from emogen.analysis.face_sheets import face_sheet
-        from emogen.appearance.identities import resolve_identity
         from emogen.errors import EmoGenError
-        from emogen.study.export import identities_from_table
 
-        table = self.table("identities")
-        known = (
-            {} if table is None else {n: i for (_, n), i in identities_from_table(table).items()}
-        )
         rig = self.model.rig
         eye = genes.shape[1] == len(rig.gene_names(True))
         try:
-            idents = [resolve_identity(i, known) for i in identities]
+            idents = [self.identity(i) for i in identities]
             path = face_sheet(
                 self.model,
                 rig.expand(genes, eye),

@@ -41,7 +41,6 @@ if TYPE_CHECKING:
     import numpy as np
     import pandas as pd
 
-    from emogen.ga.genome import DynamicGenome
     from emogen.model.rig import Rig
 
 #: Columns that tell faces apart in an export's ``face_curves`` table.
@@ -110,68 +109,6 @@ def read_curves(path: Path, rig: Rig, select: list[str] | None) -> tuple[np.ndar
     return genes, table.assign(gene_index=seen)
 
 
-def clip_genome(
-    rows: pd.DataFrame, genes: np.ndarray, clip_s: float | None, hold_s: float, min_segment_s: float
-) -> DynamicGenome:
-    """The genome of the face's clip: ``clip_s`` from the rows (an export's ``clip_s``) or the
-    option; the rows' latencies (``onset_s``, ``peak_s``, ``offset_s``), when there, must be
-    the curve's under ``min_segment_s`` (a study's other ``min_segment_s`` is a wrong clip)."""
-    import numpy as np
-
-    from emogen.errors import ConfigError
-    from emogen.ga.genome import DynamicGenome
-
-    if "clip_s" in rows.columns:
-        lengths = sorted(set(rows.clip_s.dropna().astype(float)))
-        if len(lengths) != 1:
-            raise ConfigError(
-                f"the face's rows give clip_s {lengths}; one face has one clip length"
-            )
-        if clip_s is not None and abs(clip_s - lengths[0]) > 1e-9:
-            raise ConfigError(f"--clip-s {clip_s} differs from the face's clip_s {lengths[0]}")
-        clip_s = lengths[0]
-    genome = DynamicGenome(
-        clip_s=1.25 if clip_s is None else clip_s, hold_s=hold_s, min_segment_s=min_segment_s
-    )
-    if {"onset_s", "peak_s", "offset_s"} <= set(rows.columns):
-        shown = rows[rows.amplitude > 0]
-        got = np.stack(genome.times(genes[shown.gene_index.to_numpy()]), axis=1)
-        want = shown[["onset_s", "peak_s", "offset_s"]].to_numpy(float)
-        if not np.allclose(got, want, rtol=0, atol=1e-6):
-            raise ConfigError(
-                f"the face's onset_s/peak_s/offset_s are not its curves' under --min-segment-s "
-                f"{min_segment_s}: give the study's min_segment_s (docs/ga.md)"
-            )
-    return genome
-
-
-def clip_frames(
-    model: Any, genes: np.ndarray, genome: DynamicGenome, fps: float, hold: bool
-) -> tuple[np.ndarray, np.ndarray]:
-    """The clip's times (T,) and shape weights (T, S): frame k at k / fps, up to the first
-    frame at or after ``clip_s`` (the face at rest), then (``hold``) ``round(hold_s · fps)``
-    frames of the hold at rest — so a frame shown 1/fps seconds plays the clip in real time."""
-    import numpy as np
-
-    from emogen.errors import ConfigError
-
-    if not 1 <= fps <= 240:
-        raise ConfigError(f"--fps must be in [1, 240]; got {fps}")
-    rest = round(genome.hold_s * fps) if hold else 0
-    times = np.arange(int(np.ceil(genome.clip_s * fps - 1e-9)) + 1 + rest) / fps
-    return times, _weights_at(model, genes, genome, times)
-
-
-def render_frames(renderer: Any, weights: np.ndarray, correct: bool) -> np.ndarray:
-    """Images (T, H, W, 3) of the frames' weights (T, S); a frame equal to one before it (the
-    face at rest) is rendered once."""
-    import numpy as np
-
-    unique, where = np.unique(weights, axis=0, return_inverse=True)
-    images: np.ndarray = renderer.render(unique, correct=correct)
-    return images[where.reshape(-1)]
-
-
 def clip(
     curves: Annotated[Path, typer.Argument(help="One face's curves: a face_curves CSV.")],
     out: Annotated[
@@ -223,12 +160,13 @@ def clip(
     import numpy as np
 
     from emogen.render.images import save_png
+    from emogen.tasks.evolve import dynamic_clip as dc
 
     _check_outputs(out, sheet)  # before any work
     model, name, ident = load_render_model(model_path, rig, identity)
     genes, rows = read_curves(curves, model.rig, select)
-    genome = clip_genome(rows, genes, clip_s, hold_s, min_segment_s)
-    times, weights = clip_frames(model, genes, genome, fps, hold)
+    genome = dc.clip_genome(rows, genes, clip_s, hold_s, min_segment_s)
+    weights = dc.clip_weights(model.rig, genes, genome, times := dc.clip_times(genome, fps, hold))
     appearance = render_appearance(model, ident, plain)
     look = look_record(name, ident, appearance, framing)
     record = {**look, "clip": genome.to_dict(), "fps": fps, "corrected": correct}
@@ -236,10 +174,10 @@ def clip(
     with make_renderer(
         model, size, background, fov, supersample, appearance=appearance, framing=framing
     ) as r:
-        images = render_frames(r, weights, correct)
+        images = dc.render_frames(r, weights, correct)
         keys = None
         if sheet is not None:
-            key_w = _weights_at(model, genes, genome, key_t)
+            key_w = dc.clip_weights(model.rig, genes, genome, key_t)
             keys = r.sheet(key_w, [f"{t:.3f} s" for t in key_t], columns=min(sheet_frames, 6),
                            correct=correct)  # fmt: skip
     wrote = [_write(path, images, times, weights, model, record, force) for path in out or []]
@@ -288,10 +226,3 @@ def _write(
             meta = image_metadata(model, weights[i], time_s=float(t), **record)
             save_png(tmp / f"frame_{i:04d}.png", image, meta)
     return str(path)
-
-
-def _weights_at(model: Any, genes: np.ndarray, genome: DynamicGenome, t: np.ndarray) -> np.ndarray:
-    """Shape weights (T, S) of the face's genes (K, 6) at times ``t`` (T,)."""
-    from emogen.ga.motion import core_at
-
-    return core_at(genome, genes[None], t, lambda g: model.rig.expand(g, True))[0]

@@ -74,7 +74,10 @@ def _write_pillow(path: Path, frames: np.ndarray, fps: float, kind: str, comment
     duration = round(1000 / fps)  # ms a frame: both formats count whole milliseconds
     options: dict[str, Any] = {"save_all": True, "append_images": images[1:], "loop": 0}
     if kind == ".webp":
-        options |= {"lossless": True, "quality": 100, "method": 4}
+        # lossless: the pixels are the same at any effort; quality 50, method 2 encodes a
+        # report's 25-frame 810×178 grid in 0.31 s of CPU where 100, 4 took 3.3 s, for a file
+        # 6 % larger (685 against 648 kB)
+        options |= {"lossless": True, "quality": 50, "method": 2}
         if comment:
             options["xmp"] = comment.encode()
     else:

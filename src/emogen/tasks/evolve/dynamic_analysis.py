@@ -42,8 +42,10 @@ _JOIN = ["session_id", "trial", "attempt", "generation", "face_id"]
 
 def final_curves(final_faces: pd.DataFrame, face_curves: pd.DataFrame) -> pd.DataFrame:
     """The ``face_curves`` rows of every final face (one row per final face per shown gene),
-    with the final face's participant, block name and emotion."""
-    keys = final_faces[[*_JOIN, "participant_id", "block_name", "emotion"]]
+    with the final face's participant, block name and emotion (and its block's position and
+    identity, where the export has them)."""
+    extra = [c for c in ("block", "identity") if c in final_faces.columns]
+    keys = final_faces[[*_JOIN, "participant_id", "block_name", "emotion", *extra]]
     curves = face_curves.drop(columns=["participant_id"], errors="ignore")
     return curves.merge(keys, on=_JOIN, how="inner")
 

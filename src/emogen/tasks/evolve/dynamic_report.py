@@ -5,11 +5,15 @@ timing differs between emotions (participants as the unit)."""
 
 from __future__ import annotations
 
+import time
+from contextlib import ExitStack
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from emogen.errors import EmoGenError
+from emogen.render import Renderer
 from emogen.tasks.evolve.dynamic_analysis import (
     PERMUTATIONS,
     emotion_timing,
@@ -17,6 +21,14 @@ from emogen.tasks.evolve.dynamic_analysis import (
     gene_profiles,
     participant_timing,
     timing_test,
+)
+from emogen.tasks.evolve.dynamic_prototypes import (
+    FPS,
+    KEY_FRAMES,
+    SHEET_ROWS,
+    TILE_PX,
+    StudyLook,
+    draw_block,
 )
 
 
@@ -85,6 +97,7 @@ def dynamic_section(tools: Any, summary: dict[str, Any]) -> None:
     summary["dynamic"] = {
         "n_participants": int(curves["participant_id"].nunique()),
         "timing_tests": tests,
+        "prototypes": _prototypes(tools, curves),
     }
 
 
@@ -106,3 +119,62 @@ def _strip(timing: pd.DataFrame, tools: Any) -> None:
         "dynamic_peak_latency.png",
         "Participants' peak latencies by emotion (one dot per participant; bar: the mean).",
     )
+
+
+def _prototypes(tools: Any, curves: pd.DataFrame) -> dict[str, Any]:
+    """The participants' dynamic prototypes drawn (:mod:`.dynamic_prototypes`): what was
+    drawn and how long it took, or why nothing was."""
+    report, model = tools.report, tools.model
+    report.heading("Participants' dynamic prototypes", level=3)
+    if model is None or not tools.opts.render:
+        why = "no face model, or --no-render"
+        report.paragraph(f"The participants' dynamic prototypes are not drawn: {why}.")
+        return {"drawn": False, "why": why}
+    started = time.perf_counter()
+    drawings = []
+    try:
+        look = StudyLook.of(tools.table("study"))
+        with ExitStack() as stack:
+            renderers: dict[str, Renderer] = {}
+
+            def renderer_for(name: str) -> Renderer:
+                if name not in renderers:
+                    ident = tools.identity(name)
+                    r = Renderer(model.with_identity(ident.shape), size=TILE_PX,
+                                 appearance=ident.appearance, framing=look.framing)  # fmt: skip
+                    renderers[name] = stack.enter_context(r)
+                return renderers[name]
+
+            for _, rows in curves.groupby("block_name", sort=True):
+                drawings.append(draw_block(rows, look, model.rig, renderer_for, report.figures))
+    except EmoGenError as exc:
+        report.paragraph(f"The participants' dynamic prototypes are not drawn: {exc}.")
+        return {"drawn": False, "why": str(exc)}
+    seconds = time.perf_counter() - started
+    corrected = (
+        "corrected frame by frame as the study corrected its faces"
+        if look.correct
+        else "uncorrected, as the study showed its faces"
+    )
+    report.paragraph(
+        "Each participant's dynamic prototype of an emotion is the mean, frame by frame, of "
+        "the face weights of their final faces of it (one final face: that face's clip); the "
+        "emotion's mean and median are taken over participants frame by frame. Each is drawn on "
+        f"the identity most of its faces showed, through the study's framing, {corrected}"
+        f" — the frames of `emogen render clip`, {FPS:g} frames/s at {TILE_PX} px a face; "
+        f"the key-frame sheets (for print) show the {KEY_FRAMES} frames nearest evenly spaced "
+        f"times over the clip, {SHEET_ROWS} participants a sheet. Drawn in {seconds:.0f} s "
+        "(`--no-render` skips it; every tile: `tables/dynamic_prototype_tiles.csv`)."
+    )
+    tiles = [row for d in drawings for row in d.tiles]
+    report.csv(pd.DataFrame(tiles), "dynamic_prototype_tiles")
+    for d in drawings:
+        for path, caption in d.figures:
+            report.figure(path, caption)
+    return {
+        "drawn": True,
+        "seconds": round(seconds, 1),
+        "fps": FPS,
+        "tile_px": TILE_PX,
+        "files": [p.name for d in drawings for p, _ in d.figures],
+    }
