@@ -141,6 +141,8 @@ SLOW: dict[str, str] = {
     "tests/tasks/test_dynamic_timing.py::test_a_planted_timing_difference_is_found": f"{_SECONDS}: 100 (30 simulated dynamic participants, load ~17)",
     "tests/tasks/test_dynamic_timing.py::test_the_report_shows_fearful_peaking_before_sad": f"{_SECONDS}: its fixture, shared",
     "tests/tasks/test_dynamic_timing.py::test_shared_timing_is_not_flagged": f"{_SECONDS}: 45 (12 simulated dynamic participants, load ~17)",
+    "tests/tasks/test_dynamic_prototypes.py::test_each_participants_animation_is_their_final_face_as_render_clip_draws_it": f"{_SECONDS}: 77 (+288 s fixture: a corrected simulated study drawn; load ~30)",
+    "tests/tasks/test_dynamic_prototypes.py::test_a_drawing_that_fails_says_why_and_keeps_the_analysis": f"{_SECONDS}: 8.1 (and the fixture above, load ~30)",
 }
 
 _KEYS = "idempotency keys: a repeated key is one step, on each backend's transactions"
