@@ -12,7 +12,8 @@ others' and 8 random faces to label, but weights without correctives, so the rel
 section says it cannot run and CD omits the correctives; analysed with ``--no-exclusions``, as
 its carried elite sits on tile 0 and the quality rule would exclude everyone), then
 ``emogen analyse --progress`` in a fresh process
-(optionally pinned by ``taskset -c CORES``), timed. Prints the wall time per size, each
+(optionally pinned by ``taskset -c CORES``), timed. Prints the wall and CPU time per size
+with the 1-minute load average at the start and end of its analysis, each
 section's share (from the progress lines), and the growth exponent of every section between
 the smallest and largest size (1: linear in participants; 2: quadratic).
 """
@@ -79,7 +80,7 @@ def one_size(n: int, args: argparse.Namespace, tmp: Path) -> tuple[float, dict[s
         )
         emogen("study", "export", "--database-url", f"sqlite:///{db}", "--out", str(export))
     made = time.perf_counter() - start
-    start, cpu = time.perf_counter(), _child_cpu()
+    start, cpu, load = time.perf_counter(), _child_cpu(), os.getloadavg()[0]
     # the planted generator carries the elite on tile 0 in > 90% of generations, which the
     # quality rule excludes (every participant): its exports are analysed without exclusions
     unruled = ["--no-exclusions"] if args.planted else []
@@ -89,7 +90,8 @@ def one_size(n: int, args: argparse.Namespace, tmp: Path) -> tuple[float, dict[s
     total, cpu = time.perf_counter() - start, _child_cpu() - cpu
     print(
         f"{n} participants: simulated and exported in {made:.0f} s; analyse {total:.1f} s "
-        f"wall, {cpu:.1f} s CPU (user + system; the wall time on a busy machine is longer)",
+        f"wall, {cpu:.1f} s CPU (user + system; the wall time on a busy machine is longer); "
+        f"load average {load:.1f} at the start, {os.getloadavg()[0]:.1f} at the end",
         flush=True,
     )
     return total, sections(run.stdout + run.stderr, total)

@@ -17,7 +17,8 @@ with 49, p is a multiple of 0.02 and the test's level 0.04), the secondary GEE, 
 the pooled conditional logit's two-way cluster-robust t test (``two_way``: the primary test
 before), the same pooled fit with model-based (unclustered) SEs — the reference the primary
 test's power is compared with — and the fields ↔ accuracy test
-(:mod:`emogen.analysis.fields_accuracy`, 999 permutations). ``--seed``: the first study's seed
+(:mod:`emogen.analysis.fields_accuracy`, 999 permutations; then the mean of its r and how many
+of its rejections had r below and above 0). ``--seed``: the first study's seed
 (the docs' table: ``--seed 141000``, seeds not used while choosing the test).
 """
 
@@ -91,6 +92,7 @@ def one_study(design: PlantedDesign, seed: int, shuffles: int) -> dict[str, obje
         "warned": [n for n, t in tests.items() if t.get("warnings")],
         "p": p,
         "contrast": res.primary.get("contrast"),
+        "fields_r": fa["r"],
     }
 
 
@@ -150,6 +152,15 @@ def report(name: str, runs: list[dict[str, object]], args: argparse.Namespace, s
         print(f"  {test:15s} {k:4d} of {len(p):4d} = {k / max(len(p), 1):.3f} [{lo:.3f}, {hi:.3f}]")
     contrasts = [r["contrast"] for r in ok if r["contrast"] is not None]
     print(f"primary contrast: mean {np.mean(contrasts):+.3f}, SD {np.std(contrasts, ddof=1):.3f}")
+    with_r = [r for r in ok if r["fields_r"] is not None]
+    if with_r:
+        rs = np.array([r["fields_r"] for r in with_r], dtype=float)
+        hit = np.array([r["p"]["fields_accuracy"] <= args.alpha for r in with_r])  # type: ignore[index]
+        se = rs.std(ddof=1) / np.sqrt(len(rs))
+        print(
+            f"fields ↔ accuracy r: mean {rs.mean():+.3f} (SE {se:.3f}); rejections with "
+            f"r < 0: {int(np.sum(hit & (rs < 0)))}, with r > 0: {int(np.sum(hit & (rs > 0)))}"
+        )
 
 
 if __name__ == "__main__":

@@ -15,10 +15,11 @@ participant who clicks without looking (always the same tile, at a glance) is:
   :mod:`emogen.analysis.quality`);
 * ``max_same_tile_share`` = 0.75 (with ``min_events`` = 8): the elite of generation 0 — a
   shuffled population, so position-neutral — on one tile in more than 75 % of the trials
-  (uniform over 10 tiles: P(≥ 6 of 8 on one tile) ≈ 2·10⁻⁴);
+  (uniform over 10 tiles, 8 trials: P(≥ 7 of 8 on one tile) = 10 · P(Binomial(8, 0.1) ≥ 7)
+  ≈ 7·10⁻⁶);
 * ``max_keep_tile0_share`` = 0.9 (with ``min_elites`` = 20): the elite on tile 0 in > 90 % of
   all generations — tile 0 holds the carried elite from generation 1 on, so this participant
-  (almost) never changed their face (simulated participants: 22–34 %);
+  (almost) never changed their face;
 * ``min_finished_share`` = 0.75: fewer than 75 % of the participant's GA trials finished.
 
 Categorisation (the ``categorise_responses`` of categorise blocks; a participant without any is
