@@ -202,7 +202,7 @@ class ViewerDisplay {
   }
 
   /**
-   * The faces ``slot`` (shown last) may show next, known ahead (the GSP slider's positions:
+   * The faces ``slot`` (shown last) may show next, known ahead (a slider's positions:
    * [{id, weights}]; null: forget them): each is shown as a frame drawn once and kept, and the
    * browser's idle frames draw the rest, nearest the one shown first (viewer/kept.js).
    */

@@ -235,7 +235,7 @@ export class FaceGrid {
   }
 
   /**
-   * Face ``i``'s faces known ahead (weight vectors, e.g. the GSP slider's positions; null or
+   * Face ``i``'s faces known ahead (weight vectors, e.g. a slider's positions; null or
    * none: forget them): each is shown as the frame the live draw made for it, kept (kept.js);
    * idle animation frames draw the rest, nearest the one shown first.
    */
