@@ -214,9 +214,11 @@ export class FaceGrid {
     return vector;
   }
 
-  /** Face ``i`` set to show weights ``w`` (morphed to them when it is drawn live). */
+  /** Face ``i`` set to show weights ``w``: morphed to them now, or, a face with kept frames,
+   * when it is drawn live. */
   setFace(i, w) {
     this.faces[i].shown = this.vectorOf(w, i);
+    if (!this.kept.has(i)) this.morph(i, this.faces[i].shown);
   }
 
   /** Face ``i``'s meshes morphed to ``vector`` (unless they hold it already). */
