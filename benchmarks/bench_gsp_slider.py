@@ -17,8 +17,9 @@ average (it is shared). Target: ≥ 30 frames/s at 1366×768 (issue #43).
 
 Measured on the shared 2-core VM (docs/study.md): drawn live on every input event (before the
 kept frames), 7.6–11.8 frames/s at load averages 1.5–12 (80–92 ms of GPU-process CPU a frame);
-from kept frames, all kept, 60.0, 44.3, 29.5 and 15.5 frames/s at load averages 24–31 (2–3 ms
-of GPU-process CPU and 3–5 ms of page a frame), every frame kept 7–15 s after the opening.
+from kept frames, all kept, 60.0, 44.3, 29.5 and 15.5 frames/s at load averages 24–31 and 59.9
+at load 5 (2–3 ms of GPU-process CPU and 3–5 ms of page a frame; from the opening 33.8 at load
+5), every frame kept 6–15 s after the opening.
 
     python -m benchmarks.bench_gsp_slider [--seconds 5]
 """
