@@ -78,6 +78,10 @@ def state_of(page: Any, srv: ServerProcess) -> dict[str, Any]:
     return httpx.get(f"{srv.url}/api/s/{token}/state", timeout=30).json()  # type: ignore[no-any-return]
 
 
+# The GSP slot's kept frames (viewer/kept.js): {shown, kept, of, complete}.
+KEPT = "() => window.emogenStudy.keptFrames().find(Boolean)"
+
+
 def face_pixels(page: Any) -> bytes:
     return page.locator("#gsp-slot").screenshot()  # type: ignore[no-any-return]
 
@@ -136,6 +140,24 @@ def test_a_participant_moves_the_slider_and_the_face_follows(
         assert int(page.input_value("#gsp-slider")) == want
         after = face_pixels(page)
         assert after != before  # the face followed the slider, live
+        # the face shown is the one of the slider's position (the viewer's kept frames hold
+        # the view's faces, position by position: tests/web/test_kept_frames.py)
+        kept = page.evaluate(KEPT)
+        assert kept["shown"] == want and kept["of"] == view["slider"]["steps"]
+        if k == 0:  # every frame kept: away and back, the same face, from its kept frame
+            page.wait_for_function(f"() => ({KEPT})().complete", timeout=120_000, polling=100)
+            page.evaluate(
+                "v => { const s = document.getElementById('gsp-slider'); s.value = v;"
+                " s.dispatchEvent(new Event('input', { bubbles: true })); }",
+                str(start_at),
+            )
+            assert face_pixels(page) == before
+            page.evaluate(
+                "v => { const s = document.getElementById('gsp-slider'); s.value = v;"
+                " s.dispatchEvent(new Event('input', { bubbles: true })); }",
+                str(want),
+            )
+            assert face_pixels(page) == after and page.evaluate(KEPT)["shown"] == want
         if k == 0:
             page.evaluate("scrollTo(0, 0)")
             no_horizontal_overflow(page)

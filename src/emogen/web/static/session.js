@@ -35,8 +35,10 @@ const ui = {
 };
 // Tests and the researcher's tools read this (loads: the face models the 3D display built, each
 // with its timings; loadMs: the current screen's from its answer to its faces drawn; clipTimes:
-// the clip time each face shown plays now).
-window.emogenStudy = { ready: false, stage: null, display: null, loads: [], loadMs: 0, shownAt: 0, clipTimes: () => [] };
+// the clip time each face shown plays now; keptFrames: each face's frames kept ahead).
+window.emogenStudy = {
+  ready: false, stage: null, display: null, loads: [], loadMs: 0, shownAt: 0, clipTimes: () => [], keptFrames: () => [],
+};
 
 function setReady(ready) {
   window.emogenStudy.ready = ready;
@@ -289,6 +291,9 @@ async function main() {
     // the clip time (s) each face shown plays now (null: a face that does not move)
     window.emogenStudy.clipTimes = () =>
       Array.from(document.querySelectorAll("[data-viewer-container] .slot"), (s) => ui.display.clipTime(s));
+    // each face's frames kept ahead (viewer/kept.js; null: none)
+    window.emogenStudy.keptFrames = () =>
+      Array.from(document.querySelectorAll("[data-viewer-container] .slot"), (s) => ui.display.keptOf?.(s) ?? null);
     await render(await call(`/api/s/${token}/state`));
   } catch (err) {
     say(err.message);

@@ -55,10 +55,9 @@ function glbOnce(url, onProgress) {
 }
 
 function release(grid) {
-  grid.play(null);
+  grid.remove();
   grid.renderer.dispose();
   grid.renderer.forceContextLoss(); // the browser's WebGL contexts are few: give this one back
-  grid.canvas.remove();
 }
 
 const nextFrame = () => new Promise((resolve) => requestAnimationFrame(() => resolve()));
@@ -95,7 +94,7 @@ class ViewerDisplay {
 
   build(container, slots, url, onProgress, ahead) {
     const grid = new FaceGrid(container, slots);
-    grid.canvas.style.visibility = "hidden"; // until its show
+    grid.setVisible(false); // until its show
     const began = performance.now();
     const ready = glbOnce(url, onProgress).then(async (blob) => {
       const fetched = performance.now() - began;
@@ -189,7 +188,7 @@ class ViewerDisplay {
       grid = await this.gridFor(container, slots, url, onProgress); // made ahead and failed: load it now
     }
     for (const entry of this.heldBy(container).values()) {
-      entry.grid.canvas.style.visibility = entry.grid === grid ? "" : "hidden";
+      entry.grid.setVisible(entry.grid === grid);
     }
     const n = grid.shapeNames.length;
     grid.setFaces(faces.map((f) => f.weights.slice(0, n)));
@@ -200,6 +199,25 @@ class ViewerDisplay {
     this.playing.set(container, { grid, slots });
     await nextFrame();
     return faces.map(() => true);
+  }
+
+  /**
+   * The faces ``slot`` (shown last) may show next, known ahead (a slider's positions:
+   * [{id, weights}]; null: forget them): each is shown as a frame drawn once and kept, and the
+   * browser's idle frames draw the rest, nearest the one shown first (viewer/kept.js).
+   */
+  keep(slot, faces) {
+    const tile = this.tileOf(slot);
+    if (!tile) return;
+    const n = tile.grid.shapeNames.length;
+    tile.grid.keep(tile.i, faces ? faces.map((f) => f.weights.slice(0, n)) : null);
+  }
+
+  /** ``slot``'s kept frames: {shown: the position shown (−1: none of them), kept, of, complete}
+   * (null: none kept; benchmarks and tests). */
+  keptOf(slot) {
+    const tile = this.tileOf(slot);
+    return tile ? tile.grid.keptState(tile.i) : null;
   }
 
   /** The grid drawing ``slot`` and the slot's place in it (null: none shown there). */

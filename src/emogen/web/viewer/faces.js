@@ -17,6 +17,7 @@ import {
   Scene,
   Vector2,
   Vector3,
+  Vector4,
   WebGLRenderer,
 } from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
@@ -25,6 +26,7 @@ import { faceMaterial, gazeMatrix } from './material.js';
 import { addShadingAttributes } from './mesh.js';
 import { MorphSource } from './morph.js';
 import { Clip } from './motion.js';
+import { KeptFrames, Overlay } from './kept.js';
 import { StrainField } from './strain.js';
 
 ColorManagement.enabled = false; // shade.glsl writes sRGB itself: no conversions anywhere
@@ -102,6 +104,8 @@ export class FaceGrid {
     this.faces = [];
     this.shapeNames = [];
     this.drawnSize = null;
+    this.kept = new Map(); // face → its KeptFrames (kept.js)
+    this.overlay = null; // the 2D canvas playing kept frames, made by the first keep()
     new ResizeObserver(() => {
       const box = container.getBoundingClientRect();
       const key = `${Math.round(box.width)}x${Math.round(box.height)}`;
@@ -174,7 +178,7 @@ export class FaceGrid {
       });
       root.add(copy);
       scene.add(root);
-      this.faces.push({ scene, meshes: copies, sources, weights: null });
+      this.faces.push({ scene, meshes: copies, sources, weights: null, shown: null });
     }
     // The shaders compiled without holding up the page (KHR_parallel_shader_compile where the
     // browser has it): a face model made ahead while the participant answers (see the study
@@ -197,8 +201,9 @@ export class FaceGrid {
     this.render();
   }
 
-  /** Face ``i`` set to weights ``w`` (morphed to them unless it shows them already). */
-  setFace(i, w) {
+  /** Weights ``w`` (an array in the GLB's order, or a {target: value} object) as the full
+   * vector of the GLB's targets, for face ``i`` (named in the error). */
+  vectorOf(w, i) {
     const vector = Array.isArray(w) || ArrayBuffer.isView(w)
       ? Array.from(w, Number)
       : this.shapeNames.map((name) => Number(w?.[name] ?? 0));
@@ -206,8 +211,20 @@ export class FaceGrid {
       throw new Error(`face ${i}: expected at most ${this.shapeNames.length} weights, got ${vector.length}`);
     }
     while (vector.length < this.shapeNames.length) vector.push(0);
+    return vector;
+  }
+
+  /** Face ``i`` set to show weights ``w``: morphed to them now, or, a face with kept frames,
+   * when it is drawn live. */
+  setFace(i, w) {
+    this.faces[i].shown = this.vectorOf(w, i);
+    if (!this.kept.has(i)) this.morph(i, this.faces[i].shown);
+  }
+
+  /** Face ``i``'s meshes morphed to ``vector`` (unless they hold it already). */
+  morph(i, vector) {
     const face = this.faces[i];
-    if (face.weights && vector.every((x, k) => x === face.weights[k])) return;
+    if (!vector || (face.weights && vector.every((x, k) => x === face.weights[k]))) return;
     face.weights = vector;
     const active = [];
     vector.forEach((x, k) => x !== 0 && active.push(k));
@@ -217,6 +234,64 @@ export class FaceGrid {
       gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotLeft.value);
       gazeMatrix(yaw, pitch, mesh.material.uniforms.uEyeRotRight.value);
     }
+  }
+
+  /**
+   * Face ``i``'s faces known ahead (weight vectors, e.g. a slider's positions; null or
+   * none: forget them): each is shown as the frame the live draw made for it, kept (kept.js);
+   * idle animation frames draw the rest, nearest the one shown first.
+   */
+  keep(i, faces) {
+    this.kept.get(i)?.clear();
+    this.kept.delete(i);
+    if (faces?.length) {
+      this.kept.set(i, new KeptFrames(faces.map((w) => this.vectorOf(w, i))));
+      this.overlay ??= new Overlay(this.canvas);
+      this.ahead();
+    } else if (this.faces[i].shown) {
+      this.render(); // drawn live again: the WebGL canvas under the kept frames may hold another
+    }
+  }
+
+  /** Face ``i``'s kept frames: {shown: the position it shows (−1: none of them), kept, of,
+   * complete: none left to draw}; null when none are kept. */
+  keptState(i) {
+    const kept = this.kept.get(i);
+    if (!kept) return null;
+    const shown = this.faces[i].shown ? kept.find(this.faces[i].shown) : -1;
+    return { shown, kept: kept.frames.size, of: kept.faces.length, complete: shown >= 0 && kept.complete(shown) };
+  }
+
+  /** The next frame to keep drawn at the next animation frame (one a frame), until none is left. */
+  ahead() {
+    if (this.aheadRaf) return;
+    this.aheadRaf = requestAnimationFrame(() => {
+      this.aheadRaf = null;
+      if (this.drewLive) { // a face shown was drawn live in this frame: the next one draws ahead
+        this.drewLive = false;
+        return this.ahead();
+      }
+      for (const [i, kept] of this.kept) {
+        const slot = this.slots[i].getBoundingClientRect();
+        if (!slot.width || !slot.height) continue; // not on screen: nothing to draw
+        const shown = this.faces[i].shown ? kept.find(this.faces[i].shown) : -1;
+        const k = shown < 0 ? -1 : kept.next(shown);
+        if (k < 0) continue;
+        if (k === shown || !this.sameSize()) this.render(); // the face shown first (drawn live, kept)
+        else this.drawAhead(i, kept, k, shown);
+        this.ahead();
+        return;
+      }
+    });
+  }
+
+  /** Frame ``k`` of face ``i`` drawn into its slot and kept, under the kept frame shown. */
+  drawAhead(i, kept, k, shown) {
+    const rect = this.viewport(i, this.container.getBoundingClientRect());
+    this.morph(i, kept.faces[k]);
+    this.renderer.clear();
+    this.renderer.render(this.faces[i].scene, this.camera);
+    kept.keep(k, this.canvas, rect, shown);
   }
 
   /**
@@ -277,6 +352,27 @@ export class FaceGrid {
     return [yaw, pitch];
   }
 
+  /** Whether the container still has the size last drawn. */
+  sameSize() {
+    const box = this.container.getBoundingClientRect();
+    return `${Math.max(1, Math.round(box.width))}x${Math.max(1, Math.round(box.height))}` === this.drawnSize;
+  }
+
+  /** Viewport, scissor and camera set to face ``i``'s slot; its rectangle in the canvas's
+   * device pixels from the top left, [x, y, width, height]. */
+  viewport(i, box) {
+    const r = this.renderer;
+    const rect = this.slots[i].getBoundingClientRect();
+    const x = rect.left - box.left;
+    const y = box.bottom - rect.bottom;
+    r.setViewport(x, y, rect.width, rect.height);
+    r.setScissor(x, y, rect.width, rect.height);
+    this.camera.aspect = rect.width / rect.height;
+    this.camera.updateProjectionMatrix();
+    const v = r.getCurrentViewport(new Vector4());
+    return [v.x, this.canvas.height - v.y - v.w, v.z, v.w];
+  }
+
   render() {
     const r = this.renderer;
     const box = this.container.getBoundingClientRect();
@@ -284,21 +380,47 @@ export class FaceGrid {
     const height = Math.max(1, Math.round(box.height));
     const size = r.getSize(new Vector2());
     if (size.x !== width || size.y !== height) r.setSize(width, height, true);
+    if (this.drawnSize !== `${width}x${height}`) {
+      for (const kept of this.kept.values()) kept.clear(); // frames of another size
+      this.overlay?.fit();
+    }
     this.drawnSize = `${width}x${height}`;
     r.setScissor(0, 0, width, height);
     r.setClearColor(0x000000, 0);
     r.clear();
     r.setClearColor(this.background, 1);
     this.faces.forEach((face, i) => {
-      const rect = this.slots[i].getBoundingClientRect();
-      const x = rect.left - box.left;
-      const y = box.bottom - rect.bottom;
-      r.setViewport(x, y, rect.width, rect.height);
-      r.setScissor(x, y, rect.width, rect.height);
-      this.camera.aspect = rect.width / rect.height;
-      this.camera.updateProjectionMatrix();
+      const rect = this.viewport(i, box);
+      const kept = this.kept.get(i);
+      const k = kept && face.shown ? kept.find(face.shown) : -1;
+      if (k >= 0 && this.overlay.play(i, k, kept.frames.get(k))) return;
+      this.morph(i, face.shown);
       r.clear();
       r.render(face.scene, this.camera);
+      if (k >= 0) {
+        if (!kept.frames.has(k)) kept.keep(k, this.canvas, rect, k);
+        this.overlay.copy(i, k, rect);
+        this.drewLive = true;
+        this.ahead();
+      } else {
+        this.overlay?.uncover(i);
+      }
     });
+  }
+
+  /** Shown (true) or hidden, the kept frames' canvas with it. */
+  setVisible(visible) {
+    this.canvas.style.visibility = visible ? '' : 'hidden';
+    if (this.overlay) this.overlay.canvas.style.visibility = this.canvas.style.visibility;
+  }
+
+  /** Playing stopped, kept frames given back, the canvases taken off the page. */
+  remove() {
+    this.play(null);
+    cancelAnimationFrame(this.aheadRaf ?? 0);
+    for (const kept of this.kept.values()) kept.clear();
+    this.kept.clear();
+    this.canvas.remove();
+    this.overlay?.canvas.remove();
   }
 }

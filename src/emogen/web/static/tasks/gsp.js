@@ -1,6 +1,10 @@
 // The gsp task's page component (Gibbs sampling with people): one face, large, and one slider
 // under it. The view carries the face at every slider position (``frames``), so moving the
-// slider sets the viewer's morph weights on every input event, without asking the server. The
+// slider shows the face of that position on every input event, without asking the server: the
+// 3D viewer keeps each position's frame once drawn and draws the others ahead while the page is
+// idle (display.keep, viewer/kept.js: on software GL a live draw of this face runs at 7.6–10.5
+// frames/s, its kept frames at ≥ 30; benchmarks/bench_gsp_slider.py). The frames are given
+// back when the answer is sent. The
 // slider starts where the server drew it (recorded); arrow keys move it, Home/End jump to its
 // ends, Enter or "Next" sends it. Without WebGL (the server's images) a strip of nine pictures
 // at evenly spaced positions stands in for the slider, and the answer says so (``fallback``).
@@ -94,6 +98,7 @@ function create(page) {
   function send() {
     const state = ui.state;
     if (ui.busy || !page.ready() || state.view.waiting || chosen === null) return;
+    if (!fallback()) ui.display.keep?.($("gsp-slot"), null); // the trial's frames given back
     page.step({
       command: "slide",
       key: ui.key,
@@ -166,6 +171,8 @@ function create(page) {
       slider.value = String(view.slider.start);
       page.show("gsp");
       await page.drawFaces([$("gsp-slot")], [view.face], state.trial.identity);
+      const positions = view.frames.map((/** @type {number[]} */ w, /** @type {number} */ p) => ({ id: p, weights: w }));
+      ui.display.keep?.($("gsp-slot"), positions);
     }
     page.facesShown();
     page.setReady(true);
