@@ -11,30 +11,24 @@ from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.exclusions import ExclusionRule, apply_exclusions
 from emogen.analysis.people import People
 from emogen.analysis.quality import participant_quality, position_bias, selection_positions
-from emogen.analysis.report import Content
+from emogen.analysis.results import Section
 
 if TYPE_CHECKING:
-    from emogen.model.face import FaceModel
+    from pathlib import Path
 
 #: Monte Carlo draws of the position-bias null.
 DRAWS = 2000
 
 
 def quality_section(
-    people: People,
-    report: Content,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-    *,
-    rule: ExclusionRule | None = None,
-) -> pd.DataFrame:
+    people: People, folder: Path, opts: AnalysisOptions, *, rule: ExclusionRule | None = None
+) -> tuple[Section, pd.DataFrame]:
     """Quality per participant and session, the position-bias test and the exclusion rule
-    applied (``rule``; default :class:`ExclusionRule`) into ``report``; ``people`` are **all**
-    participants, before exclusions. Headline numbers into ``summary["quality"]``; returns the
-    exclusion table (:func:`apply_exclusions`)."""
-    del model
+    applied (``rule``; default :class:`ExclusionRule`); ``people`` are **all** participants,
+    before exclusions. The section (headline numbers in ``analysis.json``'s ``quality``, the
+    position-bias test a typed result) and the exclusion table (:func:`apply_exclusions`)."""
     rule = ExclusionRule() if rule is None else rule
+    report = Section(folder)
     report.heading("Data quality and exclusions")
     quality = participant_quality(people)
     report.paragraph(
@@ -69,11 +63,11 @@ def quality_section(
     report.table(table, "quality_exclusions", "Exclusion measures and flags, every participant.")
     out["excluded"] = int(table["excluded"].sum())
     out["excluded_ids"] = sorted(excluded["participant_id"].astype(str))
-    summary["quality"] = out
-    return table
+    report.data["quality"] = out
+    return report, table
 
 
-def _position(people: People, report: Content, opts: AnalysisOptions, out: dict) -> None:
+def _position(people: People, report: Section, opts: AnalysisOptions, out: dict) -> None:
     sel = selection_positions(people)
     if sel is None or sel["position"].isna().all():
         report.paragraph(
@@ -105,5 +99,20 @@ def _position(people: People, report: Content, opts: AnalysisOptions, out: dict)
         "quality_position_bias",
         "Generation-0 picks per participant: the most-picked tile and the position-bias test.",
     )
-    out["position_bias_p"] = overall["p_mc"]
-    out["position_bias_flagged"] = flagged
+    test = "Monte Carlo chi-square sum"
+    out["position_bias"] = record = {
+        "test": test,
+        "chi2_sum": overall["chi2_sum"],
+        "p": overall["p_mc"],
+        "draws": DRAWS,
+        "n_participants": len(table),
+        "flagged": flagged,
+    }
+    report.add_test(
+        "quality.position_bias",
+        record,
+        test=test,
+        p=overall["p_mc"],
+        statistic=overall["chi2_sum"],
+        n=len(table),
+    )
