@@ -24,10 +24,10 @@ def quality_section(
     people: People, folder: Path, opts: AnalysisOptions, *, rule: ExclusionRule | None = None
 ) -> tuple[Section, pd.DataFrame]:
     """Quality per participant and session, the position-bias test and the exclusion rule
-    applied (``rule``; default :class:`ExclusionRule`); ``people`` are **all** participants,
-    before exclusions. The section (headline numbers in ``analysis.json``'s ``quality``, the
-    position-bias test a typed result) and the exclusion table (:func:`apply_exclusions`)."""
-    rule = ExclusionRule() if rule is None else rule
+    applied (``rule``; None: none applied, ``--no-exclusions``, and the default rule's flags
+    shown for information only); ``people`` are **all** participants, before exclusions. The
+    section (headline numbers in ``analysis.json``'s ``quality``, the position-bias test a typed
+    result) and the exclusion table (:func:`apply_exclusions`, the default rule's without one)."""
     report = Section(folder)
     report.heading("Data quality and exclusions")
     quality = participant_quality(people)
@@ -42,7 +42,18 @@ def quality_section(
     report.table(quality, "quality_sessions", "Quality per participant and session.")
     out: dict[str, Any] = {"participants": people.n_participants}
     _position(people, report, opts, out)
-    kept, table = apply_exclusions(people, rule)
+    kept, table = apply_exclusions(people, ExclusionRule() if rule is None else rule)
+    if rule is None:
+        _not_applied(table, report, out)
+    else:
+        _applied(rule, kept, table, report, out)
+    report.data["quality"] = out
+    return report, table
+
+
+def _applied(
+    rule: ExclusionRule, kept: People, table: pd.DataFrame, report: Section, out: dict
+) -> None:
     excluded = table[table["excluded"]]
     report.paragraph(
         "**Exclusion rule** (stated before the analysis; a participant is excluded when any "
@@ -63,8 +74,25 @@ def quality_section(
     report.table(table, "quality_exclusions", "Exclusion measures and flags, every participant.")
     out["excluded"] = int(table["excluded"].sum())
     out["excluded_ids"] = sorted(excluded["participant_id"].astype(str))
-    report.data["quality"] = out
-    return report, table
+
+
+def _not_applied(table: pd.DataFrame, report: Section, out: dict) -> None:
+    """``--no-exclusions``: nobody excluded; the default rule's flags for information."""
+    flagged = sorted(table.loc[table["excluded"], "participant_id"].astype(str))
+    report.paragraph(
+        "**No exclusion rule applied** (`--no-exclusions`): every participant is analysed. For "
+        "information only, the default rule (" + "; ".join(ExclusionRule().describe()) + ") "
+        f"would exclude {len(flagged)} of {len(table)}"
+        + (f" ({', '.join(flagged)})." if flagged else ".")
+    )
+    report.table(
+        table,
+        "quality_exclusions",
+        "Exclusion measures and the default rule's flags (not applied), every participant.",
+    )
+    out["excluded"] = 0
+    out["excluded_ids"] = []
+    out["default_rule_would_exclude"] = flagged
 
 
 def _position(people: People, report: Section, opts: AnalysisOptions, out: dict) -> None:
