@@ -7,7 +7,10 @@ in the spirit of statsmodels' results and :mod:`emogen.analysis.replication.find
 estimate with its interval, the test (name, statistic, df, p), the unit of inference and how
 many of them, the family whose correction it shares, its role in the multiplicity plan
 (primary or exploratory, set by :mod:`emogen.analysis.plan`), an effect size with its interval,
-and warnings or a failed fit.
+and warnings or a failed fit. A section builds each result where it computes the test
+(:meth:`Section.add_test`); sections written before that read theirs from their records in
+``data`` (:meth:`Section.tests_in_data`, by the ``*_KEYS`` below: a p-value under another key
+is not found there, so a new analysis uses ``add_test``).
 
 :func:`write_analysis` is the one renderer: from the sections it writes ``index.html``,
 ``README.md``, every table under ``tables/`` and ``analysis.json`` (each test's record there
