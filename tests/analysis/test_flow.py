@@ -131,9 +131,10 @@ def test_the_flow_per_group_and_in_the_report(export: Path, tmp_path: Path) -> N
     )
     opts = AnalysisOptions(participants=groups_file)
     prepared = prepare_people(export, opts)
-    section = quality_first(prepared, tmp_path / "report", opts)
-    write_tables(section.out, section.blocks)
-    summary = section.data
+    quality, flow_sec = quality_first(prepared, tmp_path / "report", opts)[:2]
+    write_tables(flow_sec.out, flow_sec.blocks)
+    summary = flow_sec.data
+    assert list(quality.data) == ["quality"] and list(summary) == ["flow"]
     assert summary["flow"]["finished the study"] == 5
     assert summary["flow"]["excluded by the rule"] == 3
     written = pd.read_csv(tmp_path / "report" / "tables" / "participant_flow.csv")

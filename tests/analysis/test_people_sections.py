@@ -23,7 +23,10 @@ def test_sections_on_a_simulated_study(ict_model, tmp_path: Path) -> None:  # ty
     people = as_people(simulate_people(design, ict_model.rig, seed=1))
     report, summary = Report("t", tmp_path), {}
     opts = AnalysisOptions()
-    quality_section(people, report, summary, opts, None)  # within the quality section
+    quality, _ = quality_section(people, tmp_path, opts, rule=opts.exclusions)
+    report.blocks += quality.blocks
+    summary |= quality.data
+    assert quality.results == []  # as_people has no tile positions: no position-bias test
     for section in (genes_section, conditions_section):
         part = section(people, tmp_path, opts, None)
         report.blocks += part.blocks

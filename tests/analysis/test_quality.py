@@ -125,3 +125,32 @@ def test_exclusions_spare_simulated_participants_and_catch_a_careless_one(
     quality = participant_quality(careless)
     assert quality.set_index("participant_id").loc[who, "median_rt_ms"] == 100
     assert (quality["trials_finished"] == 8).all()
+
+
+def test_the_quality_section_says_who_is_excluded_and_never_claims_it_without_a_rule(
+    export: Path, tmp_path: Path
+) -> None:
+    """With the rule: the careless participant excluded, and the position-bias test a typed
+    result whose p is the one in its record. With ``--no-exclusions``: nobody excluded in the
+    JSON or the text; the default rule's verdict given for information only."""
+    from emogen.analysis.analyse_options import AnalysisOptions
+    from emogen.analysis.analyse_people import prepare_people, quality_first
+
+    who = sorted(load_people(export).faces["participant_id"])[1]
+    _plant_careless(export, tmp_path / "careless", who)
+    for opts, excluded in ((AnalysisOptions(), [who]), (AnalysisOptions(exclusions=None), [])):
+        prepared = prepare_people(tmp_path / "careless", opts)
+        sections = quality_first(prepared, tmp_path / "report", opts)
+        quality = sections[0].data["quality"]
+        text = " ".join(str(getattr(b, "text", "")) for s in sections for b in s.blocks)
+        assert quality["excluded_ids"] == excluded and quality["excluded"] == len(excluded)
+        assert sorted(prepared.excluded) == excluded
+        (bias,) = sections[0].results
+        assert bias.name == "quality.position_bias" and bias.n == 4
+        assert bias.p == quality["position_bias"]["p"] and 0 < bias.p <= 1
+        if excluded:
+            assert "1 of 4 participants excluded; 3 kept" in text
+        else:
+            assert quality["default_rule_would_exclude"] == [who]
+            assert "No exclusion rule applied" in text and "excluded by the rule" not in text
+            assert f"would exclude 1 of 4 ({who})" in text

@@ -10,7 +10,6 @@ import json
 import math
 import re
 from pathlib import Path
-from typing import Any
 
 import pandas as pd
 import pytest
@@ -24,9 +23,10 @@ from emogen.analysis.results import (
     Section,
     records_in,
     result_of,
-    section_of,
     write_analysis,
 )
+from emogen.analysis.study_export import StudyExport
+from emogen.analysis.task_sections import TaskTools, task_sections
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 #: The planted study and options of tests/data/analyse_planted.* (its maker imports them).
@@ -109,14 +109,40 @@ def test_records_are_named_by_their_place_and_item() -> None:
 
 
 def _one_section(out: Path) -> Section:
-    def fill(report: Any, summary: dict[str, Any]) -> None:
-        report.heading("Own vs others")
-        report.paragraph("The participant is the **unit**.")
-        report.table(pd.DataFrame({"group": ["a", "b"], "mean": [0.5, 0.25]}), "means", "Means")
-        report.csv(pd.DataFrame({"x": [1, 2, 3]}), "hidden")
-        summary["categorisation"] = {"own_advantage": dict(OWN_ADVANTAGE)}
+    sec = Section(out)
+    sec.heading("Own vs others")
+    sec.paragraph("The participant is the **unit**.")
+    sec.table(pd.DataFrame({"group": ["a", "b"], "mean": [0.5, 0.25]}), "means", "Means")
+    sec.csv(pd.DataFrame({"x": [1, 2, 3]}), "hidden")
+    record = dict(OWN_ADVANTAGE)
+    sec.data["categorisation"] = {"own_advantage": record}
+    sec.add_test(
+        "categorisation.own_advantage",
+        record,
+        test="paired t",
+        p=0.025,
+        statistic=2.6,
+        df=11,
+        n=12,
+        estimate=0.1,
+        interval=(0.02, 0.18),
+        level=0.9,
+        effect=("dz", 0.75, 0.1, 1.4),
+    )
+    return sec
 
-    return section_of(fill, out)
+
+def test_a_test_built_by_its_analysis_is_the_record_read_back(tmp_path: Path) -> None:
+    """The typed result an analysis builds equals the one read from its JSON record (every
+    field written by hand in ``OWN_ADVANTAGE``), and is the section's only result."""
+    (built,) = _one_section(tmp_path).results
+    assert built == result_of("categorisation.own_advantage", OWN_ADVANTAGE)
+    assert built.record["t"] == 2.6
+    without = Section(tmp_path).add_test(
+        "x[a]", {}, test="F", p=0.5, n=3, effect=("r", 0.2, None, None)
+    )
+    assert without.family == "x" and without.interval is None
+    assert without.effect_size is not None and without.effect_size.interval is None
 
 
 def test_the_renderer_writes_every_format_from_the_sections(tmp_path: Path) -> None:
@@ -183,3 +209,47 @@ def test_a_planted_study_gives_mains_numbers_and_report(tmp_path: Path) -> None:
     )
     primary = by_name["categorisation.own_distance.primary"]
     assert primary.role == "primary" and primary.unit.startswith("participant")
+
+
+class _Task:
+    """A task whose analysis hook gives back ``answer`` (its section filled with one test, or
+    what a wrong hook might return)."""
+
+    def __init__(self, name: str, answer: str) -> None:
+        self.name, self.answer = name, answer
+
+    def analysis_section(self, tools: TaskTools) -> object:
+        if self.answer == "nothing":
+            return None
+        if self.answer == "a dict":
+            return {"p": 0.5}
+        sec = tools.report
+        sec.heading(f"{self.name} blocks")
+        sec.data[self.name] = record = {"t": 2.0, "p": 0.1}
+        sec.add_test(f"{self.name}.test", record, test="t", p=0.1, statistic=2.0, df=3, n=4)
+        return sec
+
+
+def test_a_tasks_section_and_its_test_reach_the_plan(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    tasks = {n: _Task(n, a) for n, a in (("made", "its section"), ("empty", "nothing"))}
+    monkeypatch.setattr("emogen.analysis.task_sections.TASKS", tasks)
+    steps: list[str] = []
+    sections = task_sections(StudyExport(tmp_path), tmp_path, OPTIONS, None, steps.append)
+    assert steps == ["made blocks", "empty blocks"] and len(sections) == 1  # None: no section
+    (result,) = mark_roles(sections[0].results, ())
+    assert (result.name, result.family, result.p, result.n) == ("made.test", "made.test", 0.1, 4)
+    _, md, js = write_analysis("T", tmp_path, [*sections, plan_section([result], (), tmp_path)], {})
+    data = json.loads(js.read_text())
+    assert data["made"] == {"t": 2.0, "p": 0.1, "role": "exploratory"}
+    assert [t["test"] for t in data["plan"]["tests"]] == ["made.test"]
+    assert "## made blocks" in md.read_text()
+
+
+def test_a_hook_that_returns_something_else_is_refused_by_the_tasks_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr("emogen.analysis.task_sections.TASKS", {"odd": _Task("odd", "a dict")})
+    with pytest.raises(TypeError, match=r"task 'odd': analysis_section returned dict"):
+        task_sections(StudyExport(tmp_path), tmp_path, OPTIONS, None, lambda _s: None)

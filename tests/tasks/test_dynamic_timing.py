@@ -14,7 +14,7 @@ import pytest
 from statsmodels.stats.anova import AnovaRM
 
 from emogen.analysis.analyse_options import AnalysisOptions
-from emogen.analysis.report import Report
+from emogen.analysis.results import Section, write_analysis
 from emogen.analysis.study_export import StudyExport
 from emogen.analysis.task_sections import TaskTools
 from emogen.errors import ConfigError
@@ -240,18 +240,27 @@ def planted(tmp_path_factory: pytest.TempPathFactory, ict_model: Any) -> dict[st
         export_study(store, tmp / "export", "csv")
     finally:
         store.dispose()
-    report = Report("timing", tmp / "report")
     opts = AnalysisOptions(render=False, exclusions=None)
-    summary: dict[str, Any] = {}
-    dynamic_section(TaskTools(StudyExport(tmp / "export"), report, opts, None), summary)
-    report.write()  # the tables are written with the report
-    return {"summary": summary["dynamic"], "tables": report.out / "tables", "report": report}
+    tools = TaskTools(StudyExport(tmp / "export"), Section(tmp / "report"), opts, None)
+    report = dynamic_section(tools)
+    assert report is tools.report
+    write_analysis("timing", report.out, [report], {})  # the tables are written with the report
+    return {"summary": report.data["dynamic"], "tables": report.out / "tables", "report": report}
 
 
 def test_a_planted_timing_difference_is_found(planted: dict[str, Any]) -> None:
     (test,) = planted["summary"]["timing_tests"]
     assert test["n_participants"] >= 28
     assert test["p_value"] < 0.05 and test["eta2_low"] > 0.0
+    # the same test, typed, for the report's multiplicity plan
+    (result,) = planted["report"].results
+    assert result.name == f"dynamic.timing_tests[{test['block_name']}]"
+    assert result.family == "dynamic.timing_tests" and result.record is test
+    assert result.test is not None and result.p == test["p_value"]
+    assert (result.test.statistic, result.n) == (test["f"], test["n_participants"])
+    assert result.effect_size is not None and result.effect_size.value == test["eta2"]
+    assert result.effect_size.interval is not None
+    assert result.effect_size.interval.low == test["eta2_low"]
 
 
 def test_the_report_shows_fearful_peaking_before_sad(planted: dict[str, Any]) -> None:

@@ -136,7 +136,7 @@ def test_the_comparison_interval_covers_a_known_difference() -> None:
 
 
 def test_a_study_without_complete_nodes_says_so(tmp_path: Path) -> None:
-    from emogen.analysis.report import Report
+    from emogen.analysis.results import Section
     from emogen.analysis.study_export import StudyExport
     from emogen.analysis.task_sections import TaskTools
     from emogen.tasks.gsp.analysis_report import gsp_section
@@ -160,7 +160,8 @@ def test_a_study_without_complete_nodes_says_so(tmp_path: Path) -> None:
         }
     )
     rows.to_csv(tmp_path / "gsp_iterations.csv", index=False)
-    report = Report("t", tmp_path / "out")
-    summary: dict[str, Any] = {}
-    gsp_section(TaskTools(StudyExport(tmp_path), report, AnalysisOptions(), None), summary)
-    assert summary["gsp"]["note"] == "no complete node"
+    report = gsp_section(
+        TaskTools(StudyExport(tmp_path), Section(tmp_path / "out"), AnalysisOptions(), None)
+    )
+    assert report.data["gsp"]["note"] == "no complete node" and report.results == []
+    assert "no chain has a complete node" in " ".join(getattr(b, "text", "") for b in report.blocks)

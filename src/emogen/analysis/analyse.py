@@ -103,7 +103,7 @@ def analyse(
     sections = [head, _overview(ds, out)]
     if prepared is not None:
         step("quality and exclusions")
-        sections.append(quality_first(prepared, out, opts))
+        sections += quality_first(prepared, out, opts)
     if ds.groups:
         identities = group_identities(prepared) if model is not None and opts.render else {}
         sections += _ga_sections(ds, out, opts, model, step, identities)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from emogen.analysis.categorisation import categorisation_section
 from emogen.analysis.conditions import conditions_section
@@ -25,7 +25,7 @@ from emogen.analysis.identity import identity_section
 from emogen.analysis.people import load_people, read_participant_table
 from emogen.analysis.quality_report import quality_section
 from emogen.analysis.reliability_report import reliability_section
-from emogen.analysis.results import Section, section_of
+from emogen.analysis.results import Section
 from emogen.analysis.retest import retest_section
 from emogen.analysis.study_export import StudyExport
 from emogen.errors import ConfigError, EmoGenError
@@ -38,7 +38,6 @@ if TYPE_CHECKING:
     from emogen.analysis.analyse_options import AnalysisOptions
     from emogen.analysis.data import Dataset
     from emogen.analysis.people import People
-    from emogen.analysis.report import Content
     from emogen.appearance.identities import Identity
     from emogen.model.face import FaceModel
 
@@ -92,33 +91,26 @@ def check_participants(ds: Dataset, table: Path, group_column: str) -> None:
     load_people(ds.export or ds.source).with_participants(frame)
 
 
-def quality_first(prepared: Prepared, out: Path, opts: AnalysisOptions) -> Section:
-    """Quality and exclusions: reported before the analyses they apply to."""
-    return section_of(lambda r, s: _quality(prepared, r, s, opts), out)
-
-
-def _quality(
-    prepared: Prepared, report: Content, summary: dict[str, Any], opts: AnalysisOptions
-) -> None:
+def quality_first(prepared: Prepared, out: Path, opts: AnalysisOptions) -> list[Section]:
+    """Quality and exclusions, and the participant flow: reported before the analyses they
+    apply to (none where the export gives no people)."""
     if prepared.everyone is None or prepared.everyone.faces.empty:
-        return
-    table = quality_section(prepared.everyone, report, summary, opts, None, rule=opts.exclusions)
+        return []
+    quality, table = quality_section(prepared.everyone, out, opts, rule=opts.exclusions)
+    sections = [quality]
     if prepared.export is not None:
         kept = prepared.kept
         analysed = set() if kept is None else set(kept.faces["participant_id"].astype(str))
-        flow_section(
-            prepared.export,
-            table if opts.exclusions is not None else None,
-            analysed,
-            report,
-            summary,
-            _groups(opts),
-        )
+        rule_table = table if opts.exclusions is not None else None
+        sections.append(flow_section(prepared.export, rule_table, analysed, out, _groups(opts)))
     if prepared.excluded:
-        report.paragraph(
+        note = Section(out)
+        note.paragraph(
             f"**{len(prepared.excluded)} participant(s) excluded by the rule above** "
             f"({', '.join(sorted(prepared.excluded))}): every section below is without them."
         )
+        sections.append(note)
+    return sections
 
 
 def _groups(opts: AnalysisOptions) -> pd.Series | None:

@@ -14,10 +14,11 @@ from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
+from emogen.analysis.results import Section
 from emogen.analysis.study_export import StudyExport
 
 if TYPE_CHECKING:
-    from emogen.analysis.report import Content
+    from pathlib import Path
 
 #: A participant without a row in the participant table, in the per-group columns.
 NO_GROUP = "(not in the participant table)"
@@ -96,16 +97,15 @@ def flow_section(
     export: StudyExport,
     exclusions: pd.DataFrame | None,
     analysed: set[str],
-    report: Content,
-    summary: dict[str, Any],
+    folder: Path,
     groups: pd.Series | None = None,
-) -> None:
-    """The participant-flow table of ``export`` into ``report`` (its counts into
-    ``summary["flow"]``)."""
+) -> Section:
+    """The participant-flow table of ``export`` (its counts in ``analysis.json``'s ``flow``)."""
+    report = Section(folder)
     sessions, trials = export.table("sessions"), export.table("trials")
     if sessions is None or trials is None or "block_name" not in trials.columns:
         report.paragraph("Participant flow: the export has no sessions or trials table.")
-        return
+        return report
     table = participant_flow(sessions, trials, exclusions, analysed, groups)
     report.paragraph(
         "**Participant flow.** Participants (distinct ids) reaching each stage, read from the "
@@ -115,4 +115,5 @@ def flow_section(
         + (" Per group as the participant table assigns them." if groups is not None else "")
     )
     report.table(table, "participant_flow", "Participant flow (CONSORT-like).")
-    summary["flow"] = dict(zip(table["stage"], table["participants"], strict=True))
+    report.data["flow"] = dict(zip(table["stage"], table["participants"], strict=True))
+    return report

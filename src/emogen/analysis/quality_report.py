@@ -11,30 +11,24 @@ from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.exclusions import ExclusionRule, apply_exclusions
 from emogen.analysis.people import People
 from emogen.analysis.quality import participant_quality, position_bias, selection_positions
-from emogen.analysis.report import Content
+from emogen.analysis.results import Section
 
 if TYPE_CHECKING:
-    from emogen.model.face import FaceModel
+    from pathlib import Path
 
 #: Monte Carlo draws of the position-bias null.
 DRAWS = 2000
 
 
 def quality_section(
-    people: People,
-    report: Content,
-    summary: dict[str, Any],
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-    *,
-    rule: ExclusionRule | None = None,
-) -> pd.DataFrame:
+    people: People, folder: Path, opts: AnalysisOptions, *, rule: ExclusionRule | None = None
+) -> tuple[Section, pd.DataFrame]:
     """Quality per participant and session, the position-bias test and the exclusion rule
-    applied (``rule``; default :class:`ExclusionRule`) into ``report``; ``people`` are **all**
-    participants, before exclusions. Headline numbers into ``summary["quality"]``; returns the
-    exclusion table (:func:`apply_exclusions`)."""
-    del model
-    rule = ExclusionRule() if rule is None else rule
+    applied (``rule``; None: none applied, ``--no-exclusions``, and the default rule's flags
+    shown for information only); ``people`` are **all** participants, before exclusions. The
+    section (headline numbers in ``analysis.json``'s ``quality``, the position-bias test a typed
+    result) and the exclusion table (:func:`apply_exclusions`, the default rule's without one)."""
+    report = Section(folder)
     report.heading("Data quality and exclusions")
     quality = participant_quality(people)
     report.paragraph(
@@ -48,7 +42,18 @@ def quality_section(
     report.table(quality, "quality_sessions", "Quality per participant and session.")
     out: dict[str, Any] = {"participants": people.n_participants}
     _position(people, report, opts, out)
-    kept, table = apply_exclusions(people, rule)
+    kept, table = apply_exclusions(people, ExclusionRule() if rule is None else rule)
+    if rule is None:
+        _not_applied(table, report, out)
+    else:
+        _applied(rule, kept, table, report, out)
+    report.data["quality"] = out
+    return report, table
+
+
+def _applied(
+    rule: ExclusionRule, kept: People, table: pd.DataFrame, report: Section, out: dict
+) -> None:
     excluded = table[table["excluded"]]
     report.paragraph(
         "**Exclusion rule** (stated before the analysis; a participant is excluded when any "
@@ -69,11 +74,28 @@ def quality_section(
     report.table(table, "quality_exclusions", "Exclusion measures and flags, every participant.")
     out["excluded"] = int(table["excluded"].sum())
     out["excluded_ids"] = sorted(excluded["participant_id"].astype(str))
-    summary["quality"] = out
-    return table
 
 
-def _position(people: People, report: Content, opts: AnalysisOptions, out: dict) -> None:
+def _not_applied(table: pd.DataFrame, report: Section, out: dict) -> None:
+    """``--no-exclusions``: nobody excluded; the default rule's flags for information."""
+    flagged = sorted(table.loc[table["excluded"], "participant_id"].astype(str))
+    report.paragraph(
+        "**No exclusion rule applied** (`--no-exclusions`): every participant is analysed. For "
+        "information only, the default rule (" + "; ".join(ExclusionRule().describe()) + ") "
+        f"would exclude {len(flagged)} of {len(table)}"
+        + (f" ({', '.join(flagged)})." if flagged else ".")
+    )
+    report.table(
+        table,
+        "quality_exclusions",
+        "Exclusion measures and the default rule's flags (not applied), every participant.",
+    )
+    out["excluded"] = 0
+    out["excluded_ids"] = []
+    out["default_rule_would_exclude"] = flagged
+
+
+def _position(people: People, report: Section, opts: AnalysisOptions, out: dict) -> None:
     sel = selection_positions(people)
     if sel is None or sel["position"].isna().all():
         report.paragraph(
@@ -105,5 +127,20 @@ def _position(people: People, report: Content, opts: AnalysisOptions, out: dict)
         "quality_position_bias",
         "Generation-0 picks per participant: the most-picked tile and the position-bias test.",
     )
-    out["position_bias_p"] = overall["p_mc"]
-    out["position_bias_flagged"] = flagged
+    test = "Monte Carlo chi-square sum"
+    out["position_bias"] = record = {
+        "test": test,
+        "chi2_sum": overall["chi2_sum"],
+        "p": overall["p_mc"],
+        "draws": DRAWS,
+        "n_participants": len(table),
+        "flagged": flagged,
+    }
+    report.add_test(
+        "quality.position_bias",
+        record,
+        test=test,
+        p=overall["p_mc"],
+        statistic=overall["chi2_sum"],
+        n=len(table),
+    )

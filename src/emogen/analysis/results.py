@@ -7,7 +7,10 @@ in the spirit of statsmodels' results and :mod:`emogen.analysis.replication.find
 estimate with its interval, the test (name, statistic, df, p), the unit of inference and how
 many of them, the family whose correction it shares, its role in the multiplicity plan
 (primary or exploratory, set by :mod:`emogen.analysis.plan`), an effect size with its interval,
-and warnings or a failed fit.
+and warnings or a failed fit. A section builds each result where it computes the test
+(:meth:`Section.add_test`); sections written before that read theirs from their records in
+``data`` (:meth:`Section.tests_in_data`, by the ``*_KEYS`` below: a p-value under another key
+is not found there, so a new analysis uses ``add_test``).
 
 :func:`write_analysis` is the one renderer: from the sections it writes ``index.html``,
 ``README.md``, every table under ``tables/`` and ``analysis.json`` (each test's record there
@@ -17,7 +20,6 @@ carries its ``role``). Figures are made by the sections, under ``figures/``, and
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -100,23 +102,50 @@ class Section(Content):
         """The test whose record (in ``data``) is ``record``, as a :class:`Result`."""
         self.results.append(result_of(name, record, unit))
 
+    def add_test(
+        self,
+        name: str,
+        record: dict[str, Any],
+        *,
+        test: str,
+        p: float,
+        n: int | None,
+        statistic: float | None = None,
+        df: float | None = None,
+        unit: str = "participant",
+        estimate: float | None = None,
+        interval: tuple[float, float] | None = None,
+        level: float | None = None,
+        effect: tuple[str, float, float | None, float | None] | None = None,
+    ) -> Result:
+        """A test as its analysis computed it, added to ``results`` (and returned): ``name``
+        as :class:`Result`'s, ``record`` its entry in ``data`` (the role is written into it);
+        ``interval``: the estimate's (low, high) at ``level``; ``effect``: a standardised effect
+        size (name, value, low, high), its interval at ``level`` too (None, None: none)."""
+        size = None
+        if effect is not None:
+            e_name, value, low, high = effect
+            e_int = None if low is None or high is None else Interval(low, high, level)
+            size = EffectSize(e_name, value, e_int)
+        result = Result(
+            name=name,
+            family=name.split("[", 1)[0],
+            test=HypothesisTest(test, p, statistic, df),
+            estimate=estimate,
+            interval=None if interval is None else Interval(*interval, level),
+            unit=unit,
+            n=n,
+            effect_size=size,
+            record=record,
+        )
+        self.results.append(result)
+        return result
+
     def tests_in_data(self, unit: str = "participant") -> Section:
         """Every record in ``data`` with a p-value as a :class:`Result` (an analysis that fills
         ``data`` only); returns the section."""
         self.results += [result_of(n, r, unit) for n, r in records_in(self.data)]
         return self
-
-
-def section_of(
-    fill: Callable[[Content, dict[str, Any]], object], out: Path, unit: str = "participant"
-) -> Section:
-    """The :class:`Section` of an analysis written as ``fill(report, summary)`` — it adds its
-    content to ``report`` and its entries to ``summary`` — with every test in those entries as
-    a :class:`Result` (:meth:`Section.tests_in_data`; ``unit``: theirs where a record does not
-    name one)."""
-    sec = Section(out)
-    fill(sec, sec.data)
-    return sec.tests_in_data(unit)
 
 
 def result_of(name: str, record: dict[str, Any], unit: str = "participant") -> Result:

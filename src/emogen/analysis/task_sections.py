@@ -1,12 +1,14 @@
 """``emogen analyse``'s sections that tasks write themselves (a task's optional
-``analysis_section(tools, summary)``, :mod:`emogen.tasks.protocol`).
+``analysis_section(tools)``, :mod:`emogen.tasks.protocol`).
 
 Tasks sit below the analysis in the package's layers, so a task's section does not import it:
 it is handed :class:`TaskTools` — the export's tables (the analysis's one loaded export), its
-section of the report, new figures saved in the report's formats, faces drawn as participants
-saw them — and fills ``summary`` under its name. Its section is one
-:class:`~emogen.analysis.results.Section` of the report: its records with a p-value become
-typed results, in the multiplicity plan like every other test.
+own :class:`~emogen.analysis.results.Section` of the report (``tools.report``), new figures
+saved in the report's formats, faces drawn as participants saw them — and returns that section
+filled (None: nothing to report): its content, its entries of ``analysis.json`` under the
+task's name (``report.data``) and its tests as typed results
+(:meth:`~emogen.analysis.results.Section.add_test`), in the multiplicity plan like every other
+test.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from emogen.analysis import plots
-from emogen.analysis.results import Section, section_of
+from emogen.analysis.results import Section
 from emogen.analysis.study_export import StudyExport
 from emogen.tasks.registry import TASKS
 
@@ -28,17 +30,17 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from emogen.analysis.analyse_options import AnalysisOptions
-    from emogen.analysis.report import Content
     from emogen.appearance.identities import Identity
     from emogen.model.face import FaceModel
 
 
 @dataclass(frozen=True)
 class TaskTools:
-    """What a task's analysis section works with."""
+    """What a task's analysis section works with; ``report``: the task's own section (fill
+    and return it)."""
 
     export: StudyExport
-    report: Content
+    report: Section
     opts: AnalysisOptions
     model: FaceModel | None
 
@@ -116,23 +118,19 @@ def task_sections(
     model: FaceModel | None,
     step: Callable[[str], None],
 ) -> list[Section]:
-    """Every registered task's own section, where it has one: each fills a :class:`Section`
-    (its content through :class:`TaskTools`, its entries of ``analysis.json`` in ``summary``;
-    its tests — records with a p-value — become the section's results)."""
+    """Every registered task's own section, where it has one and has something to report
+    (``out``: the report's folder)."""
     sections = []
     for task in TASKS.values():
-        fill = getattr(task, "analysis_section", None)
-        if fill is not None:
+        analysis = getattr(task, "analysis_section", None)
+        if analysis is not None:
             step(f"{task.name} blocks")
-            sections.append(section_of(_with_tools(fill, export, opts, model), out))
+            section = analysis(TaskTools(export, Section(out), opts, model))
+            if section is not None and not isinstance(section, Section):
+                raise TypeError(
+                    f"task {task.name!r}: analysis_section returned {type(section).__name__}, "
+                    "not its section (tools.report) or None"
+                )
+            if section is not None:
+                sections.append(section)
     return sections
-
-
-def _with_tools(
-    fill: Callable[[TaskTools, dict[str, Any]], None],
-    export: StudyExport,
-    opts: AnalysisOptions,
-    model: FaceModel | None,
-) -> Callable[[Content, dict[str, Any]], None]:
-    """A task's ``analysis_section(tools, summary)`` as ``fill(report, summary)``."""
-    return lambda report, summary: fill(TaskTools(export, report, opts, model), summary)

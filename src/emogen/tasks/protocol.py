@@ -316,11 +316,14 @@ class Task(Protocol):
         """What the researcher's dashboard should say of block ``k`` over ``sessions`` (a
         SELECT of the study's session ids): what went otherwise than the design meant."""
 
-    # Optional: ``analysis_section(tools, summary)`` — ``emogen analyse``'s section on the
-    # task's export tables (``tools``: :class:`emogen.analysis.task_sections.TaskTools`, the
-    # export's tables, the report, figures, faces drawn; tasks sit below the analysis and call
-    # back through it); a task without one is analysed by emogen.analysis itself (categorise;
-    # evolve's faces, its section adds dynamic blocks' timing) or not at all.
+    # Optional: ``analysis_section(tools)`` — ``emogen analyse``'s section on the task's
+    # export tables (``tools``: :class:`emogen.analysis.task_sections.TaskTools`, the export's
+    # tables, the task's own section ``tools.report``, figures, faces drawn; tasks sit below the
+    # analysis and call back through it): returns ``tools.report`` filled — content, its
+    # entries of analysis.json in ``report.data``, each test a typed result through
+    # ``report.add_test`` — or None when the export has nothing of the task's. A task without
+    # one is analysed by emogen.analysis itself (categorise; evolve's faces, its section adds
+    # dynamic blocks' timing) or not at all.
 
 
 def conditions_of(blocks: Sequence[TaskBlock], study: Any, rows: dict[int, int]) -> list[Condition]:

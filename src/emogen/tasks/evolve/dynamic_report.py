@@ -16,6 +16,7 @@ from emogen.errors import EmoGenError
 from emogen.render import Renderer
 from emogen.tasks.evolve.dynamic_analysis import (
     PERMUTATIONS,
+    TimingTest,
     emotion_timing,
     final_curves,
     gene_profiles,
@@ -32,20 +33,20 @@ from emogen.tasks.evolve.dynamic_prototypes import (
 )
 
 
-def dynamic_section(tools: Any, summary: dict[str, Any]) -> None:
-    """The section (nothing where the export has no dynamic faces); ``tools``:
-    :class:`emogen.analysis.task_sections.TaskTools`."""
+def dynamic_section(tools: Any) -> Any:
+    """The section, ``tools.report`` filled (None where the export has no dynamic faces);
+    ``tools``: :class:`emogen.analysis.task_sections.TaskTools`."""
     report, opts = tools.report, tools.opts
     face_curves = tools.table("face_curves")
     finals = tools.table("final_faces")
     if face_curves is None or face_curves.empty:
-        return
+        return None
     report.heading("Dynamic faces: timing")
     curves = final_curves(finals, face_curves) if finals is not None else face_curves.iloc[:0]
     if curves.empty:
         report.paragraph("No timing analysis: no finished dynamic evolve trial yet.")
-        summary["dynamic"] = {"note": "no finished dynamic trial"}
-        return
+        report.data["dynamic"] = {"note": "no finished dynamic trial"}
+        return report
     rng = np.random.default_rng(opts.seed)
     timing = participant_timing(curves)
     level = int(100 * (1 - opts.alpha))
@@ -83,6 +84,7 @@ def dynamic_section(tools: Any, summary: dict[str, Any]) -> None:
         test = timing_test(timing, str(block), rng, opts.alpha)
         if test is not None:
             tests.append(test.to_dict())
+            _add_test(report, test, tests[-1], 1 - opts.alpha)
     if tests:
         report.table(
             pd.DataFrame(tests).drop(columns=["emotions"]).round(4),
@@ -94,11 +96,26 @@ def dynamic_section(tools: Any, summary: dict[str, Any]) -> None:
         )
     else:
         report.paragraph("No timing test: it needs two emotions and three participants with both.")
-    summary["dynamic"] = {
+    report.data["dynamic"] = {
         "n_participants": int(curves["participant_id"].nunique()),
         "timing_tests": tests,
         "prototypes": _prototypes(tools, curves),
     }
+    return report
+
+
+def _add_test(report: Any, test: TimingTest, record: dict[str, Any], level: float) -> None:
+    """The block's timing test as a typed result of the report (``record``: its JSON)."""
+    report.add_test(
+        f"dynamic.timing_tests[{test.block_name}]",
+        record,
+        test="repeated-measures F, permutation p",
+        p=test.p_value,
+        statistic=test.f,
+        n=test.n_participants,
+        level=level,
+        effect=("partial eta2", test.eta2, test.eta2_low, test.eta2_high),
+    )
 
 
 def _strip(timing: pd.DataFrame, tools: Any) -> None:

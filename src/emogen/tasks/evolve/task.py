@@ -346,13 +346,13 @@ class EvolveTask:
         """Nothing the GA's blocks need say on the dashboard."""
         return []
 
-    def analysis_section(self, tools: Any, summary: dict[str, Any]) -> None:
+    def analysis_section(self, tools: Any) -> Any:
         """``emogen analyse``'s section on dynamic blocks' timing
         (:mod:`emogen.tasks.evolve.dynamic_report`); the faces themselves are analysed by
         :mod:`emogen.analysis`."""
         from emogen.tasks.evolve.dynamic_report import dynamic_section
 
-        dynamic_section(tools, summary)
+        return dynamic_section(tools)
 
 
 def _shown(db: Session, row: TrialRow, cmd: _Shown) -> PopulationRow:

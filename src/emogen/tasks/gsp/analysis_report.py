@@ -21,19 +21,20 @@ from emogen.tasks.gsp.analysis import (
 )
 
 
-def gsp_section(tools: Any, summary: dict[str, Any]) -> None:
-    """The section (nothing where the export has no GSP answers); ``tools``:
-    :class:`emogen.analysis.task_sections.TaskTools`."""
+def gsp_section(tools: Any) -> Any:
+    """The section, ``tools.report`` filled (None where the export has no GSP answers);
+    ``tools``: :class:`emogen.analysis.task_sections.TaskTools`. It estimates with intervals
+    and tests nothing, so it adds no result to the multiplicity plan."""
     report, opts = tools.report, tools.opts
     iterations = tools.table("gsp_iterations")
     if iterations is None or iterations.empty:
-        return
+        return None
     report.heading("Gibbs sampling with people (GSP)")
     concepts = chains_of(iterations)
     if not concepts:
         report.paragraph("No GSP analysis: no chain has a complete node yet.")
-        summary["gsp"] = {"n_answers": len(iterations), "note": "no complete node"}
-        return
+        report.data["gsp"] = {"n_answers": len(iterations), "note": "no complete node"}
+        return report
     rng = np.random.default_rng(opts.seed)
     report.paragraph(
         f"{len(iterations)} slider answers of {iterations['participant_id'].nunique()} "
@@ -74,7 +75,8 @@ def gsp_section(tools: Any, summary: dict[str, Any]) -> None:
     _draw(concepts, tools)
     out["between_concepts"] = _between(concepts, rng, opts.alpha, report)
     out["versus_ga"] = _versus_ga(concepts, tools.table("final_faces"), rng, opts.alpha, report)
-    summary["gsp"] = out
+    report.data["gsp"] = out
+    return report
 
 
 def _convergence(curves: pd.DataFrame, tools: Any) -> None:

@@ -322,12 +322,12 @@ class GspTask:
     def state_facts(self, state: str | None) -> dict[str, Any]:
         return {}
 
-    def analysis_section(self, tools: Any, summary: dict[str, Any]) -> None:
+    def analysis_section(self, tools: Any) -> Any:
         """``emogen analyse``'s section on the export's GSP chains
         (:mod:`emogen.tasks.gsp.analysis_report`)."""
         from emogen.tasks.gsp.analysis_report import gsp_section
 
-        gsp_section(tools, summary)
+        return gsp_section(tools)
 
     def progress_step(
         self, status: str, generation: int, generations: int
