@@ -20,7 +20,7 @@ import {
   WebGLRenderer,
 } from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
-import { look } from './look.js';
+import { hairLayer, look } from './look.js';
 import { faceMaterial, gazeMatrix } from './material.js';
 import { addShadingAttributes } from './mesh.js';
 import { MorphSource } from './morph.js';
@@ -84,6 +84,19 @@ async function skinTextures(gltf, indices, appearance) {
   return { skin, detail, wrinkleStrength: appearance?.wrinkle_strength ?? 1 };
 }
 
+// An object URL of the GLB's long-hair layer image (asset.extras.emogen.hair_layer), decoded
+// before it is shown, so the first faces on screen have it; null when the GLB has none.
+async function hairLayerUrl(gltf, index) {
+  if (index === undefined) return null;
+  const image = gltf.parser.json.images[index];
+  const bytes = await gltf.parser.getDependency('bufferView', image.bufferView);
+  const url = URL.createObjectURL(new Blob([bytes], { type: image.mimeType }));
+  const img = new Image();
+  img.src = url;
+  await img.decode();
+  return url;
+}
+
 export class FaceGrid {
   constructor(container, slots, { antialias } = {}) {
     this.container = container;
@@ -119,6 +132,8 @@ export class FaceGrid {
     if (extras.camera) this.camera = makeCamera(extras.camera);
     const textures = await skinTextures(gltf, extras.textures, extras.appearance);
     this.textured = textures !== null;
+    const hair = await hairLayerUrl(gltf, extras.hair_layer);
+    for (const slot of this.slots) hairLayer(slot, hair);
     gltf.scene.updateMatrixWorld(true);
     const meshes = [];
     gltf.scene.traverse((o) => o.isMesh && meshes.push(o));
