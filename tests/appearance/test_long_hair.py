@@ -169,3 +169,39 @@ def test_bad_values_are_named() -> None:
         long_hair_layer(lm, 64, "brown")
     with pytest.raises(ValueError, match=r"does not fit images of shape \(1, 8, 8, 3\)"):
         apply_layer(np.zeros((1, 8, 8, 3), np.uint8), np.zeros((4, 4, 4), np.uint8))
+
+
+def test_a_study_names_it_and_its_export_records_it() -> None:
+    """A study's identities include the long presets and a lab's own ``hair = "long"``; the
+    export's ``identities`` table records ``hair`` per identity, and reading the table back
+    rebuilds the same identities (replay: what was shown is what is re-rendered)."""
+    import json
+    from types import SimpleNamespace
+
+    import pandas as pd
+
+    from emogen.study.config import study_from_dict
+    from emogen.study.export import identities_from_table, identity_rows
+
+    config = study_from_dict(
+        {
+            "identities": ["female-dark-v3-long", "male-light", "lab_face"],
+            "identity": {"lab_face": {"shape": "female", "skin_tone": 4.0, "hair": "long"}},
+        }
+    )
+    study = SimpleNamespace(
+        name="s",
+        config_json=json.dumps(config.model_dump(mode="json")),
+        package_version="x",
+        model_hash="m",
+        config_hash="c",
+    )
+    rows = identity_rows(study)  # type: ignore[arg-type]
+    assert {r["identity"]: r["hair"] for r in rows} == {
+        "female-dark-v3-long": "long",
+        "male-light": "short",
+        "lab_face": "long",
+    }
+    back = identities_from_table(pd.DataFrame(rows))
+    assert back[("s", "female-dark-v3-long")] == PRESETS["female-dark-v3-long"]
+    assert back[("s", "lab_face")].appearance.hair == "long"
