@@ -113,6 +113,7 @@ export class FaceGrid {
     this.camera = makeCamera();
     this.background = new Color(...look.background_srgb);
     this.faces = [];
+    this.hairUrl = null;
     this.shapeNames = [];
     this.drawnSize = null;
     new ResizeObserver(() => {
@@ -132,8 +133,7 @@ export class FaceGrid {
     if (extras.camera) this.camera = makeCamera(extras.camera);
     const textures = await skinTextures(gltf, extras.textures, extras.appearance);
     this.textured = textures !== null;
-    const hair = await hairLayerUrl(gltf, extras.hair_layer);
-    for (const slot of this.slots) hairLayer(slot, hair);
+    this.hairUrl = await hairLayerUrl(gltf, extras.hair_layer);
     gltf.scene.updateMatrixWorld(true);
     const meshes = [];
     gltf.scene.traverse((o) => o.isMesh && meshes.push(o));
@@ -293,6 +293,11 @@ export class FaceGrid {
   }
 
   render() {
+    // The slots show the long-hair layer of the grid drawn in them (grids of other identities
+    // may share the slots: a page keeps one per identity, hidden until shown), or none.
+    if (this.canvas.style.visibility !== 'hidden') {
+      for (const slot of this.slots) hairLayer(slot, this.hairUrl);
+    }
     const r = this.renderer;
     const box = this.container.getBoundingClientRect();
     const width = Math.max(1, Math.round(box.width));

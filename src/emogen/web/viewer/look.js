@@ -54,7 +54,7 @@ export function ovalLayer(slot, framing) {
 // slot, as emogen.render.renderer composites it offscreen: one RGBA image (the GLB's image
 // asset.extras.emogen.hair_layer, WebP) stretched over the slot, above the canvas and below the
 // oval layer (which hides it outside the oval, as offscreen). url null: an earlier layer is
-// taken away.
+// taken away. Called by each draw of the grid shown in the slot (cheap when nothing changed).
 export function hairLayer(slot, url) {
   let layer = slot.querySelector(':scope > .hair-layer');
   if (!url) {
@@ -70,6 +70,9 @@ export function hairLayer(slot, url) {
     });
     slot.insertBefore(layer, slot.querySelector(':scope > .oval-layer'));
   }
-  layer.style.backgroundImage = `url(${url})`;
+  if (layer.dataset.url !== url) {
+    layer.dataset.url = url;
+    layer.style.backgroundImage = `url(${url})`;
+  }
   return layer;
 }
