@@ -19,7 +19,7 @@ just inside it. Painted at twice the size and averaged down (anti-aliasing).
 from __future__ import annotations
 
 import io
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 from scipy import ndimage
@@ -29,7 +29,14 @@ from emogen.appearance.params import Appearance, hex_to_srgb
 
 if TYPE_CHECKING:
     from emogen.model.face import FaceModel
-    from emogen.render.look import Camera
+
+
+class Camera(Protocol):
+    """What the layer needs of a camera (:class:`emogen.render.look.Camera`): pixel positions
+    (n, 2), x right and y down, of points (n, 3) in cm in a ``size``² image."""
+
+    def project(self, points: np.ndarray, size: int) -> np.ndarray: ...
+
 
 #: The layer's side in pixels, as the GLB carries it (a 512² tile at device pixel ratio 2).
 LAYER_PX = 1024
