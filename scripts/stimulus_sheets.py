@@ -6,6 +6,7 @@ and the rig's six EMFACS core blocks at full weight) on the six identity presets
     python scripts/stimulus_sheets.py docs/images --dark   # the dark presets and their -v2
     python scripts/stimulus_sheets.py docs/images --v3     # the presets for new studies (-v3)
     python scripts/stimulus_sheets.py docs/images --rig3   # the same presets with rig 3
+    python scripts/stimulus_sheets.py docs/images --long   # rig 3, the female ones long-haired
 
 "before": the flat look of EmoGen ≤ 0.2 (no textures, head-and-shoulders framing);
 "after": each preset's appearance and the face framing. 512² and the participant tile (256²).
@@ -128,6 +129,22 @@ def rig3_sheets(out: Path) -> None:
         print(path)
 
 
+def long_hair_sheets(out: Path) -> None:
+    """The six presets for new studies with rig 3, the female ones framed by long hair
+    (``female-*-long``), face framing, 512² and tile size: stimuli_long_face_SIZE.jpg; the
+    "before" is the --rig3 sheet (the same faces with the painted crop)."""
+    model = emogen.load_model()
+    new = (
+        *(f"female-{t}-long" for t in ("light", "medium", "dark-v3")),
+        *(f"male-{t}" for t in ("light", "medium", "dark-v3")),
+    )
+    for size, name in ((512, "512"), (256, "tile")):
+        path = out / f"stimuli_long_face_{name}.jpg"
+        image = sheet(model, size, True, presets=new)
+        Image.fromarray(image).save(path, quality=88, optimize=True)
+        print(path)
+
+
 def main() -> None:
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "docs/images")
     if "--rigs" in sys.argv:
@@ -135,6 +152,9 @@ def main() -> None:
         return
     if "--dark" in sys.argv:
         dark_sheets(out)
+        return
+    if "--long" in sys.argv:
+        long_hair_sheets(out)
         return
     if "--rig3" in sys.argv:
         rig3_sheets(out)

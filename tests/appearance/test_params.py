@@ -17,7 +17,7 @@ def test_unknown_key_and_bad_values_are_named() -> None:
     with pytest.raises(ConfigError, match="brow_colour"):
         appearance_from_dict({"brow_colour": "brown"})
     with pytest.raises(ConfigError, match="hair"):
-        appearance_from_dict({"hair": "long"})
+        appearance_from_dict({"hair": "longg"})
 
 
 def test_record_rebuilds_the_same_appearance_and_key() -> None:
@@ -30,7 +30,7 @@ def test_record_rebuilds_the_same_appearance_and_key() -> None:
 
 
 def test_six_presets_two_sexes_three_tones() -> None:
-    six = [n for n in PRESETS if "-" in n and not n.endswith(("-v2", "-v3"))]
+    six = [n for n in PRESETS if "-" in n and not n.endswith(("-v2", "-v3", "-long"))]
     assert sorted(six) == sorted(
         f"{s}-{t}" for s in ("female", "male") for t in ("light", "medium", "dark")
     )

@@ -2,7 +2,8 @@
 
 Six ready presets cross two sexes with three Monk skin tones (light 2, medium 5, dark 8);
 ``female-dark-v3`` and ``male-dark-v3`` are the dark ones for new studies: readable lips (as
-``-v2``) and anger's furrows as visible as on the light presets.
+``-v2``) and anger's furrows as visible as on the light presets. ``female-light-long``,
+``female-medium-long`` and ``female-dark-v3-long`` are those female faces framed by long hair.
 The rig's shape-only names keep working — ``generic``, ``male``, ``female`` — with a default
 appearance of their sex at the medium tone. A lab defines its own in the study TOML::
 
@@ -85,6 +86,18 @@ PRESETS: dict[str, Identity] = {
     "male-dark-v3": Identity(
         shape="male", appearance=_MALE_DARK_V2.model_copy(update={"wrinkle_strength": 1.6})
     ),
+    # the female presets for new studies framed by long hair (hair = "long": a layer over the
+    # face framing, docs/appearance.md); the short-haired ones keep their look for replay
+    **{
+        f"female-{k}-long": Identity(
+            shape="female", appearance=a.model_copy(update={"hair": "long"})
+        )
+        for k, a in (
+            ("light", _female(TONES["light"])),
+            ("medium", _female(TONES["medium"])),
+            ("dark-v3", _FEMALE_DARK_V2.model_copy(update={"wrinkle_strength": 2.0})),
+        )
+    },
     "generic": Identity(shape="generic", appearance=Appearance()),
     "female": Identity(shape="female", appearance=_female(TONES["medium"])),
     "male": Identity(shape="male", appearance=_male(TONES["medium"])),

@@ -65,8 +65,9 @@ class Appearance(BaseModel):
     brow_colour: Colour = "#2b2019"
     brow_thickness: Annotated[float, Field(ge=0.5, le=2.0)] = 1.0  # × the default band height
     brow_density: Annotated[float, Field(ge=0.0, le=2.0)] = 1.0  # × the default hairs per cm²
-    #: scalp hair: "short" (a close crop with a natural hairline) or "none" (bald)
-    hair: Literal["short", "none"] = "short"
+    #: scalp hair: "short" (a close crop with a natural hairline), "none" (bald) or "long" (the
+    #: crop, framed under the ``face`` framing by long hair: :mod:`emogen.appearance.long_hair`)
+    hair: Literal["short", "none", "long"] = "short"
     hair_colour: Colour = "#2a2019"
     hair_density: Annotated[float, Field(ge=0.0, le=1.0)] = 0.9
     #: hairline height above the brows as a fraction of the default (male recession > 1)

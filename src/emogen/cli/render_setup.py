@@ -60,6 +60,7 @@ IdentityOpt = Annotated[
         "--identity",
         help="Identity: shape and appearance (skin tone, brows, lips, hair). Presets: "
         "female-light, female-medium, female-dark-v3, male-light, male-medium, male-dark-v3 "
+        "(female-light-long, …: the female ones framed by long hair under face framing) "
         "(female-dark, male-dark, …-v2: the older dark looks, paler lips, fainter wrinkles); "
         "generic, male, female (medium tone); or a shape preset of the rig. Default: generic.",
     ),

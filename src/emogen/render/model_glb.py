@@ -151,7 +151,9 @@ def export_model_glb(
     ``textures``: the identity's skin textures, embedded as WebP (``EXT_texture_webp``) and
     shown by the materials of :data:`SKIN_REGIONS`; ``asset.extras.emogen`` then records
     ``textures`` (texture indices ``skin``, ``detail``) and ``appearance``. ``camera``: the
-    camera to view the face with (``asset.extras.emogen.camera``, centimetres).
+    camera to view the face with (``asset.extras.emogen.camera``, centimetres). With both and
+    ``hair = "long"`` in the textures' appearance, the identity's long-hair layer for that camera
+    is embedded too (``asset.extras.emogen.hair_layer``: its image index).
     """
     path = Path(path)
     layout = export_layout(model, parts)
@@ -183,6 +185,8 @@ def export_model_glb(
         "materials": materials(model, layout),
     }
     _declare_extensions(doc, b, model, layout, quantize, textures)
+    if textures is not None and textures.appearance.hair == "long" and camera is not None:
+        _add_hair_layer(doc, b, model, textures, camera)
     data = b.finish(doc)
     write_file(path, data)
     return _report(path, data, model, layout, targets, enc, quantize, corrective_tolerance_cm)
@@ -296,6 +300,21 @@ def _declare_extensions(
         doc["extensionsUsed"] = used
     if required:
         doc["extensionsRequired"] = required
+
+
+def _add_hair_layer(
+    doc: dict[str, Any], b: GlbBuilder, model: FaceModel, textures: SkinTextures, camera: Camera
+) -> None:
+    """Embed the identity's long-hair layer (:mod:`emogen.appearance.long_hair`, WebP) as an
+    image the viewer lays over each face: ``asset.extras.emogen.hair_layer`` = its image index.
+    No texture uses it (it is not drawn on the mesh)."""
+    from emogen.appearance.long_hair import identity_layer, layer_webp
+
+    data = layer_webp(identity_layer(model, textures.appearance, camera))
+    doc["images"].append(
+        {"name": "hair_layer", "bufferView": b.blob(data), "mimeType": "image/webp"}
+    )
+    doc["asset"]["extras"]["emogen"]["hair_layer"] = len(doc["images"]) - 1
 
 
 def _camera_extras(camera: Camera) -> dict[str, Any]:

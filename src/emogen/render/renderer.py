@@ -16,6 +16,7 @@ from typing import Any, Self
 
 import numpy as np
 
+from emogen.appearance.long_hair import apply_layer
 from emogen.appearance.params import Appearance
 from emogen.appearance.textures import SkinTextures, skin_textures
 from emogen.correct.faces import correct_faces, corrected_vertices, model_correctives
@@ -85,6 +86,27 @@ class Renderer:
             )
             self._gl.set_textures(self.textures.albedo, self.textures.detail)
             self._gl.set_wrinkle_strength(appearance.wrinkle_strength)
+        self.hair_layer = self._hair_layer()
+
+    def _hair_layer(self) -> np.ndarray | None:
+        """The long-hair layer of this identity at this size (``hair = "long"`` under the
+        ``face`` framing, or ``oval``'s, which shows it through the oval), decoded from the
+        bytes the viewer's GLB carries; None for other appearances, framings and models
+        without landmarks."""
+        a = self.appearance
+        if a is None or a.hair != "long" or self.look.framing not in self.look.fits:
+            return None
+        if len(self.model.landmarks) != 68:
+            return None
+        from emogen.appearance.long_hair import (
+            decode_layer,
+            identity_layer,
+            layer_webp,
+            resample_layer,
+        )
+
+        layer = identity_layer(self.model, a, self.look.camera)
+        return resample_layer(decode_layer(layer_webp(layer)), self.size)
 
     def _target_delta(self, k: int) -> np.ndarray:
         """Morph target ``k``'s displacement at the drawn vertices: the shapes, then the
@@ -176,6 +198,8 @@ class Renderer:
         finally:
             if albedo is not None:
                 self._gl.set_albedo(None)
+        if self.hair_layer is not None and albedo is None:
+            out = apply_layer(out, self.hair_layer)
         if self.look.oval is not None:
             out = apply_oval(out, self.look.oval, self.look.background_srgb)
         return out

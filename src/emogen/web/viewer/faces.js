@@ -21,7 +21,7 @@ import {
   WebGLRenderer,
 } from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
-import { look } from './look.js';
+import { hairLayer, look } from './look.js';
 import { faceMaterial, gazeMatrix } from './material.js';
 import { addShadingAttributes } from './mesh.js';
 import { MorphSource } from './morph.js';
@@ -86,6 +86,19 @@ async function skinTextures(gltf, indices, appearance) {
   return { skin, detail, wrinkleStrength: appearance?.wrinkle_strength ?? 1 };
 }
 
+// An object URL of the GLB's long-hair layer image (asset.extras.emogen.hair_layer), decoded
+// before it is shown, so the first faces on screen have it; null when the GLB has none.
+async function hairLayerUrl(gltf, index) {
+  if (index === undefined) return null;
+  const image = gltf.parser.json.images[index];
+  const bytes = await gltf.parser.getDependency('bufferView', image.bufferView);
+  const url = URL.createObjectURL(new Blob([bytes], { type: image.mimeType }));
+  const img = new Image();
+  img.src = url;
+  await img.decode();
+  return url;
+}
+
 export class FaceGrid {
   constructor(container, slots, { antialias } = {}) {
     this.container = container;
@@ -102,6 +115,7 @@ export class FaceGrid {
     this.camera = makeCamera();
     this.background = new Color(...look.background_srgb);
     this.faces = [];
+    this.hairUrl = null;
     this.shapeNames = [];
     this.drawnSize = null;
     this.kept = new Map(); // face → its KeptFrames (kept.js)
@@ -123,6 +137,7 @@ export class FaceGrid {
     if (extras.camera) this.camera = makeCamera(extras.camera);
     const textures = await skinTextures(gltf, extras.textures, extras.appearance);
     this.textured = textures !== null;
+    this.hairUrl = await hairLayerUrl(gltf, extras.hair_layer);
     gltf.scene.updateMatrixWorld(true);
     const meshes = [];
     gltf.scene.traverse((o) => o.isMesh && meshes.push(o));
@@ -374,6 +389,11 @@ export class FaceGrid {
   }
 
   render() {
+    // The slots show the long-hair layer of the grid drawn in them (grids of other identities
+    // may share the slots: a page keeps one per identity, hidden until shown), or none.
+    if (this.canvas.style.visibility !== 'hidden') {
+      for (const slot of this.slots) hairLayer(slot, this.hairUrl);
+    }
     const r = this.renderer;
     const box = this.container.getBoundingClientRect();
     const width = Math.max(1, Math.round(box.width));

@@ -49,3 +49,30 @@ export function ovalLayer(slot, framing) {
     `rgba(${bg}, 0) calc(100% - 0.5px), rgb(${bg}) calc(100% + 0.5px))`;
   return layer;
 }
+
+// The identity's long-hair layer (hair = "long": emogen.appearance.long_hair) over a face's
+// slot, as emogen.render.renderer composites it offscreen: one RGBA image (the GLB's image
+// asset.extras.emogen.hair_layer, WebP) stretched over the slot, above the canvas and below the
+// oval layer (which hides it outside the oval, as offscreen). url null: an earlier layer is
+// taken away. Called by each draw of the grid shown in the slot (cheap when nothing changed).
+export function hairLayer(slot, url) {
+  let layer = slot.querySelector(':scope > .hair-layer');
+  if (!url) {
+    layer?.remove();
+    return null;
+  }
+  if (!layer) {
+    layer = document.createElement('div');
+    layer.className = 'hair-layer';
+    Object.assign(layer.style, {
+      position: 'absolute', inset: '0', zIndex: '2', pointerEvents: 'none',
+      backgroundSize: '100% 100%', backgroundRepeat: 'no-repeat',
+    });
+    slot.insertBefore(layer, slot.querySelector(':scope > .oval-layer'));
+  }
+  if (layer.dataset.url !== url) {
+    layer.dataset.url = url;
+    layer.style.backgroundImage = `url(${url})`;
+  }
+  return layer;
+}
