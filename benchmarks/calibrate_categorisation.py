@@ -3,11 +3,16 @@ how often each of its tests finds the effect when simulated participants label w
 prototypes, and how often it falsely finds it when they label with another participant's
 (``shuffle_prototypes``), over many simulated studies.
 
-    python benchmarks/calibrate_categorisation.py            # 100 studies each, 50 participants
-    python benchmarks/calibrate_categorisation.py --studies 20 --participants 30
+    python -m benchmarks.calibrate_categorisation            # 100 studies each, 50 participants
+    python -m benchmarks.calibrate_categorisation --studies 20 --participants 30
+    python -m benchmarks.calibrate_categorisation --seed 41000 --studies 200 --conditions null
+
+Seeds: study s of the effect condition is ``--seed + s``, of the null ``--seed + 1000 + s``
+(2028: the figures before #41; a fresh-seed confirmation takes another).
 
 Prints one line per study and, per condition and test, the rejection rate at α with its binomial
-SE; for the shuffled condition, the bound α + 2·SE(α) = α + 2·sqrt(α(1 − α)/studies).
+SE and exact (Clopper–Pearson) interval; for the shuffled condition, the bound
+α + 2·SE(α) = α + 2·sqrt(α(1 − α)/studies).
 """
 
 from __future__ import annotations
@@ -16,6 +21,8 @@ import argparse
 import time
 
 import numpy as np
+
+from benchmarks.exact import share
 
 TESTS = (
     ("primary", "p"),
@@ -81,11 +88,12 @@ def report(shuffle: bool, p: np.ndarray, args: argparse.Namespace, seconds: floa
         f"\n== {what}: {n} studies × {args.participants} participants, α = {a}, {seconds:.0f} s =="
     )
     for k, (part, key) in enumerate(TESTS):
-        rate = float(np.mean(p[:, k] <= a))
+        hits = int(np.sum(p[:, k] <= a))
+        rate = hits / n
         se = np.sqrt(rate * (1 - rate) / n)
         verdict = ("≤ bound" if rate <= bound else "ABOVE bound") if shuffle else ""
         print(
-            f"  {part:9s} {key:10s} rejection rate {rate:.3f} (SE {se:.3f}) "
+            f"  {part:9s} {key:10s} rejection rate {rate:.3f} (SE {se:.3f}; {share(hits, n)}) "
             f"{f'bound {bound:.3f} ' if shuffle else ''}{verdict}"
         )
 

@@ -22,6 +22,8 @@ import time
 
 import numpy as np
 
+from benchmarks.exact import share as exact_share
+
 ALPHA = 0.05
 GROUP_SHIFT = {
     "happy": ("browInnerUp", "mouthFrown"),
@@ -96,7 +98,7 @@ def run(args: argparse.Namespace) -> None:
 
     def share(x: list[bool]) -> str:
         p = float(np.mean(x))
-        return f"{p:.3f} (SE {np.sqrt(p * (1 - p) / k):.3f})"
+        return f"{p:.3f} (SE {np.sqrt(p * (1 - p) / k):.3f}; {exact_share(int(sum(x)), k)})"
 
     print(
         f"\n{k} studies per cell, {args.participants} participants, spread {args.spread}, "

@@ -1,7 +1,7 @@
 """Calibration of the per-gene and condition tests of #28 (items 5–6) over 100 simulated
 studies each; prints the figures reported in docs/analysis.md.
 
-    PYTHONPATH=src python benchmarks/calibrate_genes.py [--studies 100]
+    python -m benchmarks.calibrate_genes [--studies 100] [--seed 0]
 
 * per-gene FWER (max-T) and FDR (BH, share of studies with any false discovery — under the
   complete null FDR = FWER) on null data: groups without a shift; emotions that share a
@@ -22,6 +22,7 @@ from dataclasses import replace
 import numpy as np
 
 import emogen
+from benchmarks.exact import share
 from emogen.analysis.conditions import condition_tests
 from emogen.analysis.genes import GeneTestOptions, emotion_gene_tests, group_gene_tests
 from emogen.analysis.quality import position_bias
@@ -43,7 +44,7 @@ NULL = PeopleDesign(
 
 def rate(hits: int, n: int) -> str:
     p = hits / n
-    return f"{p:.3f} ± {math.sqrt(p * (1 - p) / n):.3f} (SE; {hits}/{n})"
+    return f"{p:.3f} ± {math.sqrt(p * (1 - p) / n):.3f} (SE; {share(hits, n)})"
 
 
 def same_prototype(people):  # type: ignore[no-untyped-def]

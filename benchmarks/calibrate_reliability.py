@@ -7,7 +7,7 @@ true ICC of each emotion is that of a 1000-participant, 4-repetition study of th
 emotion × identity (leave one participant out); the script prints the share that
 covers the truth, per cell and pooled, with its binomial SE.
 
-    EMOGEN_MODEL=… python -m benchmarks.calibrate_reliability --studies 100
+    EMOGEN_MODEL=… python -m benchmarks.calibrate_reliability --studies 100 [--seed 0]
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ import time
 
 import numpy as np
 
+from benchmarks.exact import share
 from emogen.analysis.reliability import components, icc_interval
 from emogen.analysis.simulated_study import PeopleDesign, simulate_people
 from emogen.model.load import load_model
@@ -57,10 +58,12 @@ def main() -> None:
             widths.append(hi - lo)
     for cell, h in sorted(hits.items()):
         print(f"{cell[0]:>8} / {cell[1]:<14} covered {sum(h):3d} of {len(h)}")
+    print(f"study seeds {args.seed}–{args.seed + args.studies - 1}")
     pooled = np.concatenate(list(hits.values()))
     se = np.sqrt(0.95 * 0.05 / len(pooled))
     print(
-        f"pooled coverage {pooled.mean():.3f} of {len(pooled)} intervals (nominal 0.95, SE {se:.3f});"
+        f"pooled coverage {pooled.mean():.3f} of {len(pooled)} intervals (nominal 0.95, SE {se:.3f};"
+        f" {share(int(pooled.sum()), len(pooled))});"
         f" median width {np.median(widths):.3f}; {time.perf_counter() - t0:.0f} s"
     )
 

@@ -10,12 +10,15 @@ its own null simulation (seed), as every study's analysis has: groups sharing on
 would share its sampling error, and their flags would not be independent draws.
 
     python -m benchmarks.spread_calibration --groups 40 --sizes 20 80 240 --out grid.csv
+    python -m benchmarks.spread_calibration --groups 60 --seed 41   # fresh seeds
     python -m benchmarks.spread_calibration --groups 20 --power-spread 0.2   # + power cells
     python -m benchmarks.spread_calibration --targets medium --sizes 80 \
         --temperatures 0.05 --assumed-temperatures 0 0.025 0.05 0.1   # sensitivity to T
 
 Cells: sparse (one gene), medium (four genes) and dense (the happy face's building blocks)
-targets × group sizes × T; G = 10 generations with the paper's selections.
+targets × group sizes × T; G = 10 generations with the paper's selections. Group k of a cell
+with seed S simulates from seeds 50,000 + 10,000·S + k (its faces) and 90,000 + 10,000·S + k
+(its null); before #41 the null cells ignored ``--seed`` and always used S = 0.
 """
 
 from __future__ import annotations
@@ -27,6 +30,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from benchmarks.exact import clopper_pearson
 
 ALPHA = 0.05
 TARGETS: dict[str, dict[str, float]] = {
@@ -101,6 +106,7 @@ def cell(
         covered.append(test.excess_lo <= 0 <= test.excess_hi)
     rate = float(np.mean(flagged))
     se = float(np.sqrt(ALPHA * (1 - ALPHA) / groups))
+    lo, hi = clopper_pearson(int(np.sum(flagged)), groups)
     return {
         "target": name,
         "n": n,
@@ -109,6 +115,7 @@ def cell(
         "participant spread": spread,
         "groups": groups,
         "flagged": rate,
+        "Clopper-Pearson 95%": f"[{lo:.3f}, {hi:.3f}]",
         "SE at α": se,
         "within α + 2 SE": rate <= ALPHA + 2 * se if spread == 0 else None,
         "mean excess spread": float(np.mean(excess)),
@@ -135,7 +142,10 @@ def main() -> None:
     )
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument(
-        "--seed", type=int, default=1, help="cell seed (1: the docs' figures; another: fresh)"
+        "--seed",
+        type=int,
+        default=0,
+        help="null cells' seed (power cells: seed + 1); 0: the rig-2 figures, another: fresh",
     )
     a = ap.parse_args()
     rig = emogen.load_model(os.environ["EMOGEN_MODEL"]).rig
@@ -144,10 +154,10 @@ def main() -> None:
         for n in a.sizes:
             for t in a.temperatures:
                 for assumed in a.assumed_temperatures or [None]:
-                    rows.append(cell(rig, name, n, t, a.groups, assumed=assumed))
+                    rows.append(cell(rig, name, n, t, a.groups, seed=a.seed, assumed=assumed))
                     print(pd.DataFrame(rows[-1:]).to_string(index=False), flush=True)
                 if a.power_spread > 0:
-                    rows.append(cell(rig, name, n, t, a.groups, a.power_spread, seed=a.seed))
+                    rows.append(cell(rig, name, n, t, a.groups, a.power_spread, seed=a.seed + 1))
                     print(pd.DataFrame(rows[-1:]).to_string(index=False), flush=True)
     table = pd.DataFrame(rows)
     print(table.to_string(index=False))
