@@ -1,15 +1,15 @@
-// Frames rendered ahead and kept (issues #43, #44): a slot whose faces are known in advance (the
-// GSP slider's positions, known when the trial opens) shows each of them as a frame the viewer
+// Frames rendered ahead and kept (issues #43, #44): a slot whose faces are known in advance (a
+// one-face slider page's positions, known when its trial opens) shows each of them as a frame the viewer
 // drew live with WebGL for that face and kept as an ImageBitmap, played by a 2D canvas laid over
 // the WebGL one. A face not yet kept is drawn live when shown (then kept); while the page is idle
 // the viewer draws the others, nearest (in the list) the one shown first. There is no second
 // drawing code: a kept frame is a copy of the pixels the live draw made.
 //
-// Why (benchmarks/bench_viewer_cost.py, docs/render.md): on software GL (SwiftShader) the GSP
-// face costs 87 ms of GPU-process CPU a frame drawn live (7.6 frames/s, target 30) and 11 ms
+// Why (benchmarks/bench_viewer_cost.py, docs/render.md): on software GL (SwiftShader) the slider
+// page's face costs 87 ms of GPU-process CPU a frame drawn live (7.6 frames/s, target 30) and 11 ms
 // played from kept frames (59.7 frames/s); benchmarks/bench_gsp_slider.py measures the slider.
 //
-// Memory: frames × width × height × 4 bytes (device pixels): the GSP face at 1366×768, 41
+// Memory: frames × width × height × 4 bytes (device pixels): the slider's face at 1366×768, 41
 // positions of 445×445, is 32 MB. At most KEEP_BYTES a slot: beyond it the frames farthest from
 // the one shown are dropped (a phone (390×844) at 3 device pixels a CSS pixel keeps 28 of 41).
 

@@ -4,7 +4,7 @@
 // fewer). The faces are then drawn as plain meshes: the vertex shader reads the morphed values as
 // attributes. Software GL (SwiftShader) ran the blend for every vertex in every draw, three
 // texture fetches per non-zero target. CPU of Chromium's GPU process a frame, vertex-shader
-// morph → this (docs/render.md): the GSP slider 185 → 80 ms (benchmarks/bench_gsp_slider.py),
+// morph → this (docs/render.md): the one-face slider page 185 → 80 ms (benchmarks/bench_gsp_slider.py),
 // ten moving tiles 1057 → 493 ms (bench_dynamic_page.py), shared 2-core VM, load average 11–16.
 import { BufferAttribute, BufferGeometry, DynamicDrawUsage } from 'three';
 
