@@ -119,7 +119,7 @@ def drawn(tmp_path_factory: pytest.TempPathFactory, ict_model: Any) -> dict[str,
     """A corrected dynamic study of 3 simulated participants (2 emotions, 3 generations),
     exported and analysed with its drawings, as ``emogen analyse`` does."""
     from emogen.analysis.analyse_options import AnalysisOptions
-    from emogen.analysis.report import Report
+    from emogen.analysis.results import Section, write_analysis
     from emogen.analysis.study_export import StudyExport
     from emogen.analysis.task_sections import TaskTools
     from emogen.study.config import load_study_config
@@ -149,12 +149,13 @@ def drawn(tmp_path_factory: pytest.TempPathFactory, ict_model: Any) -> dict[str,
         store.dispose()
 
     def analyse(export: Path, out: Path) -> dict[str, Any]:
-        report = Report("dynamic", out)
-        summary: dict[str, Any] = {}
         opts = AnalysisOptions(exclusions=None)
-        dynamic_section(TaskTools(StudyExport(export), report, opts, ict_model), summary)
-        report.write()
-        return summary["dynamic"]
+        tools = TaskTools(StudyExport(export), Section(out), opts, ict_model)
+        report = dynamic_section(tools)
+        assert report is tools.report
+        write_analysis("dynamic", out, [report], {})
+        result: dict[str, Any] = report.data["dynamic"]
+        return result
 
     return {"tmp": tmp, "summary": analyse(tmp / "export", tmp / "report"), "analyse": analyse}
 
