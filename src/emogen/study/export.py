@@ -2,8 +2,7 @@
 
 Tables (one row per …): ``sessions`` (session), ``trials`` (trial of a session), then each
 registered task's own tables (:attr:`emogen.tasks.protocol.Task.export_tables`, in the task's
-``export`` module: the GA's ``faces``, ``selections``, ``restarts``, ``evolve_ratings`` and
-``final_faces``; the labelling task's ``categorise_responses``; docs/data.md has them all),
+``export`` module; docs/data.md lists them all),
 ``identities`` (identity of a study: its ``shape`` —
 a preset name, or ``shape_coefficients`` as a JSON list — and one column per appearance
 parameter, with ``appearance_generator``, so any stimulus can be re-rendered exactly; join on

@@ -1,6 +1,6 @@
 """Replay a stored session: every trial re-run by its task from its seed and recorded commands
-and compared with its records (:meth:`emogen.tasks.protocol.Task.replay`: the GA's populations
-regenerated from the selections, a categorised face checked against its source); discrete
+and compared with its records (:meth:`emogen.tasks.protocol.Task.replay`: what each task regenerates or checks is its own);
+discrete
 things exactly, weights within floating-point rounding (:mod:`emogen.tasks.rounding`; the
 largest deviation is reported).
 """
@@ -37,7 +37,7 @@ class ReplayReport:
     model_hash_matches: bool
     populations: int = 0
     faces: int = 0
-    #: stimuli checked against their source (a categorised face)
+    #: stimuli checked against their source
     stimuli: int = 0
     mismatches: list[str] = field(default_factory=list)
     #: largest deviation of a replayed weight from the stored one, relative to max(1, |w|)

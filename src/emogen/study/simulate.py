@@ -1,5 +1,5 @@
 """``emogen study simulate``: simulated participants run a whole study through the real study
-service and database — every block, categorisation included — so a lab can pilot the design,
+service and database — every block of every task — so a lab can pilot the design,
 the export and the analysis before going live.
 
 Participant ``i`` (id ``sim-0001`` …) draws their prototypes and every choice from child ``i``
