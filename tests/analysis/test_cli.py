@@ -186,3 +186,17 @@ def test_replicate_quick(ict_dir: Path, tmp_path: Path) -> None:
     assert "9,592" in html and "simulated participants" in html
     for fig in ("fig8_cd", "fig9_mean_faces", "fig15_kl_default", "table_iii_bins", "power"):
         assert (out / "figures" / f"{fig}.png").is_file(), fig
+
+
+def test_replicate_seeds_default_ten_quick_three() -> None:
+    """Verdicts decided at the seed level need ten seeds by default (docs/replication uses
+    10); ``--quick`` stays a three-seed smoke run; an explicit ``--seeds`` wins over both."""
+    from emogen.analysis.replication import ReplicateSettings
+
+    assert ReplicateSettings.full_settings().seeds == 10
+    assert ReplicateSettings.quick_settings().seeds == 3
+    assert ReplicateSettings.quick_settings(seeds=5).seeds == 5
+    result = runner.invoke(analysis_app, ["replicate", "--help"], env={"COLUMNS": "250"})
+    assert "default 10" in result.output and "--quick: 3" in result.output
+    bad = runner.invoke(analysis_app, ["replicate", "--out", "x", "--seeds", "0"])
+    assert bad.exit_code == 2 and "--seeds" in bad.output

@@ -250,9 +250,13 @@ def replicate_command(
         typer.Option("--seed", help="First seed (default 1; --quick: its own, 101)."),
     ] = None,
     seeds: Annotated[
-        int,
-        typer.Option("--seeds", min=1, help="Independent seeds every verdict combines."),
-    ] = 3,
+        int | None,
+        typer.Option(
+            "--seeds",
+            min=1,
+            help="Independent seeds every verdict combines (default 10; --quick: 3).",
+        ),
+    ] = None,
     render: RenderOpt = True,
     model_path: ModelOpt = None,
     rig: RigOpt = None,
@@ -268,7 +272,9 @@ def replicate_command(
     from emogen.analysis.replication import ReplicateSettings, replicate
     from emogen.model import load_model
 
-    extra: dict[str, object] = {"seeds": seeds, "render": render}
+    extra: dict[str, object] = {"render": render}
+    if seeds is not None:
+        extra["seeds"] = seeds
     if seed is not None:
         extra["seed"] = seed
     if runs is not None:
@@ -283,7 +289,7 @@ def replicate_command(
     model = load_model(model_path, rig=rig)
     start = time.perf_counter()
     show = stage_printer(progress)
-    command = _replicate_line(quick, runs, only, settings.seed, seeds, render, out)
+    command = _replicate_line(quick, runs, only, settings.seed, settings.seeds, render, out)
     with output_folder(out, force=force) as tmp, plots.formats(figure_format or ["png", "svg"]):
         findings = replicate(
             model, tmp, settings, only=only, progress=show or (lambda _n: None), command=command

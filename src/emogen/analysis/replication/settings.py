@@ -17,7 +17,9 @@ class ReplicateSettings:
     runs: int = 500
     participants: int = 240
     seed: int = 1
-    seeds: int = 3  # independent seeds: seed, seed + 1, …; every verdict combines them
+    # independent seeds: seed, seed + 1, …; every verdict combines them (seed-level t intervals
+    # over the seeds' fitted objects: 10, as docs/replication uses; --quick: 3, a smoke run)
+    seeds: int = 10
     render: bool = True
     participant_noise: float = 0.05  # simulated participants' choice noise (softmax T, CD units)
     power_replicates: int = 300
@@ -30,6 +32,7 @@ class ReplicateSettings:
             "quick": True,
             "seed": QUICK_SEED,
             "runs": 100,
+            "seeds": 3,
             "participants": 60,
             "power_replicates": 100,
             "power_permutations": 100,
