@@ -13,6 +13,7 @@ strips of frames and every selection records it (``fallback``).
 
 from __future__ import annotations
 
+import tomllib
 import uuid
 from collections.abc import Iterator
 from io import BytesIO
@@ -36,10 +37,13 @@ _ = (browser, viewer_bundle)  # fixtures, requested by name
 
 EXAMPLE = REPO / "examples" / "dynamic.toml"
 
-#: Rounds walked on the page (the others through the participant API): each round of ten
-#: moving faces takes 10-60 s in software GL on the shared 2-core machine under load; all 11
+#: Both walks choose every round of the first trial on the page (a whole evolution:
+#: examples/dynamic.toml's 10 generations after the first) and rate its face there. The
+#: session's other trials go through the participant API: each round of ten moving
+#: faces takes about 30 s in software GL on the shared 2-core machine at load 3 (10-60 s under
+#: heavier load; the whole desktop test 6 min at load 3), and all 44
 #: rounds of the four trials took over 20 minutes there.
-ROUNDS = 3
+GENERATIONS = 10
 
 #: Where the desktop walk leaves the final face's `face_curves` rows (its first trial's,
 #: rated on the page): `emogen render clip` makes docs/images/dynamic-walk-final.webp of it.
@@ -332,7 +336,8 @@ def test_a_participant_evolves_moving_faces_on_a_desktop(
     server, db_url = example
     walk = open_walk(browser, server, "walker-desk", phone=False)
     page, folder = walk.page, pictures_folder()
-    for g in range(ROUNDS):  # the first rounds of the first trial, on the page
+    g = 0
+    while walk.state["trial"]["status"] != "rating":  # every round of the first trial, on the page
         trial, generation, faces = walk.screen()
         assert (trial, generation) == (0, g)
         if g == 1:
@@ -352,11 +357,14 @@ def test_a_participant_evolves_moving_faces_on_a_desktop(
             times = clip_times(page)
             assert max(times) - min(times) < 0.02, times
         walk.choose(trial, generation, [f["id"] for f in faces])
-    # the trial's other rounds through the participant API, then its rating on the page again
-    walk.answer(until=lambda state: state["trial"]["status"] == "rating")
-    walk.reload()
+        g += 1
+    assert g == GENERATIONS + 1  # the whole evolution (generations 0-10) chosen on the page
+    assert tomllib.loads(EXAMPLE.read_text())["ga"]["generations"] == GENERATIONS
+    wait_ready(page, "rating")  # the face to rate, reached from the last round on the page, moves
+    page.wait_for_function(
+        "window.emogenStudy.clipTimes().some((t) => t !== null)", timeout=120_000
+    )
     walk.rate(0, 5)
-    assert page.evaluate("window.emogenStudy.clipTimes()").count(None) < 11  # the rated face moves
     # the rest of the session (three dynamic trials, then the static block) through the API
     walk.answer(until=lambda state: state["stage"] == "done")
     walk.reload()
@@ -388,8 +396,8 @@ def test_a_participant_evolves_moving_faces_on_a_phone(
     server, db_url = example
     walk = open_walk(browser, server, "walker-phone", phone=True)
     page, folder = walk.page, pictures_folder()
-    # the first rounds of the first trial on the page
-    for g in range(ROUNDS):
+    g = 0
+    while walk.state["trial"]["status"] != "rating":  # every round of the first trial, on the page
         trial, generation, faces = walk.screen()
         assert (trial, generation) == (0, g)
         if g == 1:
@@ -422,6 +430,13 @@ def test_a_participant_evolves_moving_faces_on_a_phone(
             assert rows_of_tiles(page) == [2] * 5
             walk.touch(walk.face(8))  # taken back
         walk.choose(trial, generation, [f["id"] for f in faces])
+        g += 1
+    assert g == GENERATIONS + 1  # the whole evolution chosen on the phone's page
+    wait_ready(page, "rating")
+    page.wait_for_function(
+        "window.emogenStudy.clipTimes().some((t) => t !== null)", timeout=120_000
+    )
+    walk.rate(0, 5)  # the evolved face rated with a tap
     wait_ready(page, "trial")
     assert page.errors == [] and page.evaluate("window.__cspViolations") == []
     page.context.close()
