@@ -69,9 +69,9 @@ def mark_roles(results: list[Result], primary: tuple[str, ...]) -> list[Result]:
 
 
 def plan_table(results: list[Result]) -> pd.DataFrame:
-    """One row per test that ran (tests not run are left out): ``test``, ``role``, ``p``, ``p_holm_primary`` (primary only),
-    ``estimate``, ``ci_low``, ``ci_high``, ``effect_size`` (standardised, where the test gives
-    one); primary first."""
+    """One row per test that ran (tests not run are left out): ``test``, ``role``, ``p``,
+    ``p_holm_primary`` (primary only), ``estimate``, ``ci_low``, ``ci_high``, ``effect_size``
+    (standardised, where the test gives one); primary first."""
     rows = [
         {
             "test": r.name,
