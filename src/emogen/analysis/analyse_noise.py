@@ -134,18 +134,7 @@ def noise_section(
             "Mean proxy error of each group against GA noise at the same n.",
         )
         report.data["spread_test"] = rows
-        for row, rec in zip(rows, records, strict=True):
-            report.add_test(
-                f"spread_test[{row['group']}]",
-                row,
-                test=str(rec["method"]),
-                p=rec["p"],
-                n=rec["n"],
-                unit=_unit(ds),
-                estimate=rec["excess"],
-                interval=(rec["excess_ci_low"], rec["excess_ci_high"]),
-                level=0.95,
-            )
+        _register(report, rows, records, _unit(ds))
     if candidates:
         report.table(
             pd.DataFrame(candidates),
@@ -156,6 +145,25 @@ def noise_section(
     if ds.kind == "study":
         empirical_section(ds, report, opts, model)
     return report
+
+
+def _register(
+    report: Section, rows: list[dict[str, object]], records: list[dict[str, Any]], unit: str
+) -> None:
+    """Each group's spread test in the plan: its row of ``data``, its numbers from the record
+    (full precision; the excess over the null with its 95% interval as estimate)."""
+    for row, rec in zip(rows, records, strict=True):
+        report.add_test(
+            f"spread_test[{row['group']}]",
+            row,
+            test=str(rec["method"]),
+            p=rec["p"],
+            n=rec["n"],
+            unit=unit,
+            estimate=rec["excess"],
+            interval=(rec["excess_ci_low"], rec["excess_ci_high"]),
+            level=0.95,
+        )
 
 
 def _unit(ds: Dataset) -> str:

@@ -198,6 +198,24 @@ def cross_identity_decoding(
     return pd.DataFrame(rows)
 
 
+def _register_distance(report: Section, test: dict[str, Any], level: float) -> None:
+    """The within- against between-identity distance test in the plan (dz without interval)."""
+    dz = test["dz"]
+    report.add_test(
+        "identity.distance",
+        test,
+        test="paired t (between − within identity distance)",
+        p=test["p"],
+        n=int(test["n"]),
+        statistic=test["t"],
+        df=test["df"],
+        estimate=test["difference"],
+        interval=(test["ci_low"], test["ci_high"]),
+        level=level,
+        effect=("dz", dz, None, None) if np.isfinite(dz) else None,
+    )
+
+
 def identity_section(
     people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
 ) -> Section:
@@ -242,20 +260,7 @@ def identity_section(
             "Between − within identity distance over participants",
         )
         out["distance"] = test
-        dz = test["dz"]
-        report.add_test(
-            "identity.distance",
-            test,
-            test="paired t (between − within identity distance)",
-            p=test["p"],
-            n=int(test["n"]),
-            statistic=test["t"],
-            df=test["df"],
-            estimate=test["difference"],
-            interval=(test["ci_low"], test["ci_high"]),
-            level=1 - opts.alpha,
-            effect=("dz", dz, None, None) if np.isfinite(dz) else None,
-        )
+        _register_distance(report, test, 1 - opts.alpha)
     report.table(dist, "identity_distances", "Per participant and emotion: mean distances")
     dec = cross_identity_decoding(people, rng=rng, n_perm=DECODING_PERMUTATIONS)
     report.paragraph(
