@@ -8,6 +8,7 @@ from pathlib import Path
 
 from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.conditions import conditions_section
+from emogen.analysis.exclusions import ExclusionRule, apply_exclusions
 from emogen.analysis.genes_report import genes_section
 from emogen.analysis.quality_report import quality_section
 from emogen.analysis.report import Report
@@ -23,7 +24,8 @@ def test_sections_on_a_simulated_study(ict_model, tmp_path: Path) -> None:  # ty
     people = as_people(simulate_people(design, ict_model.rig, seed=1))
     report, summary = Report("t", tmp_path), {}
     opts = AnalysisOptions()
-    quality, _ = quality_section(people, tmp_path, opts, rule=opts.exclusions)
+    applied = apply_exclusions(people, opts.exclusions or ExclusionRule())
+    quality = quality_section(people, tmp_path, opts, rule=opts.exclusions, applied=applied)
     report.blocks += quality.blocks
     summary |= quality.data
     assert quality.results == []  # as_people has no tile positions: no position-bias test

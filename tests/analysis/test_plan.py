@@ -5,16 +5,19 @@ others effect size dz with its noncentral-t interval."""
 
 from __future__ import annotations
 
+import copy
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+import pandas as pd
 import pytest
 from scipy import stats
 from typer.testing import CliRunner
 
 from emogen.analysis.categorisation import dz_interval, own_advantage
 from emogen.analysis.plan import check_primary, mark_roles, plan_table
-from emogen.analysis.results import records_in, result_of
+from emogen.analysis.results import Result, Section, unregistered, write_analysis
 from emogen.cli.analysis import analysis_app
 from emogen.errors import ConfigError
 
@@ -35,13 +38,35 @@ SUMMARY = {
 }
 
 
-def _results(summary: dict[str, object]):  # type: ignore[no-untyped-def]
-    return [result_of(n, r) for n, r in records_in(summary)]
+def _results(summary: dict[str, Any]) -> list[Result]:
+    """SUMMARY's tests as their sections register them (estimate, interval, p by hand)."""
+    sec = Section(Path("."), data=summary)
+    cat = summary["categorisation"]
+    adv, od = cat["own_advantage"], cat["own_distance"]
+    sec.add_test(
+        "categorisation.own_advantage", adv, test="t", p=0.04, n=9, estimate=0.1,
+        interval=(0.0, 0.2), effect=("dz", 0.5, None, None),
+    )  # fmt: skip
+    for row in cat["hit_rates"]:
+        name = f"categorisation.hit_rates[{row['emotion']}]"
+        sec.add_test(name, row, test="t", p=row["p"], n=9, estimate=row["mean_difference"])
+    sec.add_test(
+        "categorisation.own_distance.primary", od["primary"], test="permutation", p=0.02, n=9,
+        estimate=-1.0, interval=(-2.0, 0.1),
+    )  # fmt: skip
+    sec.add_test(
+        "categorisation.own_distance.two_stage", od["two_stage"], test="t", p=0.2, n=9,
+        estimate=-0.5,
+    )  # fmt: skip
+    emotion = summary["conditions"]["emotion"]
+    sec.add_test("conditions.emotion", emotion, test="permutation", p=0.0002, n=9)
+    assert unregistered(sec) == []
+    return sec.results
 
 
 def test_every_test_is_found_and_marked() -> None:
     primary = ("categorisation.own_distance.primary", "categorisation.hit_rates")
-    summary = {k: v for k, v in SUMMARY.items()}
+    summary = copy.deepcopy(SUMMARY)
     table = plan_table(mark_roles(_results(summary), primary))
     assert set(table["test"]) == {
         "categorisation.own_advantage",
@@ -127,3 +152,35 @@ def test_dz_interval_past_scipys_noncentral_t_is_the_normal_approximation() -> N
     low, high = dz_interval(-300.0, 50)  # nct.cdf is NaN this far out
     dz, half = -300.0 / np.sqrt(50), 1.959964 * np.sqrt(1 / 50 + (300.0**2 / 50) / 100)
     assert (low, high) == pytest.approx((dz - half, dz + half), rel=1e-6)
+
+
+def test_a_test_not_run_is_listed_with_its_reason_and_left_out_of_holm(tmp_path: Path) -> None:
+    """A study too small for one test: the test is in the plan as not run with its reason,
+    not among the tests that ran, and Holm's family over the primary tests counts only those
+    that ran (statsmodels on the two p-values)."""
+    from statsmodels.stats.multitest import multipletests
+
+    from emogen.analysis.plan import plan_section
+
+    results = _results(copy.deepcopy(SUMMARY))
+    small = Section(tmp_path)
+    small.not_run("categorisation.fields_accuracy", "4 participants; the test needs 5", n=4)
+    primary = ("categorisation.own_distance.primary", "conditions.emotion",
+               "categorisation.fields_accuracy", "identity.distance")  # fmt: skip
+    plan = plan_section(mark_roles(results + small.results, primary), primary, tmp_path)
+    data = plan.data["plan"]
+    ran = {t["test"]: t for t in data["tests"]}
+    assert "categorisation.fields_accuracy" not in ran and len(ran) == len(results)
+    assert data["not_run"] == [
+        {"test": "categorisation.fields_accuracy", "role": "primary",
+         "reason": "4 participants; the test needs 5"},
+        {"test": "identity.distance", "role": "primary",
+         "reason": "no section registered it (see its section)"},
+    ]  # fmt: skip
+    ref = multipletests([0.02, 0.0002], method="holm")[1]
+    got = [ran[n]["p_holm_primary"] for n in primary[:2]]
+    assert got == pytest.approx(ref)
+    write_analysis("plan", tmp_path, [plan], {})
+    table = pd.read_csv(tmp_path / "tables" / "plan_not_run.csv")
+    assert list(table["test"]) == ["categorisation.fields_accuracy", "identity.distance"]
+    assert "fields_accuracy" not in pd.read_csv(tmp_path / "tables" / "plan.csv")["test"].str.cat()

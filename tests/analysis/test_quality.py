@@ -154,3 +154,44 @@ def test_the_quality_section_says_who_is_excluded_and_never_claims_it_without_a_
             assert quality["default_rule_would_exclude"] == [who]
             assert "No exclusion rule applied" in text and "excluded by the rule" not in text
             assert f"would exclude 1 of 4 ({who})" in text
+
+
+def test_the_rule_is_applied_once_and_the_report_shows_that_table(
+    export: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """One application of the exclusion rule per analysis (in ``prepare_people``): the report's
+    exclusion table (``tables/quality_exclusions.csv``) is the rule computed again, plainly, on
+    the export; under ``--no-exclusions`` nobody is excluded, the report says so, and the table
+    is the default rule's, for information."""
+    from emogen.analysis import analyse_people
+    from emogen.analysis.analyse_options import AnalysisOptions
+    from emogen.analysis.results import write_analysis
+
+    who = sorted(load_people(export).faces["participant_id"])[1]
+    careless = tmp_path / "careless"
+    _plant_careless(export, careless, who)
+    calls: list[int] = []
+
+    def counted(*args: Any, **kwargs: Any) -> Any:
+        calls.append(1)
+        return apply_exclusions(*args, **kwargs)
+
+    monkeypatch.setattr(analyse_people, "apply_exclusions", counted)
+    for opts, excluded in ((AnalysisOptions(), [who]), (AnalysisOptions(exclusions=None), [])):
+        calls.clear()
+        out = tmp_path / f"report-{len(excluded)}"
+        prepared = analyse_people.prepare_people(careless, opts)
+        sections = analyse_people.quality_first(prepared, out, opts)
+        write_analysis("quality", out, sections, {})
+        assert calls == [1]
+        shown = pd.read_csv(out / "tables" / "quality_exclusions.csv", keep_default_na=False)
+        _, plain = apply_exclusions(load_people(careless), opts.exclusions or ExclusionRule())
+        cols = ["participant_id", "excluded", "reasons"]
+        assert shown[cols].astype(str).values.tolist() == plain[cols].astype(str).values.tolist()
+        assert sorted(prepared.excluded) == excluded
+        assert sections[0].data["quality"]["excluded_ids"] == excluded
+        assert prepared.kept is not None and prepared.kept.n_participants == 4 - len(excluded)
+        md = (out / "README.md").read_text()
+        if not excluded:
+            assert "No exclusion rule applied" in md and "excluded by the rule above" not in md
+            assert plain.set_index("participant_id").loc[who, "excluded"]  # flagged only

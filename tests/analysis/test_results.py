@@ -21,8 +21,9 @@ from emogen.analysis.results import (
     HypothesisTest,
     Interval,
     Section,
+    check_registered,
     records_in,
-    result_of,
+    unregistered,
     write_analysis,
 )
 from emogen.analysis.study_export import StudyExport
@@ -51,8 +52,9 @@ OWN_ADVANTAGE = {
 }
 
 
-def test_a_record_becomes_a_typed_result() -> None:
-    r = result_of("categorisation.own_advantage", OWN_ADVANTAGE)
+def test_a_test_added_by_its_analysis_is_typed(tmp_path: Path) -> None:
+    sec = _one_section(tmp_path)
+    (r,) = sec.results
     assert r.test == HypothesisTest(name="paired t", p=0.025, statistic=2.6, df=11.0)
     assert r.estimate == 0.1
     assert r.interval == Interval(0.02, 0.18, 0.9)
@@ -68,34 +70,27 @@ def test_a_record_becomes_a_typed_result() -> None:
     assert r.effect_size.interval == Interval(0.1, 1.4, 0.9)
 
 
-def test_a_failed_fit_keeps_its_reason_and_no_made_up_numbers() -> None:
-    record = {
-        "model": "GEE",
-        "status": "fallback",
-        "reason": "exchangeable correlation diverged",
-        "warnings": ["exchangeable correlation diverged; independence used"],
-        "contrast": -1.2,
-        "ci_low": float("nan"),
-        "ci_high": 0.3,
-        "z": float("nan"),
-        "p": 0.2,
-    }
-    r = result_of("categorisation.own_distance.gee", record, unit="answer")
-    assert r.fit == "fallback"
-    assert r.warnings == ("exchangeable correlation diverged; independence used",)
-    assert r.interval is None  # one bound is not a number: no interval
-    assert r.test is not None and r.test.statistic is None and r.test.p == 0.2
-    assert r.unit == "answer" and r.n is None and r.effect_size is None
-    # a record that does not give its interval's level: the level is not guessed
-    bare = result_of("x", {"p": 0.1, "ci_low": 0.0, "ci_high": 1.0})
-    assert bare.interval == Interval(0.0, 1.0, None)
+@pytest.mark.parametrize("p", [float("nan"), None, float("inf")])
+def test_a_test_without_a_p_is_refused_and_names_not_run(p: object) -> None:
+    with pytest.raises(ValueError, match=r"'x\[a\]'.*not_run"):
+        Section(Path(".")).add_test("x[a]", {}, test="t", p=p, n=3)  # type: ignore[arg-type]
+
+
+def test_a_test_not_run_keeps_its_reason_and_no_made_up_numbers() -> None:
+    sec = Section(Path("."))
+    record = {"status": "failed", "reason": "2 participants", "p": None}
+    r = sec.not_run("categorisation.fields_accuracy", "2 participants", record, n=2)
+    assert r.test is None and r.p is None and r.estimate is None and r.interval is None
+    assert (r.fit, r.warnings, r.n, r.record) == ("not run", ("2 participants",), 2, record)
+    with pytest.raises(ValueError, match="reason"):
+        sec.not_run("x", "")
 
 
 def test_records_are_named_by_their_place_and_item() -> None:
     data = {
         "spread_test": [{"group": "happy", "p": 0.2}, {"group": "sad", "p": 0.01}],
         "conditions": {"emotion": {"p": 0.001}, "note": "x", "n": 3},
-        "categorisation": {"hit_rates": [{"p": 0.5}]},
+        "categorisation": {"hit_rates": [{"p_t": 0.5}]},
     }
     names = [n for n, _ in records_in(data)]
     assert names == [
@@ -104,8 +99,26 @@ def test_records_are_named_by_their_place_and_item() -> None:
         "conditions.emotion",
         "categorisation.hit_rates[0]",
     ]
-    families = {result_of(n, r).family for n, r in records_in(data)}
-    assert families == {"spread_test", "conditions.emotion", "categorisation.hit_rates"}
+
+
+def test_a_p_value_in_the_data_without_its_test_is_refused_by_name(tmp_path: Path) -> None:
+    """One path into the plan: a section whose data holds a p that it did not register (with
+    add_test or not_run) stops the analysis, naming the record."""
+    sec = Section(tmp_path)
+    kept, forgotten = {"p": 0.2}, {"p_perm": 0.01}
+    sec.data["spread_test"] = [{"group": "happy", **kept}]
+    sec.data["conditions"] = {"emotion": forgotten, "identity": {"p": float("nan")}}
+    sec.add_test("spread_test[happy]", sec.data["spread_test"][0], test="t", p=0.2, n=5)
+    sec.not_run("conditions.identity", "one identity", sec.data["conditions"]["identity"])
+    assert unregistered(sec) == ["conditions.emotion"]
+    with pytest.raises(ValueError, match=r"\['conditions.emotion'\].*did not register"):
+        check_registered([Section(tmp_path), sec])
+    sec.add_test("conditions.emotion", forgotten, test="permutation", p=0.01, n=5)
+    assert [r.name for r in check_registered([sec])] == [
+        "spread_test[happy]",
+        "conditions.identity",
+        "conditions.emotion",
+    ]
 
 
 def _one_section(out: Path) -> Section:
@@ -132,11 +145,8 @@ def _one_section(out: Path) -> Section:
     return sec
 
 
-def test_a_test_built_by_its_analysis_is_the_record_read_back(tmp_path: Path) -> None:
-    """The typed result an analysis builds equals the one read from its JSON record (every
-    field written by hand in ``OWN_ADVANTAGE``), and is the section's only result."""
+def test_a_test_keeps_its_record_and_an_effect_without_interval(tmp_path: Path) -> None:
     (built,) = _one_section(tmp_path).results
-    assert built == result_of("categorisation.own_advantage", OWN_ADVANTAGE)
     assert built.record["t"] == 2.6
     without = Section(tmp_path).add_test(
         "x[a]", {}, test="F", p=0.5, n=3, effect=("r", 0.2, None, None)
@@ -204,9 +214,12 @@ def test_a_planted_study_gives_mains_numbers_and_report(tmp_path: Path) -> None:
     md = result.markdown.read_text().replace(str(export), "EXPORT")
     assert _masked(md) == _masked((DATA / "analyse_planted.md").read_text())
     by_name = {r.name: r for r in result.results}
+    ran = [n for n in by_name if by_name[n].test is not None]
     assert [t["test"] for t in main["plan"]["tests"]] == sorted(
-        by_name, key=lambda n: by_name[n].role != "primary"
+        ran, key=lambda n: by_name[n].role != "primary"
     )
+    not_run = [n for n in by_name if by_name[n].test is None]
+    assert [t["test"] for t in main["plan"]["not_run"]] == not_run == ["identity.distance"]
     primary = by_name["categorisation.own_distance.primary"]
     assert primary.role == "primary" and primary.unit.startswith("participant")
 

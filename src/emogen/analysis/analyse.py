@@ -55,7 +55,7 @@ from emogen.analysis.distributions import generation_summary, kl_per_generation
 from emogen.analysis.methods import methods_record, methods_text
 from emogen.analysis.plan import mark_roles, plan_section
 from emogen.analysis.repeatability import BIN_LABELS, repeatability_bins
-from emogen.analysis.results import Result, Section, write_analysis
+from emogen.analysis.results import Result, Section, check_registered, write_analysis
 from emogen.analysis.task_sections import task_sections
 
 if TYPE_CHECKING:
@@ -119,7 +119,7 @@ def analyse(
     if export is not None and prepared is not None:
         sections += people_sections(prepared, out, opts, model, step)
         sections += task_sections(export, out, opts, model, step)
-    results = mark_roles([r for s in sections for r in s.results], opts.primary)
+    results = mark_roles(check_registered(sections), opts.primary)
     sections.append(plan_section(results, opts.primary, out))
     step("writing the report")
     if ds.has_weights:

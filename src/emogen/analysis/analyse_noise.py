@@ -4,7 +4,7 @@ simulated on the model with the data's GA settings?"""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -76,7 +76,8 @@ def noise_section(
         report.paragraph("Skipped: needs face weights.")
         return report
     rng = np.random.default_rng(opts.seed)
-    rows, notes, records = [], [], []
+    rows, notes = [], []
+    records: list[dict[str, Any]] = []
     candidates: list[dict[str, object]] = []
     candidate_records: list[dict[str, object]] = []
     for g in ds.groups:
@@ -133,8 +134,7 @@ def noise_section(
             "Mean proxy error of each group against GA noise at the same n.",
         )
         report.data["spread_test"] = rows
-        for row in rows:
-            report.test(f"spread_test[{row['group']}]", row, _unit(ds))
+        _register(report, rows, records, _unit(ds))
     if candidates:
         report.table(
             pd.DataFrame(candidates),
@@ -145,6 +145,25 @@ def noise_section(
     if ds.kind == "study":
         empirical_section(ds, report, opts, model)
     return report
+
+
+def _register(
+    report: Section, rows: list[dict[str, object]], records: list[dict[str, Any]], unit: str
+) -> None:
+    """Each group's spread test in the plan: its row of ``data``, its numbers from the record
+    (full precision; the excess over the null with its 95% interval as estimate)."""
+    for row, rec in zip(rows, records, strict=True):
+        report.add_test(
+            f"spread_test[{row['group']}]",
+            row,
+            test=str(rec["method"]),
+            p=rec["p"],
+            n=rec["n"],
+            unit=unit,
+            estimate=rec["excess"],
+            interval=(rec["excess_ci_low"], rec["excess_ci_high"]),
+            level=0.95,
+        )
 
 
 def _unit(ds: Dataset) -> str:
@@ -158,7 +177,8 @@ def empirical_section(
     within-person spread (the empirical null, :mod:`emogen.analysis.noise_empirical`), added
     to ``sec``."""
     rng = np.random.default_rng(opts.seed)
-    rows, records = [], []
+    rows = []
+    records: list[dict[str, Any]] = []
     for g in ds.groups:
         final = ds.final[ds.final["group"] == g]
         who = final["participant"].to_numpy()
@@ -187,8 +207,17 @@ def empirical_section(
         data=pd.DataFrame(records),
     )
     report.data["spread_empirical"] = rows
-    for row in rows:
-        report.test(f"spread_empirical[{row['group']}]", row)
+    for row, rec in zip(rows, records, strict=True):
+        report.add_test(
+            f"spread_empirical[{row['group']}]",
+            row,
+            test="permutation (faces shuffled among participants)",
+            p=rec["p"],
+            n=rec["participants"],
+            estimate=rec["excess_between_variance"],
+            interval=(rec["excess_ci_low"], rec["excess_ci_high"]),
+            level=0.95,
+        )
 
 
 def _method_text(ds: Dataset, opts: AnalysisOptions, model: FaceModel | None) -> str:

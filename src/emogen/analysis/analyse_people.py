@@ -2,9 +2,10 @@
 
 Read from the export as :class:`~emogen.analysis.people.People` (one row per final face), with
 the participant table joined when given (``--participants``). The exclusion rule
-(:mod:`emogen.analysis.exclusions`, stated in the report) is applied **before every analysis**:
-:func:`prepare_people` returns the people kept, and ``emogen analyse`` reloads the GA data
-without the excluded participants. Each section states its unit, model and assumptions, and says
+(:mod:`emogen.analysis.exclusions`, stated in the report) is applied **once, before every
+analysis**: :func:`prepare_people` returns the people kept and the rule's table, the quality
+section reports that table, and ``emogen analyse`` reloads the GA data without the excluded
+participants. Each section states its unit, model and assumptions, and says
 in one line why when the design cannot support it.
 """
 
@@ -16,7 +17,7 @@ from typing import TYPE_CHECKING
 
 from emogen.analysis.categorisation import categorisation_section
 from emogen.analysis.conditions import conditions_section
-from emogen.analysis.exclusions import apply_exclusions
+from emogen.analysis.exclusions import ExclusionRule, apply_exclusions
 from emogen.analysis.fields_report import fields_section
 from emogen.analysis.flow import flow_section
 from emogen.analysis.genes_report import genes_section
@@ -45,13 +46,17 @@ if TYPE_CHECKING:
 @dataclass(frozen=True, eq=False)
 class Prepared:
     """Everyone (for the quality section), the people kept, who was excluded, and why there
-    are no people (``problem``) when the export cannot give them."""
+    are no people (``problem``) when the export cannot give them. ``exclusions``: the table of
+    the rule's one application (:func:`apply_exclusions`: measures, flags, ``excluded``,
+    ``reasons``; under ``--no-exclusions`` the default rule's flags, for information only,
+    nobody excluded); None without faces."""
 
     everyone: People | None
     kept: People | None
     excluded: frozenset[str]
     problem: str = ""
     export: StudyExport | None = None  # its sessions and trials: the participant flow
+    exclusions: pd.DataFrame | None = None
 
 
 def people_for(export: StudyExport, opts: AnalysisOptions) -> People:
@@ -70,11 +75,13 @@ def prepare_people(source: Path | StudyExport, opts: AnalysisOptions) -> Prepare
         everyone = people_for(export, opts)
     except EmoGenError as exc:
         return Prepared(None, None, frozenset(), str(exc), export)
-    if opts.exclusions is None or everyone.faces.empty:
+    if everyone.faces.empty:
         return Prepared(everyone, everyone, frozenset(), export=export)
-    kept, table = apply_exclusions(everyone, opts.exclusions)
+    kept, table = apply_exclusions(everyone, opts.exclusions or ExclusionRule())
+    if opts.exclusions is None:  # the default rule's flags are shown, not applied
+        return Prepared(everyone, everyone, frozenset(), export=export, exclusions=table)
     out = frozenset(table.loc[table["excluded"], "participant_id"].astype(str))
-    return Prepared(everyone, kept, out, export=export)
+    return Prepared(everyone, kept, out, export=export, exclusions=table)
 
 
 def check_participants(ds: Dataset, table: Path, group_column: str) -> None:
@@ -94,13 +101,13 @@ def check_participants(ds: Dataset, table: Path, group_column: str) -> None:
 def quality_first(prepared: Prepared, out: Path, opts: AnalysisOptions) -> list[Section]:
     """Quality and exclusions, and the participant flow: reported before the analyses they
     apply to (none where the export gives no people)."""
-    if prepared.everyone is None or prepared.everyone.faces.empty:
+    everyone, kept, table = prepared.everyone, prepared.kept, prepared.exclusions
+    if everyone is None or kept is None or table is None:  # no faces: no quality to report
         return []
-    quality, table = quality_section(prepared.everyone, out, opts, rule=opts.exclusions)
+    quality = quality_section(everyone, out, opts, rule=opts.exclusions, applied=(kept, table))
     sections = [quality]
     if prepared.export is not None:
-        kept = prepared.kept
-        analysed = set() if kept is None else set(kept.faces["participant_id"].astype(str))
+        analysed = set(kept.faces["participant_id"].astype(str))
         rule_table = table if opts.exclusions is not None else None
         sections.append(flow_section(prepared.export, rule_table, analysed, out, _groups(opts)))
     if prepared.excluded:

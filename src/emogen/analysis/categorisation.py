@@ -142,7 +142,7 @@ def categorisation_section(
                 "block, or nobody has reached it yet)."
             )
             report.data["categorisation"] = {"n_answers": 0, "note": "no categorise answers"}
-        return report.tests_in_data()
+        return report
     report.heading("Categorisation of faces")
     answered = rec.answered(responses)
     if answered.empty:
@@ -150,7 +150,7 @@ def categorisation_section(
             "No categorisation analysis: the study's categorise trials are unanswered."
         )
         report.data["categorisation"] = {"n_answers": 0, "note": "no answers"}
-        return report.tests_in_data()
+        return report
     out: dict[str, Any] = {
         "n_answers": len(answered),
         "n_participants": int(answered["participant_id"].nunique()),
@@ -165,10 +165,10 @@ def categorisation_section(
             "Own-distance model: not fitted here (it needs the study's final faces, which "
             "this call did not receive)."
         )
-        return report.tests_in_data()
+        return report
     own_distance_section(full, report, out, opts)
     fields_accuracy_section(full, report, out, opts)
-    return report.tests_in_data()
+    return report
 
 
 def _long(report: Content, table: pd.DataFrame, name: str, caption: str, shown: int = 8) -> None:
@@ -234,7 +234,7 @@ def _confusion(responses: pd.DataFrame, report: Content) -> None:
 
 
 def _hit_rates(
-    responses: pd.DataFrame, report: Content, out: dict[str, Any], opts: AnalysisOptions
+    responses: pd.DataFrame, report: Section, out: dict[str, Any], opts: AnalysisOptions
 ) -> None:
     hu = rec.unbiased_hit_rates(responses)
     if hu.empty:
@@ -251,6 +251,24 @@ def _hit_rates(
         tests, "categorisation_hit_rate_tests", "Hu against chance per emotion (over participants)"
     )
     out["hit_rates"] = tests.to_dict(orient="records")
+    for row in out["hit_rates"]:
+        name = f"categorisation.hit_rates[{row['emotion']}]"
+        if not np.isfinite(row["p"]):
+            reason = f"{row['n_participants']} participant(s), or no spread: no t"
+            report.not_run(name, reason, row, n=row["n_participants"])
+            continue
+        report.add_test(
+            name,
+            row,
+            test="one-sample t (arcsin√Hu − arcsin√pc)",
+            p=row["p"],
+            n=row["n_participants"],
+            statistic=row["t"],
+            df=row["n_participants"] - 1,
+            estimate=row["mean_difference"],
+            interval=(row["ci_low"], row["ci_high"]),
+            level=0.95,
+        )
     above = ", ".join(tests.loc[tests["above_chance"], "emotion"]) or "none"
     report.paragraph(
         "Unbiased hit rates (Wagner 1993): per participant and emotion, Hu = hits² / (faces of "
@@ -264,7 +282,7 @@ def _hit_rates(
 
 
 def _sources(
-    responses: pd.DataFrame, report: Content, out: dict[str, Any], opts: AnalysisOptions
+    responses: pd.DataFrame, report: Section, out: dict[str, Any], opts: AnalysisOptions
 ) -> None:
     per = rec.accuracy_per_participant(responses)
     pairs = rec.source_comparisons(per, opts.alpha)
@@ -284,9 +302,24 @@ def _sources(
         )
     adv = own_advantage(responses)
     out["own_advantage"] = adv
+    name = "categorisation.own_advantage"
     if np.isnan(adv["ci_low"]):
+        report.not_run(name, adv["note"], adv, n=adv["n_participants"])
         report.paragraph(f"Own- against other-face accuracy: {adv['note']}.")
         return
+    report.add_test(
+        name,
+        adv,
+        test=adv["test"],
+        p=adv["p"],
+        n=adv["n_participants"],
+        statistic=adv["t"],
+        df=adv["n_participants"] - 1,
+        estimate=adv["difference"],
+        interval=(adv["ci_low"], adv["ci_high"]),
+        level=adv["confidence"],
+        effect=("dz", adv["dz"], adv["dz_low"], adv["dz_high"]),
+    )
     report.paragraph(
         f"Own- against other-face accuracy ({adv['test']}; the participant is the unit, "
         f"n = {adv['n_participants']}; fallback faces left out): own "

@@ -191,14 +191,14 @@ def conditions_section(
     report.heading("Emotions, identities and their interaction")
     if len(people.emotions) < 2 and len(people.identity_names) < 2:
         report.paragraph("The study has one emotion and one identity: no condition to compare.")
-        return report.tests_in_data()
+        return report
     _, ids, _, _ = cell_cube(people)
     if len(ids) < 3:
         report.paragraph(
             f"Condition tests need >= 3 participants with a face in every emotion × identity "
             f"cell; {len(ids)} have one."
         )
-        return report.tests_in_data()
+        return report
     permutations, draws = 2000, 1000
     table = condition_tests(
         people,
@@ -227,8 +227,19 @@ def conditions_section(
         "conditions_tests",
         "Emotion, identity and interaction effects on the genes (participant as unit).",
     )
-    report.data["conditions"] = {
-        r["effect"]: {"p": r["p_perm"], "partial_eta2": r["partial_eta2"]}
-        for r in table.to_dict("records")
-    }
-    return report.tests_in_data()
+    report.data["conditions"] = {}
+    for r in table.to_dict("records"):
+        record = {"p": r["p_perm"], "partial_eta2": r["partial_eta2"]}
+        report.data["conditions"][r["effect"]] = record
+        report.add_test(
+            f"conditions.{r['effect']}",
+            record,
+            test="within-participant permutation (pseudo-F)",
+            p=r["p_perm"],
+            n=r["n_participants"],
+            statistic=r["pseudo_f"],
+            level=1 - opts.alpha,
+            effect=("partial η² (bias-corrected)", r["partial_eta2_corrected"],
+                    r["ci_low"], r["ci_high"]),
+        )  # fmt: skip
+    return report

@@ -32,7 +32,7 @@ from emogen.analysis.analyse_options import AnalysisOptions
 from emogen.analysis.people import People
 
 if TYPE_CHECKING:
-    from emogen.analysis.report import Content
+    from emogen.analysis.results import Section
 
 #: The fewest participants with both measures the relation is tested on.
 MIN_PARTICIPANTS = 8
@@ -116,7 +116,7 @@ def distinctness_accuracy(
 
 
 def fields_accuracy_section(
-    people: People, report: Content, out: dict[str, Any], opts: AnalysisOptions
+    people: People, report: Section, out: dict[str, Any], opts: AnalysisOptions
 ) -> None:
     """The report's paragraph and table on distinctness and accuracy
     (``out["fields_accuracy"]``)."""
@@ -132,9 +132,23 @@ def fields_accuracy_section(
         f"95% CI (assumes rough bivariate normality) and a permutation p ({PERMUTATIONS} "
         f"shuffles of accuracy among participants, seed {opts.seed}): "
     )
+    name = "categorisation.fields_accuracy"
     if res["status"] != "ok":
+        report.not_run(name, res["reason"], res, n=res["n_participants"])
         report.paragraph(head + f"**not estimated** — {res['reason']}.")
         return
+    report.add_test(
+        name,
+        res,
+        test=res["test"],
+        p=res["p"],
+        n=res["n_participants"],
+        statistic=res["r"],
+        estimate=res["r"],
+        interval=(res["ci_low"], res["ci_high"]),
+        level=0.95,
+        effect=("r", res["r"], res["ci_low"], res["ci_high"]),
+    )
     report.table(table, "categorisation_distinctness", "Distinctness and accuracy per participant")
     report.paragraph(
         head + f"r = {res['r']:+.2f}, 95% CI [{res['ci_low']:+.2f}, {res['ci_high']:+.2f}], "

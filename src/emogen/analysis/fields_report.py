@@ -55,7 +55,7 @@ def fields_section(
             f"or more final faces of an emotion; this study has {people.n_participants} "
             f"participant(s) with at most {counts.max()} face(s) per emotion."
         )
-        return report.tests_in_data()
+        return report
     from threadpoolctl import threadpool_limits
 
     rng = np.random.default_rng(opts.seed)
@@ -87,7 +87,7 @@ def fields_section(
     )
     _sheets(people, report, opts, model)
     report.data["fields"] = out
-    return report.tests_in_data()
+    return report
 
 
 def _describe(fields: Fields, counts: pd.Series, report: Content, out: dict[str, Any]) -> None:
@@ -181,7 +181,7 @@ def _write_only(report: Content, table: pd.DataFrame, name: str) -> None:
 
 
 def _individuality(
-    people: People, fields: Fields, report: Content, opts: AnalysisOptions, out: dict[str, Any]
+    people: People, fields: Fields, report: Section, opts: AnalysisOptions, out: dict[str, Any]
 ) -> None:
     ind = field_individuality(people, fields)
     if ind.empty:
@@ -225,11 +225,32 @@ def _individuality(
     out["individuality"] = table.set_index("emotion")[["difference", "p", "identified"]].to_dict(
         orient="index"
     )
+    for row in rows:
+        name, record = (
+            f"fields.individuality.{row['emotion']}",
+            out["individuality"][row["emotion"]],
+        )
+        if not np.isfinite(row["p"]):
+            reason = f"{row['n_participants']} participant(s), or no spread: no t"
+            report.not_run(name, reason, record, n=row["n_participants"])
+            continue
+        report.add_test(
+            name,
+            record,
+            test="paired t (self − others overlap)",
+            p=row["p"],
+            n=row["n_participants"],
+            statistic=row["t"],
+            df=row["n_participants"] - 1,
+            estimate=row["difference"],
+            interval=(row["ci_low"], row["ci_high"]),
+            level=1 - opts.alpha,
+        )
 
 
 def _clusters(
     fields: Fields,
-    report: Content,
+    report: Section,
     opts: AnalysisOptions,
     rng: np.random.Generator,
     out: dict[str, Any],
@@ -276,6 +297,14 @@ def _clusters(
         "silhouette": c.silhouette,
         "p": c.p_value,
     }
+    report.add_test(
+        "fields.clusters",
+        out["clusters"],
+        test="one-population null of the best silhouette over k",
+        p=c.p_value,
+        n=len(c.participants),
+        statistic=c.silhouette,
+    )
     return c
 
 

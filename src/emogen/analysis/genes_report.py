@@ -36,7 +36,7 @@ def genes_section(
             f"Per-gene tests need >= {MIN_PARTICIPANTS} participants; this study has "
             f"{people.n_participants}."
         )
-        return report.tests_in_data()
+        return report
     rng = np.random.default_rng(opts.seed)
     gopts = GeneTestOptions(level=1 - opts.alpha)
     report.paragraph(
@@ -90,7 +90,7 @@ def genes_section(
         out["emotion_tests"] = len(emo)
     _groups(people, report, gopts, rng, out)
     report.data["genes"] = out
-    return report.tests_in_data()
+    return report
 
 
 def _groups(

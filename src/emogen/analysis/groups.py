@@ -144,7 +144,7 @@ def groups_section(
     """The report's group comparison per emotion (nothing without a participant table)."""
     report = Section(folder)
     if column not in people.participant_columns:
-        return report.tests_in_data()
+        return report
     report.heading(f"Groups of participants ('{column}')")
     rng = np.random.default_rng(np.random.SeedSequence(opts.seed, spawn_key=(0x6A,)))
     rows, notes = [], []
@@ -173,4 +173,25 @@ def groups_section(
             table, "participant_groups", f"Groups ('{column}') per emotion: location and dispersion"
         )
         report.data["groups"] = rows
-    return report.tests_in_data()
+    for row in rows:
+        e = row["emotion"]
+        report.add_test(
+            f"groups.location[{e}]",
+            row,
+            test="PERMANOVA (4999 permutations of participants)",
+            p=row["p_location"],
+            n=row["participants"],
+            estimate=row["r2"],
+            interval=(row["r2_low"], row["r2_high"]),
+            level=0.95,
+            effect=("R²", row["r2"], row["r2_low"], row["r2_high"]),
+        )
+        report.add_test(
+            f"groups.dispersion[{e}]",
+            row,
+            test="PERMDISP (permuted distances to the centroid)",
+            p=row["p_dispersion"],
+            n=row["participants"],
+            statistic=row["dispersion_f"],
+        )
+    return report

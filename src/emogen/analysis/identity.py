@@ -198,6 +198,24 @@ def cross_identity_decoding(
     return pd.DataFrame(rows)
 
 
+def _register_distance(report: Section, test: dict[str, Any], level: float) -> None:
+    """The within- against between-identity distance test in the plan (dz without interval)."""
+    dz = test["dz"]
+    report.add_test(
+        "identity.distance",
+        test,
+        test="paired t (between − within identity distance)",
+        p=test["p"],
+        n=int(test["n"]),
+        statistic=test["t"],
+        df=test["df"],
+        estimate=test["difference"],
+        interval=(test["ci_low"], test["ci_high"]),
+        level=level,
+        effect=("dz", dz, None, None) if np.isfinite(dz) else None,
+    )
+
+
 def identity_section(
     people: People, folder: Path, opts: AnalysisOptions, model: FaceModel | None
 ) -> Section:
@@ -212,17 +230,18 @@ def identity_section(
             f"Skipped: every face was made on one identity ({names[0] if names else 'none'}), "
             "so there is no identity effect to measure."
         )
-        return report.tests_in_data()
+        return report
     rng = np.random.default_rng(opts.seed)
     out: dict[str, Any] = {}
     dist = identity_distances(people)
     test = within_between_test(dist, alpha=opts.alpha, rng=rng)
-    if test.get("n", 0) < 3:
-        report.paragraph(
-            "No within- against between-identity distance test: it needs participants who "
-            "made an emotion at least twice on one identity and on another (repetitions); "
-            f"{int(test.get('n', 0))} did."
+    if test.get("n", 0) < 3 or not np.isfinite(test.get("p", np.nan)):
+        why = (
+            "it needs participants who made an emotion at least twice on one identity and on "
+            f"another (repetitions), and spread among them; {int(test.get('n', 0))} did"
         )
+        report.paragraph(f"No within- against between-identity distance test: {why}.")
+        report.not_run("identity.distance", why, n=int(test.get("n", 0)))
     else:
         report.paragraph(
             "Distance within against between identities (gene-space Euclidean distance between "
@@ -241,6 +260,7 @@ def identity_section(
             "Between − within identity distance over participants",
         )
         out["distance"] = test
+        _register_distance(report, test, 1 - opts.alpha)
     report.table(dist, "identity_distances", "Per participant and emotion: mean distances")
     dec = cross_identity_decoding(people, rng=rng, n_perm=DECODING_PERMUTATIONS)
     report.paragraph(
@@ -257,5 +277,14 @@ def identity_section(
     )
     report.table(dec, "identity_decoding", "Decoding the emotion across identities")
     out["decoding"] = dec.to_dict(orient="records")
+    for row in out["decoding"]:
+        report.add_test(
+            f"identity.decoding[{row['train_identity']} → {row['test_identity']}]",
+            row,
+            test="permutation (emotion labels within participant × identity)",
+            p=row["p"],
+            n=row["n_participants"],
+            estimate=row["accuracy"],
+        )
     report.data["identity"] = out
-    return report.tests_in_data()
+    return report

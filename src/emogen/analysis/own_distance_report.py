@@ -19,13 +19,14 @@ if TYPE_CHECKING:
     from emogen.analysis.categorisation_models import OwnDistance
     from emogen.analysis.people import People
     from emogen.analysis.report import Content
+    from emogen.analysis.results import Section
 
 #: Shuffles (derangements of participants) of the report's shuffled-prototype control.
 SHUFFLES = 199
 
 
 def own_distance_section(
-    people: People, report: Content, out: dict[str, Any], opts: AnalysisOptions
+    people: People, report: Section, out: dict[str, Any], opts: AnalysisOptions
 ) -> None:
     """Fit the own-distance model of ``people`` and write it (``out["own_distance"]``)."""
     from emogen.analysis import categorisation_models as cm
@@ -35,6 +36,7 @@ def own_distance_section(
     if isinstance(res, str):
         report.paragraph(f"No own-distance model: {res}.")
         out["own_distance"] = {"note": res}
+        report.not_run("categorisation.own_distance.primary", res)
         return
     tests = {
         "primary": res.primary,
@@ -43,12 +45,50 @@ def own_distance_section(
         "control": {k: v for k, v in res.control.items() if k != "control"},
     }
     out["own_distance"] = tests | {"fit_problems": fit_problems(tests)}
+    for name, t in tests.items():
+        _register(report, f"categorisation.own_distance.{name}", t)
     _tables(report, res)
     _method(report, res, opts)
     _primary(report, res.primary)
     _secondary(report, res, opts)
     _problems(report, out["own_distance"]["fit_problems"])
     _figure(report, res)
+
+
+#: Each test's p, statistic and estimate keys in its record (the two-stage test's p is its t's).
+_KEYS = {
+    "primary": ("p", "t", "contrast"),
+    "gee": ("p", "z", "contrast"),
+    "two_stage": ("p_t", "t", "mean_contrast"),
+    "control": ("p", None, None),
+}
+
+
+def _register(report: Section, name: str, t: dict[str, Any]) -> None:
+    """The test ``t`` (a record of ``out["own_distance"]``) in the report's plan: run, or not
+    run with its fit's reason."""
+    p_key, stat_key, est_key = _KEYS[name.rsplit(".", 1)[1]]
+    p = t.get(p_key)
+    if t.get("status") == "failed" or p is None or not np.isfinite(p):
+        reason = t.get("reason") or "no p-value"
+        report.not_run(name, f"fit {t.get('status', 'failed')}: {reason}", t)
+        return
+    has_ci = "ci_low" in t and est_key is not None
+    report.add_test(
+        name,
+        t,
+        test=str(t.get("test", stat_key)),
+        p=p,
+        n=t.get("n_participants"),
+        statistic=None if stat_key is None else t[stat_key],
+        df=t.get("df"),
+        unit=str(t.get("unit", "participant")),
+        estimate=None if est_key is None else t[est_key],
+        interval=(t["ci_low"], t["ci_high"]) if has_ci else None,
+        level=t.get("confidence"),
+        warnings=tuple(t.get("warnings", ())),
+        fit=str(t.get("status", "ok")),
+    )
 
 
 def fit_problems(tests: dict[str, dict[str, Any]]) -> list[dict[str, str]]:

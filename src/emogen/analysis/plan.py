@@ -7,7 +7,10 @@ the JSON too), adjusts the primary family by Holm (1979) — the only family-wis
 makes across sections — and writes one table of every test with its estimate and interval.
 Exploratory p-values are descriptive: each table's own correction (Holm over emotions, max-T
 over genes, …) controls that table only. A named primary test the data could not support is
-listed as not run, with its reason, never dropped silently.
+listed as not run, with its reason, never dropped silently — and so is every test a section
+registered as not run (:meth:`~emogen.analysis.results.Section.not_run`: too few participants,
+a fit that failed): named with its reason, outside the table of tests that ran and outside
+the primary family Holm's adjustment counts.
 """
 
 from __future__ import annotations
@@ -66,9 +69,9 @@ def mark_roles(results: list[Result], primary: tuple[str, ...]) -> list[Result]:
 
 
 def plan_table(results: list[Result]) -> pd.DataFrame:
-    """One row per test: ``test``, ``role``, ``p``, ``p_holm_primary`` (primary only),
-    ``estimate``, ``ci_low``, ``ci_high``, ``effect_size`` (standardised, where the test gives
-    one); primary first."""
+    """One row per test that ran (tests not run are left out): ``test``, ``role``, ``p``,
+    ``p_holm_primary`` (primary only), ``estimate``, ``ci_low``, ``ci_high``, ``effect_size``
+    (standardised, where the test gives one); primary first."""
     rows = [
         {
             "test": r.name,
@@ -80,6 +83,7 @@ def plan_table(results: list[Result]) -> pd.DataFrame:
             "effect_size": None if r.effect_size is None else r.effect_size.value,
         }
         for r in results
+        if r.test is not None
     ]
     table = pd.DataFrame(
         rows, columns=["test", "role", "p", "estimate", "ci_low", "ci_high", "effect_size"]
@@ -114,10 +118,18 @@ def plan_section(results: list[Result], primary: tuple[str, ...], out: Path) -> 
     report (``results``, their roles set by :func:`mark_roles`)."""
     sec = Section(out)
     table = plan_table(results)
-    missing = [n for n in primary if not any(_under(t, n) for t in table["test"])]
+    not_run: list[tuple[str, str, str]] = [
+        (r.name, r.role, "; ".join(r.warnings)) for r in results if r.test is None
+    ]
+    missing = [
+        (n, "primary", "no section registered it (see its section)")
+        for n in primary
+        if not any(_under(t, n) for t in [*table["test"], *(name for name, _, _ in not_run)])
+    ]
+    not_run = sorted(not_run + missing, key=lambda row: row[1] != "primary")
     sec.data["plan"] = {
         "primary": list(primary),
-        "not_run": missing,
+        "not_run": [{"test": n, "role": role, "reason": why} for n, role, why in not_run],
         "tests": table.astype(object).where(table.notna(), None).to_dict(orient="records"),
     }
     sec.heading("Multiplicity plan: primary and exploratory tests")
@@ -128,12 +140,21 @@ def plan_section(results: list[Result], primary: tuple[str, ...], out: Path) -> 
         "exploratory: its p-value describes, and its own table's correction (where it has "
         "one) controls that table only. Estimates and intervals are on each test's own scale "
         "(see its section); `effect_size` is standardised where the test gives one (dz: mean "
-        "difference over the SD of the participants' differences; r)."
+        "difference over the SD of the participants' differences; r; R²; partial η², "
+        "bias-corrected, for the condition tests)."
     )
-    if missing:
+    if any(role == "primary" for _, role, _ in not_run):
         sec.paragraph(
-            "**Named primary test(s) not run** (the data could not support them; their "
-            "sections say why): " + ", ".join(f"`{n}`" for n in missing) + "."
+            "**Named primary test(s) not run** (the data could not support them): "
+            + ", ".join(f"`{n}`" for n, role, _ in not_run if role == "primary")
+            + ". Holm's adjustment counts only the primary tests that ran."
         )
-    sec.table(table, "plan", f"Every test of this report ({len(table)}), primary first")
+    sec.table(table, "plan", f"Every test of this report that ran ({len(table)}), primary first")
+    if not_run:
+        rows = pd.DataFrame(not_run, columns=["test", "role", "reason"])
+        sec.table(
+            rows,
+            "plan_not_run",
+            f"Tests not run ({len(rows)}): not among the tests above, nor in any correction",
+        )
     return sec

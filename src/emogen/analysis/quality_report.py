@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 
 from emogen.analysis.analyse_options import AnalysisOptions
-from emogen.analysis.exclusions import ExclusionRule, apply_exclusions
+from emogen.analysis.exclusions import ExclusionRule
 from emogen.analysis.people import People
 from emogen.analysis.quality import participant_quality, position_bias, selection_positions
 from emogen.analysis.results import Section
@@ -21,13 +21,20 @@ DRAWS = 2000
 
 
 def quality_section(
-    people: People, folder: Path, opts: AnalysisOptions, *, rule: ExclusionRule | None = None
-) -> tuple[Section, pd.DataFrame]:
+    people: People,
+    folder: Path,
+    opts: AnalysisOptions,
+    *,
+    rule: ExclusionRule | None,
+    applied: tuple[People, pd.DataFrame],
+) -> Section:
     """Quality per participant and session, the position-bias test and the exclusion rule
     applied (``rule``; None: none applied, ``--no-exclusions``, and the default rule's flags
-    shown for information only); ``people`` are **all** participants, before exclusions. The
-    section (headline numbers in ``analysis.json``'s ``quality``, the position-bias test a typed
-    result) and the exclusion table (:func:`apply_exclusions`, the default rule's without one)."""
+    shown for information only); ``people`` are **all** participants, before exclusions;
+    ``applied``: the people kept and the exclusion table of the rule's one application
+    (:func:`~emogen.analysis.analyse_people.prepare_people`: the default rule's flags when
+    ``rule`` is None), reported as they are, never computed again. The section: headline
+    numbers in ``analysis.json``'s ``quality``, the position-bias test a typed result."""
     report = Section(folder)
     report.heading("Data quality and exclusions")
     quality = participant_quality(people)
@@ -42,13 +49,13 @@ def quality_section(
     report.table(quality, "quality_sessions", "Quality per participant and session.")
     out: dict[str, Any] = {"participants": people.n_participants}
     _position(people, report, opts, out)
-    kept, table = apply_exclusions(people, ExclusionRule() if rule is None else rule)
+    kept, table = applied
     if rule is None:
         _not_applied(table, report, out)
     else:
         _applied(rule, kept, table, report, out)
     report.data["quality"] = out
-    return report, table
+    return report
 
 
 def _applied(

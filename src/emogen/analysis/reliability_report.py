@@ -112,18 +112,18 @@ def reliability_section(
             "No reliability: every participant made each emotion on each identity once "
             "(repetitions = 1); a test–retest analysis needs repeated trials of an emotion."
         )
-        return report.tests_in_data()
+        return report
     rng = np.random.default_rng(np.random.SeedSequence(opts.seed, spawn_key=(0x2E1,)))
     try:
         table = reliability_table(people, model, rng=rng)
     except DataError as exc:
         report.paragraph(f"No reliability: {exc}.")
-        return report.tests_in_data()
+        return report
     if table.empty:
         report.paragraph(
             "No reliability: fewer than 2 participants made any emotion twice on one identity."
         )
-        return report.tests_in_data()
+        return report
     report.paragraph(_method(opts, model))
     shown = table[
         [
@@ -159,7 +159,7 @@ def reliability_section(
         for r in ed.itertuples()
     }
     report.paragraph(_floor_text(table))
-    return report.tests_in_data()
+    return report
 
 
 def _method(opts: AnalysisOptions, model: FaceModel | None) -> str:

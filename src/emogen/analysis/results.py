@@ -7,10 +7,12 @@ in the spirit of statsmodels' results and :mod:`emogen.analysis.replication.find
 estimate with its interval, the test (name, statistic, df, p), the unit of inference and how
 many of them, the family whose correction it shares, its role in the multiplicity plan
 (primary or exploratory, set by :mod:`emogen.analysis.plan`), an effect size with its interval,
-and warnings or a failed fit. A section builds each result where it computes the test
-(:meth:`Section.add_test`); sections written before that read theirs from their records in
-``data`` (:meth:`Section.tests_in_data`, by the ``*_KEYS`` below: a p-value under another key
-is not found there, so a new analysis uses ``add_test``).
+and warnings or a failed fit. A section builds each result where it computes the test, by
+one path: :meth:`Section.add_test` (a test that ran: its p and the rest as typed arguments) or
+:meth:`Section.not_run` (a test the data could not support: its reason). The analysis refuses a
+section whose ``data`` holds a record with a p-value (``p``, ``p_perm``, ``p_t``) that neither
+registered (:func:`check_registered`, before the plan): no test reaches the report without its typed result, and
+none is found by guessing at keys.
 
 :func:`write_analysis` is the one renderer: from the sections it writes ``index.html``,
 ``README.md``, every table under ``tables/`` and ``analysis.json`` (each test's record there
@@ -28,12 +30,9 @@ import numpy as np
 
 from emogen.analysis.report import Content, write_pages
 
-#: The keys of a test's record in ``analysis.json`` that hold, in order of preference, ...
-P_KEYS = ("p", "p_perm", "p_t")  # its p-value
-ESTIMATE_KEYS = ("contrast", "difference", "mean_difference", "mean_contrast", "r", "excess")
-STATISTIC_KEYS = ("t", "z", "F", "chi2", "statistic")
-N_KEYS = ("n_participants", "n")
-EFFECT_KEYS = (("dz", "dz_low", "dz_high"), ("r", "ci_low", "ci_high"))
+#: The keys under which a record in ``analysis.json`` holds a p-value: such a record must be a
+#: registered test's (:func:`unregistered`).
+P_KEYS = ("p", "p_perm", "p_t")
 
 Role = Literal["primary", "exploratory"]
 
@@ -98,10 +97,6 @@ class Section(Content):
     data: dict[str, Any] = field(default_factory=dict)
     results: list[Result] = field(default_factory=list)
 
-    def test(self, name: str, record: dict[str, Any], unit: str = "participant") -> None:
-        """The test whose record (in ``data``) is ``record``, as a :class:`Result`."""
-        self.results.append(result_of(name, record, unit))
-
     def add_test(
         self,
         name: str,
@@ -117,11 +112,20 @@ class Section(Content):
         interval: tuple[float, float] | None = None,
         level: float | None = None,
         effect: tuple[str, float, float | None, float | None] | None = None,
+        warnings: tuple[str, ...] = (),
+        fit: str = "ok",
     ) -> Result:
         """A test as its analysis computed it, added to ``results`` (and returned): ``name``
         as :class:`Result`'s, ``record`` its entry in ``data`` (the role is written into it);
         ``interval``: the estimate's (low, high) at ``level``; ``effect``: a standardised effect
-        size (name, value, low, high), its interval at ``level`` too (None, None: none)."""
+        size (name, value, low, high), its interval at ``level`` too (None, None: none);
+        ``warnings`` and ``fit``: the fit's. A p that is not a number is refused: a test that did
+        not run is registered by :meth:`not_run`, with its reason."""
+        if not _number(p):
+            raise ValueError(
+                f"test {name!r} has p = {p!r}: a test that did not run is registered with "
+                "Section.not_run and its reason"
+            )
         size = None
         if effect is not None:
             e_name, value, low, high = effect
@@ -130,60 +134,43 @@ class Section(Content):
         result = Result(
             name=name,
             family=name.split("[", 1)[0],
-            test=HypothesisTest(test, p, statistic, df),
+            test=HypothesisTest(test, float(p), statistic, df),
             estimate=estimate,
             interval=None if interval is None else Interval(*interval, level),
             unit=unit,
             n=n,
             effect_size=size,
+            warnings=tuple(warnings),
+            fit=fit,
             record=record,
         )
         self.results.append(result)
         return result
 
-    def tests_in_data(self, unit: str = "participant") -> Section:
-        """Every record in ``data`` with a p-value as a :class:`Result` (an analysis that fills
-        ``data`` only); returns the section."""
-        self.results += [result_of(n, r, unit) for n, r in records_in(self.data)]
-        return self
-
-
-def result_of(name: str, record: dict[str, Any], unit: str = "participant") -> Result:
-    """A test's :class:`Result` from its record in ``analysis.json`` (see the ``*_KEYS``); the
-    record's own ``unit`` overrides ``unit``."""
-    p = _first(record, P_KEYS)
-    stat_key = next((k for k in STATISTIC_KEYS if _number(record.get(k))), None)
-    level = float(record["confidence"]) if _number(record.get("confidence")) else None
-    both = _number(record.get("ci_low")) and _number(record.get("ci_high"))
-    interval = Interval(float(record["ci_low"]), float(record["ci_high"]), level) if both else None
-    test = None
-    if p is not None:
-        test = HypothesisTest(
-            name=str(record.get("test", stat_key or "test")),
-            p=float(p),
-            statistic=None if stat_key is None else float(record[stat_key]),
-            df=float(record["df"]) if _number(record.get("df")) else None,
+    def not_run(
+        self, name: str, reason: str, record: dict[str, Any] | None = None, *, n: int | None = None
+    ) -> Result:
+        """A test the analysis could not run (too few participants, a fit that failed): in the
+        plan as not run with ``reason``, never among the tests that ran nor in a correction's
+        family. ``record``: its entry in ``data``, if it has one (a p there must be NaN)."""
+        if not reason:
+            raise ValueError(f"test {name!r} not run: give the reason")
+        result = Result(
+            name=name,
+            family=name.split("[", 1)[0],
+            test=None,
+            n=n,
+            warnings=(reason,),
+            fit="not run",
+            record={} if record is None else record,
         )
-    n = _first(record, N_KEYS)
-    warnings = record.get("warnings") or ()
-    return Result(
-        name=name,
-        family=name.split("[", 1)[0],
-        test=test,
-        estimate=_first(record, ESTIMATE_KEYS),
-        interval=interval,
-        unit=str(record.get("unit", unit)),
-        n=int(n) if _number(n) else None,
-        effect_size=_effect(record, level),
-        warnings=tuple(str(w) for w in warnings) if isinstance(warnings, list | tuple) else (),
-        fit=str(record.get("status", "ok")),
-        record=record,
-    )
+        self.results.append(result)
+        return result
 
 
 def records_in(data: dict[str, Any], prefix: str = "") -> list[tuple[str, dict[str, Any]]]:
-    """Every record with a p-value under ``data``, with its dotted name; list items are named
-    by their ``emotion``/``group``/``space``/``contrast`` when they have one."""
+    """Every record with a p-value under ``data``, with its dotted name (where it is; list
+    items by their ``emotion``/``group``/``space``/``contrast`` when they have one)."""
     found: list[tuple[str, dict[str, Any]]] = []
 
     def walk(node: object, path: str) -> None:
@@ -200,6 +187,25 @@ def records_in(data: dict[str, Any], prefix: str = "") -> list[tuple[str, dict[s
     return found
 
 
+def unregistered(section: Section) -> list[str]:
+    """Where ``section.data`` holds a record with a p-value that is no result of the section
+    (neither :meth:`Section.add_test` nor :meth:`Section.not_run` received it)."""
+    mine = {id(r.record) for r in section.results}
+    return [name for name, record in records_in(section.data) if id(record) not in mine]
+
+
+def check_registered(sections: list[Section]) -> list[Result]:
+    """Every result of ``sections``, or a ValueError naming each record with a p-value in a
+    section's ``data`` that the section did not register (the multiplicity plan would miss it)."""
+    for s in sections:
+        if missing := unregistered(s):
+            raise ValueError(
+                f"a section's analysis.json entries hold test(s) {missing} that it did not "
+                "register (Section.add_test, or Section.not_run with the reason)"
+            )
+    return [r for s in sections for r in s.results]
+
+
 def _item_name(value: object, i: int) -> str:
     if isinstance(value, dict):
         for key in ("emotion", "group", "space", "contrast"):
@@ -214,23 +220,6 @@ def _number(value: object) -> bool:
         and not isinstance(value, bool)
         and bool(np.isfinite(float(value)))
     )
-
-
-def _first(record: dict[str, Any], keys: tuple[str, ...]) -> Any:
-    for key in keys:
-        value = record.get(key)
-        if value is not None:
-            return value
-    return None
-
-
-def _effect(record: dict[str, Any], level: float | None) -> EffectSize | None:
-    for name, lo, hi in EFFECT_KEYS:
-        if _number(record.get(name)):
-            both = _number(record.get(lo)) and _number(record.get(hi))
-            interval = Interval(float(record[lo]), float(record[hi]), level) if both else None
-            return EffectSize(name, float(record[name]), interval)
-    return None
 
 
 # ---- the renderer ----------------------------------------------------------------------------
