@@ -141,7 +141,7 @@ def fields_accuracy_section(
         name,
         res,
         test=res["test"],
-        p=res["p"],
+        p=res["p_perm"],  # the calibrated p (docs/analysis.md: 34 of 1000 null studies)
         n=res["n_participants"],
         statistic=res["r"],
         estimate=res["r"],
