@@ -128,10 +128,9 @@ function create(page) {
     $("next").textContent = ui.busy ? "Saving…" : "Next round";
   }
 
-  /** "Tap" where the main pointer is a finger (a phone, a tablet), "Click" with a mouse (and
-   * where the page cannot ask: a document without media queries). */
+  /** "Tap" where the main pointer is a finger (a phone, a tablet), "Click" with a mouse. */
   function pointerVerb() {
-    return window.matchMedia?.("(pointer: coarse)").matches ? "Tap" : "Click";
+    return window.matchMedia("(pointer: coarse)").matches ? "Tap" : "Click";
   }
 
   // ---- the grid ------------------------------------------------------------------------------
