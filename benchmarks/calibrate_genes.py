@@ -7,6 +7,11 @@ studies each; prints the figures reported in docs/analysis.md.
   complete null FDR = FWER) on null data: groups without a shift; emotions that share a
   prototype (one emotion's repetitions 0 and 1 labelled as two emotions);
 * power: a planted group shift of +0.3 and +0.6 on browInnerUp (happy) found on that gene;
+  and whether max-T's other rejections under the shift are false: each gene × emotion's true
+  group difference is estimated from one study of ``--truth-participants`` per group; a cell is
+  "moved" when that difference's Welch p is below 0.001 (a real knock-on of the shift: the
+  simulated participants evolve the other genes toward a target that now raises browInnerUp),
+  and max-T's strong FWER is the share of studies rejecting any cell that is not moved;
 * condition tests: identity and interaction at α on null; identity power on a planted shift;
 * position-bias test: per-participant rejection rate under uniform picks.
 """
@@ -53,10 +58,40 @@ def same_prototype(people):  # type: ignore[no-untyped-def]
     return replace(people, faces=f)
 
 
-def genes(rig, studies: int, seed: int = 0) -> None:  # type: ignore[no-untyped-def]
+def planted(amount: float, participants: int = NULL.participants) -> PeopleDesign:
+    return replace(
+        NULL, participants=participants, shifts={"b": {"happy": {"browInnerUp": amount}}}
+    )
+
+
+def moved_cells(rig, amount: float, per_group: int, seed: int) -> set[tuple[str, str]]:  # type: ignore[no-untyped-def]
+    """The (emotion, gene) cells whose group difference is detectable (Welch p < 0.001) in
+    one study of ``per_group`` participants per group with the shift planted."""
+    from scipy import stats
+
+    from emogen.analysis.genes import participant_gene_means
+
+    people = as_people(simulate_people(planted(amount, 2 * per_group), rig, seed=seed))
+    means = participant_gene_means(people)
+    group = people.faces.groupby("participant_id")["group"].first()
+    moved = set()
+    for emotion, rows in means.groupby("emotion"):
+        g = group.reindex(rows["participant_id"]).to_numpy()
+        for gene in people.genes:
+            a, b = rows[gene].to_numpy()[g == "a"], rows[gene].to_numpy()[g == "b"]
+            if stats.ttest_ind(b, a, equal_var=False).pvalue < 1e-3:
+                moved.add((str(emotion), gene.removeprefix("g_")))
+    return moved
+
+
+def genes(rig, studies: int, seed: int = 0, truth: int = 1000) -> None:  # type: ignore[no-untyped-def]
     g_fwer = g_fdr = e_fwer = e_fdr = 0
     power = {0.3: 0, 0.6: 0}
     wrong = {0.3: 0, 0.6: 0}
+    false = {0.3: 0, 0.6: 0}
+    moved = {a: moved_cells(rig, a, truth, seed=900_000 + seed) for a in power}
+    for a in power:
+        print(f"  +{a}: cells moved at {truth} per group: {sorted(moved[a])}")
     for s in range(seed, seed + studies):
         people = as_people(simulate_people(NULL, rig, seed=1000 + s))
         rng = np.random.default_rng(s)
@@ -67,8 +102,7 @@ def genes(rig, studies: int, seed: int = 0) -> None:  # type: ignore[no-untyped-
         e_fwer += bool(e["significant_maxt"].any())
         e_fdr += bool(e["significant_bh"].any())
         for amount in power:
-            planted = replace(NULL, shifts={"b": {"happy": {"browInnerUp": amount}}})
-            pp = as_people(simulate_people(planted, rig, seed=5000 + s))
+            pp = as_people(simulate_people(planted(amount), rig, seed=5000 + s))
             t = group_gene_tests(pp, OPTS, rng=rng)
             hit = t[t["significant_maxt"]]
             power[amount] += bool(
@@ -77,6 +111,8 @@ def genes(rig, studies: int, seed: int = 0) -> None:  # type: ignore[no-untyped-
             wrong[amount] += bool(
                 ((hit["gene"] != "browInnerUp") | (hit["emotion"] != "happy")).any()
             )
+            cells = zip(hit["emotion"].astype(str), hit["gene"].astype(str), strict=True)
+            false[amount] += any(c not in moved[amount] for c in cells)
     print(
         f"genes: {NULL.participants} participants (20/group), 2 emotions, 2 repetitions, "
         f"{len(g) // 2} genes"
@@ -90,7 +126,8 @@ def genes(rig, studies: int, seed: int = 0) -> None:  # type: ignore[no-untyped-
     for amount in power:
         print(
             f"  planted +{amount} browInnerUp (happy, group b): found (max-T) {rate(power[amount], studies)}; "
-            f"another gene/emotion rejected {rate(wrong[amount], studies)}"
+            f"another gene/emotion rejected {rate(wrong[amount], studies)}; "
+            f"a cell not moved rejected (strong FWER) {rate(false[amount], studies)}"
         )
 
 
@@ -164,12 +201,27 @@ def main() -> None:
         default=0,
         help="first study seed (0: the seeds of the docs' figures; another: a fresh-seed confirmation)",
     )
+    ap.add_argument(
+        "--truth-participants",
+        type=int,
+        default=1000,
+        help="participants per group of the study that decides which cells the shift moved",
+    )
+    ap.add_argument(
+        "--parts",
+        nargs="+",
+        choices=("genes", "conditions", "positions"),
+        default=["genes", "conditions", "positions"],
+    )
     a = ap.parse_args()
     rig = emogen.load_model(os.environ["EMOGEN_MODEL"]).rig
     start = time.perf_counter()
-    genes(rig, a.studies, a.seed)
-    conditions(rig, a.studies, a.seed)
-    positions(a.studies, a.seed)
+    if "genes" in a.parts:
+        genes(rig, a.studies, a.seed, a.truth_participants)
+    if "conditions" in a.parts:
+        conditions(rig, a.studies, a.seed)
+    if "positions" in a.parts:
+        positions(a.studies, a.seed)
     print(f"({time.perf_counter() - start:.0f} s)")
 
 

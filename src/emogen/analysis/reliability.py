@@ -156,11 +156,11 @@ def icc_interval(
     the leave-one-participant-out pseudo-values of z = ½ log F, F = MS_between / MS_within =
     1 + k0 σ²_b / σ²_w (Fisher 1925: z = ½ log((1 + (k0 − 1) ICC) / (1 − ICC))), their mean ±
     t(n − 1) × their standard error, back to the ICC by ICC = (F − 1) / (F + k0 − 1) (k0 of
-    the whole study). On the ICC scale itself the jackknife covered 91% at ICC 0 with 12
-    participants × 2 faces (the ICC's sampling distribution is skewed near 0); the participant
-    bootstrap covers only ~75% at n = 12 (resampled copies of a person look like two people).
-    Where F is 0 or infinite (no spread between or within people) the jackknife is on the ICC
-    scale. Coverage: ``benchmarks/coverage_intervals.py --parts icc``."""
+    the whole study). Fisher's z because the ICC's sampling distribution is skewed near 0 and
+    bounded at 1; the participant bootstrap under-covers in small studies (resampled copies of
+    a person look like two people). Where F is 0 or infinite (no spread between or within
+    people) the jackknife is on the ICC scale. Coverage (94.6–95.5% over 20 000 studies a
+    cell, docs/analysis.md): ``benchmarks/coverage_intervals.py --parts icc``."""
     codes, people = _codes(participants)
     k, within, p = _blocks(np.asarray(x, dtype=np.float64), codes)
     n = len(people)
