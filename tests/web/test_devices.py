@@ -347,3 +347,19 @@ def test_the_keyboard_does_what_the_instructions_say(browser: Any, site: ServerP
     page.keyboard.press("Tab")  # after the last face: the buttons
     assert page.evaluate("document.activeElement.id") in ("restart", "next")
     page.context.close()
+
+
+@pytest.mark.parametrize(
+    ("size", "touch", "verb"),
+    [((1366, 768), False, "Click"), ((390, 844), True, "Tap")],
+    ids=["mouse", "touch"],
+)
+def test_the_first_hint_says_click_with_a_mouse_and_tap_on_a_touch_screen(
+    browser: Any, site: ServerProcess, size: tuple[int, int], touch: bool, verb: str
+) -> None:
+    page = start(browser, site, size, f"hint-{verb}", has_touch=touch, is_mobile=touch)
+    page.click("#begin")
+    wait_ready(page, "trial")
+    hint = page.inner_text("#selection-status")
+    assert hint == f"{verb} the face most like the emotion: it becomes ★ best.", hint
+    page.context.close()

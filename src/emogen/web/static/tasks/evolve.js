@@ -120,12 +120,18 @@ function create(page) {
     let status;
     if (ui.busy) status = "Saving your choice…";
     else if (ui.loading) status = "Loading the faces: please wait until they appear.";
-    else if (sel.elite === null) status = "Tap the face most like the emotion: it becomes ★ best.";
+    else if (sel.elite === null) status = `${pointerVerb()} the face most like the emotion: it becomes ★ best.`;
     else if (n < min) status = `Choose at least ${min} faces (${n} chosen).`;
     else status = `${n} chosen (up to ${max}): ★ best + ${sel.others.length} also acceptable. Then press Next round.`;
     $("selection-status").textContent = status;
     $("next").disabled = ui.busy || ui.loading || !selection.complete(sel, view().limits);
     $("next").textContent = ui.busy ? "Saving…" : "Next round";
+  }
+
+  /** "Tap" where the main pointer is a finger (a phone, a tablet), "Click" with a mouse (and
+   * where the page cannot ask: a document without media queries). */
+  function pointerVerb() {
+    return window.matchMedia?.("(pointer: coarse)").matches ? "Tap" : "Click";
   }
 
   // ---- the grid ------------------------------------------------------------------------------
