@@ -128,3 +128,64 @@ def test_a_moving_face_plays_and_its_frame_at_t_is_the_offscreen_face(
     page.wait_for_timeout(300)
     assert page.evaluate("window.emogen.view.clipTime(0)") != started  # it plays, not held
     context.close()
+
+
+# Face 0's clip frames: every one kept (none left to draw ahead, every copy made).
+CLIP_KEPT = """() => {
+  const v = window.emogen.view, kept = v.kept.get(0);
+  return Boolean(kept) && kept.complete(Math.max(0, kept.find(v.faces[0].shown)));
+}"""
+# Count the WebGL draws from now on (window.liveDraws).
+COUNT_DRAWS = """() => {
+  const r = window.emogen.view.renderer;
+  window.liveDraws = 0;
+  if (!r.counted) {
+    const render = r.render.bind(r);
+    r.render = (...a) => { window.liveDraws += 1; return render(...a); };
+    r.counted = true;
+  }
+}"""
+
+
+def test_a_moving_face_plays_kept_frames_that_are_its_live_draws(
+    chromium: Any, viewer_site: Site, ict_model: Any
+) -> None:
+    """The clip's grid frames (viewer/motion.js FRAME_RATE), each drawn once and kept
+    (viewer/kept.js), are what the face shows while it plays; held at a grid time, the kept
+    frame on screen equals, pixel for pixel, the live WebGL draw of the face at that time."""
+    genome, genes, keyed, _ = moving_face(ict_model)
+    context, page, _ = open_viewer(chromium, viewer_site, "?faces=1&size=445")
+    slot = page.locator(".face").first
+    page.evaluate(
+        "face => window.emogen.view.play([face])", motion_of(genome, genes, keyed, ict_model.rig)
+    )
+    steps = page.evaluate("window.emogen.view.clips[0].steps")
+    assert steps == int(np.ceil(genome.clip_s * 30 - 1e-9))  # a 30 frames/s grid
+    page.wait_for_function(CLIP_KEPT, timeout=180_000, polling=200)
+    assert page.evaluate("window.emogen.view.kept.get(0).frames.size") == steps + 1
+    # playing, every picture is a kept frame: no live draw
+    page.evaluate(COUNT_DRAWS)
+    page.wait_for_timeout(1500)
+    assert page.evaluate("window.liveDraws") == 0
+    picks = [2, steps // 3, (2 * steps) // 3, steps - 3]
+    times = page.evaluate("ks => ks.map((k) => window.emogen.view.clips[0].gridTime(k))", picks)
+    kept = {}
+    for k, t in zip(picks, times, strict=True):
+        page.evaluate("t => window.emogen.view.scrub(0, t)", t)
+        page.evaluate(TWO_FRAMES)
+        state = page.evaluate("window.emogen.view.keptState(0)")
+        assert state["shown"] == k and state["showing"] == k, (k, state)
+        kept[k] = screenshot(slot)
+    assert page.evaluate("window.liveDraws") == 0
+    for a, b in itertools.combinations(
+        picks, 2
+    ):  # the frames differ: equality below means the right one
+        assert (np.abs(kept[a].astype(int) - kept[b]).max(-1) > 20).sum() > 100, (a, b)
+    page.evaluate("() => window.emogen.view.keep(0, null)")  # forgotten: drawn live from now on
+    for k, t in zip(picks, times, strict=True):
+        page.evaluate("t => window.emogen.view.scrub(0, t)", t)
+        page.evaluate(TWO_FRAMES)
+        assert page.evaluate("window.emogen.view.keptState(0)") is None
+        assert np.array_equal(screenshot(slot), kept[k]), k
+    assert page.evaluate("window.liveDraws") > 0
+    context.close()

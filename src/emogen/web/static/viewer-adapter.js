@@ -213,7 +213,8 @@ class ViewerDisplay {
     tile.grid.keep(tile.i, faces ? faces.map((f) => f.weights.slice(0, n)) : null);
   }
 
-  /** ``slot``'s kept frames: {shown: the position shown (−1: none of them), kept, of, complete}
+  /** ``slot``'s kept frames: {shown: the position shown (−1: none of them), showing: the kept
+   * frame on screen (null: drawn live), kept, of, complete}
    * (null: none kept; benchmarks and tests). */
   keptOf(slot) {
     const tile = this.tileOf(slot);

@@ -25,8 +25,8 @@ import { hairLayer, look } from './look.js';
 import { faceMaterial, gazeMatrix } from './material.js';
 import { addShadingAttributes } from './mesh.js';
 import { MorphSource } from './morph.js';
-import { Clip } from './motion.js';
-import { KeptFrames, Overlay } from './kept.js';
+import { Clip, FRAME_RATE } from './motion.js';
+import { CLIP_BYTES, KeptFrames, Overlay, coarseToFine } from './kept.js';
 import { StrainField } from './strain.js';
 
 ColorManagement.enabled = false; // shade.glsl writes sRGB itself: no conversions anywhere
@@ -256,28 +256,32 @@ export class FaceGrid {
    * none: forget them): each is shown as the frame the live draw made for it, kept (kept.js);
    * idle animation frames draw the rest, nearest the one shown first.
    */
-  keep(i, faces) {
+  keep(i, faces, options) {
     this.kept.get(i)?.clear();
     this.kept.delete(i);
     if (faces?.length) {
-      this.kept.set(i, new KeptFrames(faces.map((w) => this.vectorOf(w, i))));
+      this.kept.set(i, new KeptFrames(faces.map((w) => this.vectorOf(w, i)), options));
       this.overlay ??= new Overlay(this.canvas);
       this.ahead();
     } else if (this.faces[i].shown) {
+      this.overlay?.uncover(i);
       this.render(); // drawn live again: the WebGL canvas under the kept frames may hold another
     }
   }
 
-  /** Face ``i``'s kept frames: {shown: the position it shows (−1: none of them), kept, of,
-   * complete: none left to draw}; null when none are kept. */
+  /** Face ``i``'s kept frames: {shown: the position it shows (−1: none of them), showing: the
+   * kept frame on screen (null: drawn live; another than ``shown`` while a clip's frames are
+   * drawn ahead), kept, of, complete: none left to draw}; null when none are kept. */
   keptState(i) {
     const kept = this.kept.get(i);
     if (!kept) return null;
     const shown = this.faces[i].shown ? kept.find(this.faces[i].shown) : -1;
-    return { shown, kept: kept.frames.size, of: kept.faces.length, complete: shown >= 0 && kept.complete(shown) };
+    const showing = this.overlay?.shows.get(i)?.[0] ?? null; // the kept frame on screen
+    return { shown, showing, kept: kept.frames.size, of: kept.faces.length, complete: shown >= 0 && kept.complete(shown) };
   }
 
-  /** The next frame to keep drawn at the next animation frame (one a frame), until none is left. */
+  /** The next frame to keep drawn at the next animation frame (one a frame, the faces in
+   * turn), until none is left. */
   ahead() {
     if (this.aheadRaf) return;
     this.aheadRaf = requestAnimationFrame(() => {
@@ -286,13 +290,17 @@ export class FaceGrid {
         this.drewLive = false;
         return this.ahead();
       }
-      for (const [i, kept] of this.kept) {
+      const order = [...this.kept.keys()];
+      const from = order.indexOf(this.aheadFrom) + 1;
+      for (const i of [...order.slice(from), ...order.slice(0, from)]) {
+        const kept = this.kept.get(i);
         const slot = this.slots[i].getBoundingClientRect();
         if (!slot.width || !slot.height) continue; // not on screen: nothing to draw
         const shown = this.faces[i].shown ? kept.find(this.faces[i].shown) : -1;
         const k = shown < 0 ? -1 : kept.next(shown);
         if (k < 0) continue;
-        if (k === shown || !this.sameSize()) this.render(); // the face shown first (drawn live, kept)
+        this.aheadFrom = i;
+        if (!this.sameSize() || (k === shown && !kept.order)) this.render(); // drawn live, kept
         else this.drawAhead(i, kept, k, shown);
         this.ahead();
         return;
@@ -317,18 +325,44 @@ export class FaceGrid {
   play(faces) {
     cancelAnimationFrame(this.raf ?? 0);
     this.raf = null;
+    for (const i of this.clipKept ?? []) { // the last clips' frames given back
+      this.kept.get(i)?.clear();
+      this.kept.delete(i);
+      this.overlay.uncover(i);
+    }
     const n = this.shapeNames.length;
     this.clips = (faces ?? []).map((f) => (f?.motion ? new Clip(f.weights, f.motion, n) : null));
+    this.clipKept = [];
     if (!this.clips.some(Boolean)) return;
     this.frame = new Float32Array(n);
+    this.keepClips();
     this.held = new Map(); // face → clip time it is scrubbed to
     this.frames = 0; // frames drawn since play (the benchmark's count)
+    this.slow = 0; // draws in a row slower than two grid steps (2: frames kept are shown)
+    this.last = null;
     this.start = performance.now();
     const tick = (now) => {
       this.draw(now);
       this.raf = requestAnimationFrame(tick);
     };
     this.raf = requestAnimationFrame(tick);
+  }
+
+  /** Every clip's grid frames kept (kept.js), when all of them fit in CLIP_BYTES. */
+  keepClips() {
+    const dpr = window.devicePixelRatio || 1;
+    let bytes = 0;
+    this.clips.forEach((clip, i) => {
+      const r = this.slots[i].getBoundingClientRect();
+      if (clip) bytes += (clip.steps + 1) * Math.ceil(r.width * dpr) * Math.ceil(r.height * dpr) * 4;
+    });
+    if (bytes > CLIP_BYTES) return; // drawn live
+    this.clips.forEach((clip, i) => {
+      if (!clip) return;
+      const faces = Array.from({ length: clip.steps + 1 }, (_, k) => Array.from(clip.at(clip.gridTime(k), this.frame)));
+      this.keep(i, faces, { bytes: CLIP_BYTES, order: coarseToFine(clip.steps) });
+      this.clipKept.push(i);
+    });
   }
 
   /** Every clip from its start again (scrubbed faces play along again). */
@@ -343,14 +377,21 @@ export class FaceGrid {
     else this.held?.set(i, t);
   }
 
-  /** The clip time (s) face ``i`` shows now (null: it does not move). */
+  /** The clip time (s) face ``i`` shows now: its grid frame's, or the time it is scrubbed to
+   * (null: it does not move). */
   clipTime(i, now = performance.now()) {
     const clip = this.clips?.[i];
     if (!clip) return null;
-    return this.held.has(i) ? this.held.get(i) : clip.time((now - this.start) / 1000);
+    if (this.held.has(i)) return this.held.get(i);
+    return clip.gridTime(clip.gridFrame(clip.time((now - this.start) / 1000)));
   }
 
   draw(now) {
+    // two draws in a row slower than two of the grid's steps: the faces' frames not kept yet
+    // show the nearest kept one while the rest are drawn ahead
+    const slow = this.last !== null && now - this.last > 2000 / FRAME_RATE;
+    this.slow = slow ? this.slow + 1 : this.slow >= 2 ? this.slow : 0;
+    this.last = now;
     this.clips.forEach((clip, i) => {
       if (clip) this.setFace(i, clip.at(this.clipTime(i, now), this.frame));
     });
@@ -414,6 +455,8 @@ export class FaceGrid {
       const kept = this.kept.get(i);
       const k = kept && face.shown ? kept.find(face.shown) : -1;
       if (k >= 0 && this.overlay.play(i, k, kept.frames.get(k))) return;
+      const near = k >= 0 && kept.order && this.slow >= 2 ? kept.nearest(k) : null;
+      if (near && this.overlay.play(i, ...near)) return this.ahead(); // a clip's frame: not yet
       this.morph(i, face.shown);
       r.clear();
       r.render(face.scene, this.camera);

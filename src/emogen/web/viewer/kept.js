@@ -12,22 +12,48 @@
 // Memory: frames × width × height × 4 bytes (device pixels): the slider's face at 1366×768, 41
 // positions of 445×445, is 32 MB. At most KEEP_BYTES a slot: beyond it the frames farthest from
 // the one shown are dropped (a phone (390×844) at 3 device pixels a CSS pixel keeps 28 of 41).
+//
+// Faces that move (motion.js) keep the frames of their clip's grid, when all of them fit in
+// CLIP_BYTES over the screen's tiles (else they are drawn live, as before): drawn ahead coarse
+// to fine (the first and last frames, then the middle, then the quarters …, one tile after
+// another), and while a tile's frame is not kept yet the nearest kept one is shown.
 
 /** The most bytes of kept frames one slot holds. */
 export const KEEP_BYTES = 128 * 2 ** 20;
+
+/** The most bytes of kept clip frames one screen of tiles holds. */
+export const CLIP_BYTES = 256 * 2 ** 20;
+
+/** Positions 0 … last in the order a clip's frames are drawn ahead: 0 and last, then each
+ * halving of the grid's step (the frames of a coarser grid first). @param {number} last */
+export function coarseToFine(last) {
+  const order = [0, last];
+  const seen = new Set(order);
+  for (let step = 2 ** Math.ceil(Math.log2(Math.max(1, last))); step >= 1; step /= 2) {
+    for (let k = step; k < last; k += step) if (!seen.has(k)) (seen.add(k), order.push(k));
+  }
+  return order;
+}
 
 /** The key of a weight vector (the full vector the grid draws). @param {number[]} vector */
 export const keyOf = (vector) => vector.join(',');
 
 /** The frames of one slot: ``faces`` (full weight vectors) and the ones drawn so far. */
 export class KeptFrames {
-  /** @param {number[][]} faces */
-  constructor(faces) {
+  /**
+   * @param {number[][]} faces
+   * @param {{bytes?: number, order?: number[]}} [options] ``bytes``: the most the slot keeps
+   * (KEEP_BYTES); ``order``: the positions in the order they are drawn ahead (a clip's; none:
+   * the nearest the one shown first, a slider's)
+   */
+  constructor(faces, { bytes = KEEP_BYTES, order = null } = {}) {
     this.faces = faces;
     this.index = new Map(faces.map((w, k) => [keyOf(w), k]));
     /** k → {bitmap: ImageBitmap | null (its copy under way), rect: [x, y, w, h] (device px)} */
     this.frames = new Map();
     this.limit = faces.length;
+    this.bytes = bytes;
+    this.order = order;
   }
 
   /** The position of weights ``vector`` among the faces (−1: none of them). */
@@ -48,7 +74,7 @@ export class KeptFrames {
       },
       () => this.frames.get(k) === frame && this.frames.delete(k), // not copied: drawn again when shown
     );
-    this.limit = Math.max(1, Math.floor(KEEP_BYTES / (rect[2] * rect[3] * 4)));
+    this.limit = Math.max(1, Math.floor(this.bytes / (rect[2] * rect[3] * 4)));
     while (this.frames.size > this.limit) this.drop(this.farthest(shown));
   }
 
@@ -69,9 +95,23 @@ export class KeptFrames {
     for (const k of [...this.frames.keys()]) this.drop(k);
   }
 
-  /** The position to draw ahead next: the nearest to ``shown`` not kept (ties: the lower one),
-   * while it is nearer than the farthest kept or there is room; −1 when none. */
+  /** The kept frame (copied) nearest position ``k``; null when none is. */
+  nearest(k) {
+    let best = null;
+    for (const [j, frame] of this.frames) {
+      if (frame.bitmap && (!best || Math.abs(j - k) < Math.abs(best[0] - k))) best = [j, frame];
+    }
+    return best;
+  }
+
+  /** The position to draw ahead next: the first of ``order`` not kept, or else the nearest to
+   * ``shown`` not kept (ties: the lower one), while it is nearer than the farthest kept or
+   * there is room; −1 when none. */
   next(shown) {
+    if (this.order) {
+      if (this.frames.size >= this.limit) return -1;
+      return this.order.find((k) => !this.frames.has(k)) ?? -1;
+    }
     for (let d = 0; d < this.faces.length; d++) {
       for (const k of [shown - d, shown + d]) {
         if (k < 0 || k >= this.faces.length || this.frames.has(k)) continue;

@@ -7,6 +7,15 @@
 //        = H((t_off − t) / (t_off − t_peak); fall_slope)  t > t_peak   (0 from t_off)
 //   H(x; m) = 3x² − 2x³ + m (x³ − 2x² + x),  x clipped to [0, 1]
 // and the correctives are the keyframes interpolated linearly around t.
+//
+// Played, a clip shows the frames of a fixed grid over it, as a video does: FRAME_RATE frames a
+// second or a little more (n = ceil(clip_s × FRAME_RATE) steps, frames at clip_s × k / n,
+// k = 0 … n; the last is the face at rest the hold shows), the same frames on every machine;
+// a face scrubbed to a time shows that time exactly. The viewer keeps each grid frame once drawn
+// (kept.js), so a machine that draws ten faces slowly plays them at the grid's rate.
+
+/** Frames a second of the grid a clip plays on (issue #44: ≥ 30 on a laptop GPU). */
+export const FRAME_RATE = 30;
 
 const hermite = (x, m) => 3 * x * x - 2 * x * x * x + m * (x * x * x - 2 * x * x + x);
 const unit = (x) => (x < 0 ? 0 : x > 1 ? 1 : x);
@@ -39,6 +48,21 @@ export class Clip {
   time(tau) {
     const t = tau % this.loop;
     return t < this.clip ? t : this.clip;
+  }
+
+  /** The grid's steps over the clip: its frames are ``gridTime(0 … steps)``. */
+  get steps() {
+    return Math.max(1, Math.ceil(this.clip * FRAME_RATE - 1e-9));
+  }
+
+  /** The clip time (s) of grid frame ``k``. */
+  gridTime(k) {
+    return (k / this.steps) * this.clip;
+  }
+
+  /** The grid frame played at clip time ``t`` (s): the nearest. */
+  gridFrame(t) {
+    return Math.min(this.steps, Math.max(0, Math.round((t / this.clip) * this.steps)));
   }
 
   /** The morph weights at clip time ``t`` (s) into ``out`` (Float32Array of the targets). */
