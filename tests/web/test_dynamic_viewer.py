@@ -22,6 +22,7 @@ from emogen.correct.faces import corrector_for
 from emogen.ga.genome import DynamicGenome
 from emogen.ga.motion import correct_keyframes, frames, shape_curves
 from tests.web import viewer_site as vs
+from tests.web.test_kept_frames import COUNT_DRAWS
 from tests.web.test_viewer import MAX_MEAN_ABS, assert_agrees, open_viewer, screenshot
 
 pytestmark = pytest.mark.browser
@@ -134,16 +135,6 @@ def test_a_moving_face_plays_and_its_frame_at_t_is_the_offscreen_face(
 CLIP_KEPT = """() => {
   const v = window.emogen.view, kept = v.kept.get(0);
   return Boolean(kept) && kept.complete(Math.max(0, kept.find(v.faces[0].shown)));
-}"""
-# Count the WebGL draws from now on (window.liveDraws).
-COUNT_DRAWS = """() => {
-  const r = window.emogen.view.renderer;
-  window.liveDraws = 0;
-  if (!r.counted) {
-    const render = r.render.bind(r);
-    r.render = (...a) => { window.liveDraws += 1; return render(...a); };
-    r.counted = true;
-  }
 }"""
 
 
