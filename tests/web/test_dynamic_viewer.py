@@ -133,8 +133,8 @@ def test_a_moving_face_plays_and_its_frame_at_t_is_the_offscreen_face(
 
 # Face 0's clip frames: every one kept (none left to draw ahead, every copy made).
 CLIP_KEPT = """() => {
-  const v = window.emogen.view, kept = v.kept.get(0);
-  return Boolean(kept) && kept.complete(Math.max(0, kept.find(v.faces[0].shown)));
+  const v = window.emogen.view, kept = v.kept.get(0), shown = v.faces[0].shown;
+  return Boolean(kept && shown) && kept.complete(Math.max(0, kept.find(shown)));
 }"""
 
 
