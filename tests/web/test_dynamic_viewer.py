@@ -179,4 +179,23 @@ def test_a_moving_face_plays_kept_frames_that_are_its_live_draws(
         assert page.evaluate("window.emogen.view.keptState(0)") is None
         assert np.array_equal(screenshot(slot), kept[k]), k
     assert page.evaluate("window.liveDraws") > 0
+    # the tiles resized: the clip's frames are kept again, at the new size
+    page.evaluate(
+        "() => document.getElementById('faces').style.setProperty('--face-size', '400px')"
+    )
+    page.wait_for_function(
+        f"() => window.emogen.view.kept.get(0)?.frames.get(0)?.rect[2] === 400 && ({CLIP_KEPT})()",
+        timeout=180_000,
+        polling=200,
+    )
+    state = page.evaluate("window.emogen.view.keptState(0)")
+    assert state["kept"] == steps + 1 and state["showing"] == state["shown"] >= 0, state
+    # so large that 39 frames exceed the 256 MiB (1700² px × 4 B × 39 = 451 MB): drawn live
+    page.evaluate(
+        "() => document.getElementById('faces').style.setProperty('--face-size', '1700px')"
+    )
+    page.wait_for_function("() => window.emogen.view.keptState(0) === null", timeout=30_000)
+    page.evaluate(COUNT_DRAWS)
+    page.evaluate("() => window.emogen.view.scrub(0, null)")
+    page.wait_for_function("() => window.liveDraws >= 3", timeout=60_000)
     context.close()

@@ -325,14 +325,9 @@ export class FaceGrid {
   play(faces) {
     cancelAnimationFrame(this.raf ?? 0);
     this.raf = null;
-    for (const i of this.clipKept ?? []) { // the last clips' frames given back
-      this.kept.get(i)?.clear();
-      this.kept.delete(i);
-      this.overlay.uncover(i);
-    }
+    this.forgetClips();
     const n = this.shapeNames.length;
     this.clips = (faces ?? []).map((f) => (f?.motion ? new Clip(f.weights, f.motion, n) : null));
-    this.clipKept = [];
     if (!this.clips.some(Boolean)) return;
     this.frame = new Float32Array(n);
     this.keepClips();
@@ -348,8 +343,10 @@ export class FaceGrid {
     this.raf = requestAnimationFrame(tick);
   }
 
-  /** Every clip's grid frames kept (kept.js), when all of them fit in CLIP_BYTES. */
+  /** Every clip's grid frames kept (kept.js), when all of them fit in CLIP_BYTES at the tiles'
+   * size now (else they are drawn live); the frames kept before given back. */
   keepClips() {
+    this.forgetClips();
     const dpr = window.devicePixelRatio || 1;
     let bytes = 0;
     this.clips.forEach((clip, i) => {
@@ -357,12 +354,23 @@ export class FaceGrid {
       if (clip) bytes += (clip.steps + 1) * Math.ceil(r.width * dpr) * Math.ceil(r.height * dpr) * 4;
     });
     if (bytes > CLIP_BYTES) return; // drawn live
+    const share = CLIP_BYTES / this.clips.filter(Boolean).length;
     this.clips.forEach((clip, i) => {
       if (!clip) return;
       const faces = Array.from({ length: clip.steps + 1 }, (_, k) => Array.from(clip.at(clip.gridTime(k), this.frame)));
-      this.keep(i, faces, { bytes: CLIP_BYTES, order: coarseToFine(clip.steps) });
+      this.keep(i, faces, { bytes: share, order: coarseToFine(clip.steps) });
       this.clipKept.push(i);
     });
+  }
+
+  /** The clips' kept frames given back (a new screen, or the tiles' size changed). */
+  forgetClips() {
+    for (const i of this.clipKept ?? []) {
+      this.kept.get(i)?.clear();
+      this.kept.delete(i);
+      this.overlay.uncover(i);
+    }
+    this.clipKept = [];
   }
 
   /** Every clip from its start again (scrubbed faces play along again). */
@@ -441,11 +449,13 @@ export class FaceGrid {
     const height = Math.max(1, Math.round(box.height));
     const size = r.getSize(new Vector2());
     if (size.x !== width || size.y !== height) r.setSize(width, height, true);
-    if (this.drawnSize !== `${width}x${height}`) {
+    const resized = this.drawnSize !== `${width}x${height}`;
+    if (resized) {
       for (const kept of this.kept.values()) kept.clear(); // frames of another size
       this.overlay?.fit();
     }
     this.drawnSize = `${width}x${height}`;
+    if (resized && this.clips?.some(Boolean)) this.keepClips(); // if they fit at the new size
     r.setScissor(0, 0, width, height);
     r.setClearColor(0x000000, 0);
     r.clear();
