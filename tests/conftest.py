@@ -134,29 +134,6 @@ def ict_model(ict_dir: Path):  # type: ignore[no-untyped-def]
     return emogen.load_model(ict_dir)
 
 
-@pytest.fixture(scope="session")
-def seeded_rig(ict_dir: Path):  # type: ignore[no-untyped-def]
-    """Rig 2 (``ict_rig_2.toml``), for the simulated studies whose single seeds were chosen on
-    its emotion blocks: a new default rig re-draws their data (rig 3's blocks: three planted
-    effects missed at their seeds; the identity one is found at 26 of 40 seeds on rig 2, 21 on
-    rig 3, so one seed is no test of power on either).
-
-    Still pinned after #41 item 7's rig-3 rerun (docs/analysis.md, "Which rig the calibration
-    figures used"): with this fixture returning the default rig 3,
-    ``test_the_own_distance_effect_is_found_when_present`` fails at its seed 11 (the two-stage
-    t finds the planted effect at p = 0.0012 against the test's bar of 0.001; the primary and
-    GEE assertions hold), so its planted size would have to be recalibrated over many seeds
-    on rig 3 before the bar means the same there — a run that did not fit the shared 2-core
-    machine in that round. Moving a test means: its planted effect found at the bar in
-    nearly every seed of a documented rig-3 run, its null checks unchanged."""
-    from importlib import resources
-
-    import emogen
-
-    with resources.as_file(resources.files("emogen.data").joinpath("ict_rig_2.toml")) as p:
-        return emogen.load_model(ict_dir, rig=p).rig
-
-
 def read_obj_vertices_plainly(path: Path) -> np.ndarray:
     """An independent reference: every 'v' line of an OBJ, parsed one by one in plain Python."""
     rows = []

@@ -108,27 +108,23 @@ def test_family_wise_error_on_null_data(rig) -> None:  # type: ignore[no-untyped
 
 
 def test_planted_group_shift_is_found_on_its_gene(rig) -> None:  # type: ignore[no-untyped-def]
-    design = PeopleDesign(
-        emotions=("happy", "sad"),
-        identities=("female-medium",),
-        participants=40,
-        repetitions=2,
-        categorise=False,
-        groups=("a", "b"),
-        shifts={"b": {"happy": {"browInnerUp": 0.6}}},
-        participant=SimulatedDesign(spread=0.1),
-    )
-    people = as_people(simulate_people(design, rig, seed=7))
+    from benchmarks.calibrate_known_answers import GENE
+
+    people = as_people(simulate_people(GENE, rig, seed=7))
     g = group_gene_tests(people, OPTS, rng=np.random.default_rng(0))
     hits = g[g["significant_maxt"]]
-    assert {(r.gene, r.emotion) for r in hits.itertuples()} == {("browInnerUp", "happy")}
-    row = hits.iloc[0]
-    assert row["difference"] < 0 and row["ci_high"] < 0  # group a − group b: b raised it
+    row = hits[(hits["gene"] == "browInnerUp") & (hits["emotion"] == "happy")]
+    assert len(row) == 1
+    assert row["difference"].iloc[0] < 0 and row["ci_high"].iloc[0] < 0  # a − b: b raised it
+    # the sad prototypes are the same in both groups: no sad cell (other happy cells may move
+    # with the shift, docs/analysis.md "knock-on effects"); these checks held at 38 of 40
+    # fresh seeds on rig 3 (`python -m benchmarks.calibrate_known_answers --checks gene`)
+    assert not (hits["emotion"] == "sad").any(), hits[["gene", "emotion"]]
 
 
 @pytest.fixture(scope="module")
-def rig(seeded_rig):  # type: ignore[no-untyped-def]
-    return seeded_rig  # the seeds below were chosen on rig 2's blocks (tests/conftest.py)
+def rig(ict_model):  # type: ignore[no-untyped-def]
+    return ict_model.rig
 
 
 def test_gene_intervals_are_scipys_t_intervals() -> None:
