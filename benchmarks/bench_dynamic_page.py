@@ -155,6 +155,8 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=5.0)
     parser.add_argument("--model", type=Path, default=None, help="ICT-FaceKit FaceXModel folder")
     args = parser.parse_args()
+    if not args.seconds > 0:
+        parser.error(f"--seconds must be above 0; got {args.seconds}")
     model = args.model or Path(os.environ.get("EMOGEN_MODEL", "../shared/ict-facekit/FaceXModel"))
     for size in ((1366, 768), (683, 384)):
         load = os.getloadavg()[0]

@@ -90,6 +90,13 @@ def genes(rig, studies: int, seed: int = 0, truth: int = 1000) -> None:  # type:
     wrong = {0.3: 0, 0.6: 0}
     false = {0.3: 0, 0.6: 0}
     moved = {a: moved_cells(rig, a, truth, seed=900_000 + seed) for a in power}
+    for a, cells in moved.items():
+        if ("happy", "browInnerUp") not in cells:
+            raise SystemExit(
+                f"the truth study ({truth} participants per group) did not find the planted "
+                f"+{a} shift on browInnerUp itself, so it cannot tell which cells moved: use "
+                "more --truth-participants (the docs' figures use 1000)"
+            )
     for a in power:
         print(f"  +{a}: cells moved at {truth} per group: {sorted(moved[a])}")
     for s in range(seed, seed + studies):
@@ -214,6 +221,11 @@ def main() -> None:
         default=["genes", "conditions", "positions"],
     )
     a = ap.parse_args()
+    if a.studies < 1 or a.truth_participants < 2:
+        ap.error(
+            f"--studies must be at least 1 and --truth-participants at least 2; got "
+            f"{a.studies} and {a.truth_participants}"
+        )
     rig = emogen.load_model(os.environ["EMOGEN_MODEL"]).rig
     start = time.perf_counter()
     if "genes" in a.parts:

@@ -31,6 +31,7 @@ import numpy as np
 from benchmarks.calibrate_genes import NULL
 from benchmarks.exact import share
 from emogen.analysis.simulated_study import PeopleDesign, as_people, simulate_people
+from emogen.errors import EmoGenError
 
 #: The tests' planted designs (imported by the tests, so the rates here are theirs).
 OWN = PeopleDesign(participants=60, repetitions=2, identities=("female-medium",))
@@ -105,7 +106,12 @@ def main() -> None:
     ap.add_argument("--checks", nargs="+", choices=tuple(CHECKS), default=list(CHECKS))
     ap.add_argument("--model", default=None)
     a = ap.parse_args()
-    rig = emogen.load_model(a.model, rig=a.rig).rig
+    if a.seeds < 1:
+        ap.error(f"--seeds must be at least 1; got {a.seeds}")
+    try:
+        rig = emogen.load_model(a.model, rig=a.rig).rig
+    except EmoGenError as err:
+        ap.error(str(err))
     seeds = range(a.first_seed, a.first_seed + a.seeds)
     for name in a.checks:
         t0 = time.perf_counter()

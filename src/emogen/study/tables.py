@@ -56,14 +56,14 @@ __all__ = [
 #: ``sessions.trial_order`` dropped (the ``trials`` table holds the order), provenance in
 #: every Parquet file's metadata (:mod:`emogen.columns`). Exports of schema 2 still analyse
 #: and replay.
-#: 5: blocks and tasks: ``trials.block`` and ``trials.task``, the ``responses`` table (a
+#: 5: blocks and tasks: ``trials.block`` and ``trials.task``, a table of answers (a
 #: labelling trial's face and answer). Exports of schema 4 still analyse and replay.
-#: 6 (exports only): tables named by their task (``responses`` → ``categorise_responses``,
-#: ``ratings`` → ``evolve_ratings``), the ``final_faces`` table, ``trials.emotion`` and
-#: ``final_face_id`` NA for trials that make no face. Exports of schema 5 still analyse and replay.
-#: 7: ``selections``, ``restarts`` and ``ratings`` (``evolve_ratings``) say which display the
-#: page had (``fallback``: the server's images, not the 3D viewer; NA before). Records and
-#: exports of schema 6 still open, analyse and replay.
+#: 6 (exports only): each task's tables named by their task (the names: docs/data.md), the
+#: ``final_faces`` table, ``trials.emotion`` and ``final_face_id`` NA for trials that make no
+#: face. Exports of schema 5 still analyse and replay.
+#: 7: the steps of a task that shows faces say which display the page had (``fallback``: the
+#: server's images, not the 3D viewer; NA before; docs/data.md). Records and exports of
+#: schema 6 still open, analyse and replay.
 SCHEMA_VERSION = "emogen.study/7"
 
 

@@ -333,7 +333,8 @@ export class FaceGrid {
     this.keepClips();
     this.held = new Map(); // face → clip time it is scrubbed to
     this.frames = 0; // frames drawn since play (the benchmark's count)
-    this.slow = 0; // draws in a row slower than two grid steps (2: frames kept are shown)
+    this.slowDraws = 0; // draws in a row slower than two grid steps
+    this.behind = false; // two of them seen: frames not kept yet show the nearest kept one
     this.last = null;
     this.start = performance.now();
     const tick = (now) => {
@@ -395,10 +396,11 @@ export class FaceGrid {
   }
 
   draw(now) {
-    // two draws in a row slower than two of the grid's steps: the faces' frames not kept yet
-    // show the nearest kept one while the rest are drawn ahead
+    // two draws in a row slower than two of the grid's steps: from then on the faces' frames
+    // not kept yet show the nearest kept one while the rest are drawn ahead
     const slow = this.last !== null && now - this.last > 2000 / FRAME_RATE;
-    this.slow = slow ? this.slow + 1 : this.slow >= 2 ? this.slow : 0;
+    this.slowDraws = slow ? this.slowDraws + 1 : 0;
+    this.behind ||= this.slowDraws >= 2;
     this.last = now;
     this.clips.forEach((clip, i) => {
       if (clip) this.setFace(i, clip.at(this.clipTime(i, now), this.frame));
@@ -465,7 +467,7 @@ export class FaceGrid {
       const kept = this.kept.get(i);
       const k = kept && face.shown ? kept.find(face.shown) : -1;
       if (k >= 0 && this.overlay.play(i, k, kept.frames.get(k))) return;
-      const near = k >= 0 && kept.order && this.slow >= 2 ? kept.nearest(k) : null;
+      const near = k >= 0 && kept.order && this.behind ? kept.nearest(k) : null;
       if (near && this.overlay.play(i, ...near)) return this.ahead(); // a clip's frame: not yet
       this.morph(i, face.shown);
       r.clear();
