@@ -45,13 +45,14 @@ sys.path[:0] = [str(REPO), str(REPO / "src")]
 from benchmarks.bench_study import (  # noqa: E402
     BENCH_STUDY,
     BENCH_TOKEN,
+    DYNAMIC_STUDY,
     MIXED_STUDY,
     ServerProcess,
     model_path,
     write_study_toml,
 )
 
-STUDIES = {"evolve": BENCH_STUDY, "mixed": MIXED_STUDY}
+STUDIES = {"evolve": BENCH_STUDY, "mixed": MIXED_STUDY, "dynamic": DYNAMIC_STUDY}
 
 
 @dataclass
@@ -350,7 +351,7 @@ def main() -> None:
         choices=sorted(STUDIES),
         default="evolve",
         help="evolve: two GA trials; mixed: GA trials, then a categorise block "
-        "(own + others' + random faces)",
+        "(own + others' + random faces); dynamic: the GA trials with faces that move",
     )
     parser.add_argument("--ramp", type=float, default=10.0, help="arrivals spread over (s)")
     parser.add_argument("--max-seconds", type=float, default=900.0, help="cap per run")
@@ -372,7 +373,8 @@ def main() -> None:
     print(
         f"study server load: {os.cpu_count()} cores, study {BENCH_STUDY['emotions']} × "
         f"G={BENCH_STUDY['ga']['generations']} (12 selections + 2 ratings per participant"
-        f"{', then 8 faces to categorise' if cfg.study == 'mixed' else ''}), "
+        f"{', then 8 faces to categorise' if cfg.study == 'mixed' else ''}"
+        f"{', faces that move' if cfg.study == 'dynamic' else ''}), "
         f"pause {cfg.pause[0]:g}–{cfg.pause[1]:g} s, arrivals over {cfg.ramp:g} s"
     )
     print(HEADER, flush=True)

@@ -52,6 +52,7 @@ sys.path[:0] = [str(REPO), str(REPO / "src")]
 
 from benchmarks.bench_study import (  # noqa: E402
     BENCH_STUDY,
+    DYNAMIC_STUDY,
     ServerProcess,
     model_path,
     selection_body,
@@ -166,10 +167,6 @@ def _timed(acc: dict[str, float], phase: dict[str, bool], label: str) -> Callabl
         return timed
 
     return wrap
-
-
-#: The bench study with dynamic faces (docs/ga.md, "Dynamic faces"; its default clip).
-DYNAMIC_STUDY: dict[str, Any] = {**BENCH_STUDY, "blocks": [{"task": "evolve", "dynamic": {}}]}
 
 
 def in_process(

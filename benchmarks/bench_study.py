@@ -49,6 +49,9 @@ MIXED_STUDY: dict[str, Any] = {
         {"task": "categorise", "own": True, "others": 4, "random": 2, "intensity": True},
     ],
 }
+#: The bench study with faces that move (docs/ga.md, "Dynamic faces"; its default clip): the same
+#: GA trials, each face corrected at its keyframes as well as at its peak.
+DYNAMIC_STUDY: dict[str, Any] = {**BENCH_STUDY, "blocks": [{"task": "evolve", "dynamic": {}}]}
 
 
 def model_path() -> Path:

@@ -18,12 +18,14 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 from collections.abc import Mapping
 from typing import Any
 
 from sqlalchemy.orm import Session
 from sqlalchemy.orm.attributes import set_committed_value
 
+from emogen.errors import EmoGenError
 from emogen.study.context import StudyContext
 from emogen.study.errors import SessionNotFound, StepConflict
 from emogen.study.queries import n_trials, session_by_token, step_with_key, trial_at
@@ -33,6 +35,8 @@ from emogen.study.view import SessionState, session_state
 from emogen.study.writes import record_step
 from emogen.tasks.protocol import Command, Outcome, TaskEnv, TrialCommand
 from emogen.tasks.registry import command_name, task_named
+
+log = logging.getLogger(__name__)
 
 
 def request_hash(kind: str, payload: Mapping[str, Any]) -> str:
@@ -47,10 +51,13 @@ class SessionSteps:
         self.ctx = ctx
         self.store = store
         self.env = env
+        #: some block's trials are worked ahead (:meth:`_ahead`); none: no read is spent on it
+        self.works_ahead = any(b.works_ahead for b in ctx.config.study_blocks())
 
     def step(self, token: str, cmd: Command) -> SessionState:
         """Do ``cmd`` once per key, in one transaction; answer the session's state."""
         digest = request_hash(cmd.command, cmd.payload())
+        self._ahead(token, cmd)
 
         def work(db: Session) -> SessionState:
             sess = session_by_token(db, token, self.ctx.accepted, lock=True)
@@ -71,6 +78,32 @@ class SessionSteps:
             return session_state(db, self.env, sess, shown)
 
         return self.store.transact(work)
+
+    def _ahead(self, token: str, cmd: Command) -> None:
+        """The current trial's task's work ahead of the write transaction (the optional
+        ``ahead`` of :mod:`emogen.tasks.protocol`), in a read of the session as it is now. Only
+        a hint: whatever it meets (a stale or repeated request, a wrong selection, an error) is
+        left to the write transaction, which does the step whole and says so."""
+        if not (self.works_ahead and isinstance(cmd, TrialCommand)):
+            return
+        try:
+            with self.store.read() as db:
+                sess = session_by_token(db, token, self.ctx.accepted)
+                if sess.stage != "trial" or cmd.trial != sess.current_trial:
+                    return
+                if step_with_key(db, sess.id, cmd.key) is not None:
+                    return  # answered already: nothing to make
+                row = trial_at(db, sess.id, cmd.trial)
+                if row is None or not self.env.block(row).works_ahead:
+                    return
+                task = task_named(row.task)
+                ahead = getattr(task, "ahead", None)
+                if ahead is not None and type(cmd) in task.commands:
+                    ahead(self.env, db, row, cmd)
+        except (EmoGenError, ValueError) as exc:  # the write transaction meets it and says so
+            log.debug("step ahead of %s skipped: %s", cmd.command, exc)
+        except Exception:  # an error here must not stop the step: the step itself decides
+            log.warning("step ahead of %s failed; the step goes on", cmd.command, exc_info=True)
 
     def _take(self, db: Session, sess: SessionRow, cmd: Command) -> Outcome:
         """The command's work on the locked session: what the step has just shown."""

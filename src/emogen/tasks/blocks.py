@@ -72,6 +72,13 @@ class TaskBlock(_Strict):
             raise ValueError(f"block name must be 1-64 letters, digits, '_' or '-'; got {v!r}")
         return v
 
+    @property
+    def works_ahead(self) -> bool:
+        """Its trials' steps are worked ahead of the write transaction (the task's optional
+        ``ahead``, :mod:`emogen.tasks.protocol`): only where a benchmark shows the step's work
+        holds up the one writer; default no."""
+        return False
+
     def resolved(self, study: Any) -> Self:
         """The block with the study's defaults filled in (``study``: the StudyConfig)."""
         return self

@@ -14,6 +14,9 @@ ask/tell and jsPsych's plugins (typed ``info``, ``trial()``, ``simulate()``).
 Each method gets a :class:`TaskEnv` (the study's config, rig, correctors and what the task
 prepared when the service started) and, where it reads or stores records, the step's open
 database session: the study holds the lock and the transaction; a task adds its rows to it.
+
+Optional: ``ahead(env, db, row, cmd)``, a command's pure work done in a read before the write
+transaction where the block's ``works_ahead`` says so; it stores nothing (docs/tasks.md).
 """
 
 from __future__ import annotations
@@ -349,6 +352,9 @@ class TaskDefaults:
         return None
 
     def rows(self, prepared: Any) -> int | None:
+        return None
+
+    def ahead(self, env: TaskEnv, db: Session, row: TrialRow, cmd: TrialCommand) -> None:
         return None
 
     def face(

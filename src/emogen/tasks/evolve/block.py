@@ -55,6 +55,13 @@ class EvolveBlock(TaskBlock):
             data.pop("dynamic", None)
         return data
 
+    @property
+    def works_ahead(self) -> bool:
+        """Faces that move are worked ahead (``EvolveTask.ahead``): correcting a selection's
+        next generation at its keyframes is most of the step (docs/study.md, "Corrected
+        ahead"); a still face's step is not (its figures hold without it)."""
+        return self.dynamic is not None
+
     def genome(self) -> Genome:
         """What its trials' genes are (:mod:`emogen.ga.genome`): static, or dynamic."""
         return STATIC if self.dynamic is None else self.dynamic.genome()

@@ -20,6 +20,7 @@ from pydantic import Field
 from sqlalchemy.orm import Session
 
 from emogen.errors import SelectionError
+from emogen.ga.corrector import corrected_ahead
 from emogen.ga.state import collision_solver_of_state, stream_of_state
 from emogen.tasks.blocks import Condition, TaskBlock
 from emogen.tasks.errors import StepConflict
@@ -167,6 +168,22 @@ class EvolveTask:
         if isinstance(cmd, Rate):
             return self._rate(env, db, row, cmd)
         raise StepConflict(f"an evolve trial does not take {cmd.command}")  # pragma: no cover
+
+    def ahead(self, env: TaskEnv, db: Session, row: TrialRow, cmd: TrialCommand) -> None:
+        """A selection's next generation (after the last: the final face) made, in a read
+        before the write transaction, with its faces' correction kept
+        (:func:`emogen.ga.corrector.corrected_ahead`): the write transaction makes the same
+        generation from the same stored state and finds its correction made, so the correction
+        (most of a dynamic step: the keyframes) runs beside other sessions' steps instead of in
+        the one writer. Nothing is stored here."""
+        if not isinstance(cmd, Select) or row.status != "active":
+            return
+        if (cmd.attempt, cmd.generation) != (row.attempt, row.generation):
+            return  # not what is shown now: the write transaction says so
+        engine = restore(env, row)
+        engine.tell(cmd.elite, list(cmd.others))
+        with corrected_ahead():
+            _ = engine.result if engine.done else engine.ask()  # the final face, or the next
 
     def _select(self, env: TaskEnv, db: Session, row: TrialRow, cmd: Select) -> Outcome:
         """The participant's selection of the shown generation; the next one is stored (or the
