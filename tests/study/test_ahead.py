@@ -26,7 +26,17 @@ from emogen.study.errors import StepConflict
 from emogen.study.steps import SessionSteps
 from emogen.study.storage import Store
 from emogen.tasks.evolve.task import EvolveTask
-from tests.study.drive import choose, do, new_key, step_args, study_service
+from emogen.tasks.registry import parse_command
+from tests.study.drive import (
+    choose,
+    command,
+    do,
+    new_key,
+    run_to_end,
+    service_caller,
+    step_args,
+    study_service,
+)
 
 MOVING: dict[str, Any] = {
     "name": "ahead",
@@ -70,14 +80,31 @@ def _select(service: Any, token: str, state: dict[str, Any], key: str | None = N
               others=others, response_ms=900.0)  # fmt: skip
 
 
-def _walk(service: Any) -> list[dict[str, Any]]:
-    """One participant's selections through the first trial: the state after each."""
+def _walk(service: Any, *, whole: bool = False) -> list[dict[str, Any]]:
+    """One participant's selections through the first trial (``whole``: then on to the end of
+    the session: the rating, the second trial, done): the state after each step."""
     token, _ = service.create_session("p-ahead")
     state = do(service, "begin", token, new_key())
     states = [state]
     while state["trial"]["status"] == "active" and state["progress"]["trial"] == 0:
         state = _select(service, token, state)
         states.append(state)
+    if whole:
+        states += _finished(service, token, state)
+    return states
+
+
+def _finished(service: Any, token: str, state: dict[str, Any]) -> list[dict[str, Any]]:
+    """The session driven to its end from ``state``: the state after each step, the last one
+    done."""
+    states: list[dict[str, Any]] = []
+
+    def call(kind: str, body: dict[str, Any]) -> dict[str, Any]:
+        states.append(service_caller(service, token)(kind, body))
+        return states[-1]
+
+    run_to_end(state, call)
+    assert states[-1]["stage"] == "done"
     return states
 
 
@@ -159,7 +186,7 @@ def test_stale_repeated_and_raced_requests_end_as_steps_do(
     with monkeypatch.context() as m:
         m.setattr(SessionSteps, "_ahead", lambda self, token, cmd: None)
         with _service(MOVING, tmp_path / "plain.sqlite", ict_model) as plain:
-            reference = _walk(plain)
+            reference = _walk(plain, whole=True)
     with _service(MOVING, tmp_path / "ahead.sqlite", ict_model) as service:
         token, _ = service.create_session("p-ahead")
         state0 = do(service, "begin", token, new_key())
@@ -169,11 +196,7 @@ def test_stale_repeated_and_raced_requests_end_as_steps_do(
         # this tab's selection commits first: the other one is refused as stale when it comes
         ids = [f["id"] for f in state0["view"]["population"]["faces"]]
         other = {**step_args(state0), "elite": ids[-1], "others": [], "response_ms": 900.0}
-        from tests.study.drive import command
-
         tab2 = command("select", {"key": new_key(), **other})
-        from emogen.tasks.registry import parse_command
-
         service.steps._ahead(token, parse_command(tab2))
         key = new_key()
         state1 = do(service, "select", token, key, **body)
@@ -190,6 +213,8 @@ def test_stale_repeated_and_raced_requests_end_as_steps_do(
         assert calls == []
         state2 = _select(service, token, state1)
         assert _shown([state2]) == _shown([reference[2]])
+        # and the rest of the session as without any of it: the rating, the second trial, done
+        assert _shown(_finished(service, token, state2)) == _shown(reference[3:])
 
 
 def test_an_error_in_the_work_ahead_leaves_the_step_to_itself(
@@ -198,7 +223,7 @@ def test_an_error_in_the_work_ahead_leaves_the_step_to_itself(
     with monkeypatch.context() as m:
         m.setattr(SessionSteps, "_ahead", lambda self, token, cmd: None)
         with _service(MOVING, tmp_path / "plain.sqlite", ict_model) as plain:
-            reference = _walk(plain)
+            reference = _walk(plain, whole=True)
 
     def broken(*args: Any) -> None:
         raise RuntimeError("ahead broke")
@@ -208,7 +233,8 @@ def test_an_error_in_the_work_ahead_leaves_the_step_to_itself(
         _service(MOVING, tmp_path / "ahead.sqlite", ict_model) as service,
         caplog.at_level(logging.WARNING, logger="emogen.study.steps"),
     ):
-        states = _walk(service)
+        states = _walk(service, whole=True)  # the steps after it too: on to the session's end
+    assert states[-1]["stage"] == "done"
     assert _shown(states) == _shown(reference)
     assert "step ahead of select failed; the step goes on" in caplog.text
     assert "ahead broke" in caplog.text

@@ -180,8 +180,7 @@ class EvolveTask:
             return
         if (cmd.attempt, cmd.generation) != (row.attempt, row.generation):
             return  # not what is shown now: the write transaction says so
-        engine = restore(env, row)
-        engine.tell(cmd.elite, list(cmd.others))
+        engine = _told(env, row, cmd)
         with corrected_ahead():
             _ = engine.result if engine.done else engine.ask()  # the final face, or the next
 
@@ -189,8 +188,7 @@ class EvolveTask:
         """The participant's selection of the shown generation; the next one is stored (or the
         trial waits for its rating)."""
         pop = _shown(db, row, cmd)
-        engine = restore(env, row)
-        engine.tell(cmd.elite, list(cmd.others))
+        engine = _told(env, row, cmd)
         now = utcnow()
         db.add(
             SelectionRow(
@@ -370,6 +368,13 @@ class EvolveTask:
         from emogen.tasks.evolve.dynamic_report import dynamic_section
 
         return dynamic_section(tools)
+
+
+def _told(env: TaskEnv, row: TrialRow, cmd: Select) -> Any:
+    """The trial's engine restored from its stored state and told the selection."""
+    engine = restore(env, row)
+    engine.tell(cmd.elite, list(cmd.others))
+    return engine
 
 
 def _shown(db: Session, row: TrialRow, cmd: _Shown) -> PopulationRow:
